@@ -1,0 +1,45 @@
+"""Spectra of the physical parts of the rigs: lamps, tunable filter, cameras, targets.
+
+Each part cites the thesis section or figure it models; see the submodules.
+"""
+
+from twin.components.detectors import RGB_CAMERA_RESPONSES, CCDQuantumEfficiency, rgb_camera_response
+from twin.components.lamps import (
+    FINE_GRID,
+    HMI_F575_LINES,
+    EmissionLine,
+    HMILamp,
+    Lamp,
+    PhosphorWhiteLED,
+    QTHLamp,
+    cie_illuminant,
+    irradiance_at,
+    planck_spectral_radiance,
+)
+from twin.components.lctf import VARISPEC_FWHM_NM, LiquidCrystalTunableFilter
+from twin.components.targets import (
+    COLORCHECKER_SOURCES,
+    colorchecker_reflectances,
+    zenith_white_reflectance,
+)
+
+__all__ = [
+    "COLORCHECKER_SOURCES",
+    "FINE_GRID",
+    "HMI_F575_LINES",
+    "RGB_CAMERA_RESPONSES",
+    "VARISPEC_FWHM_NM",
+    "CCDQuantumEfficiency",
+    "EmissionLine",
+    "HMILamp",
+    "Lamp",
+    "LiquidCrystalTunableFilter",
+    "PhosphorWhiteLED",
+    "QTHLamp",
+    "cie_illuminant",
+    "irradiance_at",
+    "colorchecker_reflectances",
+    "planck_spectral_radiance",
+    "rgb_camera_response",
+    "zenith_white_reflectance",
+]

@@ -1,0 +1,65 @@
+"""Reflectance targets: the Zenith Ultra-White standard and the ColorChecker.
+
+References
+----------
+- The thesis, Eq. 3.3 and Fig. 3.5d (Zenith Ultra-White reflectance standard of Sphere Optics,
+  barium sulphate, nearly perfect white and diffuse); section 9.3 (colour charts).
+- Ohta, N. ColorChecker spectra as shipped by ``colour`` ("ColorChecker N Ohta").
+- isetbio (MIT licence): ``shared/data/spectra/reflectances/macbeth_colorchecker.csv``.
+"""
+
+from __future__ import annotations
+
+import colour
+import numpy as np
+
+from recon.errors import SpectwinInputError
+from recon.shared_data import read_spectra_csv
+from recon.spectra import OutOfRangePolicy, SampledSpectra, WavelengthGrid, from_colour, resample
+
+__all__ = ["COLORCHECKER_SOURCES", "colorchecker_reflectances", "zenith_white_reflectance"]
+
+COLORCHECKER_SOURCES = ("ColorChecker N Ohta", "BabelColor Average", "isetbio")
+
+
+def zenith_white_reflectance(
+    grid: WavelengthGrid,
+    *,
+    plateau: float = 0.99,
+    blue_drop: float = 0.03,
+    drop_scale_nm: float = 50.0,
+) -> SampledSpectra:
+    """Directional-hemispherical reflectance of the Zenith Ultra-White standard (Fig. 3.5d).
+
+    A smooth model of the manufacturer's curve: a plateau near 0.99 that falls slightly toward
+    the ultraviolet, :math:`W(\\lambda) = p - d\\, e^{-(\\lambda - 350)/s}`.
+    """
+    if not 0 < plateau <= 1 or not 0 <= blue_drop < plateau or not drop_scale_nm > 0:
+        raise SpectwinInputError(
+            "zenith white: expected 0 < plateau <= 1, 0 <= blue_drop < plateau, drop_scale_nm > 0"
+        )
+    values = plateau - blue_drop * np.exp(-(grid.wavelengths_nm - 350.0) / drop_scale_nm)
+    return SampledSpectra(grid, np.clip(values, 0.0, 1.0))
+
+
+def colorchecker_reflectances(
+    grid: WavelengthGrid,
+    *,
+    source: str = "ColorChecker N Ohta",
+    out_of_range: OutOfRangePolicy = "error",
+) -> SampledSpectra:
+    """The 24 ColorChecker patch reflectances, values ``(24, K)`` named by patch.
+
+    ``source`` is a chart of ``colour.SDS_COLOURCHECKERS`` or ``"isetbio"`` (the measured chart
+    in ``shared/data``); ``out_of_range`` says how to extend the data (380-780 nm for ``colour``)
+    to a wider grid (see ``recon.spectra.resample``).
+    """
+    if source not in COLORCHECKER_SOURCES:
+        raise SpectwinInputError(f"source: expected one of {COLORCHECKER_SOURCES}, got {source!r}")
+    if source == "isetbio":
+        measured = read_spectra_csv("spectra/reflectances/macbeth_colorchecker.csv")
+    else:
+        patches = colour.SDS_COLOURCHECKERS[source]
+        measured = from_colour(colour.MultiSpectralDistributions(list(patches.values())))
+        measured = SampledSpectra(measured.grid, measured.values, tuple(patches))
+    return resample(measured, grid, method="pchip", out_of_range=out_of_range)

@@ -1,0 +1,95 @@
+"""Choose, activate and report the Mitsuba variant: the one place that calls ``mi.set_variant``.
+
+``llvm_ad_spectral`` is the default. It needs a system libLLVM 16 or newer: Dr.Jit 1.5 crashes
+with Debian's LLVM 14/15 (ARCHITECTURE.md, "Mitsuba notes"), so with an older or missing LLVM the
+slower ``scalar_spectral`` variant is used and a warning says why. ``SPECTWIN_VARIANT`` overrides
+the choice; ``SPECTWIN_THREADS`` sets Dr.Jit's thread count (default: all cores).
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from dataclasses import asdict, dataclass
+
+import drjit as dr
+import mitsuba as mi
+
+from recon.errors import SpectwinInputError
+
+__all__ = ["DEFAULT_VARIANT", "FALLBACK_VARIANT", "VariantReport", "activate", "llvm_version"]
+
+DEFAULT_VARIANT = "llvm_ad_spectral"
+FALLBACK_VARIANT = "scalar_spectral"
+MINIMUM_LLVM_MAJOR = 16
+
+_active: VariantReport | None = None
+
+
+@dataclass(frozen=True)
+class VariantReport:
+    """What was chosen and why: variant name, LLVM version found, thread count, reason."""
+
+    variant: str
+    llvm_version: str | None
+    threads: int
+    reason: str
+
+    def as_dict(self) -> dict[str, object]:
+        return asdict(self)
+
+
+def llvm_version() -> tuple[int, int, int] | None:
+    """Version of the libLLVM that Dr.Jit loads, or ``None`` when it finds none."""
+    if not dr.has_backend(dr.JitBackend.LLVM):
+        return None
+    return tuple(dr.detail.llvm_version())
+
+
+def _choose(requested: str | None, found: tuple[int, int, int] | None) -> tuple[str, str]:
+    if requested:
+        if requested not in mi.variants():
+            raise SpectwinInputError(
+                f"SPECTWIN_VARIANT: expected one of {mi.variants()}, got {requested!r}"
+            )
+        if not requested.endswith(("spectral", "spectral_polarized")):
+            raise SpectwinInputError(
+                f"SPECTWIN_VARIANT: spectwin renders spectrally, expected a *_spectral variant, "
+                f"got {requested!r}"
+            )
+        return requested, "requested by SPECTWIN_VARIANT"
+    if found is None:
+        return FALLBACK_VARIANT, "no libLLVM found"
+    if found[0] < MINIMUM_LLVM_MAJOR:
+        return FALLBACK_VARIANT, (
+            f"libLLVM {found[0]} is older than {MINIMUM_LLVM_MAJOR} (install libllvm19)"
+        )
+    return DEFAULT_VARIANT, f"libLLVM {found[0]} found"
+
+
+def activate() -> VariantReport:
+    """Select the variant once per process and return the report (later calls return it too)."""
+    global _active
+    if _active is not None:
+        return _active
+    found = llvm_version()
+    variant, reason = _choose(os.environ.get("SPECTWIN_VARIANT"), found)
+    if variant == FALLBACK_VARIANT and "SPECTWIN_VARIANT" not in reason:
+        warnings.warn(
+            f"spectwin uses the slow Mitsuba variant {FALLBACK_VARIANT}: {reason}", stacklevel=2
+        )
+    threads_text = os.environ.get("SPECTWIN_THREADS", "")
+    if threads_text:
+        if not threads_text.isdigit() or int(threads_text) < 1:
+            raise SpectwinInputError(
+                f"SPECTWIN_THREADS: expected a positive integer, got {threads_text!r}"
+            )
+        dr.set_thread_count(int(threads_text))
+    mi.set_variant(variant)
+    _active = VariantReport(
+        variant=variant,
+        llvm_version=".".join(map(str, found)) if found else None,
+        threads=dr.thread_count(),
+        reason=reason,
+    )
+    return _active
