@@ -23,7 +23,9 @@ _ENV_VARIABLE = "SPECTWIN_SHARED_DATA"
 def shared_data_dir() -> Path:
     """The ``shared/data`` folder: ``$SPECTWIN_SHARED_DATA`` or ``<repository>/../shared/data``."""
     configured = os.environ.get(_ENV_VARIABLE)
-    folder = Path(configured) if configured else Path(__file__).resolve().parents[2] / "shared" / "data"
+    folder = (
+        Path(configured) if configured else Path(__file__).resolve().parents[2] / "shared" / "data"
+    )
     if not folder.is_dir():
         raise SpectwinDataError(
             f"shared data folder {folder} does not exist: put the workplace's shared/ beside the "

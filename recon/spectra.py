@@ -74,7 +74,8 @@ class WavelengthGrid:
             bad = int(np.argmax(steps <= 0))
             raise SpectwinInputError(
                 f"wavelengths_nm: expected strictly increasing wavelengths, but sample {bad + 1} "
-                f"({wavelengths[bad + 1]:g} nm) does not exceed sample {bad} ({wavelengths[bad]:g} nm)"
+                f"({wavelengths[bad + 1]:g} nm) does not exceed sample {bad} "
+                f"({wavelengths[bad]:g} nm)"
             )
         wavelengths.setflags(write=False)
         object.__setattr__(self, "wavelengths_nm", wavelengths)

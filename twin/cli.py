@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Annotated
 
 import typer
 from rich.console import Console
@@ -16,9 +17,11 @@ app = typer.Typer(
 )
 console = Console()
 
+JsonFlag = Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")]
+
 
 @app.command()
-def info(as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a table.")) -> None:
+def info(as_json: JsonFlag = False) -> None:
     """Show the Mitsuba variant spectwin uses, the LLVM it found and the thread count."""
     from twin.variant import activate
 
@@ -34,12 +37,14 @@ def info(as_json: bool = typer.Option(False, "--json", help="Print JSON instead 
 
 @app.command()
 def smoke(
-    out: Path = typer.Option(Path("out/smoke"), help="Folder for the EXR, PNGs and summary.json."),
-    pixels_per_patch: int = typer.Option(24, min=4, help="Pixels per chart patch (square)."),
-    spp: int = typer.Option(256, min=1, help="Samples per pixel."),
-    as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
+    out: Annotated[Path, typer.Option(help="Folder for the EXR, PNGs and summary.json.")] = Path(
+        "out/smoke"
+    ),
+    pixels_per_patch: Annotated[int, typer.Option(min=4, help="Pixels per chart patch.")] = 24,
+    spp: Annotated[int, typer.Option(min=1, help="Samples per pixel.")] = 256,
+    as_json: JsonFlag = False,
 ) -> None:
-    """Render a ColorChecker under the QTH lamp through the LCTF bands; compare with the closed form."""
+    """Render a ColorChecker under the QTH lamp through the LCTF bands, check the closed form."""
     from twin.smoke import run_smoke
 
     with console.status("rendering the smoke scene"):
@@ -47,14 +52,14 @@ def smoke(
     if as_json:
         typer.echo(json.dumps(summary, indent=2))
         return
+    height, width = summary["image_px"]
     console.print(
-        f"[bold]smoke render[/bold] {summary['image_px'][1]}x{summary['image_px'][0]} px, "
-        f"{summary['bands']} bands, {summary['spp']} spp, variant {summary['variant']['variant']}, "
+        f"[bold]smoke render[/bold] {width}x{height} px, {summary['bands']} bands, "
+        f"{summary['spp']} spp, variant {summary['variant']['variant']}, "
         f"{summary['render_s']:.2f} s"
     )
-    console.print(
-        f"largest relative band error vs closed form: {100 * summary['max_abs_relative_error']:.2f} %"
-    )
+    error_percent = 100 * summary["max_abs_relative_error"]
+    console.print(f"largest relative band error vs closed form: {error_percent:.2f} %")
     console.print(f"wrote {', '.join(str(out / name) for name in summary['outputs'])}")
 
 

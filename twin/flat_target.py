@@ -89,7 +89,8 @@ def flat_target_scene(
     incidence_deg: float = 0.0,
     spp: int = 256,
 ) -> dict[str, object]:
-    """Mitsuba scene dict of the chart: patch ``i`` sits in row ``i // columns``, column ``i % columns``.
+    """Mitsuba scene dict of the chart; patch ``i`` sits in row ``i // columns``, column
+    ``i % columns``.
 
     Each patch covers ``patch_fill`` of its square cell (1.0: patches touch, a single patch fills
     the image). The image is ``columns * pixels_per_patch`` wide and ``rows * pixels_per_patch``
@@ -121,7 +122,11 @@ def flat_target_scene(
         },
         "lamp": {
             "type": "directional",
-            "direction": [-math.sin(math.radians(incidence_deg)), 0.0, -math.cos(math.radians(incidence_deg))],
+            "direction": [
+                -math.sin(math.radians(incidence_deg)),
+                0.0,
+                -math.cos(math.radians(incidence_deg)),
+            ],
             "irradiance": irregular_spectrum(irradiance),
         },
     }
@@ -161,7 +166,10 @@ def render_flat_target(
 def patch_means(
     image: np.ndarray, count: int, *, columns: int = 1, inner_fraction: float = 0.5
 ) -> np.ndarray:
-    """Mean band radiance over the central ``inner_fraction`` of each patch's cell, ``(count, n_bands)``."""
+    """Mean band radiance over the central ``inner_fraction`` of each patch's cell.
+
+    Returns an array ``(count, n_bands)``.
+    """
     chart_rows = math.ceil(count / columns)
     cell = image.shape[1] // columns
     if image.shape[0] != chart_rows * cell or image.shape[1] != columns * cell:

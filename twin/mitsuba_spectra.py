@@ -20,7 +20,8 @@ def irregular_spectrum(spectrum: SampledSpectra) -> dict[str, str]:
     """A Mitsuba ``irregular`` spectrum dict for one spectrum (1-D values)."""
     if spectrum.values.ndim != 1:
         raise SpectwinInputError(
-            f"irregular_spectrum: expected one spectrum (1-D values), got shape {spectrum.values.shape}"
+            f"irregular_spectrum: expected one spectrum (1-D values), got shape "
+            f"{spectrum.values.shape}"
         )
     return {
         "type": "irregular",

@@ -90,8 +90,12 @@ def run_smoke(
         attributes={"spectwin": "smoke render: ColorChecker, QTH lamp, VariSpec VS-10 bands"},
     )
     white = resample(irradiance, band_grid, method="box")
-    plt.imsave(out_dir / "colorchecker_qth.png", spectral_to_srgb(spectral_image, band_grid, white=white))
-    _plot_bands(out_dir / "band_radiance.png", band_grid.wavelengths_nm, chart.names, measured, expected)
+    plt.imsave(
+        out_dir / "colorchecker_qth.png", spectral_to_srgb(spectral_image, band_grid, white=white)
+    )
+    _plot_bands(
+        out_dir / "band_radiance.png", band_grid.wavelengths_nm, chart.names, measured, expected
+    )
 
     summary = {
         "variant": report.as_dict(),

@@ -17,7 +17,14 @@ import mitsuba as mi
 
 from recon.errors import SpectwinInputError
 
-__all__ = ["DEFAULT_VARIANT", "FALLBACK_VARIANT", "VariantReport", "activate", "llvm_version"]
+__all__ = [
+    "DEFAULT_VARIANT",
+    "FALLBACK_VARIANT",
+    "VariantReport",
+    "activate",
+    "choose_variant",
+    "llvm_version",
+]
 
 DEFAULT_VARIANT = "llvm_ad_spectral"
 FALLBACK_VARIANT = "scalar_spectral"
@@ -46,7 +53,7 @@ def llvm_version() -> tuple[int, int, int] | None:
     return tuple(dr.detail.llvm_version())
 
 
-def _choose(requested: str | None, found: tuple[int, int, int] | None) -> tuple[str, str]:
+def choose_variant(requested: str | None, found: tuple[int, int, int] | None) -> tuple[str, str]:
     if requested:
         if requested not in mi.variants():
             raise SpectwinInputError(
@@ -73,7 +80,7 @@ def activate() -> VariantReport:
     if _active is not None:
         return _active
     found = llvm_version()
-    variant, reason = _choose(os.environ.get("SPECTWIN_VARIANT"), found)
+    variant, reason = choose_variant(os.environ.get("SPECTWIN_VARIANT"), found)
     if variant == FALLBACK_VARIANT and "SPECTWIN_VARIANT" not in reason:
         warnings.warn(
             f"spectwin uses the slow Mitsuba variant {FALLBACK_VARIANT}: {reason}", stacklevel=2

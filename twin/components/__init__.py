@@ -3,7 +3,11 @@
 Each part cites the thesis section or figure it models; see the submodules.
 """
 
-from twin.components.detectors import RGB_CAMERA_RESPONSES, CCDQuantumEfficiency, rgb_camera_response
+from twin.components.detectors import (
+    RGB_CAMERA_RESPONSES,
+    CCDQuantumEfficiency,
+    rgb_camera_response,
+)
 from twin.components.lamps import (
     FINE_GRID,
     HMI_F575_LINES,

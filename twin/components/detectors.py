@@ -53,7 +53,9 @@ class CCDQuantumEfficiency:
         if not 0 < self.peak_qe <= 1:
             raise SpectwinInputError(f"peak_qe: expected a value in (0, 1], got {self.peak_qe}")
         if not (self.peak_nm > 0 and self.log_width_blue > 0 and self.log_width_red > 0):
-            raise SpectwinInputError("peak_nm, log_width_blue, log_width_red: expected positive values")
+            raise SpectwinInputError(
+                "peak_nm, log_width_blue, log_width_red: expected positive values"
+            )
 
     def __call__(self, grid: WavelengthGrid) -> SampledSpectra:
         log_ratio = np.log(grid.wavelengths_nm / self.peak_nm)

@@ -60,10 +60,14 @@ def planck_spectral_radiance(wavelengths_nm: np.ndarray, temperature_k: float) -
         Absolute temperature in K, positive.
     """
     if not temperature_k > 0:
-        raise SpectwinInputError(f"temperature_k: expected a positive temperature, got {temperature_k}")
+        raise SpectwinInputError(
+            f"temperature_k: expected a positive temperature, got {temperature_k}"
+        )
     wavelength_m = np.asarray(wavelengths_nm, dtype=np.float64) * 1e-9
     h, c, k = constants.h, constants.c, constants.k
-    per_metre = 2 * h * c**2 / wavelength_m**5 / np.expm1(h * c / (wavelength_m * k * temperature_k))
+    per_metre = (
+        2 * h * c**2 / wavelength_m**5 / np.expm1(h * c / (wavelength_m * k * temperature_k))
+    )
     return per_metre * 1e-9
 
 
@@ -206,7 +210,9 @@ class HMILamp:
                 f"flicker_depth: expected a modulation depth in [0, 1], got {self.flicker_depth}"
             )
         if not self.flicker_hz > 0 or not self.drift_time_constant_s > 0:
-            raise SpectwinInputError("flicker_hz and drift_time_constant_s: expected positive values")
+            raise SpectwinInputError(
+                "flicker_hz and drift_time_constant_s: expected positive values"
+            )
 
     def _relative_parts(self, wavelengths_nm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         continuum = planck_spectral_radiance(wavelengths_nm, self.continuum_temperature_k)
@@ -281,7 +287,9 @@ class PhosphorWhiteLED(_SteadyLamp):
 
     def relative_spectrum(self, wavelengths_nm: np.ndarray) -> np.ndarray:
         shape = colour.SpectralShape(FINE_GRID.start_nm, FINE_GRID.stop_nm, 0.25)
-        blue = colour.colorimetry.sd_single_led_Ohno2005(self.blue_peak_nm, self.blue_fwhm_nm, shape)
+        blue = colour.colorimetry.sd_single_led_Ohno2005(
+            self.blue_peak_nm, self.blue_fwhm_nm, shape
+        )
         phosphor = colour.colorimetry.sd_single_led_Ohno2005(
             self.phosphor_peak_nm, self.phosphor_fwhm_nm, shape
         )
@@ -298,7 +306,8 @@ def cie_illuminant(name: str, grid: WavelengthGrid) -> SampledSpectra:
     """Relative spectral power of a CIE illuminant from ``colour.SDS_ILLUMINANTS`` (e.g. "D65")."""
     if name not in colour.SDS_ILLUMINANTS:
         raise SpectwinInputError(
-            f"illuminant: expected one of colour.SDS_ILLUMINANTS ({', '.join(sorted(colour.SDS_ILLUMINANTS))}), got {name!r}"
+            f"illuminant: expected a name of colour.SDS_ILLUMINANTS "
+            f"({', '.join(sorted(colour.SDS_ILLUMINANTS))}), got {name!r}"
         )
     return resample(from_colour(colour.SDS_ILLUMINANTS[name]), grid, method="pchip")
 

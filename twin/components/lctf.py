@@ -70,7 +70,9 @@ class LiquidCrystalTunableFilter:
             if not 0 < getattr(self, name) <= 1:
                 raise SpectwinInputError(f"{name}: expected a transmission in (0, 1]")
         if not 0 <= self.leakage < 1:
-            raise SpectwinInputError(f"leakage: expected a transmission in [0, 1), got {self.leakage}")
+            raise SpectwinInputError(
+                f"leakage: expected a transmission in [0, 1), got {self.leakage}"
+            )
 
     @classmethod
     def varispec(cls, model: str = "VS-10", **overrides: object) -> LiquidCrystalTunableFilter:
@@ -89,7 +91,8 @@ class LiquidCrystalTunableFilter:
         """Transmission at each band centre for unpolarized light (polarizer included)."""
         centres = np.asarray(self.band_centres_nm)
         logistic = 1 / (
-            1 + np.exp(-(centres - self.peak_transmission_half_nm) / self.peak_transmission_width_nm)
+            1
+            + np.exp(-(centres - self.peak_transmission_half_nm) / self.peak_transmission_width_nm)
         )
         return self.polarizer_transmission * self.peak_transmission_max * logistic
 

@@ -56,10 +56,15 @@ def colorchecker_reflectances(
     """
     if source not in COLORCHECKER_SOURCES:
         raise SpectwinInputError(f"source: expected one of {COLORCHECKER_SOURCES}, got {source!r}")
+    names = tuple(colour.SDS_COLOURCHECKERS["ColorChecker N Ohta"])
     if source == "isetbio":
         measured = read_spectra_csv("spectra/reflectances/macbeth_colorchecker.csv")
+        # isetbio stores the 4 x 6 chart column by column (its gray series is every 4th patch):
+        # reorder to the row-major patch order of colour.
+        row_major = [(index % 6) * 4 + index // 6 for index in range(24)]
+        measured = SampledSpectra(measured.grid, measured.values[row_major], names)
     else:
         patches = colour.SDS_COLOURCHECKERS[source]
         measured = from_colour(colour.MultiSpectralDistributions(list(patches.values())))
-        measured = SampledSpectra(measured.grid, measured.values, tuple(patches))
+        measured = SampledSpectra(measured.grid, measured.values, names)
     return resample(measured, grid, method="pchip", out_of_range=out_of_range)
