@@ -1,17 +1,16 @@
 """Timings of the foundation: smoke render and spectral resampling. Prints JSON.
 
-Run: .venv/bin/python benchmarks/foundation.py
+Run: .venv/bin/python -m benchmarks.foundation
 """
 
 from __future__ import annotations
 
 import json
-import os
-import platform
 import time
 
 import numpy as np
 
+from benchmarks.common import machine_description
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid, resample
 from twin.components import (
     FINE_GRID,
@@ -43,12 +42,14 @@ def main() -> None:
     irradiance = irradiance_at(QTHLamp().intensity(FINE_GRID), 2.0)
     white = zenith_white_reflectance(FINE_GRID)
     results: dict[str, object] = {
-        "machine": f"{platform.machine()}, {os.cpu_count()} cores, {platform.python_version()}",
+        "machine": machine_description(),
         "variant": report.as_dict(),
     }
     for spp in (64, 256):
         first, best = _timed(
-            lambda spp=spp: render_flat_target(white, irradiance, bands, pixels_per_patch=64, spp=spp)
+            lambda spp=spp: render_flat_target(
+                white, irradiance, bands, pixels_per_patch=64, spp=spp
+            )
         )
         results[f"render_64x64x33_spp{spp}_s"] = {"first": round(first, 3), "best": round(best, 3)}
 

@@ -79,15 +79,31 @@ def _require_exposure(t0_s: float, exposure_s: float) -> None:
 
 
 class Lamp(Protocol):
-    """What the rigs need of a light source."""
+    """What the rigs need of a light source.
+
+    A lamp's output is a sum of fixed spectral parts whose weights change in time
+    (``spectral_parts`` and ``part_exposure_s``). Anything linear in the light, a render or
+    a sensor's mean signal, can therefore be computed once per part and combined per frame:
+    ``exposure_integral`` = sum over parts of ``part_exposure_s`` x ``spectral_parts``.
+    """
 
     def intensity(self, grid: WavelengthGrid, t_s: float = 0.0) -> SampledSpectra:
         """Spectral radiant intensity at time ``t_s`` in W sr^-1 nm^-1."""
+
+    def spectral_parts(self, grid: WavelengthGrid) -> SampledSpectra:
+        """Time-averaged intensity of each part, values ``(n_parts, K)``, W sr^-1 nm^-1."""
+
+    def part_exposure_s(self, t0_s: float, exposure_s: float) -> np.ndarray:
+        """Effective seconds each part shines during ``[t0_s, t0_s + exposure_s]``."""
 
     def exposure_integral(
         self, grid: WavelengthGrid, t0_s: float, exposure_s: float
     ) -> SampledSpectra:
         """Integral of the intensity over ``[t0_s, t0_s + exposure_s]`` in J sr^-1 nm^-1."""
+
+
+def _combine_parts(parts: SampledSpectra, weights_s: np.ndarray) -> SampledSpectra:
+    return SampledSpectra(parts.grid, weights_s @ parts.values)
 
 
 def _intensity_scale(
@@ -117,11 +133,18 @@ class _SteadyLamp(ABC):
         scale = _intensity_scale(self.relative_spectrum, self.radiant_intensity_w_sr)
         return SampledSpectra(grid, scale * self.relative_spectrum(grid.wavelengths_nm))
 
+    def spectral_parts(self, grid: WavelengthGrid) -> SampledSpectra:
+        intensity = self.intensity(grid)
+        return SampledSpectra(grid, intensity.values[None, :], ("steady",))
+
+    def part_exposure_s(self, t0_s: float, exposure_s: float) -> np.ndarray:
+        _require_exposure(t0_s, exposure_s)
+        return np.array([exposure_s])
+
     def exposure_integral(
         self, grid: WavelengthGrid, t0_s: float, exposure_s: float
     ) -> SampledSpectra:
-        _require_exposure(t0_s, exposure_s)
-        return self.intensity(grid, t0_s) * exposure_s
+        return _combine_parts(self.spectral_parts(grid), self.part_exposure_s(t0_s, exposure_s))
 
 
 @dataclass(frozen=True)
@@ -240,23 +263,30 @@ class HMILamp:
         modulation = 1.0 + self.flicker_depth * np.sin(phase)
         return SampledSpectra(grid, self.drift(t_s) * (continuum + modulation * lines))
 
-    def exposure_integral(
-        self, grid: WavelengthGrid, t0_s: float, exposure_s: float
-    ) -> SampledSpectra:
-        """Intensity integrated over ``[t0_s, t0_s + exposure_s]`` in J sr^-1 nm^-1.
+    def spectral_parts(self, grid: WavelengthGrid) -> SampledSpectra:
+        """The steady continuum and the flickering lines, values ``(2, K)``."""
+        continuum, lines = self.continuum_and_lines(grid.wavelengths_nm)
+        return SampledSpectra(grid, np.stack([continuum, lines]), ("continuum", "lines"))
+
+    def part_exposure_s(self, t0_s: float, exposure_s: float) -> np.ndarray:
+        """Effective seconds of continuum and lines in ``[t0_s, t0_s + exposure_s]``.
 
         The line modulation is integrated exactly, so any window whose length is a multiple of
         ``1 / flicker_hz`` (66.7 ms for 15 Hz, thesis 3.2.2) sees the same energy whatever its
         phase. The drift is evaluated at the middle of the window (it changes over hours).
         """
         _require_exposure(t0_s, exposure_s)
-        continuum, lines = self.continuum_and_lines(grid.wavelengths_nm)
         omega = 2 * np.pi * self.flicker_hz
         start = omega * t0_s + self.flicker_phase_rad
         stop = start + omega * exposure_s
         line_time = exposure_s + self.flicker_depth * (np.cos(start) - np.cos(stop)) / omega
-        drift = self.drift(t0_s + exposure_s / 2)
-        return SampledSpectra(grid, drift * (continuum * exposure_s + lines * line_time))
+        return self.drift(t0_s + exposure_s / 2) * np.array([exposure_s, line_time])
+
+    def exposure_integral(
+        self, grid: WavelengthGrid, t0_s: float, exposure_s: float
+    ) -> SampledSpectra:
+        """Intensity integrated over ``[t0_s, t0_s + exposure_s]`` in J sr^-1 nm^-1."""
+        return _combine_parts(self.spectral_parts(grid), self.part_exposure_s(t0_s, exposure_s))
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,45 @@
+"""Demosaicing of Bayer raw frames, through the ``colour-demosaicing`` package.
+
+References
+----------
+- Malvar, H. S., He, L., & Cutler, R. (2004). High-quality linear interpolation for demosaicing
+  of Bayer-patterned color images. ICASSP. doi:10.1109/ICASSP.2004.1326587
+- Menon, D., Andriani, S., & Calvagno, G. (2007). Demosaicing With Directional Filtering and a
+  posteriori Decision. IEEE TIP, 16(1), 132-141. doi:10.1109/TIP.2006.884928
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import colour_demosaicing
+import numpy as np
+
+from recon.errors import SpectwinInputError
+
+__all__ = ["DEMOSAIC_METHODS", "demosaic"]
+
+DEMOSAIC_METHODS = {
+    "bilinear": colour_demosaicing.demosaicing_CFA_Bayer_bilinear,
+    "Malvar2004": colour_demosaicing.demosaicing_CFA_Bayer_Malvar2004,
+    "Menon2007": colour_demosaicing.demosaicing_CFA_Bayer_Menon2007,
+}
+
+
+def demosaic(
+    mosaic: np.ndarray,
+    *,
+    pattern: Literal["RGGB", "BGGR", "GRBG", "GBRG"] = "RGGB",
+    method: str = "bilinear",
+) -> np.ndarray:
+    """Interpolate a Bayer mosaic ``(H, W)`` (dark-subtracted, linear) to RGB ``(H, W, 3)``."""
+    mosaic = np.asarray(mosaic, dtype=np.float64)
+    if mosaic.ndim != 2:
+        raise SpectwinInputError(f"mosaic: expected a 2-D raw frame, got shape {mosaic.shape}")
+    if method not in DEMOSAIC_METHODS:
+        raise SpectwinInputError(
+            f"method: expected one of {sorted(DEMOSAIC_METHODS)}, got {method!r}"
+        )
+    if pattern not in ("RGGB", "BGGR", "GRBG", "GBRG"):
+        raise SpectwinInputError(f"pattern: expected RGGB, BGGR, GRBG or GBRG, got {pattern!r}")
+    return np.asarray(DEMOSAIC_METHODS[method](mosaic, pattern))
