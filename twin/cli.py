@@ -63,5 +63,30 @@ def smoke(
     console.print(f"wrote {', '.join(str(out / name) for name in summary['outputs'])}")
 
 
+@app.command()
+def camera(
+    name: Annotated[str, typer.Argument(help="Camera file in scenes/cameras, e.g. coolsnap_k4.")],
+    out: Annotated[
+        Path, typer.Option(help="Folder for camera_report.png and summary.json.")
+    ] = Path("out/camera"),
+    seed: Annotated[int, typer.Option(help="Seed of the simulated frames.")] = 0,
+    as_json: JsonFlag = False,
+) -> None:
+    """Bench-test a camera: photon transfer, dark frames, HMI flicker vs exposure time."""
+    from twin.camera_report import run_camera_report
+
+    with console.status(f"simulating {name}"):
+        summary = run_camera_report(name, out / name, seed=seed)
+    if as_json:
+        typer.echo(json.dumps(summary, indent=2))
+        return
+    table = Table("quantity", "value", title=str(summary["camera"]))
+    for key, value in summary.items():
+        if key not in ("camera", "outputs"):
+            table.add_row(key, str(value))
+    console.print(table)
+    console.print(f"wrote {out / name / 'camera_report.png'}")
+
+
 if __name__ == "__main__":
     app()

@@ -3,6 +3,7 @@
 import json
 
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 from recon.spectral_exr import read_spectral_exr
@@ -37,3 +38,22 @@ def test_smoke_rejects_bad_options(tmp_path):
     result = runner.invoke(app, ["smoke", "--out", str(tmp_path), "--spp", "0"])
     assert result.exit_code != 0
     assert "spp" in result.output
+
+
+def test_camera_bench_test_reports_gain_noise_and_flicker(tmp_path):
+    result = runner.invoke(app, ["camera", "coolsnap_k4", "--out", str(tmp_path), "--json"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.output)
+    assert summary["measured_gain_dn_per_e"] == pytest.approx(0.2, rel=0.05)
+    assert summary["measured_dark_noise_dn"] == pytest.approx(3.0, rel=0.1)
+    assert (
+        summary["flicker_spread_percent_at_50ms"]
+        > 20 * summary["flicker_spread_percent_near_66_7ms"]
+    )
+    assert (tmp_path / "coolsnap_k4" / "camera_report.png").stat().st_size > 0
+
+
+def test_camera_bench_test_names_unknown_cameras(tmp_path):
+    result = runner.invoke(app, ["camera", "hasselblad", "--out", str(tmp_path)])
+    assert result.exit_code != 0
+    assert "coolsnap_k4" in str(result.exception)

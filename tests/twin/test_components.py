@@ -242,3 +242,19 @@ def test_irradiance_follows_the_inverse_square_law():
 def test_bad_component_parameters_raise_clear_errors(make, message):
     with pytest.raises(SpectwinInputError, match=message):
         make()
+
+
+@pytest.mark.parametrize("lamp", [HMILamp(), QTHLamp(), PhosphorWhiteLED()], ids=type)
+def test_every_lamp_is_the_sum_of_its_parts_over_an_exposure(lamp):
+    parts = lamp.spectral_parts(DEFAULT_GRID)
+    weights = lamp.part_exposure_s(0.0123, 0.0517)
+    assert parts.values.shape == (weights.size, 33)
+    np.testing.assert_allclose(
+        lamp.exposure_integral(DEFAULT_GRID, 0.0123, 0.0517).values,
+        weights @ parts.values,
+        rtol=1e-12,
+    )
+    # At switch-on (no drift yet, flicker phase 0) the parts add up to the intensity.
+    np.testing.assert_allclose(
+        parts.values.sum(axis=0), lamp.intensity(DEFAULT_GRID, 0.0).values, rtol=1e-12
+    )

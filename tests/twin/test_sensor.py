@@ -14,7 +14,8 @@ from recon.demosaic import demosaic
 from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra, WavelengthGrid
 from twin.camera_config import load_camera_config
-from twin.components import FINE_GRID, HMILamp, LiquidCrystalTunableFilter, zenith_white_reflectance
+from twin.camera_report import white_target_part_rates
+from twin.components import HMILamp
 from twin.sensor import Sensor, bayer_channel_index
 
 WAVELENGTH_NM = 550.0
@@ -160,20 +161,10 @@ def test_dark_frames_show_the_shift_direction_gradient_and_hot_pixels():
     assert hot_fraction == pytest.approx(sensor.config.fixed_pattern.hot_pixel_fraction, rel=0.3)
 
 
-def _white_target_rates(sensor, lamp, band_nm, distance_m=2.0):
-    """Photo-electrons per second of each lamp part for a white target facing the lamp."""
-    lctf = LiquidCrystalTunableFilter.varispec("VS-10")
-    band = lctf.transmission(FINE_GRID).row(f"lctf_{band_nm:g}nm")
-    reflectance = zenith_white_reflectance(FINE_GRID).values
-    parts = lamp.spectral_parts(FINE_GRID)
-    radiance = SampledSpectra(FINE_GRID, parts.values * reflectance / math.pi / distance_m**2)
-    return sensor.mean_electrons(radiance, band)[:, 0]
-
-
 def test_hmi_flicker_spreads_frames_unless_the_exposure_is_a_multiple_of_1_15_s():
     sensor = Sensor("coolsnap_k4", roi=(32, 32))
     lamp = HMILamp()
-    rates = _white_target_rates(sensor, lamp, 550.0)
+    rates = white_target_part_rates(sensor, lamp, 550.0)
     gain = sensor.config.system_gain_dn_per_e
     rng = np.random.default_rng(15)
     spreads, predicted = {}, {}
@@ -197,8 +188,8 @@ def test_flicker_is_in_the_line_bands_only():
     sensor = Sensor("coolsnap_k4", roi=(8, 8))
     lamp = HMILamp()
     line_band, continuum_band = (
-        _white_target_rates(sensor, lamp, 550.0),
-        _white_target_rates(sensor, lamp, 650.0),
+        white_target_part_rates(sensor, lamp, 550.0),
+        white_target_part_rates(sensor, lamp, 650.0),
     )
     assert line_band[1] > 0.1 * line_band[0]
     # Only the LCTF's out-of-band leakage lets line light into a continuum band.
