@@ -17,10 +17,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated, Literal
 
-import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from recon.errors import SpectwinInputError
+from twin.yaml_config import read_yaml_mapping, resolve_scene_file, validate_document
 
 __all__ = ["CAMERA_DIR", "CameraConfig", "available_cameras", "load_camera_config"]
 
@@ -141,24 +140,5 @@ def available_cameras() -> list[str]:
 
 def load_camera_config(name_or_path: str | Path) -> CameraConfig:
     """Load a camera by file name in ``scenes/cameras`` (e.g. ``"coolsnap_k4"``) or by path."""
-    path = Path(name_or_path)
-    if not path.suffix:
-        path = CAMERA_DIR / f"{name_or_path}.yaml"
-    if not path.is_file():
-        raise SpectwinInputError(
-            f"camera: no file {path}; expected a path or one of {available_cameras()}"
-        )
-    try:
-        document = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as error:
-        raise SpectwinInputError(f"{path}: malformed YAML: {error}") from error
-    if not isinstance(document, dict):
-        raise SpectwinInputError(f"{path}: expected a mapping of camera settings")
-    try:
-        return CameraConfig.model_validate(document)
-    except ValidationError as error:
-        problems = "; ".join(
-            f"{'.'.join(str(part) for part in item['loc']) or 'camera'}: {item['msg']}"
-            for item in error.errors()
-        )
-        raise SpectwinInputError(f"{path}: {problems}") from error
+    path = resolve_scene_file(name_or_path, CAMERA_DIR, "camera")
+    return validate_document(CameraConfig, read_yaml_mapping(path), path)

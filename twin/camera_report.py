@@ -18,32 +18,14 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from recon.spectra import SampledSpectra  # noqa: E402
-from twin.components import (  # noqa: E402
-    FINE_GRID,
-    HMILamp,
-    LiquidCrystalTunableFilter,
-    zenith_white_reflectance,
-)
+from twin.components import FINE_GRID, HMILamp, LiquidCrystalTunableFilter  # noqa: E402
 from twin.sensor import Sensor  # noqa: E402
+from twin.white_reference import white_reference_rates  # noqa: E402
 
-__all__ = ["run_camera_report", "white_target_part_rates"]
+__all__ = ["run_camera_report"]
 
 _WAVELENGTH_NM = 550.0
 _READOUT_S = 0.130  # filter switching and image download per frame (thesis 4.1.1)
-
-
-def white_target_part_rates(
-    sensor: Sensor, lamp: HMILamp, band_nm: float, *, distance_m: float = 2.0
-) -> np.ndarray:
-    """Photo-electrons per second of each lamp part, for the Zenith white facing the lamp at
-    ``distance_m`` and seen through the VS-10 band at ``band_nm`` (monochrome sensor)."""
-    band = LiquidCrystalTunableFilter.varispec("VS-10").transmission(FINE_GRID)
-    band = band.row(f"lctf_{band_nm:g}nm")
-    reflectance = zenith_white_reflectance(FINE_GRID).values
-    parts = lamp.spectral_parts(FINE_GRID)
-    radiance = SampledSpectra(FINE_GRID, parts.values * reflectance / math.pi / distance_m**2)
-    return sensor.mean_electrons(radiance, band)[:, 0]
 
 
 def _photon_transfer(sensor: Sensor, rng: np.random.Generator, exposure_s: float) -> dict:
@@ -72,9 +54,13 @@ def _photon_transfer(sensor: Sensor, rng: np.random.Generator, exposure_s: float
 
 def _flicker_sweep(sensor: Sensor, rng: np.random.Generator) -> dict:
     lamp = HMILamp()
-    # 4 m keeps the white target below saturation up to the longest exposure of the sweep.
-    rates = white_target_part_rates(sensor, lamp, _WAVELENGTH_NM, distance_m=4.0)
+    band = LiquidCrystalTunableFilter.varispec("VS-10").transmission(FINE_GRID)
+    band = band.row(f"lctf_{_WAVELENGTH_NM:g}nm")
     exposures_s = np.union1d(np.linspace(0.02, 0.3, 57), np.arange(1, 5) / lamp.flicker_hz)
+    # Place the white target so that the longest exposure fills 60 % of saturation.
+    rates_at_1m = white_reference_rates(sensor, lamp, band, distance_m=1.0)[:, 0]
+    fill = 0.6 * sensor.saturation_capacity_e / (rates_at_1m.sum() * exposures_s.max())
+    rates = rates_at_1m * fill
     predicted, simulated = [], []
     for exposure_s in exposures_s:
         starts = np.arange(40) * (exposure_s + _READOUT_S)

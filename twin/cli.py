@@ -88,5 +88,42 @@ def camera(
     console.print(f"wrote {out / name / 'camera_report.png'}")
 
 
+@app.command()
+def estimate(
+    rig: Annotated[str, typer.Argument(help="Rig file in scenes/rigs (gonio, dome) or a path.")],
+    as_json: JsonFlag = False,
+) -> None:
+    """Estimate the capture time of one material on a rig (thesis 4.1.1 and 10.2.2)."""
+    from twin.rig_config import GonioConfig, load_rig
+
+    config = load_rig(rig)
+    if isinstance(config, GonioConfig):
+        from twin.capture_time import estimate_gonio
+
+        with console.status("solving the kinematics of every direction pair"):
+            summary = estimate_gonio(config).as_dict()
+    else:
+        from twin.dome_geometry import dome_capture_seconds
+
+        total_s = dome_capture_seconds(config)
+        summary = {
+            "stage_positions": config.rotation_stage_positions,
+            "leds": config.led_count,
+            "rgb_cameras": len(config.rgb_camera_polar_deg),
+            "frames_per_camera": config.rotation_stage_positions * (config.led_count + 1),
+            "total_s": round(total_s, 1),
+            "total_h": round(total_s / 3600, 2),
+        }
+    summary = {"rig": config.name, **summary}
+    if as_json:
+        typer.echo(json.dumps(summary, indent=2))
+        return
+    table = Table("quantity", "value", title=f"capture time: {config.name}")
+    for key, value in summary.items():
+        if key not in ("rig", "band_exposures_s"):
+            table.add_row(key, str(value))
+    console.print(table)
+
+
 if __name__ == "__main__":
     app()

@@ -57,3 +57,11 @@ def test_camera_bench_test_names_unknown_cameras(tmp_path):
     result = runner.invoke(app, ["camera", "hasselblad", "--out", str(tmp_path)])
     assert result.exit_code != 0
     assert "coolsnap_k4" in str(result.exception)
+
+
+def test_estimate_gonio_reports_the_thesis_capture_time():
+    result = runner.invoke(app, ["estimate", "gonio", "--json"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.output)
+    assert summary["pairs"] == 6561
+    assert summary["total_h"] == pytest.approx(134.9, rel=0.03)

@@ -14,11 +14,18 @@ from recon.demosaic import demosaic
 from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra, WavelengthGrid
 from twin.camera_config import load_camera_config
-from twin.camera_report import white_target_part_rates
-from twin.components import HMILamp
+from twin.components import FINE_GRID, HMILamp, LiquidCrystalTunableFilter
 from twin.sensor import Sensor, bayer_channel_index
+from twin.white_reference import white_reference_rates
 
 WAVELENGTH_NM = 550.0
+VS10_BANDS = LiquidCrystalTunableFilter.varispec("VS-10").transmission(FINE_GRID)
+
+
+def white_target_part_rates(sensor, lamp, band_nm):
+    """Photo-electrons per second of each lamp part: Zenith white, HMI at 2 m, one VS-10 band."""
+    band = VS10_BANDS.row(f"lctf_{band_nm:g}nm")
+    return white_reference_rates(sensor, lamp, band, distance_m=2.0)[:, 0]
 
 
 @pytest.fixture(autouse=True)
