@@ -125,5 +125,22 @@ def estimate(
     console.print(table)
 
 
+@app.command()
+def gallery(
+    out: Annotated[Path, typer.Option(help="Folder for the PNGs and gallery.json.")] = Path(
+        "out/gallery"
+    ),
+    pixels: Annotated[int, typer.Option(min=32, help="Rendered frame size (square).")] = 256,
+    spp: Annotated[int, typer.Option(min=1, help="Samples per pixel.")] = 64,
+    seed: Annotated[int, typer.Option(help="Seed of the sensor noise.")] = 0,
+) -> None:
+    """Simulate one raw frame of every ground-truth material in every rig, as PNGs."""
+    from twin.rig_gallery import run_gallery
+
+    with console.status("rendering every material in every rig"):
+        summary = run_gallery(out, pixels=pixels, spp=spp, seed=seed)
+    console.print(f"wrote {len(summary['outputs'])} frames to {out}")
+
+
 if __name__ == "__main__":
     app()

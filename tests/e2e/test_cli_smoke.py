@@ -65,3 +65,12 @@ def test_estimate_gonio_reports_the_thesis_capture_time():
     summary = json.loads(result.output)
     assert summary["pairs"] == 6561
     assert summary["total_h"] == pytest.approx(134.9, rel=0.03)
+
+
+def test_gallery_writes_a_frame_of_every_material_in_every_rig(tmp_path):
+    result = runner.invoke(app, ["gallery", "--out", str(tmp_path), "--pixels", "64", "--spp", "4"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads((tmp_path / "gallery.json").read_text())
+    assert len(summary["outputs"]) == 12
+    for name in summary["outputs"]:
+        assert (tmp_path / name).stat().st_size > 0

@@ -1,0 +1,127 @@
+"""Real Mitsuba renders of the rigs: radiometry, kinematics against images, metamers, truth."""
+
+import math
+
+import numpy as np
+import pytest
+
+from recon.metamers import camera_signal
+from recon.metrics import relative_error
+from recon.spectra import DEFAULT_GRID, resample
+from twin.components import (
+    FINE_GRID,
+    LiquidCrystalTunableFilter,
+    PhosphorWhiteLED,
+    QTHLamp,
+    zenith_white_reflectance,
+)
+from twin.gonio_kinematics import solve_pairs
+from twin.gonio_render import gonio_camera, gonio_part_rates, pose_matrix
+from twin.hemisphere import direction
+from twin.materials import MATERIAL_GRID, load_material
+from twin.materials.geometry import box
+from twin.registration_marks import find_print_corners
+from twin.rig_config import load_rig
+from twin.sample_holder import registration_corners
+from twin.sensor import Sensor
+from twin.surfaces import SurfacePart
+from twin.truth import truth_btf, truth_camera_signal
+
+pytestmark = pytest.mark.render
+
+
+@pytest.fixture(scope="module")
+def gonio():
+    return load_rig("gonio")
+
+
+def test_white_target_under_qth_lamp_renders_to_the_analytic_sensor_irradiance(gonio):
+    qth = gonio.model_copy(
+        update={"lamps": [lamp.model_copy(update={"spectrum": "qth"}) for lamp in gonio.lamps]}
+    )
+    pose = solve_pairs(qth, direction(30.0, 0.0)[None], direction(0.0, 0.0)[None]).poses[0]
+    white = zenith_white_reflectance(FINE_GRID)
+    target = SurfacePart("zenith_white", box((0, 0, -0.001), (0.04, 0.04, 0.002)), white)
+    rates = gonio_part_rates(
+        qth, pose, None, pixels=64, spp=1024, holder=False, extra_parts=[target]
+    )[0]
+    measured = rates[28:36, 28:36].reshape(-1, 33).mean(axis=0)  # the centre, 2.5 cm square
+    # Closed form: E = I cos(theta_l) / d^2 on the target, L = W E / pi, and the sensor's
+    # electron responses (optics etendue x QE x LCTF band x lambda / hc) turn L into e-/s.
+    placement = qth.lamps[0]
+    radiance = (
+        white
+        * QTHLamp().intensity(FINE_GRID)
+        * (math.cos(math.radians(30)) / placement.distance_m**2 / math.pi)
+    )
+    sensor = Sensor(qth.camera.definition)
+    bands = LiquidCrystalTunableFilter.varispec(qth.camera.filter).transmission(FINE_GRID)
+    expected = sensor.mean_electrons(radiance, bands)
+    assert np.abs(measured / expected - 1).max() < 0.02
+
+
+@pytest.mark.parametrize(
+    ("light", "view"),
+    [((30.0, 0.0), (15.0, 180.0)), ((60.0, 90.0), (45.0, 200.0)), ((0.0, 0.0), (60.0, 40.0))],
+)
+def test_projected_border_corners_agree_with_the_kinematics_within_a_pixel(gonio, light, view):
+    pose = solve_pairs(gonio, direction(*light)[None], direction(*view)[None]).poses[0]
+    rates = gonio_part_rates(gonio, pose, None, pixels=256, spp=16)
+    image = rates[0].sum(axis=-1)
+    corners_world = registration_corners() @ pose_matrix(pose)[:3, :3].T
+    expected = gonio_camera(gonio, pose.rail_deg, 256).project(corners_world)
+    found = find_print_corners(image, expected)
+    assert np.linalg.norm(found - expected, axis=1).max() < 1.0
+
+
+@pytest.mark.parametrize("name", ["red_fabric", "lego"])
+def test_designed_metamers_match_in_camera_rgb_and_differ_spectrally(name):
+    material = load_material(name)
+    response = Sensor("svs_vistek_4022").quantum_efficiency(FINE_GRID)
+    light = PhosphorWhiteLED().intensity(FINE_GRID)
+    by_name = {part.name: part for part in material.parts}
+    for first, second in material.metameric_pairs:
+        rgb_first = camera_signal(by_name[first].reflectance, response, light)
+        rgb_second = camera_signal(by_name[second].reflectance, response, light)
+        assert np.abs(rgb_second / rgb_first - 1).max() < 0.01
+        spectral = relative_error(material.spectra[second].values, material.spectra[first].values)
+        assert spectral > 10.0
+        assert material.spectra[first].grid == MATERIAL_GRID
+
+
+def test_metameric_lego_bricks_render_to_the_same_camera_rgb():
+    lego = load_material("lego")
+    response = Sensor("svs_vistek_4022").quantum_efficiency(FINE_GRID)
+    light = PhosphorWhiteLED().intensity(FINE_GRID)
+    top = direction(0.0, 0.0)[None]
+    rgb = truth_camera_signal(lego, top, top, response, light, texels=64, spp=64)[0]
+    # Bricks 2 and 3 fill the lower half; compare their flat tops between the studs.
+    left, right = rgb[34:62, 2:30], rgb[34:62, 34:62]
+    flat_left, flat_right = (
+        left[12:16].reshape(-1, 3).mean(axis=0),
+        right[12:16].reshape(-1, 3).mean(axis=0),
+    )
+    assert np.abs(flat_right / flat_left - 1).max() < 0.01
+
+
+def test_truth_btf_of_a_diffuse_field_is_its_reflectance_over_pi():
+    chart = load_material("colorchecker16")
+    light, view = direction(40.0, 30.0)[None], direction(20.0, 250.0)[None]
+    btf = truth_btf(chart, light, view, texels=64, spp=64)
+    assert btf.shape == (1, 64, 64, 33) and btf.dtype == np.float32
+    white_field = btf[0, 52:60, 4:12].reshape(-1, 33).mean(axis=0)  # row 3, column 0: white 9.5
+    passbands = LiquidCrystalTunableFilter.varispec("VS-10")
+    expected = resample(chart.spectra["field_12"], DEFAULT_GRID).values / np.pi
+    assert np.abs(white_field[2:-2] / expected[2:-2] - 1).max() < 0.02
+    assert passbands.fwhm_nm == 10.0
+
+
+def test_glossy_fields_show_a_specular_peak_in_the_mirror_direction():
+    chart = load_material("colorchecker16")
+    light = direction(45.0, 0.0)[None]
+    mirror, off = direction(45.0, 180.0)[None], direction(45.0, 90.0)[None]
+    peak = truth_btf(chart, light, mirror, texels=32, spp=64)[0]
+    away = truth_btf(chart, light, off, texels=32, spp=64)[0]
+    glossy = peak[2:6, 18:22].mean() / away[2:6, 18:22].mean()  # field 2: blue sky, glossy
+    matte = peak[2:6, 10:14].mean() / away[2:6, 10:14].mean()  # field 1: light skin, matte
+    assert glossy > 3 and matte < 1.5

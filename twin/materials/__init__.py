@@ -1,0 +1,63 @@
+"""Ground-truth materials with exactly known spectral reflectance (``scenes/materials``).
+
+A material is a set of surface parts in the sample frame plus the spectra they were designed
+with (on ``MATERIAL_GRID``) and the pairs of parts designed to be metameric for the dome camera.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from pydantic import TypeAdapter
+
+from recon.spectra import SampledSpectra
+from twin.materials.builders import build_colorchecker16, build_fabric, build_lego, build_wallpaper
+from twin.materials.config import MaterialConfig
+from twin.materials.spectra import MATERIAL_GRID
+from twin.surfaces import SurfacePart
+from twin.yaml_config import read_yaml_mapping, resolve_scene_file, validate_document
+
+__all__ = ["MATERIAL_DIR", "MATERIAL_GRID", "Material", "available_materials", "load_material"]
+
+MATERIAL_DIR = Path(__file__).resolve().parents[2] / "scenes" / "materials"
+
+_BUILDERS = {
+    "colorchecker16": build_colorchecker16,
+    "red_fabric": build_fabric,
+    "lego": build_lego,
+    "wallpaper": build_wallpaper,
+}
+
+
+@dataclass(frozen=True, eq=False)
+class Material:
+    """A built material: parts to render, design spectra, metameric part pairs."""
+
+    name: str
+    size_m: float
+    parts: tuple[SurfacePart, ...]
+    spectra: dict[str, SampledSpectra]
+    metameric_pairs: tuple[tuple[str, str], ...]
+
+
+class _Document:
+    """pydantic needs a model to validate the discriminated union against."""
+
+    adapter = TypeAdapter(MaterialConfig)
+
+    @classmethod
+    def model_validate(cls, document: dict):
+        return cls.adapter.validate_python(document)
+
+
+def available_materials() -> list[str]:
+    return sorted(path.stem for path in MATERIAL_DIR.glob("*.yaml"))
+
+
+def load_material(name_or_path: str | Path) -> Material:
+    """Build the material described by ``scenes/materials/<name>.yaml`` (or a path)."""
+    path = resolve_scene_file(name_or_path, MATERIAL_DIR, "material")
+    config = validate_document(_Document, read_yaml_mapping(path), path)
+    parts, spectra, pairs = _BUILDERS[config.material](config)
+    return Material(config.name, config.size_m, tuple(parts), spectra, tuple(pairs))

@@ -1,0 +1,112 @@
+"""Mitsuba scenes of the rigs: a material on its holder, posed by the rig, lit by one lamp or LED,
+seen by one camera whose ``specfilm`` channels are the sensor's electron responses.
+
+Channel responses are ``Sensor.electron_responses`` (optics etendue x QE x filter x
+:math:`\\lambda / hc`), so a render is directly the mean photo-electron rate per pixel (e-/s) for
+the given lamp spectrum: ``render -> x exposure -> Sensor.capture -> raw frame``. Renders are made
+at a chosen resolution; each rendered pixel stands for one sensor pixel of the camera at that
+place of the image (a sub-sampled sensor).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from recon.spectra import SampledSpectra
+from twin.hemisphere import direction
+from twin.mitsuba_spectra import irregular_spectrum, specfilm
+from twin.surfaces import SurfacePart, mitsuba_shape, transformed
+from twin.variant import activate
+
+__all__ = ["PinholeCamera", "lamp_position", "render_view"]
+
+
+@dataclass(frozen=True)
+class PinholeCamera:
+    """A camera looking at the rig centre from ``position_m``; square image of ``pixels``.
+
+    ``field_of_view_m`` is the width of the field at the rig centre.
+    """
+
+    position_m: np.ndarray
+    field_of_view_m: float
+    pixels: int
+    up: tuple[float, float, float] = (0.0, 0.0, 1.0)
+
+    @property
+    def fov_deg(self) -> float:
+        distance = float(np.linalg.norm(self.position_m))
+        return float(2 * np.degrees(np.arctan(self.field_of_view_m / 2 / distance)))
+
+    def _frame(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        forward = -np.asarray(self.position_m, np.float64)
+        forward /= np.linalg.norm(forward)
+        up = np.asarray(self.up, np.float64)
+        if abs(np.dot(up, forward)) > 0.999:
+            up = np.array([0.0, 1.0, 0.0])
+        left = np.cross(up, forward)
+        left /= np.linalg.norm(left)
+        return left, np.cross(forward, left), forward
+
+    def project(self, points_m: np.ndarray) -> np.ndarray:
+        """Continuous pixel coordinates ``(n, 2)`` (column, row; pixel centres at +0.5)."""
+        left, up, forward = self._frame()
+        relative = np.atleast_2d(points_m) - self.position_m
+        depth = relative @ forward
+        focal = self.pixels / 2 / np.tan(np.radians(self.fov_deg) / 2)
+        column = self.pixels / 2 - focal * (relative @ left) / depth
+        row = self.pixels / 2 - focal * (relative @ up) / depth
+        return np.column_stack([column, row])
+
+    def mitsuba_sensor(self, channels: SampledSpectra, spp: int) -> dict[str, object]:
+        activate()
+        import mitsuba as mi
+
+        left, up, forward = self._frame()
+        return {
+            "type": "perspective",
+            "fov": self.fov_deg,
+            "to_world": mi.ScalarTransform4f.look_at(
+                origin=self.position_m.tolist(), target=[0.0, 0.0, 0.0], up=up.tolist()
+            ),
+            "film": specfilm(channels, self.pixels, self.pixels),
+            "sampler": {"type": "ldsampler", "sample_count": spp},
+        }
+
+
+def render_view(
+    parts: list[SurfacePart],
+    sample_to_world: np.ndarray,
+    camera: PinholeCamera,
+    channels: SampledSpectra,
+    light_position_m: np.ndarray,
+    light_intensity: SampledSpectra,
+    *,
+    spp: int = 64,
+    seed: int = 0,
+) -> np.ndarray:
+    """Render ``parts`` moved by the 4x4 ``sample_to_world``, lit by a point light of spectral
+    intensity ``light_intensity`` (W sr^-1 nm^-1, on the channels' grid); returns ``(H, W, n)``."""
+    activate()
+    import mitsuba as mi
+
+    scene: dict[str, object] = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": 3},
+        "sensor": camera.mitsuba_sensor(channels, spp),
+        "light": {
+            "type": "point",
+            "position": np.asarray(light_position_m, np.float64).tolist(),
+            "intensity": irregular_spectrum(light_intensity),
+        },
+    }
+    for part in parts:
+        scene[part.name] = mitsuba_shape(transformed(part, sample_to_world))
+    return np.array(mi.render(mi.load_dict(scene), seed=seed), dtype=np.float64)
+
+
+def lamp_position(azimuth_deg: float, elevation_deg: float, distance_m: float) -> np.ndarray:
+    """Position of a lamp at ``distance_m`` from the rig centre."""
+    return distance_m * direction(90.0 - elevation_deg, azimuth_deg)
