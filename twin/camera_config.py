@@ -17,30 +17,31 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import Field, model_validator
 
-from twin.yaml_config import read_yaml_mapping, resolve_scene_file, validate_document
+from twin.yaml_config import (
+    NonNegative,
+    Positive,
+    StrictModel,
+    read_yaml_mapping,
+    resolve_scene_file,
+    scene_names,
+    validate_document,
+)
 
 __all__ = ["CAMERA_DIR", "CameraConfig", "available_cameras", "load_camera_config"]
 
 CAMERA_DIR = Path(__file__).resolve().parents[1] / "scenes" / "cameras"
 
-Positive = Annotated[float, Field(gt=0)]
-NonNegative = Annotated[float, Field(ge=0)]
 
-
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-
-class OpticsConfig(_Strict):
+class OpticsConfig(StrictModel):
     """Lens in front of the sensor: :math:`E = \\pi \\tau L / (4 N^2)` (distant object)."""
 
     f_number: Positive
     transmission: Annotated[float, Field(gt=0, le=1)] = 1.0
 
 
-class CCDQuantumEfficiencyConfig(_Strict):
+class CCDQuantumEfficiencyConfig(StrictModel):
     """Monochrome CCD: the two-sided log-normal of ``twin.components.CCDQuantumEfficiency``."""
 
     model: Literal["ccd"]
@@ -50,7 +51,7 @@ class CCDQuantumEfficiencyConfig(_Strict):
     log_width_red: Positive
 
 
-class RGBQuantumEfficiencyConfig(_Strict):
+class RGBQuantumEfficiencyConfig(StrictModel):
     """Colour sensor: a measured relative RGB response scaled to a peak quantum efficiency."""
 
     model: Literal["rgb_camera"]
@@ -58,7 +59,7 @@ class RGBQuantumEfficiencyConfig(_Strict):
     peak_qe: Annotated[float, Field(gt=0, le=1)]
 
 
-class DarkCurrentConfig(_Strict):
+class DarkCurrentConfig(StrictModel):
     """Dark current :math:`D(T) = D_{ref} 2^{(T - T_{ref}) / T_d}` in electrons per second."""
 
     e_per_s_at_reference: NonNegative
@@ -66,7 +67,7 @@ class DarkCurrentConfig(_Strict):
     doubling_temperature_c: Positive = 6.3
 
 
-class FixedPatternConfig(_Strict):
+class FixedPatternConfig(StrictModel):
     """Fixed-pattern noise, drawn once per camera serial.
 
     ``dsnu_sigma``: log-normal spread of the per-pixel dark current; ``prnu_sigma``: relative
@@ -82,7 +83,7 @@ class FixedPatternConfig(_Strict):
     transfer_dark_e: NonNegative = 0.0
 
 
-class OECFConfig(_Strict):
+class OECFConfig(StrictModel):
     """Opto-electronic conversion: ``linear``, or ``knee`` with
     :math:`g(u) = (1 + s) u / (1 + s u)` on the signal normalized to the ADC range."""
 
@@ -96,7 +97,7 @@ class OECFConfig(_Strict):
         return self
 
 
-class CameraConfig(_Strict):
+class CameraConfig(StrictModel):
     """One camera of a rig (see the module docstring)."""
 
     name: str
@@ -135,7 +136,7 @@ class CameraConfig(_Strict):
 
 def available_cameras() -> list[str]:
     """Names of the camera files in ``scenes/cameras`` (without ``.yaml``)."""
-    return sorted(path.stem for path in CAMERA_DIR.glob("*.yaml"))
+    return scene_names(CAMERA_DIR)
 
 
 def load_camera_config(name_or_path: str | Path) -> CameraConfig:

@@ -20,6 +20,14 @@ console = Console()
 JsonFlag = Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")]
 
 
+def _print_table(summary: dict[str, object], title: str, *, skip: tuple[str, ...] = ()) -> None:
+    table = Table("quantity", "value", title=title)
+    for key, value in summary.items():
+        if key not in skip:
+            table.add_row(key, str(value))
+    console.print(table)
+
+
 @app.command()
 def info(as_json: JsonFlag = False) -> None:
     """Show the Mitsuba variant spectwin uses, the LLVM it found and the thread count."""
@@ -29,10 +37,7 @@ def info(as_json: JsonFlag = False) -> None:
     if as_json:
         typer.echo(json.dumps(report, indent=2))
         return
-    table = Table("setting", "value", title="spectwin renderer")
-    for key, value in report.items():
-        table.add_row(key, str(value))
-    console.print(table)
+    _print_table(report, "spectwin renderer")
 
 
 @app.command()
@@ -80,11 +85,7 @@ def camera(
     if as_json:
         typer.echo(json.dumps(summary, indent=2))
         return
-    table = Table("quantity", "value", title=str(summary["camera"]))
-    for key, value in summary.items():
-        if key not in ("camera", "outputs"):
-            table.add_row(key, str(value))
-    console.print(table)
+    _print_table(summary, str(summary["camera"]), skip=("camera", "outputs"))
     console.print(f"wrote {out / name / 'camera_report.png'}")
 
 
@@ -118,11 +119,7 @@ def estimate(
     if as_json:
         typer.echo(json.dumps(summary, indent=2))
         return
-    table = Table("quantity", "value", title=f"capture time: {config.name}")
-    for key, value in summary.items():
-        if key not in ("rig", "band_exposures_s"):
-            table.add_row(key, str(value))
-    console.print(table)
+    _print_table(summary, f"capture time: {config.name}", skip=("rig", "band_exposures_s"))
 
 
 @app.command()

@@ -10,25 +10,26 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import Field, model_validator
 
 from recon.errors import SpectwinInputError
 from twin.camera_config import available_cameras
-from twin.yaml_config import read_yaml_mapping, resolve_scene_file, validate_document
+from twin.yaml_config import (
+    NonNegative,
+    Positive,
+    StrictModel,
+    read_yaml_mapping,
+    resolve_scene_file,
+    scene_names,
+    validate_document,
+)
 
 __all__ = ["RIG_DIR", "DomeConfig", "GonioConfig", "available_rigs", "load_rig"]
 
 RIG_DIR = Path(__file__).resolve().parents[1] / "scenes" / "rigs"
 
-Positive = Annotated[float, Field(gt=0)]
-NonNegative = Annotated[float, Field(ge=0)]
 
-
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-
-class RailConfig(_Strict):
+class RailConfig(StrictModel):
     """Half-circle rail in the horizontal plane through the sample, camera looking at its centre."""
 
     radius_m: Positive
@@ -44,7 +45,7 @@ class RailConfig(_Strict):
         return self
 
 
-class LampPlacement(_Strict):
+class LampPlacement(StrictModel):
     """One lamp position (thesis 4.1.1: the lamp is moved by hand between two runs)."""
 
     id: str
@@ -54,7 +55,7 @@ class LampPlacement(_Strict):
     distance_m: Positive
 
 
-class GonioCameraConfig(_Strict):
+class GonioCameraConfig(StrictModel):
     definition: str
     filter: Literal["VS-07", "VS-10", "VS-20"]
     field_of_view_m: Positive
@@ -66,7 +67,7 @@ class GonioCameraConfig(_Strict):
         return self
 
 
-class RobotConfig(_Strict):
+class RobotConfig(StrictModel):
     """Sample-holding robot: orientation as yaw (base), tilt (normal from +z) and roll (wrist)."""
 
     model: str
@@ -79,21 +80,21 @@ class RobotConfig(_Strict):
     repeatability_mm: NonNegative
 
 
-class GonioTimingConfig(_Strict):
+class GonioTimingConfig(StrictModel):
     """Per direction pair: settle after moving; per image: filter switch and download (4.1.1)."""
 
     settle_s: NonNegative
     switch_and_download_s: NonNegative
 
 
-class ExposureConfig(_Strict):
+class ExposureConfig(StrictModel):
     """Band exposure times equalized on the white standard (thesis Eq. 3.4)."""
 
     white_fill: Annotated[float, Field(gt=0, le=1)]
     round_to_flicker_period: bool = True
 
 
-class GonioConfig(_Strict):
+class GonioConfig(StrictModel):
     """The spectral gonioreflectometer."""
 
     rig: Literal["gonioreflectometer"]
@@ -108,7 +109,7 @@ class GonioConfig(_Strict):
     exposure: ExposureConfig
 
 
-class DomeRing(_Strict):
+class DomeRing(StrictModel):
     """A ring of LEDs at one polar angle, ``count`` azimuths starting at ``azimuth_offset_deg``."""
 
     polar_deg: Annotated[float, Field(ge=0, lt=90)]
@@ -116,7 +117,7 @@ class DomeRing(_Strict):
     azimuth_offset_deg: float = 0.0
 
 
-class DomeTimingConfig(_Strict):
+class DomeTimingConfig(StrictModel):
     """Per rotation-stage position: turn, one all-LED alignment frame, then one frame per LED on
     all cameras in parallel (thesis 10.2.2)."""
 
@@ -126,7 +127,7 @@ class DomeTimingConfig(_Strict):
     frame_overhead_s: NonNegative
 
 
-class DomeConfig(_Strict):
+class DomeConfig(StrictModel):
     """The LED dome with RGB cameras on an arc and one spectral camera (thesis 10.2)."""
 
     rig: Literal["dome"]
@@ -157,7 +158,7 @@ class DomeConfig(_Strict):
 
 def available_rigs() -> list[str]:
     """Names of the rig files in ``scenes/rigs`` (without ``.yaml``)."""
-    return sorted(path.stem for path in RIG_DIR.glob("*.yaml"))
+    return scene_names(RIG_DIR)
 
 
 def load_rig(name_or_path: str | Path) -> GonioConfig | DomeConfig:

@@ -3,16 +3,37 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TypeVar
+from typing import Annotated, TypeVar
 
 import yaml
-from pydantic import BaseModel, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from recon.errors import SpectwinInputError
 
-__all__ = ["read_yaml_mapping", "resolve_scene_file", "validate_document"]
+__all__ = [
+    "NonNegative",
+    "Positive",
+    "StrictModel",
+    "read_yaml_mapping",
+    "resolve_scene_file",
+    "scene_names",
+    "validate_document",
+]
 
 Model = TypeVar("Model", bound=BaseModel)
+Positive = Annotated[float, Field(gt=0)]
+NonNegative = Annotated[float, Field(ge=0)]
+
+
+class StrictModel(BaseModel):
+    """Base of every scene schema: unknown keys are errors, loaded settings are immutable."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+def scene_names(folder: Path) -> list[str]:
+    """Names (file stems) of the YAML files in a ``scenes/`` folder."""
+    return sorted(path.stem for path in folder.glob("*.yaml"))
 
 
 def resolve_scene_file(name_or_path: str | Path, folder: Path, what: str) -> Path:
@@ -21,8 +42,9 @@ def resolve_scene_file(name_or_path: str | Path, folder: Path, what: str) -> Pat
     if not path.suffix:
         path = folder / f"{name_or_path}.yaml"
     if not path.is_file():
-        known = sorted(candidate.stem for candidate in folder.glob("*.yaml"))
-        raise SpectwinInputError(f"{what}: no file {path}; expected a path or one of {known}")
+        raise SpectwinInputError(
+            f"{what}: no file {path}; expected a path or one of {scene_names(folder)}"
+        )
     return path
 
 

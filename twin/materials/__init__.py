@@ -16,7 +16,7 @@ from twin.materials.builders import build_colorchecker16, build_fabric, build_le
 from twin.materials.config import MaterialConfig
 from twin.materials.spectra import MATERIAL_GRID
 from twin.surfaces import SurfacePart
-from twin.yaml_config import read_yaml_mapping, resolve_scene_file, validate_document
+from twin.yaml_config import read_yaml_mapping, resolve_scene_file, scene_names, validate_document
 
 __all__ = ["MATERIAL_DIR", "MATERIAL_GRID", "Material", "available_materials", "load_material"]
 
@@ -52,7 +52,7 @@ class _Document:
 
 
 def available_materials() -> list[str]:
-    return sorted(path.stem for path in MATERIAL_DIR.glob("*.yaml"))
+    return scene_names(MATERIAL_DIR)
 
 
 def load_material(name_or_path: str | Path) -> Material:

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import Field, model_validator
+
+from twin.yaml_config import Positive, StrictModel
 
 __all__ = [
     "ColorChecker16Config",
@@ -14,11 +16,10 @@ __all__ = [
     "WallpaperConfig",
 ]
 
-Positive = Annotated[float, Field(gt=0)]
 
+class _Material(StrictModel):
+    """Fields every material has: a display name, the side of its square, a design seed."""
 
-class _Material(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
     name: str
     size_m: Annotated[float, Field(gt=0, le=0.05)]
     seed: int = 0
