@@ -41,6 +41,7 @@ class GonioPose:
     yaw_deg: float
     tilt_deg: float
     roll_deg: float
+    offset_m: tuple[float, float, float] = (0.0, 0.0, 0.0)  # sample centre off the rig centre
 
     def rotation(self) -> Rotation:
         """Sample-to-world rotation."""
@@ -195,9 +196,14 @@ def solve_pairs(config: GonioConfig, light_local=None, view_local=None) -> Gonio
 
 
 def perturbed_pose(pose: GonioPose, config: GonioConfig, rng: np.random.Generator) -> GonioPose:
-    """The pose the robot actually reaches: each orientation axis off by the repeatability."""
-    sigma = config.robot.repeatability_deg
-    yaw, tilt, roll = np.array(
-        [pose.yaw_deg, pose.tilt_deg, pose.roll_deg]
-    ) + sigma * rng.standard_normal(3)
-    return GonioPose(pose.lamp_id, pose.rail_deg, float(yaw), float(tilt), float(roll))
+    """The pose the robot actually reaches: each orientation axis off by ``repeatability_deg``
+    and the sample centre off by ``repeatability_mm`` per axis (1 sigma), so that frames of
+    different pairs need registration."""
+    robot = config.robot
+    yaw, tilt, roll = np.array([pose.yaw_deg, pose.tilt_deg, pose.roll_deg]) + (
+        robot.repeatability_deg * rng.standard_normal(3)
+    )
+    offset = np.asarray(pose.offset_m) + 1e-3 * robot.repeatability_mm * rng.standard_normal(3)
+    return GonioPose(
+        pose.lamp_id, pose.rail_deg, float(yaw), float(tilt), float(roll), tuple(offset.tolist())
+    )

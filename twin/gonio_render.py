@@ -38,9 +38,10 @@ def gonio_camera(config: GonioConfig, rail_deg: float, pixels: int) -> PinholeCa
 
 
 def pose_matrix(pose: GonioPose) -> np.ndarray:
-    """4x4 sample-to-world transform of the robot pose (the sample centre stays at the origin)."""
+    """4x4 sample-to-world transform of the robot pose (rotation, then the centre's offset)."""
     matrix = np.eye(4)
     matrix[:3, :3] = pose.rotation().as_matrix()
+    matrix[:3, 3] = pose.offset_m
     return matrix
 
 

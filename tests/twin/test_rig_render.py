@@ -8,6 +8,7 @@ import pytest
 from recon.metamers import camera_signal
 from recon.metrics import relative_error
 from recon.spectra import DEFAULT_GRID, resample
+from twin.calibration_targets import colorchecker_chart, esser_chart, zenith_white_target
 from twin.components import (
     FINE_GRID,
     LiquidCrystalTunableFilter,
@@ -15,10 +16,10 @@ from twin.components import (
     QTHLamp,
     zenith_white_reflectance,
 )
-from twin.gonio_kinematics import solve_pairs
+from twin.gonio_kinematics import perturbed_pose, solve_pairs
 from twin.gonio_render import gonio_camera, gonio_part_rates, pose_matrix
 from twin.hemisphere import direction
-from twin.materials import MATERIAL_GRID, load_material
+from twin.materials import MATERIAL_GRID, Material, load_material
 from twin.materials.geometry import box
 from twin.registration_marks import find_print_corners
 from twin.rig_config import load_rig
@@ -68,10 +69,32 @@ def test_projected_border_corners_agree_with_the_kinematics_within_a_pixel(gonio
     pose = solve_pairs(gonio, direction(*light)[None], direction(*view)[None]).poses[0]
     rates = gonio_part_rates(gonio, pose, None, pixels=256, spp=16)
     image = rates[0].sum(axis=-1)
-    corners_world = registration_corners() @ pose_matrix(pose)[:3, :3].T
+    matrix = pose_matrix(pose)
+    corners_world = registration_corners() @ matrix[:3, :3].T + matrix[:3, 3]
     expected = gonio_camera(gonio, pose.rail_deg, 256).project(corners_world)
     found = find_print_corners(image, expected)
     assert np.linalg.norm(found - expected, axis=1).max() < 1.0
+
+
+def test_perturbed_robot_poses_move_the_corners_as_the_kinematics_say(gonio):
+    pose = solve_pairs(gonio, direction(30.0, 0.0)[None], direction(15.0, 180.0)[None]).poses[0]
+    noisy = gonio.model_copy(
+        update={
+            "robot": gonio.robot.model_copy(
+                update={"repeatability_mm": 1.0, "repeatability_deg": 0.2}
+            )
+        }
+    )
+    actual = perturbed_pose(pose, noisy, np.random.default_rng(4))
+    camera = gonio_camera(gonio, pose.rail_deg, 256)
+    matrix = pose_matrix(actual)
+    expected = camera.project(registration_corners() @ matrix[:3, :3].T + matrix[:3, 3])
+    nominal = camera.project(registration_corners() @ pose_matrix(pose)[:3, :3].T)
+    found = find_print_corners(
+        gonio_part_rates(gonio, actual, None, pixels=256, spp=16)[0].sum(axis=-1), nominal
+    )
+    assert np.linalg.norm(found - expected, axis=1).max() < 1.0
+    assert np.linalg.norm(found - nominal, axis=1).max() > 1.0  # the frame needs registration
 
 
 @pytest.mark.parametrize("name", ["red_fabric", "lego"])
@@ -125,3 +148,25 @@ def test_glossy_fields_show_a_specular_peak_in_the_mirror_direction():
     glossy = peak[2:6, 18:22].mean() / away[2:6, 18:22].mean()  # field 2: blue sky, glossy
     matte = peak[2:6, 10:14].mean() / away[2:6, 10:14].mean()  # field 1: light skin, matte
     assert glossy > 3 and matte < 1.5
+
+
+@pytest.mark.parametrize(
+    ("make", "count", "columns"), [(colorchecker_chart, 24, 6), (esser_chart, 113, 11)]
+)
+def test_colour_charts_render_their_patch_reflectances(make, count, columns):
+    parts = make(0.05)
+    assert len(parts) == count + 1
+    chart = Material("chart", 0.05, tuple(parts), {}, ())
+    top = direction(0.0, 0.0)[None]
+    btf = truth_btf(chart, top, top, texels=8 * columns, spp=256)[0]
+    first = parts[1].reflectance
+    rows = math.ceil(count / columns)
+    offset = (columns - rows) * 4  # the chart is centred vertically in the square view
+    measured = btf[offset + 2 : offset + 6, 2:6].reshape(-1, 33).mean(axis=0) * np.pi
+    expected = resample(first, DEFAULT_GRID).values
+    assert np.abs(measured[2:-2] - expected[2:-2]).max() < 0.02
+
+
+def test_zenith_white_target_is_nearly_perfect_white():
+    (target,) = zenith_white_target()
+    assert target.reflectance.values.min() > 0.96 and target.roughness is None
