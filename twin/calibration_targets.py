@@ -11,9 +11,13 @@ import math
 
 import numpy as np
 
-from recon.shared_data import read_spectra_csv
-from recon.spectra import SampledSpectra, resample
-from twin.components import FINE_GRID, colorchecker_reflectances, zenith_white_reflectance
+from recon.spectra import SampledSpectra
+from twin.components import (
+    FINE_GRID,
+    colorchecker_reflectances,
+    esser_reflectances,
+    zenith_white_reflectance,
+)
 from twin.materials.geometry import box
 from twin.surfaces import SurfacePart
 
@@ -65,6 +69,5 @@ def colorchecker_chart(size_m: float = 0.05) -> list[SurfacePart]:
 
 
 def esser_chart(size_m: float = 0.05) -> list[SurfacePart]:
-    """The Esser test chart's 113 measured patches (isetbio data in ``shared/data``), 11 columns."""
-    measured = read_spectra_csv("spectra/reflectances/esser_chart.csv")
-    return chart_parts(resample(measured, FINE_GRID, out_of_range="clamp"), 11, size_m)
+    """The Esser test chart's 113 measured patches (``esser_reflectances``), 11 columns."""
+    return chart_parts(esser_reflectances(FINE_GRID, out_of_range="clamp"), 11, size_m)

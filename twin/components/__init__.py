@@ -24,6 +24,7 @@ from twin.components.lctf import VARISPEC_FWHM_NM, LiquidCrystalTunableFilter
 from twin.components.targets import (
     COLORCHECKER_SOURCES,
     colorchecker_reflectances,
+    esser_reflectances,
     zenith_white_reflectance,
 )
 
@@ -43,6 +44,7 @@ __all__ = [
     "cie_illuminant",
     "irradiance_at",
     "colorchecker_reflectances",
+    "esser_reflectances",
     "planck_spectral_radiance",
     "rgb_camera_response",
     "zenith_white_reflectance",

@@ -17,7 +17,12 @@ from recon.errors import SpectwinInputError
 from recon.shared_data import read_spectra_csv
 from recon.spectra import OutOfRangePolicy, SampledSpectra, WavelengthGrid, from_colour, resample
 
-__all__ = ["COLORCHECKER_SOURCES", "colorchecker_reflectances", "zenith_white_reflectance"]
+__all__ = [
+    "COLORCHECKER_SOURCES",
+    "colorchecker_reflectances",
+    "esser_reflectances",
+    "zenith_white_reflectance",
+]
 
 COLORCHECKER_SOURCES = ("ColorChecker N Ohta", "BabelColor Average", "isetbio")
 
@@ -68,3 +73,18 @@ def colorchecker_reflectances(
         measured = from_colour(colour.MultiSpectralDistributions(list(patches.values())))
         measured = SampledSpectra(measured.grid, measured.values, names)
     return resample(measured, grid, method="pchip", out_of_range=out_of_range)
+
+
+def esser_reflectances(
+    grid: WavelengthGrid, *, brightest: float = 0.9, out_of_range: OutOfRangePolicy = "error"
+) -> SampledSpectra:
+    """The 113 Esser test chart patches (isetbio data in ``shared/data``), values ``(113, K)``.
+
+    The isetbio table is in relative units (its largest value is about 1.5e-3): it is scaled so
+    that the brightest patch has a mean reflectance of ``brightest`` over 400-700 nm.
+    """
+    measured = read_spectra_csv("spectra/reflectances/esser_chart.csv")
+    visible = (measured.wavelengths_nm >= 400) & (measured.wavelengths_nm <= 700)
+    scale = brightest / measured.values[:, visible].mean(axis=1).max()
+    resampled = resample(measured, grid, method="pchip", out_of_range=out_of_range)
+    return SampledSpectra(grid, np.clip(resampled.values * scale, 0.0, 1.0), measured.names)
