@@ -108,7 +108,7 @@ def illuminant_from_temperature(temperature_k: float, wavelengths: np.ndarray) -
 
 
 def _interpolation_matrix(wavelengths: np.ndarray, count: int) -> np.ndarray:
-    """(K, count) matrix that interpolates ``count`` equally spaced samples linearly onto the grid."""
+    """(K, count) matrix interpolating ``count`` equally spaced samples linearly onto the grid."""
     coarse = np.linspace(wavelengths[0], wavelengths[-1], count)
     return np.column_stack([np.interp(wavelengths, coarse, np.eye(count)[m]) for m in range(count)])
 
@@ -328,7 +328,8 @@ def estimate_response(
         multiplied by ``data_weight`` (field weights have mean 2) and, measured on the Esser chart
         under D65 with specularity in [0, 0.1] and shading in [0.8, 1.2], ``data_weight = 300``
         with ``beta = 100`` recovers smooth camera curves within 5 % of their peak where the
-        thesis's 500 leaves 6-7 % (240-field chart: 4.2-4.9 % over 8 draws). ``alpha`` defaults to 3 for ``"extended"`` and to 1e-6 for
+        thesis's 500 leaves 6-7 % (240-field chart: 4.2-4.9 % over 8 draws). ``alpha``
+        defaults to 3 for ``"extended"`` and to 1e-6 for
         ``"basic"`` (the thesis gives none for Eq. 9.5; larger values bias ideal data by percent).
     data_weight
         Factor on the data term of the extended energy (see above).

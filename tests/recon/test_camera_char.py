@@ -13,8 +13,8 @@ from recon.camera_char import (
     reference_response,
 )
 from recon.errors import SpectwinInputError
-from recon.spectra import DEFAULT_GRID, WavelengthGrid, from_colour, resample
 from recon.shared_data import read_spectra_csv
+from recon.spectra import DEFAULT_GRID, WavelengthGrid, from_colour, resample
 from twin.components import (
     LiquidCrystalTunableFilter,
     colorchecker_reflectances,
