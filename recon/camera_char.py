@@ -325,11 +325,12 @@ def estimate_response(
     alpha, beta, gamma, delta
         Weights of smoothness, shading smoothness, damping and border. The thesis uses
         3, 500, 1, 10 without saying how large its field weights are; here the data term is
-        multiplied by ``data_weight`` (field weights have mean 2) and, measured on the Esser chart
-        under D65 with specularity in [0, 0.1] and shading in [0.8, 1.2], ``data_weight = 300``
-        with ``beta = 100`` recovers smooth camera curves within 5 % of their peak where the
-        thesis's 500 leaves 6-7 % (240-field chart: 4.2-4.9 % over 8 draws). ``alpha``
-        defaults to 3 for ``"extended"`` and to 1e-6 for
+        multiplied by ``data_weight`` (field weights have mean 2). Measured under D65 with
+        specularity in [0, 0.1] and shading in [0.8, 1.2], ``data_weight = 300`` with
+        ``beta = 100`` recovers smooth camera curves (Nikon D70, D100) within 4.2-4.9 % of their
+        peak on a 240-field chart (8 draws) and within 4-6.5 % on the 113-field Esser chart; the
+        thesis's ``beta = 500`` leaves 6-7 %. ``alpha`` defaults to 3 for ``"extended"`` and to
+        1e-6 for
         ``"basic"`` (the thesis gives none for Eq. 9.5; larger values bias ideal data by percent).
     data_weight
         Factor on the data term of the extended energy (see above).

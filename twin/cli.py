@@ -139,5 +139,43 @@ def gallery(
     console.print(f"wrote {len(summary['outputs'])} frames to {out}")
 
 
+@app.command()
+def camchar(
+    out: Annotated[
+        Path, typer.Option(help="Folder for the photo, the curves and summary.json.")
+    ] = Path("out/camchar"),
+    chart: Annotated[str, typer.Option(help="esser (113 fields) or colorchecker (24).")] = "esser",
+    light: Annotated[str, typer.Option(help="daylight, halogen, fluorescent or hmi.")] = "daylight",
+    camera: Annotated[
+        str, typer.Option(help="A camera of twin.components.RGB_CAMERA_RESPONSES.")
+    ] = "Nikon D70",
+    glossy: Annotated[bool, typer.Option(help="Glossy coating on the fields.")] = True,
+    spot: Annotated[bool, typer.Option(help="Spot light (else a large area light).")] = True,
+    occluder: Annotated[bool, typer.Option(help="An occluder casting a soft shadow.")] = False,
+    bend: Annotated[float, typer.Option(help="Bend of the chart, in chart widths (0-0.2).")] = 0.0,
+    as_json: JsonFlag = False,
+) -> None:
+    """Characterize a camera from a rendered chart photograph (thesis chapter 9)."""
+    from twin.camchar_report import run_camchar
+    from twin.camchar_scenes import ChartScenario
+
+    scenario = ChartScenario(
+        chart=chart,
+        light=light,
+        camera=camera,
+        glossy=glossy,
+        spot=spot,
+        occluder=occluder,
+        bend=bend,
+    )
+    with console.status("rendering the chart photograph and estimating the response"):
+        summary = run_camchar(scenario, out)
+    if as_json:
+        typer.echo(json.dumps(summary, indent=2))
+        return
+    _print_table(summary, f"camera characterization: {camera}", skip=("scenario", "outputs"))
+    console.print(f"wrote {out / 'responses.png'} and {out / 'chart_photo.png'}")
+
+
 if __name__ == "__main__":
     app()

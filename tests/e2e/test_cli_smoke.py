@@ -74,3 +74,21 @@ def test_gallery_writes_a_frame_of_every_material_in_every_rig(tmp_path):
     assert len(summary["outputs"]) == 12
     for name in summary["outputs"]:
         assert (tmp_path / name).stat().st_size > 0
+
+
+def test_camchar_recovers_the_camera_from_a_glossy_chart_under_a_spot(tmp_path):
+    result = runner.invoke(app, ["camchar", "--out", str(tmp_path), "--json"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.output)
+    assert summary["fields"] == 113
+    # Highlights and the spot's fall-off break the basic model; the extended one copes.
+    assert min(summary["rmse_basic"]) > 0.15
+    assert max(summary["rmse_extended"]) < 0.08
+    for name in summary["outputs"]:
+        assert (tmp_path / name).stat().st_size > 0
+
+
+def test_camchar_names_bad_scenarios(tmp_path):
+    result = runner.invoke(app, ["camchar", "--out", str(tmp_path), "--light", "candle"])
+    assert result.exit_code != 0
+    assert "daylight" in str(result.exception)
