@@ -14,17 +14,11 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from recon.camera_char import estimate_response  # noqa: E402
+from recon.metrics import peak_relative_rmse  # noqa: E402
 from recon.spectra import DEFAULT_GRID  # noqa: E402
 from twin.camchar_scenes import ChartScenario, render_chart_photo  # noqa: E402
 
-__all__ = ["relative_rmse", "run_camchar"]
-
-
-def relative_rmse(estimate: np.ndarray, truth: np.ndarray) -> np.ndarray:
-    """Per-channel RMSE as a fraction of the true peak, after one least-squares global scale
-    (the overall scale is not observable from a photograph)."""
-    scale = np.sum(estimate * truth) / np.sum(estimate * estimate)
-    return np.sqrt(np.mean((scale * estimate - truth) ** 2, axis=0)) / truth.max()
+__all__ = ["run_camchar"]
 
 
 def run_camchar(scenario: ChartScenario, out_dir: Path, *, seed: int = 0) -> dict[str, object]:
@@ -75,8 +69,8 @@ def run_camchar(scenario: ChartScenario, out_dir: Path, *, seed: int = 0) -> dic
         "fields": len(photo.field_rgb),
         "render_s": round(render_s, 2),
         "solve_s": round(solve_s, 2),
-        "rmse_basic": relative_rmse(basic, photo.true_response).round(4).tolist(),
-        "rmse_extended": relative_rmse(extended, photo.true_response).round(4).tolist(),
+        "rmse_basic": peak_relative_rmse(basic, photo.true_response).round(4).tolist(),
+        "rmse_extended": peak_relative_rmse(extended, photo.true_response).round(4).tolist(),
         "outputs": ["chart_photo.png", "responses.png", "summary.json"],
     }
     (out_dir / "summary.json").write_text(json.dumps(summary, indent=2))

@@ -13,6 +13,7 @@ from recon.camera_char import (
     reference_response,
 )
 from recon.errors import SpectwinInputError
+from recon.metrics import peak_relative_rmse
 from recon.shared_data import read_spectra_csv
 from recon.spectra import DEFAULT_GRID, WavelengthGrid, from_colour, resample
 from twin.components import (
@@ -55,10 +56,11 @@ def _camera(name: str) -> np.ndarray:
 
 
 def _rmse(estimate: np.ndarray, truth: np.ndarray, rows=slice(None)) -> np.ndarray:
-    """Per-channel RMSE in fractions of the peak, after one global scale (the shading's mean is
-    not observable)."""
+    """Per-channel RMSE as a fraction of the true peak after one global scale, over ``rows``."""
     scale = np.sum(estimate * truth) / np.sum(estimate * estimate)
-    return np.sqrt(np.mean((scale * estimate[rows] - truth[rows]) ** 2, axis=0)) / truth.max()
+    return peak_relative_rmse(scale * estimate[rows], truth[rows], fit_scale=False) * (
+        np.abs(truth[rows]).max() / np.abs(truth).max()
+    )
 
 
 def _disturbed(response, light, seed, noise=0.0, chart=CHART, positions=POSITIONS):
