@@ -1,0 +1,13 @@
+"""Exceptions of the hardware bridge (``hwbridge`` imports neither ``recon`` nor ``twin``)."""
+
+
+class BridgeInputError(ValueError):
+    """A request the device cannot take (e.g. a wavelength outside its range)."""
+
+
+class DeviceError(RuntimeError):
+    """A device answered something unexpected or reported an error."""
+
+
+class DeviceTimeout(DeviceError):
+    """A device did not answer in time."""

@@ -1,0 +1,99 @@
+"""Device interfaces of the capture rigs as structural protocols.
+
+Shaped like ``bluesky.protocols``: any object with these methods qualifies, so simulated devices
+(``twin``), replayed captures and real drivers are interchangeable without inheritance.
+``read`` returns ``{name: {"value": ..., "timestamp": ...}}`` and ``describe`` the matching
+``{name: {"source", "dtype", "shape", "units"}}``.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+__all__ = [
+    "Camera",
+    "Describable",
+    "Lamp",
+    "LedArray",
+    "Positioner",
+    "Readable",
+    "Spectrometer",
+    "Stageable",
+    "TunableFilter",
+]
+
+Reading = dict[str, dict[str, Any]]
+
+
+@runtime_checkable
+class Describable(Protocol):
+    name: str
+
+    def describe(self) -> Reading:
+        """What ``read`` returns: source, dtype, shape and units per field."""
+
+
+@runtime_checkable
+class Readable(Describable, Protocol):
+    def read(self) -> Reading:
+        """Current values with timestamps."""
+
+
+@runtime_checkable
+class Stageable(Protocol):
+    def stage(self) -> None:
+        """Prepare for a run (open ports, initialize)."""
+
+    def unstage(self) -> None:
+        """Release after a run."""
+
+
+@runtime_checkable
+class TunableFilter(Readable, Stageable, Protocol):
+    """An electronically tunable band-pass filter (the VariSpec LCTF, thesis 3.2.2)."""
+
+    def set(self, wavelength_nm: float) -> None:
+        """Tune to ``wavelength_nm`` and return once the filter has settled."""
+
+    @property
+    def range_nm(self) -> tuple[float, float]:
+        """Shortest and longest wavelength the filter can be tuned to."""
+
+
+@runtime_checkable
+class Camera(Readable, Stageable, Protocol):
+    """A camera: set the exposure, take a raw frame."""
+
+    def set_exposure(self, exposure_s: float) -> None: ...
+
+    def snap(self) -> tuple[np.ndarray, dict[str, Any]]:
+        """One raw uint16 frame and its metadata (exposure, timestamp, temperature, ...)."""
+
+
+@runtime_checkable
+class Lamp(Readable, Protocol):
+    def set(self, on: bool) -> None: ...
+
+
+@runtime_checkable
+class LedArray(Readable, Protocol):
+    """The dome's LEDs: any pattern of them on (thesis 10.2.1)."""
+
+    def set(self, pattern: np.ndarray) -> None:
+        """``pattern``: boolean array, one entry per LED."""
+
+
+@runtime_checkable
+class Positioner(Readable, Protocol):
+    """Robot pose, rail angle or rotation stage: move and report where it is."""
+
+    def set(self, target: dict[str, float]) -> None: ...
+
+
+@runtime_checkable
+class Spectrometer(Readable, Protocol):
+    """The lamp monitor (X-Rite i1, thesis 3.3): one spectrum per reading."""
+
+    def trigger(self) -> None: ...
