@@ -1,0 +1,224 @@
+"""The capture store: raw frames and their metadata in Zarr v3, written resumably.
+
+Layout of ``<name>.capture.zarr`` (ARCHITECTURE.md, "Stores"):
+
+- attributes: ``rig`` (the resolved rig definition), ``backend`` (``sim``, ``real``, ``replay``),
+  ``seed``, ``software_version``, ``plan`` (one dict per step), ``complete``;
+- ``frames/<camera_id>``: uint16 ``(N, H, W)`` raw frames, one chunk per frame;
+- ``index/<camera_id>/<field>``: per frame ``kind``, ``light_id``, ``view_id``, ``band_nm``,
+  ``exposure_s``, ``timestamp``, ``status``, ``pose`` (6 numbers) and ``lamp_monitor``
+  (the monitor spectrum, when the rig has one);
+- ``progress``: one flag per plan step, set only after the step's frame and index are written.
+
+A step's frame slot is fixed by the plan, so redoing a step after a crash overwrites the same
+slot: an interrupted session resumes without losing or duplicating a frame, and ``complete``
+turns true only when every step is done.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import zarr
+
+from hwbridge.errors import BridgeInputError
+
+__all__ = ["FRAME_KINDS", "CaptureStore", "FrameRecord"]
+
+FRAME_KINDS = ("dark", "white", "chart", "sample", "oecf", "alignment")
+_NUMERIC_FIELDS = {
+    "light_id": "int32",
+    "view_id": "int32",
+    "band_nm": "float32",
+    "exposure_s": "float64",
+    "timestamp": "float64",
+}
+
+
+@dataclass(frozen=True)
+class FrameRecord:
+    """Metadata of one frame."""
+
+    kind: str
+    exposure_s: float
+    timestamp: float
+    light_id: int = -1
+    view_id: int = -1
+    band_nm: float = float("nan")
+    status: str = "ok"
+    pose: tuple[float, ...] = (np.nan,) * 6
+    lamp_monitor: np.ndarray | None = field(default=None)
+
+    def __post_init__(self) -> None:
+        if self.kind not in FRAME_KINDS:
+            raise BridgeInputError(f"kind: expected one of {FRAME_KINDS}, got {self.kind!r}")
+        if not np.isfinite(self.exposure_s) or self.exposure_s < 0:
+            raise BridgeInputError(
+                f"exposure_s: expected a non-negative time, got {self.exposure_s}"
+            )
+        if len(self.pose) != 6:
+            raise BridgeInputError(f"pose: expected 6 numbers, got {len(self.pose)}")
+
+
+class CaptureStore:
+    """A capture store on disk; create it with :meth:`create`, reopen it with :meth:`open`."""
+
+    def __init__(self, group: zarr.Group, path: Path):
+        self._group = group
+        self.path = path
+        plan = group.attrs["plan"]
+        self._cameras = [step["camera"] for step in plan]
+        counts: dict[str, int] = {}
+        self._slots = []
+        for camera in self._cameras:
+            self._slots.append(counts.get(camera, 0))
+            counts[camera] = counts.get(camera, 0) + 1
+
+    @classmethod
+    def create(
+        cls,
+        path: str | Path,
+        *,
+        rig: dict[str, Any],
+        backend: str,
+        seed: int,
+        plan: list[dict[str, Any]],
+        cameras: dict[str, tuple[int, int]],
+        monitor_samples: int = 0,
+        software_version: str = "0",
+    ) -> CaptureStore:
+        """A new, empty store for ``plan`` (each step names its ``camera``); never overwrites."""
+        path = Path(path)
+        if path.exists():
+            raise BridgeInputError(
+                f"{path} exists: resume it or choose another name (nothing was overwritten)"
+            )
+        if backend not in ("sim", "real", "replay"):
+            raise BridgeInputError(f"backend: expected 'sim', 'real' or 'replay', got {backend!r}")
+        if not plan:
+            raise BridgeInputError("plan: expected at least one step")
+        unknown = sorted({str(step.get("camera")) for step in plan} - set(cameras))
+        if unknown:
+            raise BridgeInputError(
+                f"plan: steps name cameras {unknown} that are not among {sorted(cameras)}"
+            )
+        group = zarr.open_group(str(path), mode="w-", zarr_format=3)
+        group.attrs.update(
+            {
+                "rig": rig,
+                "backend": backend,
+                "seed": int(seed),
+                "software_version": software_version,
+                "plan": plan,
+                "complete": False,
+            }
+        )
+        for camera, (height, width) in cameras.items():
+            count = sum(step["camera"] == camera for step in plan)
+            group.create_array(
+                f"frames/{camera}",
+                shape=(count, height, width),
+                chunks=(1, height, width),
+                dtype="uint16",
+            )
+            index = f"index/{camera}"
+            group.create_array(
+                f"{index}/kind", shape=(count,), chunks=(count,), dtype=str, fill_value=""
+            )
+            group.create_array(
+                f"{index}/status", shape=(count,), chunks=(count,), dtype=str, fill_value=""
+            )
+            for name, dtype in _NUMERIC_FIELDS.items():
+                fill = -1 if dtype.startswith("int") else np.nan
+                group.create_array(
+                    f"{index}/{name}", shape=(count,), chunks=(1,), dtype=dtype, fill_value=fill
+                )
+            group.create_array(
+                f"{index}/pose", shape=(count, 6), chunks=(1, 6), dtype="float64", fill_value=np.nan
+            )
+            if monitor_samples:
+                group.create_array(
+                    f"{index}/lamp_monitor",
+                    shape=(count, monitor_samples),
+                    chunks=(1, monitor_samples),
+                    dtype="float32",
+                    fill_value=np.nan,
+                )
+        group.create_array(
+            "progress", shape=(len(plan),), chunks=(1,), dtype="bool", fill_value=False
+        )
+        return cls(group, path)
+
+    @classmethod
+    def open(cls, path: str | Path) -> CaptureStore:
+        path = Path(path)
+        if not path.exists():
+            raise BridgeInputError(f"{path} does not exist")
+        group = zarr.open_group(str(path), mode="r+")
+        if "plan" not in group.attrs or "progress" not in group:
+            raise BridgeInputError(f"{path} is not a capture store (no plan or progress)")
+        return cls(group, path)
+
+    # -- writing -------------------------------------------------------------------------------
+
+    def write_frame(self, step: int, frame: np.ndarray, record: FrameRecord) -> None:
+        """Write the frame and index of ``step`` into its slot (idempotent for a redone step)."""
+        camera, slot = self._camera_and_slot(step)
+        frames = self._group[f"frames/{camera}"]
+        frame = np.asarray(frame)
+        if frame.shape != frames.shape[1:] or frame.dtype != np.uint16:
+            raise BridgeInputError(
+                f"frame: expected uint16 {frames.shape[1:]} for camera {camera!r}, got "
+                f"{frame.dtype} {frame.shape}"
+            )
+        frames[slot] = frame
+        index = self._group[f"index/{camera}"]
+        # Strings live in one chunk per camera: rewrite them whole (one writer per store).
+        for name in ("kind", "status"):
+            values = index[name][:]
+            values[slot] = getattr(record, name)
+            index[name][:] = values
+        for name in _NUMERIC_FIELDS:
+            index[name][slot] = getattr(record, name)
+        index["pose"][slot] = np.asarray(record.pose, dtype=np.float64)
+        if record.lamp_monitor is not None:
+            if "lamp_monitor" not in index:
+                raise BridgeInputError(
+                    "lamp_monitor: this store was created without monitor samples"
+                )
+            index["lamp_monitor"][slot] = np.asarray(record.lamp_monitor, dtype=np.float32)
+
+    def mark_done(self, step: int) -> None:
+        """Flag ``step`` done; when every step is, the store is marked complete."""
+        self._camera_and_slot(step)
+        self._group["progress"][step] = True
+        if not self.pending_steps():
+            self._group.attrs["complete"] = True
+
+    # -- reading -------------------------------------------------------------------------------
+
+    def pending_steps(self) -> list[int]:
+        return np.flatnonzero(~self._group["progress"][:]).tolist()
+
+    @property
+    def complete(self) -> bool:
+        return bool(self._group.attrs["complete"])
+
+    @property
+    def attrs(self) -> dict[str, Any]:
+        return dict(self._group.attrs)
+
+    def frames(self, camera: str) -> zarr.Array:
+        return self._group[f"frames/{camera}"]
+
+    def index(self, camera: str) -> dict[str, np.ndarray]:
+        group = self._group[f"index/{camera}"]
+        return {name: group[name][:] for name in group.array_keys()}
+
+    def _camera_and_slot(self, step: int) -> tuple[str, int]:
+        if not 0 <= step < len(self._cameras):
+            raise BridgeInputError(f"step: expected 0..{len(self._cameras) - 1}, got {step}")
+        return self._cameras[step], self._slots[step]

@@ -1,0 +1,95 @@
+"""The Zarr v3 capture store (hwbridge.store)."""
+
+import numpy as np
+import pytest
+import zarr
+
+from hwbridge.errors import BridgeInputError
+from hwbridge.store import CaptureStore, FrameRecord
+
+PLAN = [
+    {"camera": "k4", "kind": "dark"},
+    {"camera": "rgb0", "kind": "sample"},
+    {"camera": "k4", "kind": "sample"},
+]
+CAMERAS = {"k4": (8, 6), "rgb0": (4, 4)}
+
+
+def _frame(shape, value):
+    return np.full(shape, value, dtype=np.uint16)
+
+
+def _new(tmp_path):
+    return CaptureStore.create(
+        tmp_path / "run.capture.zarr",
+        rig={"rig": "gonioreflectometer"},
+        backend="sim",
+        seed=7,
+        plan=PLAN,
+        cameras=CAMERAS,
+        monitor_samples=5,
+    )
+
+
+def test_frames_and_index_land_in_their_plan_slots(tmp_path):
+    store = _new(tmp_path)
+    store.write_frame(
+        2,
+        _frame((8, 6), 42),
+        FrameRecord("sample", 0.5, 10.0, band_nm=550.0, lamp_monitor=np.ones(5)),
+    )
+    store.mark_done(2)
+    assert store.pending_steps() == [0, 1] and not store.complete
+    reopened = CaptureStore.open(tmp_path / "run.capture.zarr")
+    assert reopened.frames("k4")[1].max() == 42 and reopened.frames("k4")[0].max() == 0
+    index = reopened.index("k4")
+    assert list(index["kind"]) == ["", "sample"] and index["band_nm"][1] == 550.0
+    assert np.isnan(index["band_nm"][0]) and index["lamp_monitor"][1].sum() == 5
+    # The layout is plain Zarr v3, readable without spectwin.
+    group = zarr.open_group(str(tmp_path / "run.capture.zarr"), mode="r")
+    assert (
+        group.metadata.zarr_format == 3
+        and group.attrs["seed"] == 7
+        and group.attrs["backend"] == "sim"
+    )
+
+
+def test_redoing_a_step_overwrites_instead_of_duplicating(tmp_path):
+    store = _new(tmp_path)
+    record = FrameRecord("dark", 0.1, 1.0)
+    store.write_frame(0, _frame((8, 6), 5), record)
+    store.write_frame(0, _frame((8, 6), 5), record)  # a crash before mark_done, then the redo
+    for step, camera_shape in ((0, (8, 6)), (1, (4, 4)), (2, (8, 6))):
+        store.write_frame(step, _frame(camera_shape, step + 1), FrameRecord("sample", 0.1, 2.0))
+        store.mark_done(step)
+    assert store.complete and store.frames("k4").shape == (2, 8, 6)
+    assert [int(frame.max()) for frame in store.frames("k4")] == [1, 3]
+
+
+def test_bad_input_is_refused_and_nothing_is_overwritten(tmp_path):
+    store = _new(tmp_path)
+    store.write_frame(0, _frame((8, 6), 9), FrameRecord("dark", 0.1, 1.0))
+    with pytest.raises(BridgeInputError, match="exists"):
+        _new(tmp_path)
+    assert CaptureStore.open(tmp_path / "run.capture.zarr").frames("k4")[0].max() == 9
+    with pytest.raises(BridgeInputError, match="uint16"):
+        store.write_frame(0, np.zeros((8, 6)), FrameRecord("dark", 0.1, 1.0))
+    with pytest.raises(BridgeInputError, match="step"):
+        store.mark_done(3)
+    with pytest.raises(BridgeInputError, match="kind"):
+        FrameRecord("selfie", 0.1, 1.0)
+    with pytest.raises(BridgeInputError, match="exposure_s"):
+        FrameRecord("dark", -1.0, 1.0)
+    with pytest.raises(BridgeInputError, match="not among"):
+        CaptureStore.create(
+            tmp_path / "other.zarr",
+            rig={},
+            backend="sim",
+            seed=0,
+            plan=[{"camera": "x"}],
+            cameras=CAMERAS,
+        )
+    with pytest.raises(BridgeInputError, match="backend"):
+        CaptureStore.create(
+            tmp_path / "b.zarr", rig={}, backend="dream", seed=0, plan=PLAN, cameras=CAMERAS
+        )
