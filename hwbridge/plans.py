@@ -1,0 +1,78 @@
+"""Capture plans: the thesis's procedures as lists of steps, one frame per step.
+
+A step is a plain dict (JSON-able, stored in the capture store's attributes) with the camera that
+takes the frame, the frame kind, the exposure and whatever must be set before: filter band,
+light, view (rig pose). Builders make the procedures of the thesis; ``estimate_duration_s`` gives
+a dry run's duration.
+
+References
+----------
+- The thesis, section 3.3 (50 dark frames per exposure time; 200 exposures for the response
+  curve; white reference per run) and 4.1.1 (per direction pair: move, settle 1 s, per band: set
+  the filter, expose, download; 130 ms switching and download per image).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+import numpy as np
+
+from hwbridge.errors import BridgeInputError
+
+__all__ = ["dark_series", "estimate_duration_s", "gonio_sample_run", "response_curve_series"]
+
+
+def _step(camera: str, kind: str, exposure_s: float, **settings: float | int) -> dict[str, object]:
+    if not np.isfinite(exposure_s) or exposure_s <= 0:
+        raise BridgeInputError(f"exposure_s: expected a positive exposure, got {exposure_s}")
+    return {"camera": camera, "kind": kind, "exposure_s": float(exposure_s), **settings}
+
+
+def dark_series(
+    camera: str, exposures_s: Iterable[float], frames_per_exposure: int = 50
+) -> list[dict]:
+    """Dark frames: ``frames_per_exposure`` per exposure time, shutter closed (thesis 3.3)."""
+    if frames_per_exposure < 1:
+        raise BridgeInputError("frames_per_exposure: expected at least one frame")
+    return [
+        _step(camera, "dark", t, light_id=-1)
+        for t in exposures_s
+        for _ in range(frames_per_exposure)
+    ]
+
+
+def response_curve_series(
+    camera: str, exposures_s: Iterable[float], *, light_id: int = 0
+) -> list[dict]:
+    """One frame of a static scene per exposure time, for the response curve (Robertson)."""
+    return [_step(camera, "oecf", t, light_id=light_id) for t in exposures_s]
+
+
+def gonio_sample_run(
+    camera: str,
+    view_ids: Iterable[int],
+    band_centres_nm: Iterable[float],
+    band_exposures_s: Iterable[float],
+) -> list[dict]:
+    """Per direction pair (``view_id``), per band: tune the filter, expose (thesis 4.1.1)."""
+    bands = list(band_centres_nm)
+    exposures = list(band_exposures_s)
+    if len(bands) != len(exposures):
+        raise BridgeInputError(
+            f"band_exposures_s: expected {len(bands)} exposures, got {len(exposures)}"
+        )
+    return [
+        _step(camera, "sample", t, view_id=int(view), band_nm=float(band), light_id=0)
+        for view in view_ids
+        for band, t in zip(bands, exposures, strict=True)
+    ]
+
+
+def estimate_duration_s(
+    plan: list[dict], *, per_frame_overhead_s: float = 0.13, per_view_move_s: float = 6.0
+) -> float:
+    """Dry-run duration: exposures, per-frame switching/download, and a move per new view."""
+    exposures = sum(float(step["exposure_s"]) for step in plan)
+    views = {step.get("view_id", -1) for step in plan} - {-1}
+    return exposures + per_frame_overhead_s * len(plan) + per_view_move_s * len(views)

@@ -1,0 +1,108 @@
+"""Run a capture plan on any backend into a capture store, resumably.
+
+For each pending step: tune the filter (when the step names a band), set the exposure, take the
+frame, write frame and index, then flag the step done. A session interrupted at any moment
+(crash, SIGKILL, power loss) is continued with ``resume=True``: steps already flagged are skipped,
+a step that was cut short is taken again into the same slot. Devices that simulate noise can
+implement ``set_step(seed, step)`` to derive it from the step index, so that a resumed session
+reproduces the frames of an uninterrupted one bit for bit; cameras with ``set_shutter(open)``
+get it closed for dark frames. Device timeouts are retried with
+exponential backoff and recorded in the frame's ``status``.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any
+
+from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+from hwbridge.errors import BridgeInputError, DeviceTimeout
+from hwbridge.store import CaptureStore, FrameRecord
+
+__all__ = ["run_session"]
+
+
+def _with_retries(action, retries: int, backoff_s: float) -> tuple[Any, int]:
+    """Call ``action``; on a device timeout wait and retry. Returns (result, timeouts seen)."""
+    for attempt in range(retries + 1):
+        try:
+            return action(), attempt
+        except DeviceTimeout:
+            if attempt == retries:
+                raise
+            time.sleep(backoff_s * 2**attempt)
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+def run_session(
+    store_path: str | Path,
+    plan: list[dict],
+    *,
+    cameras: dict[str, Any],
+    tunable_filter: Any | None = None,
+    rig: dict[str, Any],
+    backend: str,
+    seed: int,
+    resume: bool = False,
+    retries: int = 3,
+    backoff_s: float = 0.01,
+    show_progress: bool = True,
+) -> CaptureStore:
+    """Capture every pending step of ``plan``; returns the (complete) store."""
+    unknown = sorted({step["camera"] for step in plan} - set(cameras))
+    if unknown:
+        raise BridgeInputError(f"plan: names cameras {unknown} that the session was not given")
+    if any("band_nm" in step for step in plan) and tunable_filter is None:
+        raise BridgeInputError("plan: steps name filter bands but no tunable_filter was given")
+    path = Path(store_path)
+    if resume:
+        store = CaptureStore.open(path)
+        if store.attrs["plan"] != plan or store.attrs["seed"] != seed:
+            raise BridgeInputError(
+                f"{path}: resume needs the same plan and seed as the stored session"
+            )
+    else:
+        shapes = {name: camera.frame_shape for name, camera in cameras.items()}
+        store = CaptureStore.create(
+            path, rig=rig, backend=backend, seed=seed, plan=plan, cameras=shapes
+        )
+    pending = store.pending_steps()
+    columns = (
+        TextColumn("capture"),
+        BarColumn(),
+        TextColumn("{task.completed}/{task.total}"),
+        TimeRemainingColumn(),
+    )
+    with Progress(*columns, disable=not show_progress) as progress:
+        task = progress.add_task("capture", total=len(plan), completed=len(plan) - len(pending))
+        for step in pending:
+            settings = plan[step]
+            camera = cameras[settings["camera"]]
+            timeouts = 0
+            if "band_nm" in settings:
+                _, seen = _with_retries(
+                    lambda s=settings: tunable_filter.set(s["band_nm"]), retries, backoff_s
+                )
+                timeouts += seen
+            camera.set_exposure(settings["exposure_s"])
+            if hasattr(camera, "set_shutter"):
+                camera.set_shutter(settings["kind"] != "dark")
+            if hasattr(camera, "set_step"):
+                camera.set_step(seed, step)
+            (frame, metadata), seen = _with_retries(camera.snap, retries, backoff_s)
+            timeouts += seen
+            record = FrameRecord(
+                kind=settings["kind"],
+                exposure_s=settings["exposure_s"],
+                timestamp=float(metadata.get("timestamp", time.time())),
+                light_id=int(settings.get("light_id", -1)),
+                view_id=int(settings.get("view_id", -1)),
+                band_nm=float(settings.get("band_nm", float("nan"))),
+                status="ok" if not timeouts else f"ok after {timeouts} timeout(s)",
+            )
+            store.write_frame(step, frame, record)
+            store.mark_done(step)
+            progress.advance(task)
+    return store
