@@ -39,7 +39,7 @@ def test_llanos2019_becomes_a_complete_capture_store(tmp_path):
     at_550 = chart & (index["band_nm"] == 550)
     means = {
         float(t): frames[i].mean()
-        for i, t in zip(np.flatnonzero(at_550), index["exposure_s"][at_550])
+        for i, t in zip(np.flatnonzero(at_550), index["exposure_s"][at_550], strict=True)
     }
     assert means[0.5] > means[0.025]
     reopened = CaptureStore.open(tmp_path / "llanos.capture.zarr")
