@@ -11,3 +11,7 @@ class DeviceError(RuntimeError):
 
 class DeviceTimeout(DeviceError):
     """A device did not answer in time."""
+
+
+class DeviceDisconnected(DeviceError):
+    """A device dropped off the bus; it may come back after staging it again."""

@@ -7,7 +7,8 @@ a step that was cut short is taken again into the same slot. Devices that simula
 implement ``set_step(seed, step)`` to derive it from the step index, so that a resumed session
 reproduces the frames of an uninterrupted one bit for bit; cameras with ``set_shutter(open)``
 get it closed for dark frames. Device timeouts are retried with
-exponential backoff and recorded in the frame's ``status``.
+exponential backoff, disconnected devices are staged again, and both are recorded in the frame's
+``status``.
 """
 
 from __future__ import annotations
@@ -18,21 +19,24 @@ from typing import Any
 
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
-from hwbridge.errors import BridgeInputError, DeviceTimeout
+from hwbridge.errors import BridgeInputError, DeviceDisconnected, DeviceTimeout
 from hwbridge.store import CaptureStore, FrameRecord
 
 __all__ = ["run_session"]
 
 
-def _with_retries(action, retries: int, backoff_s: float) -> tuple[Any, int]:
-    """Call ``action``; on a device timeout wait and retry. Returns (result, timeouts seen)."""
+def _with_retries(action, device: Any, retries: int, backoff_s: float) -> tuple[Any, int]:
+    """Call ``action``; on a timeout wait and retry, on a disconnect stage ``device`` again and
+    retry, with exponential backoff. Returns (result, faults seen)."""
     for attempt in range(retries + 1):
         try:
             return action(), attempt
-        except DeviceTimeout:
+        except (DeviceTimeout, DeviceDisconnected):
             if attempt == retries:
                 raise
             time.sleep(backoff_s * 2**attempt)
+            if hasattr(device, "stage"):
+                device.stage()
     raise AssertionError("unreachable")  # pragma: no cover
 
 
@@ -80,19 +84,22 @@ def run_session(
         for step in pending:
             settings = plan[step]
             camera = cameras[settings["camera"]]
-            timeouts = 0
+            faults = 0
             if "band_nm" in settings:
                 _, seen = _with_retries(
-                    lambda s=settings: tunable_filter.set(s["band_nm"]), retries, backoff_s
+                    lambda s=settings: tunable_filter.set(s["band_nm"]),
+                    tunable_filter,
+                    retries,
+                    backoff_s,
                 )
-                timeouts += seen
+                faults += seen
             camera.set_exposure(settings["exposure_s"])
             if hasattr(camera, "set_shutter"):
                 camera.set_shutter(settings["kind"] != "dark")
             if hasattr(camera, "set_step"):
                 camera.set_step(seed, step)
-            (frame, metadata), seen = _with_retries(camera.snap, retries, backoff_s)
-            timeouts += seen
+            (frame, metadata), seen = _with_retries(camera.snap, camera, retries, backoff_s)
+            faults += seen
             record = FrameRecord(
                 kind=settings["kind"],
                 exposure_s=settings["exposure_s"],
@@ -100,7 +107,9 @@ def run_session(
                 light_id=int(settings.get("light_id", -1)),
                 view_id=int(settings.get("view_id", -1)),
                 band_nm=float(settings.get("band_nm", float("nan"))),
-                status="ok" if not timeouts else f"ok after {timeouts} timeout(s)",
+                status="ok"
+                if not faults
+                else f"ok after {faults} fault(s): timeout or disconnect",
             )
             store.write_frame(step, frame, record)
             store.mark_done(step)

@@ -58,11 +58,11 @@ def test_sigkill_at_20_random_moments_then_resume_gives_the_uninterrupted_result
     assert kills >= 1
 
 
-def test_faults_on_one_call_in_20_are_retried_and_recorded(tmp_path):
+def test_timeouts_and_disconnects_on_one_call_in_20_are_retried_and_recorded(tmp_path):
     store = run_demo_session(tmp_path / "faulty.capture.zarr", SEED, fault_rate=0.05)
     assert store.complete
     statuses = store.index("k4")["status"]
-    assert any("timeout" in status for status in statuses)
+    assert any("fault" in status for status in statuses)
     reference = run_demo_session(tmp_path / "clean.capture.zarr", SEED)
     np.testing.assert_array_equal(store.frames("k4")[:], reference.frames("k4")[:])
 
