@@ -92,3 +92,15 @@ def test_camchar_names_bad_scenarios(tmp_path):
     result = runner.invoke(app, ["camchar", "--out", str(tmp_path), "--light", "candle"])
     assert result.exit_code != 0
     assert "daylight" in str(result.exception)
+
+
+def test_capture_dry_run_then_capture_then_refuse_to_overwrite(tmp_path):
+    store = tmp_path / "demo.capture.zarr"
+    dry = runner.invoke(app, ["capture", str(store), "--dry-run", "--json"])
+    assert dry.exit_code == 0, dry.output
+    assert json.loads(dry.output)["steps"] == 72 and not store.exists()
+    done = runner.invoke(app, ["capture", str(store), "--json"])
+    assert done.exit_code == 0, done.output
+    assert json.loads(done.output)["complete"] is True
+    again = runner.invoke(app, ["capture", str(store)])
+    assert again.exit_code != 0 and "exists" in str(again.exception)
