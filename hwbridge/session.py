@@ -107,9 +107,7 @@ def run_session(
                 light_id=int(settings.get("light_id", -1)),
                 view_id=int(settings.get("view_id", -1)),
                 band_nm=float(settings.get("band_nm", float("nan"))),
-                status="ok"
-                if not faults
-                else f"ok after {faults} fault(s): timeout or disconnect",
+                status="ok" if not faults else f"ok after {faults} fault(s): timeout or disconnect",
             )
             store.write_frame(step, frame, record)
             store.mark_done(step)

@@ -1,0 +1,147 @@
+"""A GenICam camera (GigE Vision, USB3 Vision, ...) through ``harvesters`` and a GenTL producer.
+
+Implements ``hwbridge.protocols.Camera``. The thesis's RGB cameras (SVS-Vistek 4022, section
+10.2.1) are GigE Vision devices; any GenTL producer (``.cti``) works, including the simulated
+"Viky" producer shipped in the ``genicam`` package, which the tests use. Install the optional
+extra ``spectwin[genicam]``.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from hwbridge.errors import BridgeInputError, DeviceError, DeviceTimeout
+
+__all__ = ["GenICamCamera", "simulated_producer"]
+
+
+def simulated_producer() -> Path:
+    """The simulated GenTL producer of the ``genicam`` package."""
+    import genicam
+
+    return Path(genicam.__file__).resolve().parent / "viky.cti"
+
+
+class GenICamCamera:
+    """The camera with ``serial_number`` (or the first one) of the GenTL producer ``cti``."""
+
+    def __init__(
+        self,
+        cti: str | Path,
+        *,
+        serial_number: str | None = None,
+        name: str = "camera",
+        timeout_s: float = 5.0,
+    ):
+        self.name = name
+        self._cti, self._serial, self._timeout_s = Path(cti), serial_number, timeout_s
+        self._harvester = None
+        self._acquirer = None
+        self._exposure_s: float | None = None
+
+    def stage(self) -> None:
+        from harvesters.core import Harvester
+
+        if not self._cti.is_file():
+            raise BridgeInputError(f"{self.name}: GenTL producer {self._cti} does not exist")
+        self.unstage()
+        self._harvester = Harvester()
+        self._harvester.add_file(str(self._cti))
+        self._harvester.update()
+        devices = self._harvester.device_info_list
+        if not devices:
+            raise DeviceError(f"{self.name}: the producer {self._cti.name} offers no camera")
+        serials = [info.serial_number for info in devices]
+        if self._serial is None:
+            selector: dict[str, Any] | int = 0
+        elif self._serial in serials:
+            selector = {"serial_number": self._serial}
+        else:
+            raise DeviceError(
+                f"{self.name}: no camera with serial {self._serial!r}; found {serials}"
+            )
+        self._acquirer = self._harvester.create(selector)
+        if self._exposure_s is not None:
+            self.set_exposure(self._exposure_s)
+
+    def unstage(self) -> None:
+        if self._acquirer is not None:
+            self._acquirer.destroy()
+            self._acquirer = None
+        if self._harvester is not None:
+            self._harvester.reset()
+            self._harvester = None
+
+    @property
+    def frame_shape(self) -> tuple[int, int]:
+        node_map = self._node_map()
+        return (int(node_map.Height.value), int(node_map.Width.value))
+
+    def set_exposure(self, exposure_s: float) -> None:
+        """Set ``ExposureTime`` (microseconds) where the camera has it; kept for the metadata."""
+        if not np.isfinite(exposure_s) or exposure_s <= 0:
+            raise BridgeInputError(
+                f"{self.name}: expected a positive exposure time, got {exposure_s}"
+            )
+        self._exposure_s = float(exposure_s)
+        node_map = self._node_map()
+        if hasattr(node_map, "ExposureTime"):
+            node_map.ExposureTime.value = exposure_s * 1e6
+
+    def snap(self) -> tuple[np.ndarray, dict[str, Any]]:
+        """One frame as uint16 ``(H, W)``: mono and Bayer formats as delivered, packed colour
+        formats (the simulated producer's RGBa8) averaged over their colour components."""
+        acquirer = self._require()
+        acquirer.start()
+        try:
+            with acquirer.fetch(timeout=self._timeout_s) as buffer:
+                component = buffer.payload.components[0]
+                data = np.asarray(component.data)
+                height, width, pixel_format = (
+                    component.height,
+                    component.width,
+                    component.data_format,
+                )
+                channels = data.size // (height * width)
+                image = data.reshape(height, width, channels)
+                if pixel_format.startswith(("RGB", "BGR")):
+                    colour = image[..., : min(channels, 3)].astype(np.float64)
+                    frame = np.rint(colour.mean(axis=-1)).astype(np.uint16)
+                else:
+                    frame = image[..., 0].astype(np.uint16)
+        except Exception as error:  # harvesters raises its own timeout types
+            if "timeout" in type(error).__name__.lower():
+                raise DeviceTimeout(f"{self.name}: no frame within {self._timeout_s} s") from error
+            raise
+        finally:
+            acquirer.stop()
+        return frame, {
+            "timestamp": time.time(),
+            "exposure_s": self._exposure_s,
+            "pixel_format": pixel_format,
+        }
+
+    def read(self) -> dict[str, dict[str, Any]]:
+        return {f"{self.name}_exposure_s": {"value": self._exposure_s, "timestamp": time.time()}}
+
+    def describe(self) -> dict[str, dict[str, Any]]:
+        return {
+            f"{self.name}_image": {
+                "source": f"GenICam via {self._cti.name}",
+                "dtype": "array",
+                "shape": list(self.frame_shape),
+                "units": "DN",
+            }
+        }
+
+    def _require(self):
+        if self._acquirer is None:
+            raise DeviceError(f"{self.name}: not staged; call stage() first")
+        return self._acquirer
+
+    def _node_map(self):
+        return self._require().remote_device.node_map

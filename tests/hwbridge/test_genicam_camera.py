@@ -1,0 +1,40 @@
+"""The GenICam camera driver against the simulated GenTL producer of the genicam package."""
+
+import numpy as np
+import pytest
+
+pytest.importorskip("harvesters")
+genicam_camera = pytest.importorskip("hwbridge.drivers.genicam_camera")
+
+from hwbridge.errors import BridgeInputError, DeviceError  # noqa: E402
+from hwbridge.protocols import Camera  # noqa: E402
+
+
+@pytest.fixture
+def camera():
+    device = genicam_camera.GenICamCamera(genicam_camera.simulated_producer(), serial_number="1")
+    device.stage()
+    yield device
+    device.unstage()
+
+
+def test_snaps_frames_of_the_advertised_size(camera):
+    assert isinstance(camera, Camera)
+    camera.set_exposure(0.01)
+    frame, metadata = camera.snap()
+    assert frame.dtype == np.uint16 and frame.shape == camera.frame_shape
+    assert metadata["exposure_s"] == 0.01 and metadata["pixel_format"]
+    second, _ = camera.snap()
+    assert second.shape == frame.shape
+    assert "GenICam" in camera.describe()["camera_image"]["source"]
+
+
+def test_wrong_serials_producers_and_exposures_are_reported(tmp_path):
+    with pytest.raises(DeviceError, match="no camera with serial"):
+        genicam_camera.GenICamCamera(
+            genicam_camera.simulated_producer(), serial_number="999"
+        ).stage()
+    with pytest.raises(BridgeInputError, match="does not exist"):
+        genicam_camera.GenICamCamera(tmp_path / "none.cti").stage()
+    with pytest.raises(DeviceError, match="not staged"):
+        genicam_camera.GenICamCamera(genicam_camera.simulated_producer()).snap()
