@@ -20,7 +20,13 @@ import numpy as np
 
 from hwbridge.errors import BridgeInputError
 
-__all__ = ["dark_series", "estimate_duration_s", "gonio_sample_run", "response_curve_series"]
+__all__ = [
+    "dark_series",
+    "estimate_duration_s",
+    "gonio_sample_run",
+    "plan_start_times_s",
+    "response_curve_series",
+]
 
 
 def _step(camera: str, kind: str, exposure_s: float, **settings: float | int) -> dict[str, object]:
@@ -69,10 +75,28 @@ def gonio_sample_run(
     ]
 
 
+def plan_start_times_s(
+    plan: list[dict], *, per_frame_overhead_s: float = 0.13, per_view_move_s: float = 6.0
+) -> np.ndarray:
+    """When each step's exposure starts, in seconds from the session start: moves to a new view,
+    then exposure plus switching/download per frame (thesis 4.1.1). Fixed by the plan alone, so a
+    resumed session sees the same lamp phase at every step as an uninterrupted one."""
+    starts, clock, view = [], 0.0, None
+    for step in plan:
+        step_view = step.get("view_id", -1)
+        if step_view != -1 and step_view != view:
+            clock += per_view_move_s
+            view = step_view
+        starts.append(clock)
+        clock += float(step["exposure_s"]) + per_frame_overhead_s
+    return np.array(starts)
+
+
 def estimate_duration_s(
     plan: list[dict], *, per_frame_overhead_s: float = 0.13, per_view_move_s: float = 6.0
 ) -> float:
     """Dry-run duration: exposures, per-frame switching/download, and a move per new view."""
-    exposures = sum(float(step["exposure_s"]) for step in plan)
-    views = {step.get("view_id", -1) for step in plan} - {-1}
-    return exposures + per_frame_overhead_s * len(plan) + per_view_move_s * len(views)
+    starts = plan_start_times_s(
+        plan, per_frame_overhead_s=per_frame_overhead_s, per_view_move_s=per_view_move_s
+    )
+    return float(starts[-1] + float(plan[-1]["exposure_s"]) + per_frame_overhead_s)

@@ -1,9 +1,10 @@
 """Run a capture plan on any backend into a capture store, resumably.
 
-For each pending step: tune the filter (when the step names a band), set the exposure, take the
-frame, write frame and index, then flag the step done. A session interrupted at any moment
-(crash, SIGKILL, power loss) is continued with ``resume=True``: steps already flagged are skipped,
-a step that was cut short is taken again into the same slot. Devices that simulate noise can
+For each pending step: move to the step's view (when it names one), tune the filter (when it
+names a band), set the exposure, take the frame, write frame and index, then flag the step done.
+A session interrupted at any moment (crash, SIGKILL, power loss) is continued with
+``resume=True``: steps already flagged are skipped, a step that was cut short is taken again
+into the same slot. Devices that simulate noise can
 implement ``set_step(seed, step)`` to derive it from the step index, so that a resumed session
 reproduces the frames of an uninterrupted one bit for bit; cameras with ``set_shutter(open)``
 get it closed for dark frames. Device timeouts are retried with
@@ -46,6 +47,7 @@ def run_session(
     *,
     cameras: dict[str, Any],
     tunable_filter: Any | None = None,
+    positioner: Any | None = None,
     rig: dict[str, Any],
     backend: str,
     seed: int,
@@ -60,6 +62,8 @@ def run_session(
         raise BridgeInputError(f"plan: names cameras {unknown} that the session was not given")
     if any("band_nm" in step for step in plan) and tunable_filter is None:
         raise BridgeInputError("plan: steps name filter bands but no tunable_filter was given")
+    if any(step.get("view_id", -1) != -1 for step in plan) and positioner is None:
+        raise BridgeInputError("plan: steps name views but no positioner was given")
     path = Path(store_path)
     if resume:
         store = CaptureStore.open(path)
@@ -85,6 +89,14 @@ def run_session(
             settings = plan[step]
             camera = cameras[settings["camera"]]
             faults = 0
+            if settings.get("view_id", -1) != -1:
+                _, seen = _with_retries(
+                    lambda s=settings: positioner.set({"view_id": s["view_id"]}),
+                    positioner,
+                    retries,
+                    backoff_s,
+                )
+                faults += seen
             if "band_nm" in settings:
                 _, seen = _with_retries(
                     lambda s=settings: tunable_filter.set(s["band_nm"]),

@@ -1,10 +1,12 @@
 """Simulated devices implementing the ``hwbridge.protocols`` interfaces over one virtual rig.
 
-The tunable filter and the camera share a :class:`VirtualRig` state: the camera's frame depends on
-the band the filter is tuned to. Frames come from the sensor model (``twin.sensor``) fed with
-photo-electron rates per band; the noise of step ``k`` of a session with seed ``s`` is drawn from
-``numpy.random.default_rng([s, k])`` so a resumed session reproduces an uninterrupted one.
-Optional fault injection raises device timeouts on a fraction of calls.
+The tunable filter, the positioner and the camera share a :class:`VirtualRig` state: the camera's
+frame depends on the band the filter is tuned to and the view the positioner has set. Frames come
+from the sensor model (``twin.sensor``) fed by a *signal*: the mean photo-electrons of the current
+state over the exposure window (the lamp's flicker included, see ``twin.rig_signals``). Step
+``k`` of a session with seed ``s`` draws its noise from ``numpy.random.default_rng([s, k])``
+and starts its exposure at the plan's start time for that step, so a resumed session reproduces
+an uninterrupted one. Optional fault injection raises timeouts and disconnects.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ import numpy as np
 from hwbridge.errors import BridgeInputError, DeviceTimeout
 from twin.sensor import Sensor
 
-__all__ = ["SimCamera", "SimTunableFilter", "VirtualRig"]
+__all__ = ["Signal", "SimCamera", "SimPositioner", "SimTunableFilter", "VirtualRig"]
 
 
 @dataclass
@@ -27,6 +29,7 @@ class VirtualRig:
     """State shared by the simulated devices of one rig."""
 
     band_nm: float | None = None
+    view_id: int = -1
     fault_rate: float = 0.0
     fault_rng: np.random.Generator | None = None
 
@@ -80,24 +83,58 @@ class SimTunableFilter:
         }
 
 
-class SimCamera:
-    """A camera of the twin: photo-electron rates per band -> the sensor model -> raw frames.
+class SimPositioner:
+    """The gonioreflectometer's robot and rail, addressed by view (direction pair) index."""
 
-    ``electron_rates(band_nm)`` returns the mean photo-electrons per second per pixel for the
-    band the filter is tuned to (``None`` when the camera has no filter in front).
+    def __init__(self, rig: VirtualRig, views: int, *, name: str = "goniometer"):
+        self.name, self._rig, self._views = name, rig, views
+
+    def set(self, target: dict[str, float]) -> None:
+        view = int(target["view_id"])
+        if not 0 <= view < self._views:
+            raise BridgeInputError(f"{self.name}: view_id {view} is not in 0..{self._views - 1}")
+        self._rig.maybe_fail(f"{self.name}.set")
+        self._rig.view_id = view
+
+    def read(self) -> dict[str, dict[str, Any]]:
+        return {f"{self.name}_view_id": {"value": self._rig.view_id, "timestamp": time.time()}}
+
+    def describe(self) -> dict[str, dict[str, Any]]:
+        return {
+            f"{self.name}_view_id": {
+                "source": "simulated",
+                "dtype": "integer",
+                "shape": [],
+                "units": "",
+            }
+        }
+
+
+Signal = Callable[[VirtualRig, float, float], np.ndarray]
+"""(rig state, exposure start in s, exposure in s) -> mean photo-electrons per pixel."""
+
+
+class SimCamera:
+    """A camera of the twin: the signal of the rig's state -> the sensor model -> raw frames.
+
+    ``start_times_s[k]`` is when the exposure of plan step ``k`` starts (``hwbridge.plans.
+    plan_start_times_s``): it sets the lamp's flicker phase for that frame.
     """
 
     def __init__(
         self,
         rig: VirtualRig,
         sensor: Sensor,
-        electron_rates: Callable[[float | None], np.ndarray],
+        signal: Signal,
+        start_times_s: np.ndarray,
         *,
         name: str = "camera",
     ):
-        self.name, self._rig, self._sensor, self._rates = name, rig, sensor, electron_rates
+        self.name, self._rig, self._sensor, self._signal = name, rig, sensor, signal
+        self._start_times_s = np.asarray(start_times_s, dtype=np.float64)
         self._exposure_s = sensor.config.exposure_range_s[0]
         self._rng = np.random.default_rng()
+        self._start_s = 0.0
         self._shutter_open = True
 
     @property
@@ -119,13 +156,18 @@ class SimCamera:
         self._shutter_open = bool(open_)
 
     def set_step(self, seed: int, step: int) -> None:
-        """Derive the noise of the next frame from the session seed and the step index."""
+        """Derive the noise and the exposure start of the next frame from the plan step."""
         self._rng = np.random.default_rng([seed, step])
+        self._start_s = float(self._start_times_s[step])
 
     def snap(self) -> tuple[np.ndarray, dict[str, Any]]:
         self._rig.maybe_fail(f"{self.name}.snap")
-        rates = self._rates(self._rig.band_nm) if self._shutter_open else np.zeros(self.frame_shape)
-        electrons = np.asarray(rates, np.float32) * self._exposure_s
+        if self._shutter_open:
+            electrons = np.asarray(
+                self._signal(self._rig, self._start_s, self._exposure_s), np.float32
+            )
+        else:
+            electrons = np.zeros(self.frame_shape, np.float32)
         frame = self._sensor.capture(electrons, self._exposure_s, self._rng)
         return frame, {"timestamp": time.time(), "exposure_s": self._exposure_s}
 

@@ -1,7 +1,9 @@
 """A small simulated gonioreflectometer session: dark frames, then two direction pairs through all
-33 VariSpec bands, on a 32x32 window of the CoolSNAP K4 looking at the white standard under the
-HMI lamp. Used by the resume and fault tests and as an example of driving ``hwbridge`` with the
-twin. Run as ``python -m twin.sim_session STORE SEED [--resume] [--fault-rate F]``.
+33 VariSpec bands, on a 32x32 window of the CoolSNAP K4. By default the camera sees the white
+standard under the HMI lamp (analytic); with ``rendered=True`` it sees the colour checker on its
+holder, rendered by Mitsuba for each direction pair. Used by the resume and fault tests and as an
+example of driving ``hwbridge`` with the twin.
+Run as ``python -m twin.sim_session STORE SEED [--resume] [--fault-rate F] [--rendered]``.
 """
 
 from __future__ import annotations
@@ -11,13 +13,17 @@ from pathlib import Path
 
 import numpy as np
 
-from hwbridge.plans import dark_series, gonio_sample_run
+from hwbridge.plans import dark_series, gonio_sample_run, plan_start_times_s
 from hwbridge.session import run_session
 from hwbridge.store import CaptureStore
-from twin.components import FINE_GRID, HMILamp, LiquidCrystalTunableFilter
+from twin.components import HMILamp, LiquidCrystalTunableFilter
+from twin.gonio_kinematics import solve_pairs
+from twin.hemisphere import direction
+from twin.materials import load_material
+from twin.rig_config import load_rig
+from twin.rig_signals import RenderedGonioSignal, WhiteReferenceSignal
 from twin.sensor import Sensor
-from twin.sim_devices import SimCamera, SimTunableFilter, VirtualRig
-from twin.white_reference import white_reference_rates
+from twin.sim_devices import SimCamera, SimPositioner, SimTunableFilter, VirtualRig
 
 __all__ = ["demo_plan", "run_demo_session"]
 
@@ -33,30 +39,36 @@ def demo_plan() -> list[dict]:
     )
 
 
+_VIEWS = ((30.0, 0.0, 15.0, 180.0), (45.0, 90.0, 30.0, 250.0))  # light, view: (theta, phi)
+
+
 def run_demo_session(
     store: Path,
     seed: int,
     *,
     resume: bool = False,
     fault_rate: float = 0.0,
+    rendered: bool = False,
     show_progress: bool = False,
 ) -> CaptureStore:
+    """Run (or resume) the session into ``store``; see the module docstring."""
     sensor = Sensor("coolsnap_k4", roi=(_PIXELS, _PIXELS))
-    lctf = LiquidCrystalTunableFilter.varispec("VS-10")
-    rates = white_reference_rates(
-        sensor, HMILamp(), lctf.transmission(FINE_GRID), distance_m=2.0
-    ).sum(axis=0)
-    by_band = dict(zip(lctf.band_centres_nm, rates, strict=True))
+    plan = demo_plan()
     rig = VirtualRig(fault_rate=fault_rate, fault_rng=np.random.default_rng([seed, 99]))
-
-    def electron_rates(band_nm: float | None) -> np.ndarray:
-        return np.full((_PIXELS, _PIXELS), by_band.get(band_nm, 0.0), np.float32)
-
+    if rendered:
+        config = load_rig("gonio")
+        light = direction(np.array([v[0] for v in _VIEWS]), np.array([v[1] for v in _VIEWS]))
+        view = direction(np.array([v[2] for v in _VIEWS]), np.array([v[3] for v in _VIEWS]))
+        poses = list(solve_pairs(config, light, view).poses)
+        signal = RenderedGonioSignal(config, load_material("colorchecker16"), poses, pixels=_PIXELS)
+    else:
+        signal = WhiteReferenceSignal(sensor, HMILamp())
     return run_session(
         store,
-        demo_plan(),
-        cameras={"k4": SimCamera(rig, sensor, electron_rates, name="k4")},
+        plan,
+        cameras={"k4": SimCamera(rig, sensor, signal, plan_start_times_s(plan), name="k4")},
         tunable_filter=SimTunableFilter(rig),
+        positioner=SimPositioner(rig, len(_VIEWS)),
         rig={"rig": "gonioreflectometer", "camera": "coolsnap_k4", "window_px": _PIXELS},
         backend="sim",
         seed=seed,

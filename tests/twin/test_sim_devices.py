@@ -1,0 +1,60 @@
+"""Simulated devices and their signals (twin.sim_devices, twin.rig_signals)."""
+
+import numpy as np
+import pytest
+
+from hwbridge.errors import BridgeInputError
+from hwbridge.protocols import Camera, Positioner, TunableFilter
+from twin.components import HMILamp, QTHLamp
+from twin.rig_signals import WhiteReferenceSignal
+from twin.sensor import Sensor
+from twin.sim_devices import SimCamera, SimPositioner, SimTunableFilter, VirtualRig
+from twin.sim_session import run_demo_session
+
+
+def test_white_reference_signal_carries_the_hmi_flicker():
+    sensor = Sensor("coolsnap_k4", roi=(4, 4))
+    rig = VirtualRig(band_nm=550.0)
+    hmi, qth = WhiteReferenceSignal(sensor, HMILamp()), WhiteReferenceSignal(sensor, QTHLamp())
+    starts = np.linspace(0, 0.2, 9)
+    short = [hmi(rig, t, 0.05)[0, 0] for t in starts]
+    full_period = [hmi(rig, t, 1 / 15)[0, 0] for t in starts]
+    steady = [qth(rig, t, 0.05)[0, 0] for t in starts]
+    assert np.ptp(short) / np.mean(short) > 0.01
+    assert np.ptp(full_period) / np.mean(full_period) < 1e-6
+    assert np.ptp(steady) == 0
+
+
+def test_simulated_devices_follow_the_protocols_and_share_state():
+    rig = VirtualRig()
+    sensor = Sensor("coolsnap_k4", roi=(8, 8))
+    camera = SimCamera(rig, sensor, WhiteReferenceSignal(sensor, HMILamp()), np.zeros(3), name="k4")
+    lctf, positioner = SimTunableFilter(rig), SimPositioner(rig, 2)
+    assert (
+        isinstance(camera, Camera)
+        and isinstance(lctf, TunableFilter)
+        and isinstance(positioner, Positioner)
+    )
+    lctf.set(550.0)
+    positioner.set({"view_id": 1})
+    assert rig.band_nm == 550.0 and rig.view_id == 1
+    camera.set_exposure(0.1)
+    camera.set_step(1, 0)
+    bright, _ = camera.snap()
+    camera.set_shutter(False)
+    camera.set_step(1, 0)
+    dark, _ = camera.snap()
+    assert bright.mean() > dark.mean() + 100
+    with pytest.raises(BridgeInputError, match="view_id"):
+        positioner.set({"view_id": 5})
+
+
+@pytest.mark.render
+def test_rendered_session_renders_each_view_once_and_completes(tmp_path):
+    store = run_demo_session(tmp_path / "rendered.capture.zarr", 1, rendered=True)
+    assert store.complete
+    frames, index = store.frames("k4")[:], store.index("k4")
+    at_550 = np.flatnonzero(index["band_nm"] == 550.0)
+    assert len(at_550) == 2
+    # The two direction pairs see the chart differently.
+    assert not np.array_equal(frames[at_550[0]], frames[at_550[1]])
