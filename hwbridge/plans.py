@@ -21,11 +21,14 @@ import numpy as np
 from hwbridge.errors import BridgeInputError
 
 __all__ = [
+    "chart_photographs",
     "dark_series",
+    "dome_run",
     "estimate_duration_s",
     "gonio_sample_run",
     "plan_start_times_s",
     "response_curve_series",
+    "white_reference_run",
 ]
 
 
@@ -73,6 +76,64 @@ def gonio_sample_run(
         for view in view_ids
         for band, t in zip(bands, exposures, strict=True)
     ]
+
+
+def white_reference_run(
+    camera: str, band_centres_nm: Iterable[float], band_exposures_s: Iterable[float]
+) -> list[dict]:
+    """The white standard through every band before a run, for the factors F'_lambda (3.3)."""
+    return [
+        _step(camera, "white", t, band_nm=float(band), light_id=0)
+        for band, t in zip(band_centres_nm, band_exposures_s, strict=True)
+    ]
+
+
+def chart_photographs(
+    camera: str, exposures_s: Iterable[float], light_ids: Iterable[int]
+) -> list[dict]:
+    """Colour-chart photographs, one per light and exposure (thesis 9.3)."""
+    return [
+        _step(camera, "chart", t, light_id=int(light)) for light in light_ids for t in exposures_s
+    ]
+
+
+def dome_run(
+    rgb_cameras: list[str],
+    spectral_camera: str,
+    *,
+    stage_positions: int,
+    leds: int,
+    rgb_exposure_s: float,
+    spectral_exposure_s: float,
+    spectral_bands_nm: list[float],
+) -> list[dict]:
+    """The dome procedure (thesis 10.2.2): per stage position an alignment frame with all LEDs on
+    for every camera, then per LED one frame of every RGB camera and one of the spectral camera
+    in the band its schedule gives that (position, LED) (cycled through ``spectral_bands_nm``).
+    The view of a step is its stage position."""
+    if stage_positions < 1 or leds < 1 or not spectral_bands_nm:
+        raise BridgeInputError("dome_run: expected stage positions, LEDs and at least one band")
+    plan, schedule = [], 0
+    for position in range(stage_positions):
+        for camera in [*rgb_cameras, spectral_camera]:
+            exposure = spectral_exposure_s if camera == spectral_camera else rgb_exposure_s
+            plan.append(_step(camera, "alignment", exposure, view_id=position, light_id=-2))
+        for led in range(leds):
+            for camera in rgb_cameras:
+                plan.append(_step(camera, "sample", rgb_exposure_s, view_id=position, light_id=led))
+            band = spectral_bands_nm[schedule % len(spectral_bands_nm)]
+            plan.append(
+                _step(
+                    spectral_camera,
+                    "sample",
+                    spectral_exposure_s,
+                    view_id=position,
+                    light_id=led,
+                    band_nm=float(band),
+                )
+            )
+            schedule += 1
+    return plan
 
 
 def plan_start_times_s(

@@ -42,3 +42,41 @@ def test_describe_matches_read(tunable_filter):
 def test_out_of_range_is_a_value_error(tunable_filter, band):
     with pytest.raises(ValueError, match="outside"):
         tunable_filter.set(band)
+
+
+@pytest.fixture(params=["simulated", "genicam-simulated-producer"])
+def camera(request):
+    if request.param == "simulated":
+        import numpy as np
+
+        from twin.components import HMILamp
+        from twin.rig_signals import WhiteReferenceSignal
+        from twin.sensor import Sensor
+        from twin.sim_devices import SimCamera
+
+        rig = VirtualRig(band_nm=550.0)
+        sensor = Sensor("coolsnap_k4", roi=(16, 16))
+        device = SimCamera(rig, sensor, WhiteReferenceSignal(sensor, HMILamp()), np.zeros(1))
+    else:
+        genicam_camera = pytest.importorskip("hwbridge.drivers.genicam_camera")
+        device = genicam_camera.GenICamCamera(genicam_camera.simulated_producer())
+    device.stage()
+    yield device
+    device.unstage()
+
+
+def test_camera_snaps_uint16_frames_of_its_shape(camera):
+    from hwbridge.protocols import Camera
+
+    assert isinstance(camera, Camera)
+    camera.set_exposure(0.05)
+    frame, metadata = camera.snap()
+    assert frame.dtype.name == "uint16" and frame.shape == camera.frame_shape
+    assert metadata["exposure_s"] == 0.05 and metadata["timestamp"] > 0
+    (description,) = camera.describe().values()
+    assert description["shape"] == list(camera.frame_shape) and description["units"] == "DN"
+
+
+def test_camera_refuses_a_negative_exposure(camera):
+    with pytest.raises(ValueError, match="exposure"):
+        camera.set_exposure(-1.0)
