@@ -7,9 +7,10 @@ A session interrupted at any moment (crash, SIGKILL, power loss) is continued wi
 into the same slot. Devices that simulate noise can
 implement ``set_step(seed, step)`` to derive it from the step index, so that a resumed session
 reproduces the frames of an uninterrupted one bit for bit; cameras with ``set_shutter(open)``
-get it closed for dark frames. Device timeouts are retried with
-exponential backoff, disconnected devices are staged again, and both are recorded in the frame's
-``status``.
+get it closed for dark frames. With a ``monitor`` (Spectrometer) the lamp spectrum is recorded
+with every lit frame (thesis 3.3: the i1 tracks the lamp at every measurement point). Device
+timeouts are retried with exponential backoff, disconnected devices are staged again, and both
+are recorded in the frame's ``status``.
 """
 
 from __future__ import annotations
@@ -48,6 +49,7 @@ def run_session(
     cameras: dict[str, Any],
     tunable_filter: Any | None = None,
     positioner: Any | None = None,
+    monitor: Any | None = None,
     rig: dict[str, Any],
     backend: str,
     seed: int,
@@ -74,7 +76,13 @@ def run_session(
     else:
         shapes = {name: camera.frame_shape for name, camera in cameras.items()}
         store = CaptureStore.create(
-            path, rig=rig, backend=backend, seed=seed, plan=plan, cameras=shapes
+            path,
+            rig=rig,
+            backend=backend,
+            seed=seed,
+            plan=plan,
+            cameras=shapes,
+            monitor_samples=monitor.samples if monitor is not None else 0,
         )
     pending = store.pending_steps()
     columns = (
@@ -112,6 +120,12 @@ def run_session(
                 camera.set_step(seed, step)
             (frame, metadata), seen = _with_retries(camera.snap, camera, retries, backoff_s)
             faults += seen
+            spectrum = None
+            if monitor is not None and settings["kind"] != "dark":
+                _, seen = _with_retries(monitor.trigger, monitor, retries, backoff_s)
+                faults += seen
+                (reading,) = monitor.read().values()
+                spectrum = reading["value"]
             record = FrameRecord(
                 kind=settings["kind"],
                 exposure_s=settings["exposure_s"],
@@ -119,6 +133,7 @@ def run_session(
                 light_id=int(settings.get("light_id", -1)),
                 view_id=int(settings.get("view_id", -1)),
                 band_nm=float(settings.get("band_nm", float("nan"))),
+                lamp_monitor=spectrum,
                 status="ok" if not faults else f"ok after {faults} fault(s): timeout or disconnect",
             )
             store.write_frame(step, frame, record)

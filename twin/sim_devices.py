@@ -18,10 +18,19 @@ from typing import Any
 
 import numpy as np
 
-from hwbridge.errors import BridgeInputError, DeviceTimeout
+from hwbridge.errors import BridgeInputError, DeviceDisconnected, DeviceTimeout
 from twin.sensor import Sensor
 
-__all__ = ["Signal", "SimCamera", "SimPositioner", "SimTunableFilter", "VirtualRig"]
+__all__ = [
+    "Signal",
+    "SimCamera",
+    "SimLamp",
+    "SimLedArray",
+    "SimPositioner",
+    "SimSpectrometer",
+    "SimTunableFilter",
+    "VirtualRig",
+]
 
 
 @dataclass
@@ -30,16 +39,21 @@ class VirtualRig:
 
     band_nm: float | None = None
     view_id: int = -1
+    lamp_on: bool = True
+    led_pattern: np.ndarray | None = None
+    clock_s: float = 0.0  # start of the current exposure (set by the camera for each step)
     fault_rate: float = 0.0
     fault_rng: np.random.Generator | None = None
 
     def maybe_fail(self, what: str) -> None:
-        if (
-            self.fault_rate
-            and self.fault_rng is not None
-            and self.fault_rng.random() < self.fault_rate
-        ):
+        """With probability ``fault_rate``, a timeout or (as often) a disconnect."""
+        if not self.fault_rate or self.fault_rng is None:
+            return
+        if self.fault_rng.random() >= self.fault_rate:
+            return
+        if self.fault_rng.random() < 0.5:
             raise DeviceTimeout(f"simulated timeout of {what}")
+        raise DeviceDisconnected(f"simulated disconnect of {what}")
 
 
 class SimTunableFilter:
@@ -79,6 +93,101 @@ class SimTunableFilter:
                 "dtype": "number",
                 "shape": [],
                 "units": "nm",
+            }
+        }
+
+
+class SimLamp:
+    """The gonioreflectometer's lamp: on or off (the camera sees nothing when it is off)."""
+
+    def __init__(self, rig: VirtualRig, *, name: str = "lamp"):
+        self.name, self._rig = name, rig
+
+    def set(self, on: bool) -> None:
+        self._rig.maybe_fail(f"{self.name}.set")
+        self._rig.lamp_on = bool(on)
+
+    def read(self) -> dict[str, dict[str, Any]]:
+        return {f"{self.name}_on": {"value": self._rig.lamp_on, "timestamp": time.time()}}
+
+    def describe(self) -> dict[str, dict[str, Any]]:
+        return {
+            f"{self.name}_on": {"source": "simulated", "dtype": "boolean", "shape": [], "units": ""}
+        }
+
+
+class SimLedArray:
+    """The dome's LEDs: any on/off pattern over ``count`` LEDs."""
+
+    def __init__(self, rig: VirtualRig, count: int, *, name: str = "leds"):
+        self.name, self._rig, self._count = name, rig, count
+
+    def set(self, pattern: np.ndarray) -> None:
+        pattern = np.asarray(pattern, dtype=bool)
+        if pattern.shape != (self._count,):
+            raise BridgeInputError(
+                f"{self.name}: expected a pattern of {self._count} LEDs, got {pattern.shape}"
+            )
+        self._rig.maybe_fail(f"{self.name}.set")
+        self._rig.led_pattern = pattern
+
+    def read(self) -> dict[str, dict[str, Any]]:
+        return {f"{self.name}_pattern": {"value": self._rig.led_pattern, "timestamp": time.time()}}
+
+    def describe(self) -> dict[str, dict[str, Any]]:
+        return {
+            f"{self.name}_pattern": {
+                "source": "simulated",
+                "dtype": "array",
+                "shape": [self._count],
+                "units": "",
+            }
+        }
+
+
+class SimSpectrometer:
+    """The lamp monitor (thesis 3.3): the lamp's spectrum integrated over the current exposure,
+    drift included, through a fixed collection efficiency."""
+
+    def __init__(
+        self,
+        rig: VirtualRig,
+        lamp: Any,
+        grid: Any,
+        *,
+        efficiency: float = 1e-3,
+        name: str = "monitor",
+    ):
+        self.name, self._rig, self._lamp, self._grid, self._efficiency = (
+            name,
+            rig,
+            lamp,
+            grid,
+            efficiency,
+        )
+        self._last: np.ndarray | None = None
+
+    @property
+    def samples(self) -> int:
+        return self._grid.size
+
+    def trigger(self) -> None:
+        self._rig.maybe_fail(f"{self.name}.trigger")
+        spectrum = self._lamp.exposure_integral(self._grid, self._rig.clock_s, 1.0).values
+        self._last = self._efficiency * spectrum * (1.0 if self._rig.lamp_on else 0.0)
+
+    def read(self) -> dict[str, dict[str, Any]]:
+        if self._last is None:
+            raise BridgeInputError(f"{self.name}: no spectrum yet; call trigger() first")
+        return {f"{self.name}_counts": {"value": self._last, "timestamp": time.time()}}
+
+    def describe(self) -> dict[str, dict[str, Any]]:
+        return {
+            f"{self.name}_counts": {
+                "source": "simulated",
+                "dtype": "array",
+                "shape": [self.samples],
+                "units": "counts",
             }
         }
 
@@ -159,10 +268,11 @@ class SimCamera:
         """Derive the noise and the exposure start of the next frame from the plan step."""
         self._rng = np.random.default_rng([seed, step])
         self._start_s = float(self._start_times_s[step])
+        self._rig.clock_s = self._start_s
 
     def snap(self) -> tuple[np.ndarray, dict[str, Any]]:
         self._rig.maybe_fail(f"{self.name}.snap")
-        if self._shutter_open:
+        if self._shutter_open and self._rig.lamp_on:
             electrons = np.asarray(
                 self._signal(self._rig, self._start_s, self._exposure_s), np.float32
             )

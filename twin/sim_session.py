@@ -16,6 +16,7 @@ import numpy as np
 from hwbridge.plans import dark_series, gonio_sample_run, plan_start_times_s
 from hwbridge.session import run_session
 from hwbridge.store import CaptureStore
+from recon.spectra import DEFAULT_GRID
 from twin.components import HMILamp, LiquidCrystalTunableFilter
 from twin.gonio_kinematics import solve_pairs
 from twin.hemisphere import direction
@@ -23,7 +24,13 @@ from twin.materials import load_material
 from twin.rig_config import load_rig
 from twin.rig_signals import RenderedGonioSignal, WhiteReferenceSignal
 from twin.sensor import Sensor
-from twin.sim_devices import SimCamera, SimPositioner, SimTunableFilter, VirtualRig
+from twin.sim_devices import (
+    SimCamera,
+    SimPositioner,
+    SimSpectrometer,
+    SimTunableFilter,
+    VirtualRig,
+)
 
 __all__ = ["demo_plan", "run_demo_session"]
 
@@ -69,6 +76,7 @@ def run_demo_session(
         cameras={"k4": SimCamera(rig, sensor, signal, plan_start_times_s(plan), name="k4")},
         tunable_filter=SimTunableFilter(rig),
         positioner=SimPositioner(rig, len(_VIEWS)),
+        monitor=SimSpectrometer(rig, HMILamp(), DEFAULT_GRID),
         rig={"rig": "gonioreflectometer", "camera": "coolsnap_k4", "window_px": _PIXELS},
         backend="sim",
         seed=seed,

@@ -58,3 +58,39 @@ def test_rendered_session_renders_each_view_once_and_completes(tmp_path):
     assert len(at_550) == 2
     # The two direction pairs see the chart differently.
     assert not np.array_equal(frames[at_550[0]], frames[at_550[1]])
+
+
+def test_lamp_leds_and_monitor_follow_the_protocols(tmp_path):
+    from hwbridge.protocols import Lamp, LedArray, Spectrometer
+    from recon.spectra import DEFAULT_GRID
+    from twin.sim_devices import SimLamp, SimLedArray, SimSpectrometer
+
+    rig = VirtualRig()
+    lamp, leds = SimLamp(rig), SimLedArray(rig, 198)
+    monitor = SimSpectrometer(rig, HMILamp(), DEFAULT_GRID)
+    assert (
+        isinstance(lamp, Lamp) and isinstance(leds, LedArray) and isinstance(monitor, Spectrometer)
+    )
+    leds.set(np.arange(198) == 7)
+    assert rig.led_pattern.sum() == 1
+    with pytest.raises(BridgeInputError, match="198"):
+        leds.set(np.ones(5))
+    rig.clock_s = 0.0
+    monitor.trigger()
+    early = monitor.read()["monitor_counts"]["value"]
+    rig.clock_s = 5 * 3600.0
+    monitor.trigger()
+    late = monitor.read()["monitor_counts"]["value"]
+    assert np.all(late < early)  # the HMI lamp's slow drift (thesis Fig. 3.5c)
+    lamp.set(False)
+    monitor.trigger()
+    assert monitor.read()["monitor_counts"]["value"].max() == 0
+
+
+def test_sessions_record_the_lamp_monitor_with_lit_frames(tmp_path):
+    store = run_demo_session(tmp_path / "monitored.capture.zarr", 2)
+    index = store.index("k4")
+    lit = index["kind"] == "sample"
+    assert np.all(np.isfinite(index["lamp_monitor"][lit])) and np.all(
+        np.isnan(index["lamp_monitor"][~lit])
+    )
