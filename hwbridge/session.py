@@ -27,13 +27,15 @@ from hwbridge.store import CaptureStore, FrameRecord
 __all__ = ["run_session"]
 
 
-def _with_retries(action, device: Any, retries: int, backoff_s: float) -> tuple[Any, int]:
+def _with_retries(action, device: Any, retries: int, backoff_s: float) -> tuple[Any, list[str]]:
     """Call ``action``; on a timeout wait and retry, on a disconnect stage ``device`` again and
-    retry, with exponential backoff. Returns (result, faults seen)."""
+    retry, with exponential backoff. Returns the result and the names of the faults seen."""
+    faults: list[str] = []
     for attempt in range(retries + 1):
         try:
-            return action(), attempt
-        except (DeviceTimeout, DeviceDisconnected):
+            return action(), faults
+        except (DeviceTimeout, DeviceDisconnected) as fault:
+            faults.append("disconnect" if isinstance(fault, DeviceDisconnected) else "timeout")
             if attempt == retries:
                 raise
             time.sleep(backoff_s * 2**attempt)
@@ -96,7 +98,7 @@ def run_session(
         for step in pending:
             settings = plan[step]
             camera = cameras[settings["camera"]]
-            faults = 0
+            faults: list[str] = []
             if settings.get("view_id", -1) != -1:
                 _, seen = _with_retries(
                     lambda s=settings: positioner.set({"view_id": s["view_id"]}),
@@ -134,7 +136,7 @@ def run_session(
                 view_id=int(settings.get("view_id", -1)),
                 band_nm=float(settings.get("band_nm", float("nan"))),
                 lamp_monitor=spectrum,
-                status="ok" if not faults else f"ok after {faults} fault(s): timeout or disconnect",
+                status="ok" if not faults else "ok after " + ", ".join(faults),
             )
             store.write_frame(step, frame, record)
             store.mark_done(step)

@@ -211,8 +211,8 @@ def capture(
             store, seed, resume=resume, fault_rate=fault_rate, show_progress=not as_json
         )
         summary["complete"] = result.complete
-        summary["faults_recorded"] = sum(
-            "fault" in status for status in result.index("k4")["status"]
+        summary["frames_with_faults"] = sum(
+            status != "ok" for status in result.index("k4")["status"]
         )
     if as_json:
         typer.echo(json.dumps(summary, indent=2))
