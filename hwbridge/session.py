@@ -7,9 +7,10 @@ A session interrupted at any moment (crash, SIGKILL, power loss) is continued wi
 into the same slot. Devices that simulate noise can
 implement ``set_step(seed, step)`` to derive it from the step index, so that a resumed session
 reproduces the frames of an uninterrupted one bit for bit; cameras with ``set_shutter(open)``
-get it closed for dark frames. With a ``monitor`` (Spectrometer) the lamp spectrum is recorded
-with every lit frame (thesis 3.3: the i1 tracks the lamp at every measurement point). Device
-timeouts are retried with exponential backoff, disconnected devices are staged again, and both
+get it closed for dark frames. With ``leds`` (an LedArray of ``led_count`` LEDs) each step's
+``light_id`` is switched on alone (``-2``: all LEDs, the dome's alignment frames). With a
+``monitor`` (Spectrometer) the lamp spectrum is recorded with every lit frame (thesis 3.3: the
+i1 tracks the lamp at every measurement point). Device timeouts are retried with exponential backoff, disconnected devices are staged again, and both
 are recorded in the frame's ``status``.
 """
 
@@ -19,6 +20,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
 from hwbridge.errors import BridgeInputError, DeviceDisconnected, DeviceTimeout
@@ -52,6 +54,8 @@ def run_session(
     tunable_filter: Any | None = None,
     positioner: Any | None = None,
     monitor: Any | None = None,
+    leds: Any | None = None,
+    led_count: int = 0,
     rig: dict[str, Any],
     backend: str,
     seed: int,
@@ -106,6 +110,11 @@ def run_session(
                     retries,
                     backoff_s,
                 )
+                faults += seen
+            if leds is not None and settings.get("light_id", -1) != -1:
+                light = int(settings["light_id"])
+                pattern = np.ones(led_count, bool) if light == -2 else np.arange(led_count) == light
+                _, seen = _with_retries(lambda p=pattern: leds.set(p), leds, retries, backoff_s)
                 faults += seen
             if "band_nm" in settings:
                 _, seen = _with_retries(

@@ -94,3 +94,38 @@ def test_sessions_record_the_lamp_monitor_with_lit_frames(tmp_path):
     assert np.all(np.isfinite(index["lamp_monitor"][lit])) and np.all(
         np.isnan(index["lamp_monitor"][~lit])
     )
+
+
+def test_sessions_switch_the_step_led_on_alone(tmp_path):
+    from hwbridge.plans import chart_photographs, plan_start_times_s
+    from hwbridge.session import run_session
+    from twin.sim_devices import SimLedArray
+
+    plan = chart_photographs("k4", [0.05], [3, 7, -2])
+    rig = VirtualRig(band_nm=550.0)
+    sensor = Sensor("coolsnap_k4", roi=(8, 8))
+    patterns = []
+    leds = SimLedArray(rig, 198)
+    original_set = leds.set
+
+    def record(pattern):
+        original_set(pattern)
+        patterns.append(np.flatnonzero(rig.led_pattern).tolist())
+
+    leds.set = record
+    camera = SimCamera(
+        rig, sensor, WhiteReferenceSignal(sensor, HMILamp()), plan_start_times_s(plan), name="k4"
+    )
+    store = run_session(
+        tmp_path / "leds.capture.zarr",
+        plan,
+        cameras={"k4": camera},
+        leds=leds,
+        led_count=198,
+        rig={},
+        backend="sim",
+        seed=0,
+        show_progress=False,
+    )
+    assert store.complete
+    assert patterns[0] == [3] and patterns[1] == [7] and len(patterns[2]) == 198
