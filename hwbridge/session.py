@@ -1,17 +1,19 @@
 """Run a capture plan on any backend into a capture store, resumably.
 
-For each pending step: move to the step's view (when it names one), tune the filter (when it
-names a band), set the exposure, take the frame, write frame and index, then flag the step done.
-A session interrupted at any moment (crash, SIGKILL, power loss) is continued with
-``resume=True``: steps already flagged are skipped, a step that was cut short is taken again
-into the same slot. Devices that simulate noise can
-implement ``set_step(seed, step)`` to derive it from the step index, so that a resumed session
-reproduces the frames of an uninterrupted one bit for bit; cameras with ``set_shutter(open)``
-get it closed for dark frames. With ``leds`` (an LedArray of ``led_count`` LEDs) each step's
-``light_id`` is switched on alone (``-2``: all LEDs, the dome's alignment frames). With a
-``monitor`` (Spectrometer) the lamp spectrum is recorded with every lit frame (thesis 3.3: the
-i1 tracks the lamp at every measurement point). Device timeouts are retried with exponential backoff, disconnected devices are staged again, and both
-are recorded in the frame's ``status``.
+For each pending step: move to the step's view (when it names one), switch its LED on (when an
+LED array is given), tune the filter (when it names a band), set the exposure, take the frame,
+record the lamp monitor, write frame and index, then flag the step done. A session interrupted
+at any moment (crash, SIGKILL, power loss) is continued with ``resume=True``: steps already
+flagged are skipped, a step that was cut short is taken again into the same slot.
+
+Devices that simulate noise can implement ``set_step(seed, step)`` to derive it from the step
+index, so that a resumed session reproduces the frames of an uninterrupted one bit for bit;
+cameras with ``set_shutter(open)`` get it closed for dark frames. With ``leds`` (an LedArray of
+``led_count`` LEDs) each step's ``light_id`` is switched on alone (``-2``: all LEDs, the dome's
+alignment frames). With a ``monitor`` (Spectrometer) the lamp spectrum is recorded with every lit
+frame (thesis 3.3: the i1 tracks the lamp at every measurement point). Device timeouts are
+retried with exponential backoff, disconnected devices are staged again, and both are recorded
+in the frame's ``status``.
 """
 
 from __future__ import annotations
