@@ -192,8 +192,7 @@ def capture(
     fault_rate: Annotated[float, typer.Option(help="Injected device faults per call (0-1).")] = 0.0,
     as_json: JsonFlag = False,
 ) -> None:
-    """Run the simulated gonioreflectometer session (dark frames, 2 pairs x 33 bands) into a
-    capture store; interrupted sessions continue with --resume."""
+    """Capture the simulated gonio session (darks, 2 pairs x 33 bands); resume with --resume."""
     from collections import Counter
 
     from hwbridge.plans import estimate_duration_s
