@@ -16,13 +16,6 @@ from recon.errors import SpectwinInputError
 __all__ = ["find_print_corners"]
 
 
-def _fit_line(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Total least-squares line through ``points``: (centroid, unit direction)."""
-    centroid = points.mean(axis=0)
-    _, _, vectors = np.linalg.svd(points - centroid)
-    return centroid, vectors[0]
-
-
 def _intersect(
     first: tuple[np.ndarray, np.ndarray], second: tuple[np.ndarray, np.ndarray]
 ) -> np.ndarray:
@@ -70,5 +63,6 @@ def find_print_corners(image: np.ndarray, expected_xy: np.ndarray) -> np.ndarray
         chosen = points[(across < 3) & (along > 0.15 * length) & (along < 0.85 * length)]
         if len(chosen) < 5:
             raise SpectwinInputError(f"image: side {index} of the print could not be traced")
-        sides.append(_fit_line(chosen))
+        line = measure.LineModelND.from_estimate(chosen)  # total least squares
+        sides.append((line.origin, line.direction))
     return np.array([_intersect(sides[index - 1], sides[index]) for index in range(4)])
