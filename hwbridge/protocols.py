@@ -8,12 +8,15 @@ Shaped like ``bluesky.protocols``: any object with these methods qualifies, so s
 
 from __future__ import annotations
 
+import time
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
 __all__ = [
     "Camera",
+    "description",
+    "reading",
     "Describable",
     "Lamp",
     "LedArray",
@@ -25,6 +28,16 @@ __all__ = [
 ]
 
 Reading = dict[str, dict[str, Any]]
+
+
+def reading(key: str, value: Any, timestamp: float | None = None) -> Reading:
+    """One field of a ``read`` result, time-stamped now unless ``timestamp`` is given."""
+    return {key: {"value": value, "timestamp": time.time() if timestamp is None else timestamp}}
+
+
+def description(key: str, *, source: str, dtype: str, shape: list[int], units: str) -> Reading:
+    """One field of a ``describe`` result."""
+    return {key: {"source": source, "dtype": dtype, "shape": shape, "units": units}}
 
 
 @runtime_checkable

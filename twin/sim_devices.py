@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from hwbridge.errors import BridgeInputError, DeviceDisconnected, DeviceTimeout
+from hwbridge.protocols import description, reading
 from twin.sensor import Sensor
 
 __all__ = [
@@ -82,19 +83,12 @@ class SimTunableFilter:
         self._rig.band_nm = float(wavelength_nm)
 
     def read(self) -> dict[str, dict[str, Any]]:
-        return {
-            f"{self.name}_wavelength_nm": {"value": self._rig.band_nm, "timestamp": time.time()}
-        }
+        return reading(f"{self.name}_wavelength_nm", self._rig.band_nm)
 
     def describe(self) -> dict[str, dict[str, Any]]:
-        return {
-            f"{self.name}_wavelength_nm": {
-                "source": "simulated",
-                "dtype": "number",
-                "shape": [],
-                "units": "nm",
-            }
-        }
+        return description(
+            f"{self.name}_wavelength_nm", source="simulated", dtype="number", shape=[], units="nm"
+        )
 
 
 class SimLamp:
@@ -108,12 +102,12 @@ class SimLamp:
         self._rig.lamp_on = bool(on)
 
     def read(self) -> dict[str, dict[str, Any]]:
-        return {f"{self.name}_on": {"value": self._rig.lamp_on, "timestamp": time.time()}}
+        return reading(f"{self.name}_on", self._rig.lamp_on)
 
     def describe(self) -> dict[str, dict[str, Any]]:
-        return {
-            f"{self.name}_on": {"source": "simulated", "dtype": "boolean", "shape": [], "units": ""}
-        }
+        return description(
+            f"{self.name}_on", source="simulated", dtype="boolean", shape=[], units=""
+        )
 
 
 class SimLedArray:
@@ -132,17 +126,12 @@ class SimLedArray:
         self._rig.led_pattern = pattern
 
     def read(self) -> dict[str, dict[str, Any]]:
-        return {f"{self.name}_pattern": {"value": self._rig.led_pattern, "timestamp": time.time()}}
+        return reading(f"{self.name}_pattern", self._rig.led_pattern)
 
     def describe(self) -> dict[str, dict[str, Any]]:
-        return {
-            f"{self.name}_pattern": {
-                "source": "simulated",
-                "dtype": "array",
-                "shape": [self._count],
-                "units": "",
-            }
-        }
+        return description(
+            f"{self.name}_pattern", source="simulated", dtype="array", shape=[self._count], units=""
+        )
 
 
 class SimSpectrometer:
@@ -179,17 +168,16 @@ class SimSpectrometer:
     def read(self) -> dict[str, dict[str, Any]]:
         if self._last is None:
             raise BridgeInputError(f"{self.name}: no spectrum yet; call trigger() first")
-        return {f"{self.name}_counts": {"value": self._last, "timestamp": time.time()}}
+        return reading(f"{self.name}_counts", self._last)
 
     def describe(self) -> dict[str, dict[str, Any]]:
-        return {
-            f"{self.name}_counts": {
-                "source": "simulated",
-                "dtype": "array",
-                "shape": [self.samples],
-                "units": "counts",
-            }
-        }
+        return description(
+            f"{self.name}_counts",
+            source="simulated",
+            dtype="array",
+            shape=[self.samples],
+            units="counts",
+        )
 
 
 class SimPositioner:
@@ -206,17 +194,12 @@ class SimPositioner:
         self._rig.view_id = view
 
     def read(self) -> dict[str, dict[str, Any]]:
-        return {f"{self.name}_view_id": {"value": self._rig.view_id, "timestamp": time.time()}}
+        return reading(f"{self.name}_view_id", self._rig.view_id)
 
     def describe(self) -> dict[str, dict[str, Any]]:
-        return {
-            f"{self.name}_view_id": {
-                "source": "simulated",
-                "dtype": "integer",
-                "shape": [],
-                "units": "",
-            }
-        }
+        return description(
+            f"{self.name}_view_id", source="simulated", dtype="integer", shape=[], units=""
+        )
 
 
 Signal = Callable[[VirtualRig, float, float], np.ndarray]
@@ -282,14 +265,13 @@ class SimCamera:
         return frame, {"timestamp": time.time(), "exposure_s": self._exposure_s}
 
     def read(self) -> dict[str, dict[str, Any]]:
-        return {f"{self.name}_exposure_s": {"value": self._exposure_s, "timestamp": time.time()}}
+        return reading(f"{self.name}_exposure_s", self._exposure_s)
 
     def describe(self) -> dict[str, dict[str, Any]]:
-        return {
-            f"{self.name}_image": {
-                "source": f"simulated {self._sensor.config.name}",
-                "dtype": "array",
-                "shape": list(self.frame_shape),
-                "units": "DN",
-            }
-        }
+        return description(
+            f"{self.name}_image",
+            source=f"simulated {self._sensor.config.name}",
+            dtype="array",
+            shape=list(self.frame_shape),
+            units="DN",
+        )

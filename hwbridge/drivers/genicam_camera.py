@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from hwbridge.errors import BridgeInputError, DeviceError, DeviceTimeout
+from hwbridge.protocols import description, reading
 
 __all__ = ["GenICamCamera", "simulated_producer"]
 
@@ -126,17 +127,16 @@ class GenICamCamera:
         }
 
     def read(self) -> dict[str, dict[str, Any]]:
-        return {f"{self.name}_exposure_s": {"value": self._exposure_s, "timestamp": time.time()}}
+        return reading(f"{self.name}_exposure_s", self._exposure_s)
 
     def describe(self) -> dict[str, dict[str, Any]]:
-        return {
-            f"{self.name}_image": {
-                "source": f"GenICam via {self._cti.name}",
-                "dtype": "array",
-                "shape": list(self.frame_shape),
-                "units": "DN",
-            }
-        }
+        return description(
+            f"{self.name}_image",
+            source=f"GenICam via {self._cti.name}",
+            dtype="array",
+            shape=list(self.frame_shape),
+            units="DN",
+        )
 
     def _require(self):
         if self._acquirer is None:

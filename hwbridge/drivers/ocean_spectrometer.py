@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from hwbridge.errors import BridgeInputError, DeviceError
+from hwbridge.protocols import description, reading
 
 __all__ = ["OceanSpectrometer"]
 
@@ -65,23 +66,25 @@ class OceanSpectrometer:
             raise DeviceError(f"{self.name}: no spectrum yet; call trigger() first")
         wavelengths, intensities, timestamp = self._last
         return {
-            f"{self.name}_wavelengths_nm": {"value": wavelengths, "timestamp": timestamp},
-            f"{self.name}_counts": {"value": intensities, "timestamp": timestamp},
+            **reading(f"{self.name}_wavelengths_nm", wavelengths, timestamp),
+            **reading(f"{self.name}_counts", intensities, timestamp),
         }
 
     def describe(self) -> dict[str, dict[str, Any]]:
         shape = [] if self._last is None else [len(self._last[0])]
         return {
-            f"{self.name}_wavelengths_nm": {
-                "source": "seabreeze",
-                "dtype": "array",
-                "shape": shape,
-                "units": "nm",
-            },
-            f"{self.name}_counts": {
-                "source": "seabreeze",
-                "dtype": "array",
-                "shape": shape,
-                "units": "counts",
-            },
+            **description(
+                f"{self.name}_wavelengths_nm",
+                source="seabreeze",
+                dtype="array",
+                shape=shape,
+                units="nm",
+            ),
+            **description(
+                f"{self.name}_counts",
+                source="seabreeze",
+                dtype="array",
+                shape=shape,
+                units="counts",
+            ),
         }

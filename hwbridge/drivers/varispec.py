@@ -15,6 +15,7 @@ import serial
 
 import hwbridge.emulators  # noqa: F401  (registers the varispec:// URL handler)
 from hwbridge.errors import BridgeInputError, DeviceError, DeviceTimeout
+from hwbridge.protocols import description, reading
 
 __all__ = ["VariSpec"]
 
@@ -101,19 +102,16 @@ class VariSpec:
         return float(fields[1])
 
     def read(self) -> dict[str, dict[str, Any]]:
-        return {
-            f"{self.name}_wavelength_nm": {"value": self.wavelength_nm(), "timestamp": time.time()}
-        }
+        return reading(f"{self.name}_wavelength_nm", self.wavelength_nm())
 
     def describe(self) -> dict[str, dict[str, Any]]:
-        return {
-            f"{self.name}_wavelength_nm": {
-                "source": f"VariSpec {self._version.get('serial', '?')} on {self._port_name}",
-                "dtype": "number",
-                "shape": [],
-                "units": "nm",
-            }
-        }
+        return description(
+            f"{self.name}_wavelength_nm",
+            source=f"VariSpec {self._version.get('serial', '?')} on {self._port_name}",
+            dtype="number",
+            shape=[],
+            units="nm",
+        )
 
     # -- status --------------------------------------------------------------------------------
 
