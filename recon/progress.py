@@ -1,0 +1,27 @@
+"""Progress reporting for long reconstructions: a rich progress bar, or nothing."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+__all__ = ["progress_steps"]
+
+
+@contextmanager
+def progress_steps(description: str, total: int, *, enabled: bool) -> Iterator[Callable[[], None]]:
+    """Yield a function that advances a ``total``-step bar labelled ``description``.
+
+    With ``enabled=False`` the function does nothing, so callers never branch on it.
+    """
+    columns = (
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+    )
+    with Progress(*columns, disable=not enabled, transient=False) as progress:
+        task = progress.add_task(description, total=total)
+        yield lambda: progress.advance(task)
