@@ -8,14 +8,21 @@ The folder sits beside the repository (``../shared/data``) unless the environmen
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from scipy import io
 
 from recon.errors import SpectwinDataError, SpectwinInputError
 from recon.spectra import SampledSpectra, WavelengthGrid
 
-__all__ = ["read_spectra_csv", "shared_data_dir"]
+__all__ = [
+    "Llanos2019Multispectral",
+    "read_llanos2019_multispectral",
+    "read_spectra_csv",
+    "shared_data_dir",
+]
 
 _ENV_VARIABLE = "SPECTWIN_SHARED_DATA"
 
@@ -53,3 +60,96 @@ def read_spectra_csv(relative_path: str | Path) -> SampledSpectra:
         )
     table = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
     return SampledSpectra(WavelengthGrid(table[:, 0]), table[:, 1:].T, tuple(header[1:]))
+
+
+_LLANOS2019_FOLDER = Path("real") / "llanos2019" / "multispectral_images"
+
+
+@dataclass(frozen=True, eq=False)
+class Llanos2019Multispectral:
+    """A real 7-band image of a ColorChecker and the RGB camera that saw it (Llanos 2019).
+
+    The image is Llanos's ``d2_colorChecker30cm_dHyper.mat``: a Point Grey Flea3 (Sony ICX655
+    CCD) photographed the chart under a projector through 7 band-pass filters, and each band
+    image is the bilinearly demosaiced Green channel of that capture, i.e. the image of a
+    hypothetical monochrome camera with the Green channel's sensitivity, clipped to zero
+    (``sensor.mat`` ``channel_mode`` = false). ``sensor.mat``'s ``sensor_map`` holds the Red,
+    Green and Blue sensitivities at the 7 bands relative to Green (so the Green row is constant),
+    normalized so that an image of ones gives Green = 1 under Llanos's image formation. That
+    formation integrates over wavelength with trapezoidal weights on the band grid (25, 50, ...,
+    50, 25 nm): :attr:`response` includes them, and ``image @ response`` reproduces the Green
+    samples of Llanos's own simulated RAW image ``d2_colorChecker30cm_raw.mat`` (to about
+    1e-8).
+
+    Attributes
+    ----------
+    image
+        ``(H, W, 7)`` float64 (342 x 408 x 7), relative radiance, non-negative.
+    wavelengths_nm
+        ``(7,)`` float64 nominal filter centres, 400 to 700 nm in 50 nm steps.
+    sensor_map
+        ``(7, 3)`` float64 relative RGB sensitivities per nm at the bands (``sensor_map.T`` of
+        the file; columns R, G, B).
+    source
+        The ``.mat`` file of the image.
+    """
+
+    image: np.ndarray
+    wavelengths_nm: np.ndarray
+    sensor_map: np.ndarray
+    source: Path
+
+    @property
+    def grid(self) -> WavelengthGrid:
+        """The band wavelengths as a ``WavelengthGrid``."""
+        return WavelengthGrid(self.wavelengths_nm)
+
+    @property
+    def response(self) -> np.ndarray:
+        """``(7, 3)`` camera response with ``rgb = image @ response`` (Eq. 6.1, Eq. 7.1).
+
+        ``sensor_map`` times the grid's trapezoidal quadrature weights in nm (the discrete band
+        integral of :func:`recon.spectra.band_integrals`).
+        """
+        return self.sensor_map * self.grid.quadrature_weights()[:, None]
+
+
+def _load_mat(path: Path, names: tuple[str, ...]) -> dict[str, np.ndarray]:
+    if not path.is_file():
+        raise SpectwinDataError(f"Llanos 2019 data file {path} does not exist")
+    contents = io.loadmat(path)
+    missing = [name for name in names if name not in contents]
+    if missing:
+        raise SpectwinDataError(f"{path}: expected the variables {list(names)}, missing {missing}")
+    return {name: contents[name] for name in names}
+
+
+def read_llanos2019_multispectral() -> Llanos2019Multispectral:
+    """Read Llanos's 7-band ColorChecker image and camera sensitivities from ``shared/data``.
+
+    Files: ``real/llanos2019/multispectral_images/d2_colorChecker30cm_dHyper.mat``
+    (``I_hyper``) and ``sensor.mat`` (``bands``, ``sensor_map``); B. Llanos, University of
+    Alberta, 2019, Boost Software License 1.0 (see ``shared/data/README.md``). A real
+    multispectral image and the RGB response that goes with it, for the sparse-to-dense
+    experiments of thesis chapter 7 on real data.
+
+    Returns
+    -------
+    Llanos2019Multispectral
+        See its description for the meaning and units of the arrays.
+    """
+    folder = shared_data_dir() / _LLANOS2019_FOLDER
+    image_path = folder / "d2_colorChecker30cm_dHyper.mat"
+    image = np.asarray(_load_mat(image_path, ("I_hyper",))["I_hyper"], dtype=np.float64)
+    sensor = _load_mat(folder / "sensor.mat", ("bands", "sensor_map"))
+    wavelengths = np.asarray(sensor["bands"], dtype=np.float64).ravel()
+    sensor_map = np.ascontiguousarray(np.asarray(sensor["sensor_map"], dtype=np.float64).T)
+    bands = wavelengths.size
+    if image.ndim != 3 or image.shape[-1] != bands or sensor_map.shape != (bands, 3):
+        raise SpectwinDataError(
+            f"{folder}: expected I_hyper (H, W, K), bands (K,) and sensor_map (3, K), got "
+            f"{image.shape}, {wavelengths.shape} and {sensor_map.T.shape}"
+        )
+    for array in (image, wavelengths, sensor_map):
+        array.setflags(write=False)
+    return Llanos2019Multispectral(image, wavelengths, sensor_map, image_path)

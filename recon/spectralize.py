@@ -59,6 +59,7 @@ from recon.energy_terms import (
 from recon.errors import SpectwinInputError
 from recon.kronecker_solver import solve_kronecker_sum
 from recon.progress import progress_steps
+from recon.spectra import SampledSpectra, WavelengthGrid
 
 __all__ = [
     "BandImage",
@@ -77,10 +78,11 @@ SOLVERS = ("auto", "multigrid", "lsqr", "lsmr")
 @dataclass(frozen=True)
 class PointSpectra:
     """Spectra known at some pixels (Eq. 6.10): ``pixels`` are flat indices into the
-    ``(n_images, height, width)`` pixel grid (row-major), ``spectra`` is ``(m, K)``."""
+    ``(n_images, height, width)`` pixel grid (row-major), ``spectra`` is ``(m, K)``: an array,
+    or ``SampledSpectra`` whose grid must equal the response's."""
 
     pixels: np.ndarray
-    spectra: np.ndarray
+    spectra: np.ndarray | SampledSpectra
 
 
 @dataclass(frozen=True)
@@ -246,6 +248,20 @@ def _as_images(rgb: np.ndarray) -> np.ndarray:
     return rgb
 
 
+def _grid_and_values(
+    spectra: np.ndarray | SampledSpectra, grid: WavelengthGrid | None, what: str
+) -> tuple[np.ndarray, WavelengthGrid | None]:
+    """Unwrap ``SampledSpectra``; refuse spectra on a grid other than ``grid``."""
+    if not isinstance(spectra, SampledSpectra):
+        return np.asarray(spectra, dtype=np.float64), grid
+    if grid is not None and spectra.grid != grid:
+        raise SpectwinInputError(
+            f"{what}: sampled on {spectra.grid.describe()} but the response is on "
+            f"{grid.describe()}; resample one of them with recon.spectra.resample"
+        )
+    return spectra.values, spectra.grid
+
+
 def _checked_response(response: np.ndarray, channels: int) -> np.ndarray:
     response = np.asarray(response, dtype=np.float64)
     if response.ndim != 2 or response.shape[1] != channels or response.shape[0] < 2:
@@ -273,9 +289,11 @@ def _dynamic_scale(images: np.ndarray, p_dyn: float) -> np.ndarray:
     return brightness**-p_dyn
 
 
-def _point_term(data: PointSpectra, scale: np.ndarray, bands: int) -> PointSpectraTerm:
+def _point_term(
+    data: PointSpectra, scale: np.ndarray, bands: int, grid: WavelengthGrid | None
+) -> PointSpectraTerm:
     pixels = np.asarray(data.pixels)
-    spectra = np.asarray(data.spectra, dtype=np.float64)
+    spectra, _ = _grid_and_values(data.spectra, grid, "point_spectra.spectra")
     if pixels.ndim != 1 or not np.issubdtype(pixels.dtype, np.integer):
         raise SpectwinInputError(f"point_spectra.pixels: expected 1-D integers, got {pixels.dtype}")
     if spectra.shape != (pixels.size, bands):
@@ -355,7 +373,10 @@ def build_problem(
 ) -> SpectralizationProblem:
     """Assemble the energy (see module docstring); parameters as in :func:`spectralize`."""
     images = _as_images(rgb)
-    response = _checked_response(response, images.shape[-1])
+    response_values, grid = _grid_and_values(response, None, "response")
+    if isinstance(response, SampledSpectra):
+        response_values = response_values.T  # (channels, K) rows -> (K, channels)
+    response = _checked_response(response_values, images.shape[-1])
     bands, channels = response.shape
     image_shape = images.shape[:3]
     scale = _dynamic_scale(images, p_dyn)
@@ -363,7 +384,7 @@ def build_problem(
 
     data_terms: list = []
     if point_spectra is not None:
-        data_terms.append(_point_term(point_spectra, scale, bands))
+        data_terms.append(_point_term(point_spectra, scale, bands, grid))
     data_terms += [_band_term(b, scale, image_shape, bands) for b in band_images]
     if device_integrals is not None:
         data_terms.append(_device_term(device_integrals, scale, bands))
@@ -476,7 +497,8 @@ def spectralize(
         ``(n_images, height, width, C)`` linear camera values :math:`V`.
     response
         :math:`R_{cam}`, ``(K, C)``: camera sensitivity times light per band, so that
-        :math:`V_i \\approx S_i R_{cam}`.
+        :math:`V_i \\approx S_i R_{cam}`; or ``SampledSpectra`` with one row per channel, whose
+        grid the point spectra must share.
     point_spectra, band_images, device_integrals
         The spectral data (at least one): see :class:`PointSpectra`, :class:`BandImage`,
         :class:`DeviceIntegrals`. Pixel indices run over ``(n_images, height, width)``.

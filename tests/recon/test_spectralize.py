@@ -1,0 +1,275 @@
+"""Spectralization (thesis chapters 6 and 10): energies, weights, neighbour graph and solvers."""
+
+from __future__ import annotations
+
+import colour
+import numpy as np
+import pytest
+from scipy import sparse
+from scipy.spatial.distance import cdist
+
+from recon.appearance import appearance_neighbours, appearance_points, connect_components
+from recon.errors import SpectwinInputError
+from recon.metrics import relative_error
+from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid
+from recon.spectralize import (
+    BandImage,
+    DeviceIntegrals,
+    EnergyWeights,
+    PointSpectra,
+    build_problem,
+    spectralize,
+)
+from recon.synthetic_images import material_mosaic
+
+WAVELENGTHS = DEFAULT_GRID.wavelengths_nm
+SIX = ["dark skin", "blue sky", "orange", "purplish blue", "yellow green", "cyan"]
+
+
+def _chart(names):
+    chart = colour.SDS_COLOURCHECKERS["ColorChecker N Ohta"]
+    return np.array([[chart[name][w] for w in WAVELENGTHS] for name in names])
+
+
+def _response():
+    camera = colour.MSDS_CAMERA_SENSITIVITIES["Nikon 5100 (NPL)"]
+    response = np.array([camera[w] for w in WAVELENGTHS])
+    return response / response.sum(axis=0)
+
+
+@pytest.fixture(scope="module")
+def mosaic():
+    image, labels = material_mosaic(_chart(SIX), (40, 48), cells=24, seed=3)
+    return image, labels, _response()
+
+
+def _grid_pixels(shape, step):
+    rows, cols = np.mgrid[step // 2 : shape[0] : step, step // 2 : shape[1] : step]
+    return (rows * shape[1] + cols).ravel()
+
+
+def test_every_spectrum_known_and_no_noise_is_exact(mosaic):
+    # Six flat materials: the truth zeroes every term of Eq. 6.10, so it is the unique minimum.
+    image, _ = material_mosaic(_chart(SIX), (40, 48), cells=24, shading=(1.0, 1.0), seed=3)
+    response = mosaic[2]
+    flat = image.reshape(-1, image.shape[-1])
+    known = PointSpectra(np.arange(flat.shape[0]), flat)
+    result = spectralize(image @ response, response, point_spectra=known, tol=1e-10)
+    assert result.solver == "multigrid" and result.converged
+    assert relative_error(result.spectra, image).mean() < 0.1
+    # With shading, neighbours differ and the prior pulls (0.13 % at equal weights); a
+    # heavier data term (alpha' = 10) brings the known spectra back below 0.1 %.
+    shaded = mosaic[0]
+    flat = shaded.reshape(-1, shaded.shape[-1])
+    known = PointSpectra(np.arange(flat.shape[0]), flat)
+    equal = spectralize(shaded @ response, response, point_spectra=known, tol=1e-10)
+    heavy = spectralize(
+        shaded @ response,
+        response,
+        point_spectra=known,
+        weights=EnergyWeights(alpha=10.0),
+        tol=1e-10,
+    )
+    assert relative_error(heavy.spectra, shaded).mean() < 0.1
+    assert relative_error(heavy.spectra, shaded).mean() < relative_error(equal.spectra, shaded).mean()
+
+
+def test_solvers_reach_the_same_minimum_and_multigrid_beats_500_lsqr_iterations(mosaic):
+    image, _, response = mosaic
+    rgb = image @ response
+    rgb = rgb + 0.01 * rgb.mean() * np.random.default_rng(0).standard_normal(rgb.shape)
+    pixels = _grid_pixels(image.shape[:2], 8)
+    known = PointSpectra(pixels, image.reshape(-1, image.shape[-1])[pixels])
+    common = {"point_spectra": known}
+    multigrid = spectralize(rgb, response, solver="multigrid", tol=1e-10, **common)
+    lsqr = spectralize(rgb, response, solver="lsqr", tol=1e-14, max_iterations=500, **common)
+    lsmr = spectralize(rgb, response, solver="lsmr", tol=1e-14, max_iterations=3000, **common)
+    assert multigrid.energy <= lsqr.energy * (1 + 1e-9)
+    assert lsmr.energy == pytest.approx(multigrid.energy, rel=1e-6)
+    assert np.max(np.abs(lsmr.spectra - multigrid.spectra)) < 1e-3 * image.max()
+
+
+def test_energy_and_weights_follow_eq_6_10_and_6_11(mosaic):
+    image, _, response = mosaic
+    rgb = image @ response
+    pixels = _grid_pixels(image.shape[:2], 10)
+    flat = image.reshape(-1, image.shape[-1])
+    problem = build_problem(
+        rgb, response, point_spectra=PointSpectra(pixels, flat[pixels]), appearance="rgb"
+    )
+    n, bands, m = flat.shape[0], flat.shape[1], pixels.size
+    links = problem.graph_links
+    total = m * bands + 3 * n + bands * links
+    alpha, beta, gamma = problem.weights
+    assert alpha == pytest.approx(total / (m * bands))
+    assert beta == pytest.approx(flat[pixels].mean() / rgb.mean() * total / (3 * n))
+    assert gamma == pytest.approx(total / (bands * links))
+    # E at a random image equals the sum of the three terms of Eq. 6.10 written out.
+    x = np.random.default_rng(1).random(flat.shape)
+    incidence = problem.terms[2].incidence
+    by_hand = (
+        alpha * np.sum((x[pixels] - flat[pixels]) ** 2)
+        + beta * np.sum((x @ response - rgb.reshape(-1, 3)) ** 2)
+        + gamma * np.sum((incidence @ x) ** 2)
+    )
+    assert problem.energy(x) == pytest.approx(by_hand, rel=1e-12)
+    assert abs(incidence).sum(axis=1).max() == 2  # every row is one S_i - S_j
+
+
+def test_operator_adjoint_holds_for_every_term(mosaic):
+    image, _, response = mosaic
+    shape = image.shape[:2]
+    flat = image.reshape(-1, image.shape[-1])
+    rng = np.random.default_rng(2)
+    pixels = _grid_pixels(shape, 9)
+    device = sparse.random(5, flat.size, density=0.01, random_state=3, format="csr")
+    problem = build_problem(
+        image @ response,
+        response,
+        point_spectra=PointSpectra(pixels, flat[pixels]),
+        band_images=[BandImage(0, 4, image[..., 4], 1.5), BandImage(0, 20, image[..., 20], 0.0)],
+        device_integrals=DeviceIntegrals(device, device @ flat.ravel()),
+        p_dyn=0.5,
+    )
+    operator, _ = problem.operator()
+    x, y = rng.standard_normal(operator.shape[1]), rng.standard_normal(operator.shape[0])
+    assert np.dot(operator.matvec(x), y) == pytest.approx(np.dot(x, operator.rmatvec(y)), rel=1e-10)
+    assert len(problem.weights) == 7  # point, 2 band images, device, camera, prior, smoothness
+
+
+def test_link_rule_matches_a_sequential_brute_force():
+    points = np.random.default_rng(4).random((300, 3))
+    graph = appearance_neighbours(points, k=3, candidates=6)
+    order = np.argsort(cdist(points, points), axis=1)[:, 1:7]
+    chosen: list[list[int]] = []
+    for j in range(len(points)):
+        allowed = [c for c in order[j] if not (c < j and j in chosen[c])]
+        chosen.append(allowed[:3])
+    expected = {(j, c) for j in range(len(points)) for c in chosen[j]}
+    assert set(zip(graph.first.tolist(), graph.second.tolist(), strict=True)) == expected
+    pairs = {frozenset(p) for p in expected}
+    assert len(pairs) == len(expected)  # no link counted twice
+
+
+def test_appearance_spaces_shapes_and_patch_centre_weight():
+    images = np.random.default_rng(5).random((2, 6, 7, 3))
+    assert appearance_points(images, "rgb").shape == (84, 3)
+    assert appearance_points(images, "rgbxy").shape == (84, 5)
+    patch = appearance_points(images, "patch", patch_radius=1)
+    assert patch.shape == (84, 27)
+    centre = patch[:, 12:15]  # the 5th of 9 patch positions, weighted by (2m+1)^2 - 1 = 8
+    assert np.allclose(centre, 8 * images.reshape(-1, 3))
+
+
+def test_components_without_data_are_linked_and_determined(mosaic):
+    image, labels, response = mosaic
+    rgb = image @ response
+    flat = image.reshape(-1, image.shape[-1])
+    # Spectra known only on material 0: in RGB space the other materials float free.
+    pixels = np.flatnonzero(labels.ravel() == 0)[::7]
+    points = appearance_points(rgb[None], "rgb")
+    graph = appearance_neighbours(points)
+    has_data = np.zeros(flat.shape[0], dtype=bool)
+    has_data[pixels] = True
+    linked = connect_components(graph, points, has_data)
+    assert linked.added >= 1 and linked.n_links == graph.n_links + linked.added
+    known = PointSpectra(pixels, flat[pixels])
+    first = spectralize(rgb, response, point_spectra=known, appearance="rgb", tol=1e-10)
+    warm = spectralize(
+        rgb,
+        response,
+        point_spectra=known,
+        appearance="rgb",
+        solver="lsmr",
+        tol=1e-14,
+        max_iterations=20000,
+        initial=np.ones_like(image),
+    )
+    # Unique minimum: a solver started elsewhere ends at the same spectra.
+    assert np.max(np.abs(warm.spectra - first.spectra)) < 1e-3
+
+
+def test_joint_reconstruction_spreads_spectra_to_an_image_without_data(mosaic):
+    image, _, response = mosaic
+    slices = np.stack([image, 0.5 * image[:, ::-1]])  # a second, darker and mirrored view
+    rgb = slices @ response
+    pixels = _grid_pixels(image.shape[:2], 6)  # first image only
+    known = PointSpectra(pixels, image.reshape(-1, image.shape[-1])[pixels])
+    result = spectralize(rgb, response, point_spectra=known, p_dyn=1.0, tol=1e-9)
+    assert result.spectra.shape == slices.shape
+    second = relative_error(result.spectra[1], slices[1]).mean()
+    assert second < 3.0, second
+
+
+def test_noisy_band_images_with_filter_beat_the_raw_band_images(mosaic):
+    image, _, response = mosaic
+    rng = np.random.default_rng(6)
+    noisy = image + 0.1 * image.mean() * rng.standard_normal(image.shape)
+    bands = [BandImage(0, b, noisy[..., b], 1.0) for b in range(image.shape[-1])]
+    result = spectralize(
+        image @ response, response, band_images=bands, tol=1e-10, max_iterations=2000
+    )
+    assert result.solver == "lsmr"
+    raw = relative_error(noisy, image).mean()
+    recovered = relative_error(result.spectra, image).mean()
+    assert recovered < 0.5 * raw, (recovered, raw)
+
+
+def test_device_integrals_equal_point_spectra_for_single_pixel_readings(mosaic):
+    image, _, response = mosaic
+    flat = image.reshape(-1, image.shape[-1])
+    pixels = _grid_pixels(image.shape[:2], 8)
+    bands = flat.shape[1]
+    columns = (pixels[:, None] * bands + np.arange(bands)).ravel()
+    weights = sparse.csr_matrix(
+        (np.ones(columns.size), (np.arange(columns.size), columns)), shape=(columns.size, flat.size)
+    )
+    rgb = image @ response
+    via_device = spectralize(
+        rgb,
+        response,
+        device_integrals=DeviceIntegrals(weights, flat[pixels].ravel()),
+        solver="lsmr",
+        tol=1e-14,
+        max_iterations=5000,
+    )
+    via_points = spectralize(
+        rgb, response, point_spectra=PointSpectra(pixels, flat[pixels]), tol=1e-10
+    )
+    assert np.max(np.abs(via_device.spectra - via_points.spectra)) < 1e-3
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"rgb": np.full((4, 4, 3), np.nan)}, "rgb: camera values must be finite"),
+        ({"response": np.ones((33, 2))}, "response: expected"),
+        ({"point_spectra": None}, "no spectral data"),
+        ({"point_spectra": PointSpectra(np.array([0]), np.ones((1, 20)))}, "expected shape"),
+        ({"point_spectra": PointSpectra(np.array([99]), np.ones((1, 33)))}, "expected indices"),
+        ({"point_spectra": PointSpectra(np.array([0]), np.full((1, 33), np.nan))}, "finite"),
+        ({"solver": "cholesky"}, "solver: expected one of"),
+        ({"p_dyn": 2.0}, "p_dyn"),
+        ({"appearance": "lab"}, "unknown space"),
+        ({"band_images": [BandImage(0, 3, np.ones((5, 5)), 1.0)]}, "has shape"),
+        ({"band_images": [BandImage(0, 3, np.ones((4, 4)), 1.0)], "solver": "multigrid"}, "lsqr"),
+    ],
+)
+def test_bad_input_is_refused_with_a_clear_message(change, message):
+    arguments = {
+        "rgb": np.random.default_rng(7).random((4, 4, 3)),
+        "response": _response(),
+        "point_spectra": PointSpectra(np.array([0, 5]), np.ones((2, 33))),
+    }
+    arguments.update(change)
+    rgb, response = arguments.pop("rgb"), arguments.pop("response")
+    with pytest.raises(SpectwinInputError, match=message):
+        spectralize(rgb, response, **arguments)
+
+
+def test_spectra_on_another_grid_are_refused():
+    response = SampledSpectra(DEFAULT_GRID, _response().T)
+    other = WavelengthGrid.regular(400, 720, 20)
+    known = PointSpectra(np.array([0]), SampledSpectra(other, np.ones((1, other.size))))
+    with pytest.raises(SpectwinInputError, match="resample"):
+        spectralize(np.ones((3, 3, 3)), response, point_spectra=known)
