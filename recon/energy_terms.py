@@ -104,7 +104,9 @@ class FilteredBandTerm:
         return gaussian_plane(x[self.pixel_slice(), self.band].reshape(self.shape), self.sigma_px)
 
     def adjoint(self, residual: np.ndarray, out: np.ndarray) -> None:
-        out[self.pixel_slice(), self.band] += gaussian_plane(residual.reshape(self.shape), self.sigma_px).ravel()
+        out[self.pixel_slice(), self.band] += gaussian_plane(
+            residual.reshape(self.shape), self.sigma_px
+        ).ravel()
 
 
 @dataclass(frozen=True)

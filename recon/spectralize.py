@@ -135,7 +135,9 @@ class EnergyWeights:
             if value is None:
                 continue
             if not (np.isfinite(value) and value >= 0):
-                raise SpectwinInputError(f"weights.{name}: expected a finite value >= 0, got {value}")
+                raise SpectwinInputError(
+                    f"weights.{name}: expected a finite value >= 0, got {value}"
+                )
         if self.alpha == 0:
             raise SpectwinInputError("weights.alpha: expected > 0; without data nothing is known")
 

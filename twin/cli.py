@@ -177,6 +177,28 @@ def camchar(
     console.print(f"wrote {out / 'responses.png'} and {out / 'chart_photo.png'}")
 
 
+@app.command(name="spectralize-study")
+def spectralize_study(
+    out: Annotated[Path, typer.Option(help="Folder for study.json and the PNGs.")] = Path(
+        "out/spectralize"
+    ),
+    texels: Annotated[int, typer.Option(min=16, help="Texture size of the twin materials.")] = 96,
+    sweeps: Annotated[bool, typer.Option(help="Run the Fig. 7.9 / 7.10 / 7.6 sweeps.")] = True,
+    as_json: JsonFlag = False,
+) -> None:
+    """Chapter 7: spectralization vs. Imai, Hardeberg, Murakami, Dong and A+ on sparse data."""
+    from twin.spectralization_study import run_study
+
+    with console.status("rendering twin textures and running the chapter 7 protocols"):
+        summary = run_study(out, texels=texels, sweeps=sweeps)
+    if as_json:
+        typer.echo(json.dumps(summary, indent=2))
+        return
+    for case, result in summary["cases"].items():
+        _print_table(result["whisk_broom"], f"{case}: whisk-broom mean relative error, %")
+    console.print(f"wrote {out / 'study.json'} and the figures in {out}")
+
+
 @app.command()
 def capture(
     store: Annotated[

@@ -71,7 +71,9 @@ def test_every_spectrum_known_and_no_noise_is_exact(mosaic):
         tol=1e-10,
     )
     assert relative_error(heavy.spectra, shaded).mean() < 0.1
-    assert relative_error(heavy.spectra, shaded).mean() < relative_error(equal.spectra, shaded).mean()
+    assert (
+        relative_error(heavy.spectra, shaded).mean() < relative_error(equal.spectra, shaded).mean()
+    )
 
 
 def test_solvers_reach_the_same_minimum_and_multigrid_beats_500_lsqr_iterations(mosaic):

@@ -1,0 +1,396 @@
+"""Competing spectral recovery methods (recon.baselines), each on its defining property."""
+
+import inspect
+
+import colour
+import numpy as np
+import pytest
+from scipy import linalg
+
+from recon import baselines
+from recon.baselines import (
+    dong_2016,
+    hardeberg,
+    imai,
+    jakob_2019,
+    murakami_2007,
+    smits_1999,
+    spectral_a_plus,
+)
+from recon.errors import SpectwinInputError
+from recon.metrics import relative_error
+from recon.spectra import DEFAULT_GRID
+
+WL = DEFAULT_GRID.wavelengths_nm  # 400-720 nm, 10 nm, K = 33
+SHAPE = colour.SpectralShape(400, 720, 10)
+CMFS_NAME = "CIE 1931 2 Degree Standard Observer"
+RESPONSE = colour.MSDS_CMFS[CMFS_NAME][WL]  # (33, 3): rgb = spectra @ RESPONSE
+
+
+def bump(centre: float, width: float) -> np.ndarray:
+    return np.exp(-0.5 * ((WL - centre) / width) ** 2)
+
+
+BASIS3 = np.array([bump(450, 40), bump(550, 40), bump(640, 50)])  # non-negative, 3-D
+BASIS6 = np.array([bump(centre, 35) for centre in np.linspace(420, 700, 6)])
+
+
+def draw6(rng: np.random.Generator, count: int) -> np.ndarray:
+    """Smooth positive spectra spanning 6 dimensions (more than an RGB camera resolves)."""
+    weights = rng.dirichlet(np.full(6, 0.3), count) * rng.uniform(0.3, 1.0, (count, 1))
+    return 0.05 + weights @ BASIS6
+
+
+def max_relative(estimate: np.ndarray, truth: np.ndarray) -> float:
+    return float(np.abs(estimate - truth).max() / np.abs(truth).max())
+
+
+# ------------------------------------------------------------------------- Imai & Berns 1999
+
+
+def test_imai_is_the_minimal_norm_solution(rng):
+    spectra = draw6(rng, 60).reshape(6, 10, 33)
+    rgb = spectra @ RESPONSE
+    estimate = imai(rgb, RESPONSE)
+    assert estimate.shape == (6, 10, 33)
+    # Reproduces the RGB exactly (measured 1e-15 relative) ...
+    assert max_relative(estimate @ RESPONSE, rgb) < 1e-12
+    # ... and has no metameric-black component (measured 1e-16 relative).
+    black = linalg.null_space(RESPONSE.T)  # (33, 30): spectra s with s @ RESPONSE = 0
+    assert np.abs(estimate @ black).max() < 1e-12 * np.abs(estimate).max()
+    lstsq = np.linalg.lstsq(RESPONSE.T, rgb.reshape(-1, 3).T, rcond=None)[0].T
+    np.testing.assert_allclose(estimate.reshape(-1, 33), lstsq, rtol=0, atol=1e-12)
+    # Minimal norm, not the truth: these spectra span 6 dimensions.
+    assert relative_error(estimate, spectra).mean() > 20
+
+
+# ------------------------------------------------------------------ Hardeberg et al. 1999
+
+
+def test_hardeberg_is_exact_in_a_three_dimensional_subspace_and_beats_imai(rng):
+    spectra = (rng.uniform(0, 1, (10 * 12, 3)) @ BASIS3).reshape(10, 12, 33)
+    rgb = spectra @ RESPONSE
+    known = rng.choice(120, 20, replace=False)
+    estimate = hardeberg(rgb, spectra.reshape(-1, 33)[known], known)
+    assert max_relative(estimate, spectra) < 1e-8  # measured 1.5e-15
+    imai_error = relative_error(imai(rgb, RESPONSE), spectra).mean()
+    assert relative_error(estimate, spectra).mean() < 1e-6
+    assert imai_error > 5  # measured 45 %: the minimal-norm inverse ignores the scene
+
+
+def test_hardeberg_reads_known_rgb_from_the_image_at_flat_indices(rng):
+    spectra = draw6(rng, 48).reshape(6, 8, 33)
+    rgb = spectra @ RESPONSE
+    rows, cols = np.array([0, 2, 5, 5]), np.array([1, 7, 0, 3])
+    known = np.ravel_multi_index((rows, cols), (6, 8))
+    from_pixels = hardeberg(rgb, spectra[rows, cols], known)
+    from_rgb = hardeberg(rgb, spectra[rows, cols], known_rgb=rgb[rows, cols])
+    np.testing.assert_allclose(from_pixels, from_rgb, rtol=0, atol=1e-14)
+
+
+# --------------------------------------------------------------------- Dong et al. 2016
+
+
+def test_dong_is_exact_for_non_negative_mixtures_of_three_spectra(rng):
+    known = rng.uniform(0, 1, (250, 3)) @ BASIS3
+    spectra = (rng.uniform(0, 1, (20 * 20, 3)) @ BASIS3).reshape(20, 20, 33)
+    rgb = spectra @ RESPONSE
+    estimate = dong_2016(rgb, RESPONSE, known)
+    # NMF converges approximately: measured 2e-5 relative (tol=1e-6).
+    assert max_relative(estimate, spectra) < 0.005
+    # Three coefficients solve the 3x3 system exactly: RGB reproduced (measured 1e-15).
+    assert max_relative(estimate @ RESPONSE, rgb) < 1e-10
+
+
+def test_dong_is_limited_to_three_dimensions(rng):
+    known = draw6(rng, 250)
+    spectra = draw6(rng, 200)
+    error = relative_error(dong_2016(spectra @ RESPONSE, RESPONSE, known), spectra).mean()
+    assert error > 5  # measured 48 %: six-dimensional spectra, three-dimensional basis
+
+
+# ----------------------------------------------------------------- Murakami et al. 2007
+
+
+def four_material_scene():
+    """24 x 24 image, four materials in quadrants (four independent spectra), smooth shading;
+    16 known spectra on a regular grid (4 per material)."""
+    materials = np.array(
+        [
+            0.1 + 0.8 * bump(450, 30),
+            0.1 + 0.8 * bump(530, 30),
+            0.1 + 0.8 * bump(610, 30),
+            0.1 + 0.6 * bump(680, 25) + 0.4 * bump(420, 20),
+        ]
+    )
+    labels = np.zeros((24, 24), dtype=int)
+    labels[:12, 12:], labels[12:, :12], labels[12:, 12:] = 1, 2, 3
+    rows, cols = np.mgrid[:24, :24]
+    shading = 0.7 + 0.3 * np.cos(cols / 7.0) * np.sin(rows / 9.0)
+    spectra = materials[labels] * shading[..., None]
+    grid_rows, grid_cols = np.meshgrid(np.arange(3, 24, 6), np.arange(3, 24, 6), indexing="ij")
+    known = np.ravel_multi_index((grid_rows.ravel(), grid_cols.ravel()), (24, 24))
+    return spectra, known
+
+
+def test_murakami_corrects_hardeberg_where_the_scene_has_four_materials():
+    spectra, known = four_material_scene()
+    rgb = spectra @ RESPONSE
+    known_spectra = spectra.reshape(-1, 33)[known]
+    estimate = murakami_2007(rgb, RESPONSE, known_spectra, known)
+    assert estimate.shape == (24, 24, 33)
+    # Known spectra reproduced at their pixels and RGB matched (both measured ~1e-15).
+    assert max_relative(estimate.reshape(-1, 33)[known], known_spectra) < 1e-10
+    assert max_relative(estimate @ RESPONSE, rgb) < 1e-10
+    hardeberg_error = relative_error(hardeberg(rgb, known_spectra, known), spectra).mean()
+    murakami_error = relative_error(estimate, spectra).mean()
+    assert hardeberg_error > 10  # measured 20.2 %: four spectra, three dimensions
+    assert murakami_error < 0.75 * hardeberg_error  # measured 9.1 %
+
+
+def test_murakami_reproduces_every_pixel_when_every_spectrum_is_known():
+    spectra, _ = four_material_scene()
+    estimate = murakami_2007(spectra @ RESPONSE, RESPONSE, spectra.reshape(-1, 33), np.arange(576))
+    assert max_relative(estimate, spectra) < 1e-10  # measured ~1e-15
+
+
+def test_murakami_correction_fades_far_from_the_known_points():
+    spectra, known = four_material_scene()
+    rgb = spectra @ RESPONSE
+    known_spectra = spectra.reshape(-1, 33)[known]
+    # A huge nugget switches the correction off: the global (Wiener) estimate alone.
+    wiener = murakami_2007(rgb, RESPONSE, known_spectra, known, nugget=1e12)
+    # With L = 0.05 px the correction one pixel away from a known point is exp(-20) of it.
+    local = murakami_2007(rgb, RESPONSE, known_spectra, known, correlation_length=0.05)
+    elsewhere = np.setdiff1d(np.arange(576), known)
+    assert max_relative(local.reshape(-1, 33)[known], known_spectra) < 1e-10
+    assert max_relative(local.reshape(-1, 33)[elsewhere], wiener.reshape(-1, 33)[elsewhere]) < 1e-7
+    # The global estimate alone is limited like Hardeberg's (measured 13.5 %, Hardeberg 20 %).
+    assert relative_error(wiener, spectra).mean() > 10
+
+
+# ------------------------------------------------------- Spectral A+ (Aeschbacher 2017)
+
+
+def test_a_plus_defaults_are_sparsity_8_and_lambda_0_1(rng):
+    parameters = inspect.signature(spectral_a_plus).parameters
+    assert parameters["sparsity"].default == 8
+    assert parameters["ridge_lambda"].default == 0.1
+    train = draw6(rng, 250)
+    test = draw6(rng, 100) @ RESPONSE
+    default = spectral_a_plus(test, train, train @ RESPONSE, response=RESPONSE)
+    explicit = spectral_a_plus(
+        test, train, train @ RESPONSE, response=RESPONSE, sparsity=8, ridge_lambda=0.1
+    )
+    np.testing.assert_array_equal(default, explicit)
+    # Both parameters act (measured max differences 0.05 and 0.11).
+    other_sparsity = spectral_a_plus(test, train, train @ RESPONSE, response=RESPONSE, sparsity=1)
+    other_lambda = spectral_a_plus(
+        test, train, train @ RESPONSE, response=RESPONSE, ridge_lambda=1e-5
+    )
+    assert np.abs(default - other_sparsity).max() > 1e-3
+    assert np.abs(default - other_lambda).max() > 1e-3
+
+
+def test_a_plus_is_exact_on_training_data_linear_in_rgb(rng):
+    train = rng.uniform(0, 1, (250, 3)) @ BASIS3  # every neighbourhood: spectra linear in RGB
+    rgb = train @ RESPONSE
+    exact = spectral_a_plus(rgb, train, rgb, ridge_lambda=1e-10)
+    assert max_relative(exact, train) < 1e-8  # measured 2e-10
+    # The default ridge (lambda = 0.1 on unit-norm RGB) biases it (measured 13 % max).
+    assert max_relative(spectral_a_plus(rgb, train, rgb), train) > 1e-3
+
+
+def test_a_plus_beats_imai_on_held_out_spectra(rng):
+    train, test = draw6(rng, 250), draw6(rng, 400)
+    estimate = spectral_a_plus(test @ RESPONSE, train, train @ RESPONSE, response=RESPONSE)
+    a_plus_error = relative_error(estimate, test).mean()
+    imai_error = relative_error(imai(test @ RESPONSE, RESPONSE), test).mean()
+    assert a_plus_error < 0.8 * imai_error  # measured 36 % vs 52 % (Hardeberg: 34 %)
+
+
+def test_a_plus_takes_training_rgb_from_known_pixels(rng):
+    spectra = draw6(rng, 16 * 16).reshape(16, 16, 33)
+    rgb = spectra @ RESPONSE
+    known = rng.choice(256, 100, replace=False)
+    known_spectra = spectra.reshape(-1, 33)[known]
+    from_pixels = spectral_a_plus(rgb, known_spectra, known_pixels=known, n_atoms=32)
+    from_rgb = spectral_a_plus(rgb, known_spectra, rgb.reshape(-1, 3)[known], n_atoms=32)
+    np.testing.assert_array_equal(from_pixels, from_rgb)
+    assert from_pixels.shape == (16, 16, 33)
+
+
+# ------------------------------------------------------------------------ Smits 1999
+
+
+def test_smits_grey_is_flat_and_matches_colour_per_pixel(rng):
+    grey = smits_1999(np.array([[0.5, 0.5, 0.5], [1.0, 1.0, 1.0]]), WL)
+    # Smits' white basis dips to 0.9992 around 500 nm: measured ptp 4e-4 and 8e-4.
+    assert np.ptp(grey, axis=1).max() < 1e-3
+    np.testing.assert_allclose(grey.mean(axis=1), [0.5, 1.0], atol=1e-3)
+    rgb = rng.uniform(0, 1, (40, 3))
+    reference = np.array([colour.recovery.RGB_to_sd_Smits1999(value)[WL] for value in rgb])
+    np.testing.assert_allclose(smits_1999(rgb, WL), reference, rtol=0, atol=1e-12)
+
+
+def test_smits_colour_round_trip_is_within_its_known_accuracy(rng):
+    rgb = rng.uniform(0, 1, (200, 3))
+    spectra = smits_1999(rgb, WL)
+    cmfs = colour.MSDS_CMFS[CMFS_NAME].copy().align(SHAPE)
+    illuminant = colour.SDS_ILLUMINANTS["E"].copy().align(SHAPE)  # Smits' white point is E
+    xyz = np.array(
+        [
+            colour.sd_to_XYZ(
+                colour.SpectralDistribution(s, WL), cmfs, illuminant, method="Integration"
+            )
+            for s in spectra
+        ]
+    )
+    back = colour.XYZ_to_RGB(xyz / 100, colour.recovery.smits1999.RGB_COLOURSPACE_SMITS1999)
+    error = np.abs(back - rgb)
+    # Smits' spectra are a heuristic fitted on ten coarse bins, not a colour-exact inverse
+    # (colour's own docstring example is off by 0.017 in X). Measured on 200 random colours:
+    # mean 0.020, max 0.087 absolute per channel.
+    assert error.mean() < 0.05
+    assert error.max() < 0.1
+
+
+# ----------------------------------------------------------------- Jakob & Hanika 2019
+
+
+def jakob_check_rgb(spectra: np.ndarray) -> np.ndarray:
+    """sRGB of reflectances under D65 on the 33-band grid, via colour (see jakob_2019)."""
+    cmfs = colour.MSDS_CMFS[CMFS_NAME].copy().align(SHAPE)
+    d65 = colour.SDS_ILLUMINANTS["D65"].copy().align(SHAPE)
+
+    def xyz(values):
+        sd = colour.SpectralDistribution(values, WL)
+        return colour.sd_to_XYZ(sd, cmfs, d65, method="Integration") / 100
+
+    white = colour.XYZ_to_xy(xyz(np.ones(33)))
+    srgb = colour.models.RGB_COLOURSPACE_sRGB.copy()
+    srgb.use_derived_transformation_matrices(True)
+    return colour.XYZ_to_RGB(np.array([xyz(s) for s in spectra]), srgb, white)
+
+
+def test_jakob_grey_is_flat_and_colours_round_trip(rng):
+    grey = jakob_2019(np.array([[0.5, 0.5, 0.5], [0.2, 0.2, 0.2]]), WL)
+    assert np.ptp(grey, axis=1).max() < 1e-9  # measured 3e-16
+    np.testing.assert_allclose(grey[:, 0], [0.5, 0.2], atol=1e-9)
+    rgb = np.concatenate([rng.uniform(0, 1, (100, 3)), np.eye(3) * 0.8])
+    spectra = jakob_2019(rgb.reshape(1, -1, 3), WL)[0]
+    assert spectra.min() > 0 and spectra.max() < 1
+    # The coefficients are fitted to the colour: measured max error 1.4e-15.
+    assert np.abs(jakob_check_rgb(spectra) - rgb).max() < 1e-6
+
+
+def test_jakob_agrees_with_colours_per_colour_optimizer():
+    rgb = np.array([[0.7, 0.2, 0.2], [0.1, 0.4, 0.3]])
+    ours = jakob_2019(rgb, WL)
+    cmfs = colour.MSDS_CMFS[CMFS_NAME].copy().align(SHAPE)
+    d65 = colour.SDS_ILLUMINANTS["D65"].copy().align(SHAPE)
+    srgb = colour.models.RGB_COLOURSPACE_sRGB.copy()
+    srgb.use_derived_transformation_matrices(True)
+    white = colour.XYZ_to_xy(np.ones(33) @ (cmfs.values * d65.values[:, None]))
+    for value, spectrum in zip(rgb, ours, strict=True):
+        xyz = colour.RGB_to_XYZ(value, srgb, white)
+        reference = colour.XYZ_to_sd(xyz, method="Jakob 2019", cmfs=cmfs, illuminant=d65)
+        # colour's optimizer stops at a Delta E threshold: measured differences 7e-5, 2e-5.
+        np.testing.assert_allclose(spectrum, reference.values, atol=1e-3)
+
+
+def test_jakob_lut_path_evaluates_colours_coefficients(monkeypatch):
+    class FakeLUT:
+        def RGB_to_coefficients(self, rgb):  # noqa: N802 (colour's name)
+            return np.tile([-1e-4, 0.1, -25.0], (len(rgb), 1)).squeeze()
+
+    requested = []
+
+    def fake_lut(size, start, end, interval):
+        requested.append((size, start, end, interval))
+        return FakeLUT()
+
+    monkeypatch.setattr(baselines, "_jakob_lut", fake_lut)
+    result = jakob_2019(np.array([[0.3, 0.4, 0.5]]), WL, lut_size=4)
+    expected = colour.recovery.sd_Jakob2019([-1e-4, 0.1, -25.0], SHAPE).values
+    np.testing.assert_allclose(result[0], expected, rtol=1e-12)
+    assert requested == [(4, 400.0, 720.0, 10.0)]
+
+
+# ------------------------------------------------------------------------- bad input
+
+
+GOOD_RGB = np.full((4, 5, 3), 0.3)
+GOOD_SPECTRA = np.full((3, 33), 0.5)
+NAN_RGB = GOOD_RGB.copy()
+NAN_RGB[1, 2, 0] = np.nan
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda: imai(NAN_RGB, RESPONSE), r"rgb: expected finite values, found 1 NaN"),
+        (lambda: imai(GOOD_RGB, RESPONSE[:, :2]), r"response: expected shape \(K, 3\)"),
+        (lambda: hardeberg(GOOD_RGB, np.empty((0, 33)), []), r"known_spectra: no known spectra"),
+        (lambda: hardeberg(GOOD_RGB, GOOD_SPECTRA, [0, 1, 20]), r"known_pixels: .*\[0, 20\)"),
+        (lambda: hardeberg(GOOD_RGB, GOOD_SPECTRA, [0, 1, 1]), r"known_pixels: .*distinct"),
+        (lambda: hardeberg(GOOD_RGB, GOOD_SPECTRA, [0, 1]), r"one index per known spectrum"),
+        (
+            lambda: hardeberg(GOOD_RGB, GOOD_SPECTRA, np.eye(4, 5, dtype=bool)[:, :]),
+            r"boolean mask; pass np.flatnonzero",
+        ),
+        (lambda: hardeberg(GOOD_RGB, GOOD_SPECTRA), r"exactly one of them"),
+        (
+            lambda: murakami_2007(GOOD_RGB, RESPONSE[:30], GOOD_SPECTRA, [0, 1, 2]),
+            r"response: has 30 bands but the spectra have K = 33",
+        ),
+        (
+            lambda: murakami_2007(GOOD_RGB[0], RESPONSE, GOOD_SPECTRA, [0, 1, 2]),
+            r"rgb: murakami_2007 needs a 2-D image of shape \(H, W, C\)",
+        ),
+        (
+            lambda: murakami_2007(GOOD_RGB, RESPONSE, np.full((3, 33), np.inf), [0, 1, 2]),
+            r"known_spectra: expected finite values",
+        ),
+        (
+            lambda: murakami_2007(GOOD_RGB, RESPONSE, GOOD_SPECTRA, [0, 1, 2], nugget=-1),
+            r"nugget: expected a finite number >= 0",
+        ),
+        (
+            lambda: dong_2016(GOOD_RGB, RESPONSE, -GOOD_SPECTRA),
+            r"known_spectra: NMF needs non-negative spectra",
+        ),
+        (
+            lambda: dong_2016(GOOD_RGB, RESPONSE, np.empty((0, 33))),
+            r"known_spectra: no known spectra",
+        ),
+        (
+            lambda: dong_2016(GOOD_RGB, RESPONSE, GOOD_SPECTRA, n_components=0),
+            r"n_components: expected an integer >= 1",
+        ),
+        (
+            lambda: spectral_a_plus(GOOD_RGB, GOOD_SPECTRA[:, :30], response=RESPONSE),
+            r"response: has 33 bands but the spectra have K = 30",
+        ),
+        (
+            lambda: spectral_a_plus(GOOD_RGB, GOOD_SPECTRA),
+            r"training_rgb: expected training_rgb, known_pixels or response",
+        ),
+        (
+            lambda: spectral_a_plus(GOOD_RGB, GOOD_SPECTRA, response=RESPONSE),
+            r"n_atoms: expected an integer >= 1 and <= 3",
+        ),
+        (
+            lambda: spectral_a_plus(NAN_RGB, GOOD_SPECTRA, response=RESPONSE, n_atoms=2),
+            r"rgb: expected finite values",
+        ),
+        (lambda: smits_1999(GOOD_RGB * 4, WL), r"rgb: expected linear sRGB .* in \[0, 1\]"),
+        (lambda: smits_1999(GOOD_RGB, WL[::-1]), r"wavelengths_nm: expected strictly increasing"),
+        (lambda: jakob_2019(NAN_RGB, WL), r"rgb: expected finite values"),
+        (lambda: jakob_2019(GOOD_RGB[..., :2], WL), r"rgb: expected 3 channels"),
+        (lambda: jakob_2019(GOOD_RGB, WL, lut_size=1), r"lut_size: expected an integer >= 2"),
+    ],
+)
+def test_bad_input_is_rejected_with_a_helpful_message(call, message):
+    with pytest.raises(SpectwinInputError, match=message):
+        call()
