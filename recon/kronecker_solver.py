@@ -63,11 +63,13 @@ def _shift_groups(shifts: np.ndarray, mean_diagonal: float) -> list[tuple[float 
     """Group column indices by preconditioner: ``None`` for Jacobi, else the smallest shift of
     a group whose shifts lie within a factor of two (zero-shifts form their own group)."""
     groups: list[tuple[float | None, list]] = []
-    jacobi = [l for l, s in enumerate(shifts) if s >= _JACOBI_SHIFT * mean_diagonal]
+    jacobi = [column for column, s in enumerate(shifts) if s >= _JACOBI_SHIFT * mean_diagonal]
     if jacobi:
         groups.append((None, jacobi))
     floor = 1e-12 * max(float(np.max(np.abs(shifts))), mean_diagonal)
-    rest = sorted((max(float(s), 0.0), l) for l, s in enumerate(shifts) if l not in jacobi)
+    rest = sorted(
+        (max(float(s), 0.0), column) for column, s in enumerate(shifts) if column not in jacobi
+    )
     for shift, column in rest:
         shift = 0.0 if shift <= floor else shift
         if groups and groups[-1][0] is not None and shift <= 2 * groups[-1][0]:
@@ -81,7 +83,7 @@ def _equal_shifts(shifts: np.ndarray, columns: list) -> list[tuple[float, list]]
     """Split ``columns`` into runs of numerically equal shifts (clipped at zero)."""
     scale = max(float(np.max(np.abs(shifts))), 1.0)
     runs: list[tuple[float, list]] = []
-    for column in sorted(columns, key=lambda l: shifts[l]):
+    for column in sorted(columns, key=lambda c: shifts[c]):
         shift = max(float(shifts[column]), 0.0)
         if runs and abs(shift - runs[-1][0]) <= 1e-9 * scale:
             runs[-1][1].append(column)
@@ -157,10 +159,10 @@ def solve_kronecker_sum(
         for group_shift, columns in _shift_groups(shifts, mean_diagonal):
             if group_shift is None:
                 preconditioners = {
-                    l: linalg.LinearOperator(
-                        (n, n), matvec=lambda v, d=diagonal + shifts[l]: v / d, dtype=np.float64
+                    c: linalg.LinearOperator(
+                        (n, n), matvec=lambda v, d=diagonal + shifts[c]: v / d, dtype=np.float64
                     )
-                    for l in columns
+                    for c in columns
                 }
             else:
                 hierarchy = pyamg.smoothed_aggregation_solver(
