@@ -275,3 +275,15 @@ def test_spectra_on_another_grid_are_refused():
     known = PointSpectra(np.array([0]), SampledSpectra(other, np.ones((1, other.size))))
     with pytest.raises(SpectwinInputError, match="resample"):
         spectralize(np.ones((3, 3, 3)), response, point_spectra=known)
+
+
+def test_progress_is_reported_for_both_solver_families(mosaic, capsys):
+    image, _, response = mosaic
+    pixels = _grid_pixels(image.shape[:2], 8)
+    known = PointSpectra(pixels, image.reshape(-1, image.shape[-1])[pixels])
+    quiet = spectralize(image @ response, response, point_spectra=known, tol=1e-8)
+    shown = spectralize(image @ response, response, point_spectra=known, tol=1e-8, progress=True)
+    spectralize(image @ response, response, point_spectra=known, solver="lsmr", progress=True)
+    printed = capsys.readouterr().out
+    assert "spectralize: band columns" in printed and "spectralize: lsmr" in printed
+    assert np.array_equal(quiet.spectra, shown.spectra)
