@@ -106,6 +106,17 @@ def _compressed(block: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray]
     return block @ weights, weights
 
 
+def _repeatable_hierarchy(matrix: sparse.csr_matrix) -> pyamg.MultilevelSolver:
+    """Smoothed-aggregation hierarchy; pyamg draws the start vector of its spectral-radius
+    estimate from numpy's global generator, seeded here (and restored) so that results repeat."""
+    state = np.random.get_state()
+    np.random.seed(0)
+    try:
+        return pyamg.smoothed_aggregation_solver(matrix, symmetry="symmetric")
+    finally:
+        np.random.set_state(state)
+
+
 def solve_kronecker_sum(
     spatial: sparse.csr_matrix,
     spectral: np.ndarray,
@@ -165,9 +176,7 @@ def solve_kronecker_sum(
                     for c in columns
                 }
             else:
-                hierarchy = pyamg.smoothed_aggregation_solver(
-                    (spatial + group_shift * identity).tocsr(), symmetry="symmetric"
-                )
+                hierarchy = _repeatable_hierarchy((spatial + group_shift * identity).tocsr())
                 hierarchies += 1
                 preconditioner = hierarchy.aspreconditioner(cycle="V")
                 preconditioners = dict.fromkeys(columns, preconditioner)
