@@ -109,12 +109,12 @@ def _compressed(block: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray]
 def _repeatable_hierarchy(matrix: sparse.csr_matrix) -> pyamg.MultilevelSolver:
     """Smoothed-aggregation hierarchy; pyamg draws the start vector of its spectral-radius
     estimate from numpy's global generator, seeded here (and restored) so that results repeat."""
-    state = np.random.get_state()
-    np.random.seed(0)
+    state = np.random.get_state()  # noqa: NPY002 (pyamg reads the legacy global generator)
+    np.random.seed(0)  # noqa: NPY002
     try:
         return pyamg.smoothed_aggregation_solver(matrix, symmetry="symmetric")
     finally:
-        np.random.set_state(state)
+        np.random.set_state(state)  # noqa: NPY002
 
 
 def solve_kronecker_sum(

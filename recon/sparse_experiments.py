@@ -53,24 +53,31 @@ class SparseInput:
     spectra: np.ndarray
 
 
-def _spectralization(data: SparseInput) -> np.ndarray:
-    """Eq. 6.10 with the RGBXY appearance space, k = 3 and equal primed weights (6.11)."""
+def _spectralization(data: SparseInput, p_dyn: float = 0.0) -> np.ndarray:
+    """Eq. 6.10 with the RGBXY appearance space, k = 3 and equal primed weights (6.11); with
+    ``p_dyn > 0`` the dynamic-range compression of Eq. 10.2, so that shading does not
+    separate the appearance neighbours of one material."""
     return spectralize(
         data.rgb,
         data.response,
         point_spectra=PointSpectra(data.pixels, data.spectra),
         weights=EnergyWeights(delta=0.0),
+        p_dyn=p_dyn,
         tol=1e-8,
     ).spectra
 
 
 METHODS: dict[str, Callable[[SparseInput], np.ndarray]] = {
     "spectralization": _spectralization,
+    "spectralization p_dyn=1": lambda d: _spectralization(d, p_dyn=1.0),
     "imai": lambda d: baselines.imai(d.rgb, d.response),
     "hardeberg": lambda d: baselines.hardeberg(d.rgb, d.spectra, d.pixels),
     "murakami": lambda d: baselines.murakami_2007(d.rgb, d.response, d.spectra, d.pixels),
     "dong": lambda d: baselines.dong_2016(d.rgb, d.response, d.spectra),
-    "a_plus": lambda d: baselines.spectral_a_plus(d.rgb, d.spectra, known_pixels=d.pixels),
+    # A+ codes spectra with 8 atoms (its default); with fewer bands than 8, with all of them.
+    "a_plus": lambda d: baselines.spectral_a_plus(
+        d.rgb, d.spectra, known_pixels=d.pixels, sparsity=min(8, d.spectra.shape[1])
+    ),
 }
 """Reconstruction methods by name. Imai cannot use the known spectra (section 7); all others
 receive them. Smits 1999 and Jakob 2019 (``recon.baselines``) expect sRGB reflectance input, not

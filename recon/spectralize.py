@@ -277,18 +277,19 @@ def _checked_response(response: np.ndarray, channels: int) -> np.ndarray:
 
 
 def _dynamic_scale(images: np.ndarray, p_dyn: float) -> np.ndarray:
-    """:math:`f_i = (\\sum_c V_i^c)^{-p_{dyn}}` (Eq. 10.2)."""
+    """:math:`f_i = (\\sum_c V_i^c)^{-p_{dyn}}` (Eq. 10.2). Sums below 0.1 % of the mean sum
+    (dark, noisy pixels; noise can make them negative) are raised to that floor."""
     if not 0 <= p_dyn <= 1:
         raise SpectwinInputError(f"p_dyn: expected a value in [0, 1], got {p_dyn}")
     brightness = images.sum(axis=-1).ravel()
     if p_dyn == 0:
         return np.ones_like(brightness)
-    if np.any(brightness <= 0):
+    mean = float(np.mean(brightness))
+    if mean <= 0:
         raise SpectwinInputError(
-            "rgb: dynamic-range compression (p_dyn > 0) needs positive pixel sums, found "
-            f"{int(np.sum(brightness <= 0))} pixels <= 0"
+            "rgb: dynamic-range compression (p_dyn > 0) needs a positive mean pixel sum"
         )
-    return brightness**-p_dyn
+    return np.maximum(brightness, 1e-3 * mean) ** -p_dyn
 
 
 def _point_term(
