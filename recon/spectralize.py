@@ -374,7 +374,31 @@ def build_problem(
     neighbours: int = 3,
     p_dyn: float = 0.0,
 ) -> SpectralizationProblem:
-    """Assemble the energy (see module docstring); parameters as in :func:`spectralize`."""
+    """Assemble the energy of the module docstring.
+
+    Parameters
+    ----------
+    rgb, response
+        As in :func:`spectralize`.
+    point_spectra, band_images, device_integrals
+        The spectral data (at least one): see :class:`PointSpectra`, :class:`BandImage`,
+        :class:`DeviceIntegrals`. Pixel indices run over ``(n_images, height, width)``.
+    weights
+        Primed weights (Eq. 6.11 / 10.13); see :class:`EnergyWeights` for the default
+        :math:`\\delta'`.
+    appearance, appearance_options
+        Appearance space ``"rgb"``, ``"rgbxy"`` or ``"patch"`` and its options
+        (:func:`recon.appearance.appearance_points`).
+    neighbours
+        :math:`|N_i|`, default 3 (section 6.2).
+    p_dyn
+        Dynamic-range compression exponent of Eq. 10.2 (0: none; the thesis used 0.5-0.6 for
+        BTFs).
+
+    Returns
+    -------
+    SpectralizationProblem
+    """
     images = _as_images(rgb)
     response_values, grid = _grid_and_values(response, None, "response")
     if isinstance(response, SampledSpectra):
@@ -477,19 +501,12 @@ def spectralize(
     rgb: np.ndarray,
     response: np.ndarray,
     *,
-    point_spectra: PointSpectra | None = None,
-    band_images: Sequence[BandImage] = (),
-    device_integrals: DeviceIntegrals | None = None,
-    weights: EnergyWeights = EnergyWeights(),
-    appearance: str = "rgbxy",
-    appearance_options: dict | None = None,
-    neighbours: int = 3,
-    p_dyn: float = 0.0,
     solver: str = "auto",
     tol: float = 1e-6,
     max_iterations: int = 500,
     initial: np.ndarray | None = None,
     progress: bool = False,
+    **energy,
 ) -> SpectralizationResult:
     """Reconstruct spectral images from RGB images and spectral data (thesis chapters 6, 10).
 
@@ -502,20 +519,10 @@ def spectralize(
         :math:`R_{cam}`, ``(K, C)``: camera sensitivity times light per band, so that
         :math:`V_i \\approx S_i R_{cam}`; or ``SampledSpectra`` with one row per channel, whose
         grid the point spectra must share.
-    point_spectra, band_images, device_integrals
-        The spectral data (at least one): see :class:`PointSpectra`, :class:`BandImage`,
-        :class:`DeviceIntegrals`. Pixel indices run over ``(n_images, height, width)``.
-    weights
-        Primed weights (Eq. 6.11 / 10.13); see :class:`EnergyWeights` for the default
-        :math:`\\delta'`.
-    appearance, appearance_options
-        Appearance space ``"rgb"``, ``"rgbxy"`` or ``"patch"`` and its options
-        (:func:`recon.appearance.appearance_points`).
-    neighbours
-        :math:`|N_i|`, default 3 (section 6.2).
-    p_dyn
-        Dynamic-range compression exponent of Eq. 10.2 (0: none; the thesis used 0.5-0.6 for
-        BTFs).
+    **energy
+        The energy: ``point_spectra``, ``band_images``, ``device_integrals``, ``weights``,
+        ``appearance``, ``appearance_options``, ``neighbours``, ``p_dyn``; see
+        :func:`build_problem`.
     solver
         ``"auto"``, ``"multigrid"``, ``"lsqr"`` or ``"lsmr"``.
     tol
@@ -551,18 +558,7 @@ def spectralize(
             f"tol, max_iterations: expected tol > 0 and max_iterations >= 1, got {tol}, "
             f"{max_iterations}"
         )
-    problem = build_problem(
-        rgb,
-        response,
-        point_spectra=point_spectra,
-        band_images=band_images,
-        device_integrals=device_integrals,
-        weights=weights,
-        appearance=appearance,
-        appearance_options=appearance_options,
-        neighbours=neighbours,
-        p_dyn=p_dyn,
-    )
+    problem = build_problem(rgb, response, **energy)
     shape = (problem.n_pixels, problem.n_bands)
     scaled_initial = None
     if initial is not None:
