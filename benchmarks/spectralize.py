@@ -40,7 +40,7 @@ def _scene(side: int, seed: int):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--side", type=int, default=1000)
-    parser.add_argument("--tol", type=float, default=1e-8)
+    parser.add_argument("--tol", type=float, nargs="+", default=[1e-6])
     parser.add_argument("--lsqr-iterations", type=int, default=0)
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
@@ -49,7 +49,7 @@ def main() -> None:
     known = PointSpectra(pixels, spectra)
     report = {"machine": machine_description(), "pixels": args.side**2, "bands": truth.shape[-1]}
     report["known_pixels"] = int(pixels.size)
-    runs = [("multigrid", args.tol, 500)]
+    runs = [("multigrid", tol, 500) for tol in args.tol]
     if args.lsqr_iterations:
         runs.append(("lsqr", 1e-14, args.lsqr_iterations))
     for solver, tol, iterations in runs:
@@ -57,7 +57,7 @@ def main() -> None:
         result = spectralize(
             rgb, response, point_spectra=known, solver=solver, tol=tol, max_iterations=iterations
         )
-        report[solver] = {
+        report[f"{solver} tol={tol:g}" if solver == "multigrid" else solver] = {
             "total_s": round(time.perf_counter() - started, 2),
             "timings_s": {k: round(v, 2) for k, v in result.timings_s.items()},
             "iterations": result.iterations,
