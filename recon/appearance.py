@@ -178,17 +178,23 @@ def _apply_link_rule(candidates: np.ndarray, k: int) -> np.ndarray:
     pixels = np.arange(n, dtype=candidates.dtype)
     lower = candidates < pixels[:, None]
     neighbours = candidates[:, :k].copy()
-    active = np.arange(n)
+    active = pixels
     while active.size:
-        cand, low = candidates[active], lower[active]
-        back = (neighbours[np.where(low, cand, 0)] == active[:, None, None]).any(-1) & low
+        full = active.size == n
+        cand = candidates if full else candidates[active]
+        low = lower if full else lower[active]
+        linked = neighbours[np.where(low, cand, 0)]  # (rows, candidates, k): N_c per candidate
+        back = np.zeros(low.shape, dtype=bool)
+        for slot in range(k):
+            back |= linked[..., slot] == active[:, None]
+        back &= low
         chosen = _first_allowed(cand, ~back, k)
         differs = (chosen != neighbours[active]).any(axis=1)
         changed = active[differs]
         neighbours[changed] = chosen[differs]
         marked = np.zeros(n, dtype=bool)
         marked[changed] = True
-        active = np.flatnonzero((marked[candidates] & lower).any(axis=1))
+        active = np.flatnonzero((marked[candidates] & lower).any(axis=1)).astype(pixels.dtype)
     return neighbours
 
 
@@ -226,8 +232,11 @@ def appearance_neighbours(
             f"k={k}, candidates={candidates}: expected 1 <= k <= candidates < n_pixels={n}"
         )
     tree = cKDTree(points, balanced_tree=False, compact_nodes=False)
-    _, found = tree.query(points, k=candidates + 1, workers=-1)
-    found = found.astype(np.int32 if n < 2**31 else np.int64)
+    # Querying in the tree's own point order keeps successive queries in cache (about 10 %).
+    order = tree.indices
+    _, in_order = tree.query(points[order], k=candidates + 1, workers=-1)
+    found = np.empty(in_order.shape, dtype=np.int32 if n < 2**31 else np.int64)
+    found[order] = in_order
     pixels = np.arange(n, dtype=found.dtype)
     # Drop each pixel itself (the first hit, unless duplicate points came first).
     is_self = found == pixels[:, None]
