@@ -43,12 +43,21 @@ def main() -> None:
     parser.add_argument("--tol", type=float, nargs="+", default=[1e-6])
     parser.add_argument("--lsqr-iterations", type=int, default=0)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--spectral-noise",
+        type=float,
+        default=0.0,
+        help="Gaussian noise on the known spectra, fraction of their mean (makes them full rank)",
+    )
     args = parser.parse_args()
     truth, rgb, response = _scene(args.side, args.seed)
     pixels, spectra = known_spectra_from_mask(truth, whisk_broom_mask(truth.shape[:2]))
+    noise = np.random.default_rng(args.seed + 1).standard_normal(spectra.shape)
+    spectra = spectra + args.spectral_noise * spectra.mean() * noise
     known = PointSpectra(pixels, spectra)
     report = {"machine": machine_description(), "pixels": args.side**2, "bands": truth.shape[-1]}
     report["known_pixels"] = int(pixels.size)
+    report["spectral_noise"] = args.spectral_noise
     runs = [("multigrid", tol, 500) for tol in args.tol]
     if args.lsqr_iterations:
         runs.append(("lsqr", 1e-14, args.lsqr_iterations))
