@@ -39,6 +39,7 @@ from twin.truth import band_passbands, truth_btf  # noqa: E402
 
 __all__ = ["study_response", "run_study", "twin_texture"]
 
+_SWEPT = ("spectralization", "spectralization p_dyn=1", "hardeberg", "dong", "murakami")
 _LIGHT = np.array([[np.sin(np.radians(15.0)), 0.0, np.cos(np.radians(15.0))]])
 _VIEW = np.array([[0.0, 0.0, 1.0]])
 
@@ -174,8 +175,8 @@ def _study_case(
     if sweeps:
         counts = [25, 50, 100, 250, 500, 1000]
         fractions = [0.005, 0.01, 0.02, 0.03, 0.05]
-        spots = spot_count_sweep(truth, response, counts=counts)
-        noise = noise_sweep(truth, response, noise_fractions=fractions)
+        spots = spot_count_sweep(truth, response, counts=counts, methods=_SWEPT)
+        noise = noise_sweep(truth, response, noise_fractions=fractions, methods=_SWEPT)
         _sweep(
             spots, counts, "whisk-broom spots", f"{name} (Fig. 7.9)", out_dir / f"{name}_spots.png"
         )
