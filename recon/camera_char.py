@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import colour
 import numpy as np
 from scipy import ndimage, optimize, spatial
+from threadpoolctl import threadpool_limits
 
 from recon.errors import SpectwinInputError
 
@@ -379,9 +380,12 @@ def estimate_response(
         "delta": delta,
         "data": data_weight,
     }
-    response, shading, specularity, iterations = _extended(
-        rgb_n, reflectances, light_n, wavelengths, positions, params, max_iterations, tolerance
-    )
+    # Hundreds of small least-squares solves: BLAS threads cost more than they bring (and
+    # stall badly when another process holds a core).
+    with threadpool_limits(1, user_api="blas"):
+        response, shading, specularity, iterations = _extended(
+            rgb_n, reflectances, light_n, wavelengths, positions, params, max_iterations, tolerance
+        )
     response = response * units
     if not return_details:
         return response
