@@ -45,6 +45,7 @@ def capture():
 @pytest.fixture(scope="module")
 def processed(capture):
     import cv2  # the OpenCV peer is a dev dependency
+
     frames, times = capture.frames, capture.exposure_s
     ours, _ = robertson(frames, times)
     # OpenCV takes one scene: the 7 filter images of an exposure side by side are one image (the

@@ -99,6 +99,7 @@ def test_recovers_the_configured_12_bit_inverse_response_within_one_percent(seri
 
 def test_opencv_robertson_on_an_8_bit_copy_as_a_peer(series):
     import cv2  # the OpenCV peer is a dev dependency
+
     frames8 = (series["frames"] >> 4).astype(np.uint8)  # a camera's 8-bit mode: top 8 bits
     times32 = EXPOSURE_S.astype(np.float32)
     colour = [np.repeat(frame[..., None], 3, axis=2) for frame in frames8]
