@@ -29,13 +29,16 @@ import numpy as np
 import tifffile
 from skimage import io as skimage_io
 
-from recon.errors import SpectwinDataError
+from hwbridge.store import CaptureStore
+from recon.capture_io import select_frames
+from recon.errors import SpectwinDataError, SpectwinInputError
 from recon.shared_data import shared_data_dir
 from recon.spectra import SampledSpectra, WavelengthGrid
 
 __all__ = [
     "LLANOS2019_PATCH_NAMES",
     "Llanos2019ChartCapture",
+    "chart_capture_from_store",
     "read_llanos2019_chart_capture",
     "read_llanos2019_chart_spectra",
 ]
@@ -160,7 +163,28 @@ def read_llanos2019_chart_capture() -> Llanos2019ChartCapture:
     dark = _match(root / "captured_images" / "dark_frames", _DARK)
     dark_frames = np.stack([tifffile.imread(path) for path, _ in dark])
     dark_exposure_s = np.array([int(groups["exposure_ms"]) / 1000 for _, groups in dark])
-    label_path = root / "colorChecker_labels" / "d2_colorChecker30cm_550nm_labels.png"
+    return _assemble(
+        frames,
+        np.array(exposures_ms, dtype=np.float64) / 1000,
+        np.array(bands, dtype=np.float64),
+        dark_frames,
+        dark_exposure_s,
+        str(root),
+    )
+
+
+def _assemble(
+    frames: np.ndarray,
+    exposure_s: np.ndarray,
+    band_nm: np.ndarray,
+    dark_frames: np.ndarray,
+    dark_exposure_s: np.ndarray,
+    source: str,
+) -> Llanos2019ChartCapture:
+    """Add the patch labels, check that everything fits together and freeze the arrays."""
+    label_path = (
+        shared_data_dir() / _FOLDER / "colorChecker_labels" / "d2_colorChecker30cm_550nm_labels.png"
+    )
     if not label_path.is_file():
         raise SpectwinDataError(f"Llanos 2019 patch labels {label_path} do not exist")
     labels = np.asarray(skimage_io.imread(label_path))
@@ -171,20 +195,67 @@ def read_llanos2019_chart_capture() -> Llanos2019ChartCapture:
         or labels.max() != len(LLANOS2019_PATCH_NAMES)
     ):
         raise SpectwinDataError(
-            f"{root}: expected uint8 frames, dark frames and 24 patch labels of one shape, got "
+            f"{source}: expected uint8 frames, dark frames and 24 patch labels of one shape, got "
             f"{frames.dtype} {frames.shape[2:]}, {dark_frames.shape[1:]} and {labels.shape} with "
             f"{labels.max()} labels"
         )
-    arrays = (frames, dark_frames, labels)
-    for array in arrays:
+    labels = labels.astype(np.uint8)
+    for array in (frames, dark_frames, labels):
         array.setflags(write=False)
     return Llanos2019ChartCapture(
         frames=frames,
-        exposure_s=np.array(exposures_ms, dtype=np.float64) / 1000,
-        band_nm=np.array(bands, dtype=np.float64),
+        exposure_s=exposure_s,
+        band_nm=band_nm,
         dark_frames=dark_frames,
         dark_exposure_s=dark_exposure_s,
-        patch_labels=labels.astype(np.uint8),
+        patch_labels=labels,
+    )
+
+
+def _as_uint8(frames: np.ndarray, source: str) -> np.ndarray:
+    if frames.min() < 0 or frames.max() > 255 or np.any(frames != np.round(frames)):
+        raise SpectwinInputError(f"{source}: expected 8-bit frames (integers 0-255)")
+    return frames.astype(np.uint8)
+
+
+def chart_capture_from_store(
+    store: str | Path | CaptureStore, camera: str = "flea3"
+) -> Llanos2019ChartCapture:
+    """The same series read from a capture store, e.g. the replay of ``hwbridge.replay.ingest``
+    with the ``llanos2019`` mapping: calibration then reads real frames exactly as it reads
+    simulated ones (``recon.capture_io.select_frames``).
+
+    Parameters
+    ----------
+    store
+        A complete capture store (or its path) with ``chart`` frames at every band and exposure
+        time and ``dark`` frames.
+    camera
+        The camera's name in the store.
+
+    Returns
+    -------
+    Llanos2019ChartCapture
+    """
+    chart = select_frames(store, camera, kind="chart")
+    bands = np.unique(chart.band_nm)
+    exposures = np.unique(chart.exposure_s)
+    if len(chart.frames) != bands.size * exposures.size:
+        raise SpectwinInputError(
+            f"{camera}: expected one chart frame per band and exposure time, got "
+            f"{len(chart.frames)} for {bands.size} bands and {exposures.size} exposure times"
+        )
+    order = np.lexsort((chart.band_nm, chart.exposure_s))
+    frames = chart.frames[order].reshape(exposures.size, bands.size, *chart.frames.shape[1:])
+    dark = select_frames(store, camera, kind="dark")
+    source = str(store.path if isinstance(store, CaptureStore) else store)
+    return _assemble(
+        _as_uint8(frames, source),
+        exposures,
+        bands,
+        _as_uint8(dark.frames, source),
+        dark.exposure_s,
+        source,
     )
 
 

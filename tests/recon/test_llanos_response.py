@@ -23,14 +23,17 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
+from hwbridge.replay import ingest
 from recon.dark_frames import average_dark_frames, dark_frames_at
 from recon.hdr import merge_hdr, predict_values
 from recon.llanos_capture import (
     LLANOS2019_PATCH_NAMES,
+    chart_capture_from_store,
     read_llanos2019_chart_capture,
     read_llanos2019_chart_spectra,
 )
 from recon.response_curve import robertson
+from recon.shared_data import shared_data_dir
 from recon.spectra import band_integrals
 
 WHITE = LLANOS2019_PATCH_NAMES.index("white 9.5 (.05 D)")
@@ -38,8 +41,14 @@ EROSION_PX = 3  # patch masks are drawn on the 550 nm image; chromatic aberratio
 
 
 @pytest.fixture(scope="module")
-def capture():
-    return read_llanos2019_chart_capture()  # shared data is part of the workplace: no skip
+def capture(tmp_path_factory):
+    """The series as calibration sees it: replayed into a capture store (hwbridge.replay)."""
+    store = ingest(
+        shared_data_dir() / "real" / "llanos2019",
+        "llanos2019",
+        tmp_path_factory.mktemp("replay") / "llanos.capture.zarr",
+    )
+    return chart_capture_from_store(store)
 
 
 @pytest.fixture(scope="module")
@@ -200,3 +209,14 @@ def test_patches_against_the_spectrometer(capture, processed):
     assert np.median(np.abs(error[:, 1:])) < 0.25
     assert np.median(np.abs(residual[:, 1:])) < 0.085
     assert np.all(coefficients[1, 1:] < -0.1)  # the fall-off is real in every band
+
+
+def test_the_replay_capture_store_gives_the_same_series_as_the_files(capture):
+    replayed, capture = capture, read_llanos2019_chart_capture()
+    assert np.array_equal(replayed.frames, capture.frames)
+    assert np.allclose(replayed.exposure_s, capture.exposure_s)
+    assert np.array_equal(replayed.band_nm, capture.band_nm)
+    by_time = np.argsort(capture.dark_exposure_s, kind="stable")
+    replay_by_time = np.argsort(replayed.dark_exposure_s, kind="stable")
+    assert np.allclose(replayed.dark_exposure_s[replay_by_time], capture.dark_exposure_s[by_time])
+    assert np.isclose(replayed.dark_frames.mean(), capture.dark_frames.mean())
