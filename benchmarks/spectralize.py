@@ -19,7 +19,7 @@ from benchmarks.common import machine_description, peak_rss_mib
 from recon.metrics import relative_error
 from recon.sparse_sampling import known_spectra_from_mask, whisk_broom_mask
 from recon.spectra import DEFAULT_GRID
-from recon.spectralize import PointSpectra, spectralize
+from recon.spectralize import PointSpectra, reconstruct
 from recon.synthetic_images import material_mosaic
 
 
@@ -63,8 +63,14 @@ def main() -> None:
         runs.append(("lsqr", 1e-14, args.lsqr_iterations))
     for solver, tol, iterations in runs:
         started = time.perf_counter()
-        result = spectralize(
-            rgb, response, point_spectra=known, solver=solver, tol=tol, max_iterations=iterations
+        result = reconstruct(
+            rgb,
+            response,
+            point_spectra=known,
+            appearance="rgbxy",
+            solver=solver,
+            tol=tol,
+            max_iterations=iterations,
         )
         report[f"{solver} tol={tol:g}" if solver == "multigrid" else solver] = {
             "total_s": round(time.perf_counter() - started, 2),

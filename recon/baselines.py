@@ -77,11 +77,16 @@ from recon.errors import SpectwinInputError
 from recon.spectra import WavelengthGrid
 
 __all__ = [
+    "aplus",
+    "dong",
     "dong_2016",
     "hardeberg",
     "imai",
+    "jakob2019",
     "jakob_2019",
+    "murakami",
     "murakami_2007",
+    "smits",
     "smits_1999",
     "spectral_a_plus",
 ]
@@ -909,3 +914,22 @@ def jakob_2019(
         coefficients = _jakob_fit(targets[chunk], weights, basis)
         spectra[chunk] = _jakob_model(coefficients, basis)[0]
     return spectra[inverse].reshape(*pixels.shape[:-1], grid.size)
+
+
+def aplus(
+    rgb: np.ndarray,
+    response: np.ndarray,
+    training_spectra: np.ndarray,
+    training_rgb: np.ndarray | None = None,
+    **options,
+) -> np.ndarray:
+    """:func:`spectral_a_plus` in the project's ``(rgb, response, ...)`` calling order."""
+    return spectral_a_plus(rgb, training_spectra, training_rgb, response=response, **options)
+
+
+# The short names of the project's stable entry points (ARCHITECTURE.md). Smits and Jakob take
+# linear sRGB reflectance and wavelengths, not a camera response.
+murakami = murakami_2007
+dong = dong_2016
+smits = smits_1999
+jakob2019 = jakob_2019

@@ -26,6 +26,7 @@ from recon.spectra import WavelengthGrid
 
 __all__ = [
     "THESIS_ILLUMINANTS",
+    "THESIS_SET",
     "delta_e94",
     "peak_relative_rmse",
     "relative_error",
@@ -46,6 +47,7 @@ THESIS_ILLUMINANTS: tuple[str, ...] = (
     "HP3",
 )
 """CIE illuminants over which the thesis averages :math:`\\Delta E^*_{94}` (section 6.2)."""
+THESIS_SET = THESIS_ILLUMINANTS  # the name used by the stable entry points
 
 OBSERVER = "CIE 1931 2 Degree Standard Observer"
 """The colour-matching functions of :func:`delta_e94` (a key of ``colour.MSDS_CMFS``)."""

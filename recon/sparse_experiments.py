@@ -29,7 +29,7 @@ from recon import baselines
 from recon.errors import SpectwinInputError
 from recon.metrics import relative_error
 from recon.sparse_sampling import add_rgb_noise, known_spectra_from_mask, whisk_broom_mask
-from recon.spectralize import EnergyWeights, PointSpectra, spectralize
+from recon.spectralize import EnergyWeights, spectralize
 
 __all__ = [
     "METHODS",
@@ -60,11 +60,13 @@ def _spectralization(data: SparseInput, p_dyn: float = 0.0) -> np.ndarray:
     return spectralize(
         data.rgb,
         data.response,
-        point_spectra=PointSpectra(data.pixels, data.spectra),
+        known_pixels=data.pixels,
+        known_spectra=data.spectra,
+        appearance="rgbxy",
         weights=EnergyWeights(delta=0.0),
         p_dyn=p_dyn,
         tol=1e-8,
-    ).spectra
+    )
 
 
 METHODS: dict[str, Callable[[SparseInput], np.ndarray]] = {

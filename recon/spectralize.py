@@ -69,6 +69,7 @@ __all__ = [
     "SpectralizationProblem",
     "SpectralizationResult",
     "build_problem",
+    "reconstruct",
     "spectralize",
 ]
 
@@ -369,7 +370,7 @@ def build_problem(
     band_images: Sequence[BandImage] = (),
     device_integrals: DeviceIntegrals | None = None,
     weights: EnergyWeights = EnergyWeights(),
-    appearance: str = "rgbxy",
+    appearance: str = "rgb",
     appearance_options: dict | None = None,
     neighbours: int = 3,
     p_dyn: float = 0.0,
@@ -497,7 +498,7 @@ def _solve_least_squares(
     return out[0].reshape(problem.n_pixels, problem.n_bands), iterations, status in (1, 2, 4, 5)
 
 
-def spectralize(
+def reconstruct(
     rgb: np.ndarray,
     response: np.ndarray,
     *,
@@ -508,7 +509,8 @@ def spectralize(
     progress: bool = False,
     **energy,
 ) -> SpectralizationResult:
-    """Reconstruct spectral images from RGB images and spectral data (thesis chapters 6, 10).
+    """Reconstruct spectral images and report how (thesis chapters 6, 10); see
+    :func:`spectralize` for the plain entry point.
 
     Parameters
     ----------
@@ -547,9 +549,9 @@ def spectralize(
     >>> materials = np.random.default_rng(1).random((2, 8))
     >>> truth = materials[np.repeat([0, 1], 15)].reshape(6, 5, 8)  # two halves
     >>> known = PointSpectra(np.arange(30), truth.reshape(30, 8))
-    >>> result = spectralize(truth @ response, response, point_spectra=known, tol=1e-10)
-    >>> bool(np.allclose(result.spectra, truth, atol=1e-5))
-    True
+    >>> result = reconstruct(truth @ response, response, point_spectra=known, tol=1e-10)
+    >>> bool(np.allclose(result.spectra, truth, atol=1e-5)), result.solver
+    (True, 'multigrid')
     """
     if solver not in SOLVERS:
         raise SpectwinInputError(f"solver: expected one of {SOLVERS}, got {solver!r}")
@@ -602,3 +604,67 @@ def spectralize(
         graph_added=problem.graph_added,
         timings_s=timings,
     )
+
+
+def spectralize(
+    rgb: np.ndarray,
+    response: np.ndarray,
+    *,
+    known_pixels: np.ndarray | None = None,
+    known_spectra: np.ndarray | SampledSpectra | None = None,
+    band_images: Sequence[BandImage] | None = None,
+    appearance: str = "rgb",
+    k: int = 3,
+    **options,
+) -> np.ndarray:
+    """Spectral image from RGB plus known spectra and/or noisy band images (the project's
+    stable entry point; thesis Eq. 6.10 and 10.12).
+
+    Parameters
+    ----------
+    rgb
+        ``(H, W, C)`` or ``(N, H, W, C)`` camera values.
+    response
+        ``(K, C)`` :math:`R_{cam}` on the cube's grid.
+    known_pixels, known_spectra
+        Flat indices into the ``(N,) H, W`` pixels and their ``(n, K)`` spectra (Eq. 6.10).
+    band_images
+        Noisy band images for Eq. 10.1/10.12 (:class:`BandImage`).
+    appearance, k
+        Appearance space (Eq. 6.4-6.6) and neighbours per pixel (section 6.2).
+    **options
+        Passed on to :func:`reconstruct` (``solver``, ``tol``, ``weights``, ``p_dyn``,
+        ``device_integrals``, ``appearance_options``, ``initial``, ``progress``, ...).
+
+    Returns
+    -------
+    numpy.ndarray
+        The cube: the leading shape of ``rgb``, then ``K`` bands.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> response = np.random.default_rng(0).random((8, 3))
+    >>> materials = np.random.default_rng(1).random((2, 8))
+    >>> truth = materials[np.repeat([0, 1], 15)].reshape(6, 5, 8)
+    >>> cube = spectralize(truth @ response, response, known_pixels=np.arange(30),
+    ...                    known_spectra=truth.reshape(30, 8), tol=1e-10)
+    >>> bool(np.allclose(cube, truth, atol=1e-5))
+    True
+    """
+    if (known_pixels is None) != (known_spectra is None):
+        raise SpectwinInputError(
+            "known_pixels, known_spectra: give both (indices and their spectra) or neither"
+        )
+    point_spectra = None
+    if known_pixels is not None:
+        point_spectra = PointSpectra(np.asarray(known_pixels), known_spectra)
+    return reconstruct(
+        rgb,
+        response,
+        point_spectra=point_spectra,
+        band_images=() if band_images is None else band_images,
+        appearance=appearance,
+        neighbours=k,
+        **options,
+    ).spectra

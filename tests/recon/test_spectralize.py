@@ -18,6 +18,7 @@ from recon.spectralize import (
     EnergyWeights,
     PointSpectra,
     build_problem,
+    reconstruct,
     spectralize,
 )
 from recon.synthetic_images import material_mosaic
@@ -54,7 +55,7 @@ def test_every_spectrum_known_and_no_noise_is_exact(mosaic):
     response = mosaic[2]
     flat = image.reshape(-1, image.shape[-1])
     known = PointSpectra(np.arange(flat.shape[0]), flat)
-    result = spectralize(image @ response, response, point_spectra=known, tol=1e-10)
+    result = reconstruct(image @ response, response, point_spectra=known, tol=1e-10)
     assert result.solver == "multigrid" and result.converged
     assert relative_error(result.spectra, image).mean() < 0.1
     # With shading, neighbours differ and the prior pulls (0.13 % at equal weights); a
@@ -62,8 +63,8 @@ def test_every_spectrum_known_and_no_noise_is_exact(mosaic):
     shaded = mosaic[0]
     flat = shaded.reshape(-1, shaded.shape[-1])
     known = PointSpectra(np.arange(flat.shape[0]), flat)
-    equal = spectralize(shaded @ response, response, point_spectra=known, tol=1e-10)
-    heavy = spectralize(
+    equal = reconstruct(shaded @ response, response, point_spectra=known, tol=1e-10)
+    heavy = reconstruct(
         shaded @ response,
         response,
         point_spectra=known,
@@ -83,9 +84,9 @@ def test_solvers_reach_the_same_minimum_and_multigrid_beats_500_lsqr_iterations(
     pixels = _grid_pixels(image.shape[:2], 8)
     known = PointSpectra(pixels, image.reshape(-1, image.shape[-1])[pixels])
     common = {"point_spectra": known}
-    multigrid = spectralize(rgb, response, solver="multigrid", tol=1e-10, **common)
-    lsqr = spectralize(rgb, response, solver="lsqr", tol=1e-14, max_iterations=500, **common)
-    lsmr = spectralize(rgb, response, solver="lsmr", tol=1e-14, max_iterations=3000, **common)
+    multigrid = reconstruct(rgb, response, solver="multigrid", tol=1e-10, **common)
+    lsqr = reconstruct(rgb, response, solver="lsqr", tol=1e-14, max_iterations=500, **common)
+    lsmr = reconstruct(rgb, response, solver="lsmr", tol=1e-14, max_iterations=3000, **common)
     assert multigrid.energy <= lsqr.energy * (1 + 1e-9)
     assert lsmr.energy == pytest.approx(multigrid.energy, rel=1e-6)
     assert np.max(np.abs(lsmr.spectra - multigrid.spectra)) < 1e-3 * image.max()
@@ -176,8 +177,8 @@ def test_components_without_data_are_linked_and_determined(mosaic):
     linked = connect_components(graph, points, has_data)
     assert linked.added >= 1 and linked.n_links == graph.n_links + linked.added
     known = PointSpectra(pixels, flat[pixels])
-    first = spectralize(rgb, response, point_spectra=known, appearance="rgb", tol=1e-10)
-    warm = spectralize(
+    first = reconstruct(rgb, response, point_spectra=known, appearance="rgb", tol=1e-10)
+    warm = reconstruct(
         rgb,
         response,
         point_spectra=known,
@@ -197,7 +198,7 @@ def test_joint_reconstruction_spreads_spectra_to_an_image_without_data(mosaic):
     rgb = slices @ response
     pixels = _grid_pixels(image.shape[:2], 6)  # first image only
     known = PointSpectra(pixels, image.reshape(-1, image.shape[-1])[pixels])
-    result = spectralize(rgb, response, point_spectra=known, p_dyn=1.0, tol=1e-9)
+    result = reconstruct(rgb, response, point_spectra=known, p_dyn=1.0, tol=1e-9)
     assert result.spectra.shape == slices.shape
     second = relative_error(result.spectra[1], slices[1]).mean()
     assert second < 3.0, second
@@ -208,7 +209,7 @@ def test_noisy_band_images_with_filter_beat_the_raw_band_images(mosaic):
     rng = np.random.default_rng(6)
     noisy = image + 0.1 * image.mean() * rng.standard_normal(image.shape)
     bands = [BandImage(0, b, noisy[..., b], 1.0) for b in range(image.shape[-1])]
-    result = spectralize(
+    result = reconstruct(
         image @ response, response, band_images=bands, tol=1e-10, max_iterations=2000
     )
     assert result.solver == "lsmr"
@@ -227,7 +228,7 @@ def test_device_integrals_equal_point_spectra_for_single_pixel_readings(mosaic):
         (np.ones(columns.size), (np.arange(columns.size), columns)), shape=(columns.size, flat.size)
     )
     rgb = image @ response
-    via_device = spectralize(
+    via_device = reconstruct(
         rgb,
         response,
         device_integrals=DeviceIntegrals(weights, flat[pixels].ravel()),
@@ -235,7 +236,7 @@ def test_device_integrals_equal_point_spectra_for_single_pixel_readings(mosaic):
         tol=1e-14,
         max_iterations=5000,
     )
-    via_points = spectralize(
+    via_points = reconstruct(
         rgb, response, point_spectra=PointSpectra(pixels, flat[pixels]), tol=1e-10
     )
     assert np.max(np.abs(via_device.spectra - via_points.spectra)) < 1e-3
@@ -266,7 +267,7 @@ def test_bad_input_is_refused_with_a_clear_message(change, message):
     arguments.update(change)
     rgb, response = arguments.pop("rgb"), arguments.pop("response")
     with pytest.raises(SpectwinInputError, match=message):
-        spectralize(rgb, response, **arguments)
+        reconstruct(rgb, response, **arguments)
 
 
 def test_spectra_on_another_grid_are_refused():
@@ -274,16 +275,36 @@ def test_spectra_on_another_grid_are_refused():
     other = WavelengthGrid.regular(400, 720, 20)
     known = PointSpectra(np.array([0]), SampledSpectra(other, np.ones((1, other.size))))
     with pytest.raises(SpectwinInputError, match="resample"):
-        spectralize(np.ones((3, 3, 3)), response, point_spectra=known)
+        reconstruct(np.ones((3, 3, 3)), response, point_spectra=known)
 
 
 def test_progress_is_reported_for_both_solver_families(mosaic, capsys):
     image, _, response = mosaic
     pixels = _grid_pixels(image.shape[:2], 8)
     known = PointSpectra(pixels, image.reshape(-1, image.shape[-1])[pixels])
-    quiet = spectralize(image @ response, response, point_spectra=known, tol=1e-8)
-    shown = spectralize(image @ response, response, point_spectra=known, tol=1e-8, progress=True)
-    spectralize(image @ response, response, point_spectra=known, solver="lsmr", progress=True)
+    quiet = reconstruct(image @ response, response, point_spectra=known, tol=1e-8)
+    shown = reconstruct(image @ response, response, point_spectra=known, tol=1e-8, progress=True)
+    reconstruct(image @ response, response, point_spectra=known, solver="lsmr", progress=True)
     printed = capsys.readouterr().out
     assert "spectralize: band columns" in printed and "spectralize: lsmr" in printed
     assert np.array_equal(quiet.spectra, shown.spectra)
+
+
+def test_stable_entry_point_returns_the_cube_of_the_detailed_call(mosaic):
+    image, _, response = mosaic
+    pixels = _grid_pixels(image.shape[:2], 8)
+    flat = image.reshape(-1, image.shape[-1])
+    cube = spectralize(
+        image @ response, response, known_pixels=pixels, known_spectra=flat[pixels], tol=1e-9
+    )
+    detailed = reconstruct(
+        image @ response,
+        response,
+        point_spectra=PointSpectra(pixels, flat[pixels]),
+        appearance="rgb",
+        neighbours=3,
+        tol=1e-9,
+    )
+    assert isinstance(cube, np.ndarray) and np.array_equal(cube, detailed.spectra)
+    with pytest.raises(SpectwinInputError, match="give both"):
+        spectralize(image @ response, response, known_pixels=pixels)
