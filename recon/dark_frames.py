@@ -39,6 +39,7 @@ __all__ = [
     "EXTRAPOLATION",
     "average_dark_frames",
     "dark_frames_at",
+    "exposure_vector",
     "subtract_dark",
 ]
 
@@ -46,7 +47,8 @@ EXTRAPOLATION: tuple[str, ...] = ("none", "linear")
 """Policies for exposure times outside the dark frames' range: refuse, or continue linearly."""
 
 
-def _exposure_vector(name: str, exposure_s: object) -> np.ndarray:
+def exposure_vector(name: str, exposure_s: object) -> np.ndarray:
+    """Exposure times in seconds (a scalar or a 1-D vector), finite and positive."""
     try:
         times = np.asarray(exposure_s, dtype=np.float64)
     except (TypeError, ValueError) as error:
@@ -104,7 +106,7 @@ def average_dark_frames(
     ([0.5, 1.0], [11.0, 21.0])
     """
     frames = _stack("dark_frames", dark_frames)
-    times = _exposure_vector("exposure_s", exposure_s)
+    times = exposure_vector("exposure_s", exposure_s)
     if times.ndim != 1 or times.size != frames.shape[0]:
         raise SpectwinInputError(
             f"exposure_s: expected one exposure time per dark frame ({frames.shape[0]}), got "
@@ -118,7 +120,7 @@ def average_dark_frames(
 
 
 def _dark_model(dark_exposure_s: object, mean_dark_frames: object) -> tuple[np.ndarray, np.ndarray]:
-    times = _exposure_vector("dark_exposure_s", dark_exposure_s)
+    times = exposure_vector("dark_exposure_s", dark_exposure_s)
     times = np.atleast_1d(times)
     means = _stack("mean_dark_frames", mean_dark_frames).astype(np.float64, copy=False)
     if means.shape[0] != times.size:
@@ -173,7 +175,7 @@ def dark_frames_at(
     40.0
     """
     times, means = _dark_model(dark_exposure_s, mean_dark_frames)
-    wanted = _exposure_vector("exposure_s", exposure_s)
+    wanted = exposure_vector("exposure_s", exposure_s)
     if extrapolate not in EXTRAPOLATION:
         raise SpectwinInputError(
             f"extrapolate: expected one of {EXTRAPOLATION}, got {extrapolate!r}"
@@ -243,7 +245,7 @@ def subtract_dark(
         raise SpectwinInputError(f"frames: expected real pixel values, got dtype {values.dtype}")
     if values.dtype.kind == "f" and not np.all(np.isfinite(values)):
         raise SpectwinInputError("frames: expected finite values, found NaN or infinity")
-    wanted = _exposure_vector("exposure_s", exposure_s)
+    wanted = exposure_vector("exposure_s", exposure_s)
     pixel_shape = means.shape[1:]
     expected = pixel_shape if wanted.ndim == 0 else (wanted.size,) + pixel_shape
     if values.shape != expected:

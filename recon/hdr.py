@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from recon.dark_frames import exposure_vector
 from recon.errors import SpectwinInputError
 
 __all__ = [
@@ -51,23 +52,14 @@ WEIGHTINGS: tuple[str, ...] = ("gaussian", "hat", "uniform")
 
 def _exposures(exposure_s: object, count: int | None = None) -> np.ndarray:
     """Exposure times as a finite, positive float64 vector (``count`` entries when given)."""
-    try:
-        times = np.asarray(exposure_s, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise SpectwinInputError(
-            f"exposure_s: expected a vector of exposure times in seconds, got {exposure_s!r}"
-        ) from error
-    if times.ndim != 1 or times.size == 0:
+    times = exposure_vector("exposure_s", exposure_s)
+    if times.ndim != 1:
         raise SpectwinInputError(
             f"exposure_s: expected a 1-D vector of exposure times, got shape {times.shape}"
         )
     if count is not None and times.size != count:
         raise SpectwinInputError(
             f"exposure_s: expected one exposure time per frame ({count}), got {times.size}"
-        )
-    if not np.all(np.isfinite(times)) or np.any(times <= 0):
-        raise SpectwinInputError(
-            f"exposure_s: expected finite, positive exposure times in seconds, got {times}"
         )
     return times
 
