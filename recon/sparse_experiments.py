@@ -155,6 +155,11 @@ def run_protocol(
     return ProtocolResult(maps, estimates, int(pixels.size))
 
 
+def _curves(results: list[ProtocolResult], methods: Sequence[str]) -> dict[str, list[float]]:
+    """Mean relative error per method along a sweep of protocol runs."""
+    return {name: [result.mean_errors[name] for result in results] for name in methods}
+
+
 def spot_count_sweep(
     truth: np.ndarray,
     response: np.ndarray,
@@ -165,15 +170,18 @@ def spot_count_sweep(
     seed: int = 0,
 ) -> dict[str, list[float]]:
     """Mean relative error per method against the number of whisk-broom spots (Fig. 7.9)."""
-    curves: dict[str, list[float]] = {name: [] for name in methods}
-    for count in counts:
-        mask = whisk_broom_mask(truth.shape[:2], n_spots=int(count))
-        result = run_protocol(
-            truth, response, mask, noise_fraction=noise_fraction, methods=methods, seed=seed
+    results = [
+        run_protocol(
+            truth,
+            response,
+            whisk_broom_mask(truth.shape[:2], n_spots=int(count)),
+            noise_fraction=noise_fraction,
+            methods=methods,
+            seed=seed,
         )
-        for name, value in result.mean_errors.items():
-            curves[name].append(value)
-    return curves
+        for count in counts
+    ]
+    return _curves(results, methods)
 
 
 def noise_sweep(
@@ -186,11 +194,10 @@ def noise_sweep(
 ) -> dict[str, list[float]]:
     """Mean relative error per method against RGB noise, 250 whisk-broom spots (Fig. 7.10)."""
     mask = whisk_broom_mask(truth.shape[:2])
-    curves: dict[str, list[float]] = {name: [] for name in methods}
-    for fraction in noise_fractions:
-        result = run_protocol(
+    results = [
+        run_protocol(
             truth, response, mask, noise_fraction=float(fraction), methods=methods, seed=seed
         )
-        for name, value in result.mean_errors.items():
-            curves[name].append(value)
-    return curves
+        for fraction in noise_fractions
+    ]
+    return _curves(results, methods)
