@@ -17,6 +17,7 @@ turns true only when every step is done.
 
 from __future__ import annotations
 
+import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -105,7 +106,11 @@ class CaptureStore:
             raise BridgeInputError(
                 f"plan: steps name cameras {unknown} that are not among {sorted(cameras)}"
             )
-        group = zarr.open_group(str(path), mode="w-", zarr_format=3)
+        # Build the store beside its final name and rename it into place when its plan and
+        # progress exist: a session killed while creating leaves no half-made store behind.
+        building = path.with_name(f".{path.name}.creating")
+        shutil.rmtree(building, ignore_errors=True)
+        group = zarr.open_group(str(building), mode="w-", zarr_format=3)
         group.attrs.update(
             {
                 "rig": rig,
@@ -150,7 +155,8 @@ class CaptureStore:
         group.create_array(
             "progress", shape=(len(plan),), chunks=(1,), dtype="bool", fill_value=False
         )
-        return cls(group, path)
+        building.rename(path)
+        return cls(zarr.open_group(str(path), mode="r+"), path)
 
     @classmethod
     def open(cls, path: str | Path) -> CaptureStore:

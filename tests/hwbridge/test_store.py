@@ -93,3 +93,20 @@ def test_bad_input_is_refused_and_nothing_is_overwritten(tmp_path):
         CaptureStore.create(
             tmp_path / "b.zarr", rig={}, backend="dream", seed=0, plan=PLAN, cameras=CAMERAS
         )
+
+
+def test_a_creation_that_fails_midway_leaves_no_store_behind(tmp_path):
+    path = tmp_path / "run.capture.zarr"
+    # A camera whose frame shape zarr refuses fails after the plan was already written.
+    with pytest.raises(Exception):  # noqa: B017 (whatever zarr raises for a negative shape)
+        CaptureStore.create(
+            path,
+            rig={"rig": "gonioreflectometer"},
+            backend="sim",
+            seed=7,
+            plan=PLAN,
+            cameras={"k4": (8, 6), "rgb0": (-4, 4)},
+        )
+    assert not path.exists()  # so a resume cannot meet a store without progress
+    store = _new(tmp_path)  # the same name can be created afresh
+    assert store.pending_steps() == [0, 1, 2]
