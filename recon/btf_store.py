@@ -249,6 +249,14 @@ class BTFStore:
             attributes={"units": "nm"},
         )
         wavelengths[:] = grid.wavelengths_nm
+        group.create_array(
+            "corners_xy",
+            shape=(n_pairs, 4, 2),
+            chunks=(1, 4, 2),
+            dtype="float64",
+            fill_value=np.nan,
+            attributes={"units": "px", "meaning": "registered image corners of the texture square"},
+        )
         # Created last: a store whose creation was interrupted lacks it and does not open.
         group.create_array("written", shape=(n_pairs,), chunks=(1,), dtype="bool", fill_value=False)
         return cls(group, path, writable=True)
@@ -321,6 +329,7 @@ class BTFStore:
         grid: WavelengthGrid | None = None,
         light_dir: np.ndarray | None = None,
         view_dir: np.ndarray | None = None,
+        corners_xy: np.ndarray | None = None,
     ) -> None:
         """Write the texture of direction ``pair``, then flag it written.
 
@@ -339,6 +348,9 @@ class BTFStore:
         light_dir, view_dir
             The pair's directions as the caller knows them; when given they must match the
             store's (within 1e-6), a guard against writing a texture into the wrong slot.
+        corners_xy
+            ``(4, 2)`` image corners ``(x, y)`` of the texture square in the raw frames, when the
+            texture was registered (thesis 4.1.2); kept for checks, see :meth:`corners_xy`.
         """
         self._require_writable()
         pair = self._check_pair(pair)
@@ -384,10 +396,23 @@ class BTFStore:
             self._known_written[pair] = False
         self._drop_compressed()
         self._group["reflectance"][pair] = values
+        if corners_xy is not None:
+            corners = np.asarray(corners_xy, dtype=np.float64)
+            if corners.shape != (4, 2) or not np.all(np.isfinite(corners)):
+                raise SpectwinInputError(
+                    f"corners_xy: expected finite (4, 2) image corners, got shape {corners.shape}"
+                )
+            self._group["corners_xy"][pair] = corners
         written[pair] = True
         self._known_written[pair] = True
         if self._all_written():
             self._set_complete(True)
+
+    def corners_xy(self) -> np.ndarray:
+        """``(n_pairs, 4, 2)`` registered image corners per pair (NaN where none were given)."""
+        if "corners_xy" not in self._group:
+            return np.full((self.n_pairs, 4, 2), np.nan)
+        return self._group["corners_xy"][:]
 
     def mark_complete(self) -> None:
         """Recompute the complete flag from the pair flags (after writers in other processes);

@@ -7,7 +7,8 @@ then vary with the flicker phase, as on the real rig (thesis 3.2.2).
 
 - :class:`WhiteReferenceSignal`: the Zenith white standard facing the lamp (analytic, uniform).
 - :class:`RenderedGonioSignal`: the material on its holder rendered by Mitsuba for the view the
-  positioner has set; renders are cached per view (one per lamp part, all bands at once).
+  positioner has set; the renders of the current view are kept (one per lamp part, all bands at
+  once), so a plan that goes view by view renders each view once.
 """
 
 from __future__ import annotations
@@ -43,6 +44,11 @@ class WhiteReferenceSignal:
         )
         self._lamp, self._shape = lamp, (sensor.height, sensor.width)
 
+    def rates_e_per_s(self) -> np.ndarray:
+        """Mean photo-electrons per second and pixel in each band ``(n_bands,)``, averaged over
+        whole flicker periods."""
+        return self._lamp.part_exposure_s(0.0, 1.0) @ self._rates
+
     def __call__(self, rig: VirtualRig, start_s: float, exposure_s: float) -> np.ndarray:
         weights = self._lamp.part_exposure_s(start_s, exposure_s)
         electrons = weights @ self._rates[:, _band_index(self._bands_nm, rig.band_nm)]
@@ -69,8 +75,9 @@ class RenderedGonioSignal:
         self._cache: dict[int, np.ndarray] = {}
 
     def rates(self, view_id: int) -> np.ndarray:
-        """Photo-electron rates ``(n_parts, H, W, n_bands)`` of a view, rendered once."""
+        """Photo-electron rates ``(n_parts, H, W, n_bands)`` of a view (the last view's kept)."""
         if view_id not in self._cache:
+            self._cache.clear()
             self._cache[view_id] = gonio_part_rates(
                 self._config,
                 self._poses[view_id],

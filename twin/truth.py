@@ -95,13 +95,25 @@ def truth_btf(
     *,
     texels: int = 64,
     bands: WavelengthGrid = DEFAULT_GRID,
+    passbands: SampledSpectra | None = None,
     spp: int = 64,
     seed: int = 0,
 ) -> np.ndarray:
-    """True reflectance BTF ``(n_pairs, texels, texels, n_bands)`` in 1/sr."""
+    """True reflectance BTF ``(n_pairs, texels, texels, n_bands)`` in 1/sr.
+
+    Each band is the reflectance averaged over its passband: by default Gaussians of 10 nm FWHM
+    at ``bands`` (:func:`band_passbands`); an instrument's own weighting (filter x sensor x
+    lamp, each row of unit area on ``FINE_GRID``) gives the values that instrument measures.
+    """
     light_dirs, view_dirs = _check_directions(light_dirs, view_dirs)
     flat = SampledSpectra(FINE_GRID, np.ones(FINE_GRID.size))
-    passbands = band_passbands(bands)
+    if passbands is None:
+        passbands = band_passbands(bands)
+    elif passbands.grid != FINE_GRID or passbands.values.ndim != 2:
+        raise SpectwinInputError(
+            f"passbands: expected (n_bands, K) rows on {FINE_GRID.describe()}, got "
+            f"{passbands.values.shape} on {passbands.grid.describe()}"
+        )
     images = [
         _render(material, light, view, passbands, flat, texels, spp, seed) / light[2]
         for light, view in zip(light_dirs, view_dirs, strict=True)

@@ -1,0 +1,165 @@
+"""Measurement run -> registered, calibrated spectral BTF (thesis 3.3 and 4.1.2).
+
+For a capture store of one measurement run (``dark``, ``white`` and ``sample`` frames; the lamp
+monitor with every lit frame) and the camera calibration (:mod:`recon.gonio_calibration`):
+
+1. dark model of the run; :math:`F'_\\lambda` of the run from its white photographs (Eq. 3.6);
+   the lamp monitor's mean spectrum over the white photographs is the drift reference;
+2. per direction pair ``i``: linear signal per band :math:`\\hat f^{-1}(p) - \\hat f^{-1}(d)`,
+   :math:`F_{i,long}` from the pair's monitor spectra, and Eq. 3.6,
+   :math:`F'_\\lambda F_{i,long} \\hat f^{-1}(\\cdot) / t_\\lambda`; the white standard faced the
+   lamp, so this is radiance over normal irradiance and is divided by :math:`\\cos\\theta_i` to
+   give the BRDF in 1/sr;
+3. registration of the pair on its band mean (:func:`recon.registration.register_frame`, with the
+   rig's approximate corners to order them), the texture square of the sample (a known fraction
+   of the marks' square, centred) mapped to ``texels x texels`` (bilinear);
+4. the texture written to the BTF store, pair by pair (an interrupted run resumes).
+
+The capture's ``rig`` attribute supplies the nominal directions (``light_dirs``, ``view_dirs``),
+``expected_corners_xy``, ``sample_fraction``, ``white_view_id`` and the material's name.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from hwbridge.store import CaptureStore
+from recon.btf_store import BTFStore
+from recon.capture_io import select_frames
+from recon.corner_refinement import texture_transform
+from recon.errors import SpectwinInputError
+from recon.gonio_calibration import GonioCalibration, dark_model, white_reflectance
+from recon.progress import progress_steps
+from recon.registration import extract_texture, register_frame
+from recon.spectral_calibration import drift_factors, reflectance, run_white_factors
+
+__all__ = ["inset_corners", "process_gonio"]
+
+_RIG_KEYS = (
+    "light_dirs",
+    "view_dirs",
+    "expected_corners_xy",
+    "sample_fraction",
+    "white_view_id",
+    "material",
+)
+
+
+def inset_corners(corners_xy: np.ndarray, fraction: float) -> np.ndarray:
+    """Image corners of the centred sub-square of side ``fraction`` of the registered square
+    (the sample inside its registration marks), through the marks' homography."""
+    if not 0 < fraction <= 1:
+        raise SpectwinInputError(f"sample_fraction: expected a fraction in (0, 1], got {fraction}")
+    margin = (1 - fraction) / 2
+    square = np.array([[0.0, 0.0], [1, 0], [1, 1], [0, 1]]) * fraction + margin
+    return texture_transform(corners_xy).inverse(square)
+
+
+def _rig(store: CaptureStore) -> dict:
+    rig = store.attrs["rig"]
+    missing = [key for key in _RIG_KEYS if key not in rig]
+    if missing:
+        raise SpectwinInputError(
+            f"{store.path}: the capture's rig attribute lacks {missing}; expected a measurement "
+            "run of the gonioreflectometer (spectwin capture --program gonio-run)"
+        )
+    return rig
+
+
+def _pair_frames(store: CaptureStore, camera: str, view: int, bands_nm: np.ndarray):
+    index = store.index(camera)
+    slots = np.flatnonzero((index["kind"] == "sample") & (index["view_id"] == view))
+    slots = slots[np.argsort(index["band_nm"][slots])]
+    if not np.allclose(index["band_nm"][slots], bands_nm):
+        raise SpectwinInputError(
+            f"{store.path}: pair {view} has bands {index['band_nm'][slots].tolist()}, the "
+            f"calibration {bands_nm.tolist()}"
+        )
+    frames = store.frames(camera)
+    stack = np.stack([frames[slot] for slot in slots])
+    return stack, index["exposure_s"][slots], index["lamp_monitor"][slots]
+
+
+def process_gonio(
+    capture: str | Path | CaptureStore,
+    calibration: GonioCalibration,
+    out: str | Path,
+    *,
+    texels: int = 128,
+    manual_corners: dict[str, np.ndarray] | None = None,
+    resume: bool = False,
+    show_progress: bool = False,
+) -> BTFStore:
+    """Turn a measurement run into a BTF store (see the module docstring).
+
+    Parameters
+    ----------
+    capture
+        The run's capture store (complete).
+    calibration
+        From :func:`recon.gonio_calibration.calibrate_gonio` (response curve, band grid).
+    out
+        BTF store to create (``<name>.btf.zarr``); with ``resume`` an existing one is continued.
+    texels
+        Texture resolution (texels per side of the sample).
+    manual_corners
+        Corner file contents (:func:`recon.registration.read_manual_corners`) keyed by
+        ``"pair<i>"`` for frames where detection fails.
+    """
+    store = capture if isinstance(capture, CaptureStore) else CaptureStore.open(capture)
+    rig = _rig(store)
+    camera = str(rig.get("camera_id", "k4"))
+    bands = calibration.bands_nm
+    curve = calibration.inverse_response
+    darks = dark_model(store, camera)
+    white = select_frames(store, camera, kind="white")
+    order = np.argsort(white.band_nm)
+    if not np.allclose(white.band_nm[order], bands):
+        raise SpectwinInputError(
+            f"{store.path}: white photographs at {white.band_nm[order].tolist()} nm, the "
+            f"calibration has {bands.tolist()} nm"
+        )
+    white_signal = darks.linear_signal(white.frames[order], white.exposure_s[order], curve)
+    factors = run_white_factors(
+        white_signal, white.exposure_s[order], white_reflectance(rig, bands)
+    )
+    index = store.index(camera)
+    reference = index["lamp_monitor"][index["kind"] == "white"].astype(np.float64).mean(axis=0)
+    light_dirs = np.asarray(rig["light_dirs"], np.float64)
+    view_dirs = np.asarray(rig["view_dirs"], np.float64)
+    expected = np.asarray(rig["expected_corners_xy"], np.float64)
+    if resume and Path(out).exists():
+        btf = BTFStore.open(out, writable=True)
+    else:
+        btf = BTFStore.create(
+            out,
+            light_dirs=light_dirs,
+            view_dirs=view_dirs,
+            texels=texels,
+            grid=calibration.grid,
+            material=str(rig["material"]),
+            source_capture=store.path,
+            calibration={"run_factors": factors.tolist(), "source": calibration.source},
+        )
+    pending = btf.pending_pairs()
+    with progress_steps("process", len(pending), enabled=show_progress) as advance:
+        for pair in pending:
+            frames, exposure, monitor = _pair_frames(store, camera, pair, bands)
+            drift = drift_factors(np.vstack([reference, monitor.astype(np.float64).mean(axis=0)]))
+            linear = darks.linear_signal(frames, exposure, curve)
+            brdf = reflectance(linear, exposure, factors, drift=float(drift[1]))
+            image = np.moveaxis(brdf / light_dirs[pair, 2], 0, -1)
+            corners = register_frame(
+                image,
+                frame_id=f"pair{pair}",
+                manual_corners=manual_corners,
+                expected_xy=expected[pair],
+            )
+            texture = extract_texture(
+                image, inset_corners(corners, float(rig["sample_fraction"])), resolution=texels
+            )
+            btf.write_pair(pair, texture, grid=calibration.grid, corners_xy=corners)
+            advance()
+    return btf
