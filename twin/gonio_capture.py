@@ -25,8 +25,13 @@ from pathlib import Path
 
 import numpy as np
 
-from hwbridge.plans import dark_series, gonio_sample_run, response_curve_series
-from hwbridge.plans import plan_start_times_s, white_reference_run
+from hwbridge.plans import (
+    dark_series,
+    gonio_sample_run,
+    plan_start_times_s,
+    response_curve_series,
+    white_reference_run,
+)
 from hwbridge.session import run_session
 from hwbridge.store import CaptureStore
 from recon.errors import SpectwinInputError
@@ -41,8 +46,7 @@ from twin.rig_config import GonioConfig, load_rig
 from twin.rig_signals import RenderedGonioSignal, WhiteReferenceSignal
 from twin.sample_holder import PRINT_OUTER_HALF_M, registration_corners
 from twin.sensor import Sensor
-from twin.sim_devices import SimCamera, SimPositioner, SimSpectrometer, SimTunableFilter
-from twin.sim_devices import VirtualRig
+from twin.sim_devices import SimCamera, SimPositioner, SimSpectrometer, SimTunableFilter, VirtualRig
 
 __all__ = [
     "CAMERA_ID",
@@ -190,10 +194,10 @@ def run_gonio_calibration(
 ) -> CaptureStore:
     """The calibration session (see the module docstring) into ``store``.
 
-    The response series photographs the colour checker on its holder (view 1, seen frontally, lit from 30 degrees; its
-    fields, card and print give the spread of radiances Robertson's method needs, a uniform
-    target only gives one value per exposure) at 1/15 s to 20 s at 550 nm, about 150 distinct whole numbers of flicker periods
-    (thesis 3.3: 200 exposures). The white
+    The response series photographs the colour checker on its holder (view 1, seen frontally,
+    lit from 30 degrees: its fields, card and print give the spread of radiances Robertson's
+    method needs, a uniform target gives one value per exposure) at 1/15 s to 20 s at 550 nm,
+    about 150 distinct whole numbers of flicker periods (thesis 3.3: 200 exposures). The white
     photographs (view 0) share one exposure time, the longest whole number of flicker periods
     that keeps the brightest band below ``white_fill`` of saturation (the operator's test shots).
     """
