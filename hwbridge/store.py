@@ -77,6 +77,9 @@ class CaptureStore:
         for camera in self._cameras:
             self._slots.append(counts.get(camera, 0))
             counts[camera] = counts.get(camera, 0) + 1
+        # Steps this writer has not seen done. Reading the progress flags touches one chunk per
+        # step, so mark_done consults this set and re-reads the flags only when it runs empty.
+        self._unseen: set[int] | None = None
 
     @classmethod
     def create(
@@ -201,8 +204,13 @@ class CaptureStore:
         """Flag ``step`` done; when every step is, the store is marked complete."""
         self._camera_and_slot(step)
         self._group["progress"][step] = True
-        if not self.pending_steps():
-            self._group.attrs["complete"] = True
+        if self._unseen is None:
+            self._unseen = set(self.pending_steps())
+        self._unseen.discard(step)
+        if not self._unseen:
+            self._unseen = set(self.pending_steps())
+            if not self._unseen:
+                self._group.attrs["complete"] = True
 
     # -- reading -------------------------------------------------------------------------------
 

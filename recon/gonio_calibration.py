@@ -200,6 +200,23 @@ class GonioCalibration:
         )
 
 
+def _response_series_curve(store: CaptureStore, camera: str, bit_depth: int) -> np.ndarray:
+    """Robertson's inverse response from the ``oecf`` frames; the series of each band is one
+    scene, all shot with the same exposure times."""
+    oecf = select_frames(store, camera, kind="oecf")
+    bands = np.unique(oecf.band_nm)
+    series = [np.flatnonzero(oecf.band_nm == band) for band in bands]
+    times = oecf.exposure_s[series[0]]
+    if any(not np.array_equal(oecf.exposure_s[s], times) for s in series):
+        raise SpectwinInputError(
+            f"{store.path}: the response series of bands {bands.tolist()} nm need the same "
+            "exposure times"
+        )
+    frames = np.stack([oecf.frames[s] for s in series], axis=1).astype(np.uint16)
+    curve, _ = robertson(frames, times, bit_depth=bit_depth)
+    return curve
+
+
 def calibrate_gonio(
     store: str | Path | CaptureStore,
     *,
@@ -228,11 +245,7 @@ def calibrate_gonio(
         raise SpectwinInputError(f"white_fill: expected a fraction in (0, 1), got {white_fill}")
     camera = str(store.attrs["rig"].get("camera_id", "k4"))
     darks = dark_model(store, camera)
-    oecf = select_frames(store, camera, kind="oecf")
-    curve, _ = robertson(
-        oecf.frames.astype(np.uint16), oecf.exposure_s, bit_depth=bit_depth, max_iterations=50
-    )
-    curve = extend_curve(curve)
+    curve = extend_curve(_response_series_curve(store, camera, bit_depth))
     white = select_frames(store, camera, kind="white")
     order = np.argsort(white.band_nm)
     bands = white.band_nm[order].astype(np.float64)

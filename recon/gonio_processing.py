@@ -68,8 +68,11 @@ def _rig(store: CaptureStore) -> dict:
     return rig
 
 
-def _pair_frames(store: CaptureStore, camera: str, view: int, bands_nm: np.ndarray):
-    index = store.index(camera)
+def _pair_frames(
+    store: CaptureStore, camera: str, index: dict, view: int, bands_nm: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Raw frames ``(K, H, W)`` of pair ``view`` in band order, their exposures and monitor
+    spectra."""
     slots = np.flatnonzero((index["kind"] == "sample") & (index["view_id"] == view))
     slots = slots[np.argsort(index["band_nm"][slots])]
     if not np.allclose(index["band_nm"][slots], bands_nm):
@@ -146,7 +149,7 @@ def process_gonio(
     pending = btf.pending_pairs()
     with progress_steps("process", len(pending), enabled=show_progress) as advance:
         for pair in pending:
-            frames, exposure, monitor = _pair_frames(store, camera, pair, bands)
+            frames, exposure, monitor = _pair_frames(store, camera, index, pair, bands)
             drift = drift_factors(np.vstack([reference, monitor.astype(np.float64).mean(axis=0)]))
             linear = darks.linear_signal(frames, exposure, curve)
             brdf = reflectance(linear, exposure, factors, drift=float(drift[1]))

@@ -10,6 +10,8 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from twin.gonio_cli import register as register_gonio
+
 app = typer.Typer(
     help="spectwin: a simulation-first digital twin of spectral reflectance capture rigs.",
     no_args_is_help=True,
@@ -199,46 +201,7 @@ def spectralize_study(
     console.print(f"wrote {out / 'study.json'} and the figures in {out}")
 
 
-@app.command()
-def capture(
-    store: Annotated[
-        Path, typer.Argument(help="Capture store to write, e.g. out/demo.capture.zarr.")
-    ],
-    seed: Annotated[int, typer.Option(help="Session seed (noise of every frame).")] = 0,
-    resume: Annotated[
-        bool, typer.Option("--resume", help="Continue an interrupted session.")
-    ] = False,
-    dry_run: Annotated[
-        bool, typer.Option("--dry-run", help="Print the plan and its duration only.")
-    ] = False,
-    fault_rate: Annotated[float, typer.Option(help="Injected device faults per call (0-1).")] = 0.0,
-    as_json: JsonFlag = False,
-) -> None:
-    """Capture the simulated gonio session (darks, 2 pairs x 33 bands); resume with --resume."""
-    from collections import Counter
-
-    from hwbridge.plans import estimate_duration_s
-    from twin.sim_session import demo_plan, run_demo_session
-
-    plan = demo_plan()
-    summary: dict[str, object] = {
-        "store": str(store),
-        "steps": len(plan),
-        "kinds": dict(Counter(step["kind"] for step in plan)),
-        "estimated_duration_s": round(estimate_duration_s(plan), 1),
-    }
-    if not dry_run:
-        result = run_demo_session(
-            store, seed, resume=resume, fault_rate=fault_rate, show_progress=not as_json
-        )
-        summary["complete"] = result.complete
-        summary["frames_with_faults"] = sum(
-            status != "ok" for status in result.index("k4")["status"]
-        )
-    if as_json:
-        typer.echo(json.dumps(summary, indent=2))
-        return
-    _print_table(summary, "capture (simulated backend)")
+register_gonio(app)
 
 
 if __name__ == "__main__":

@@ -63,8 +63,8 @@ CAMERA_ID = "k4"
 REDUCED_RINGS = ((0.0, 1), (30.0, 4), (60.0, 8))
 """13 directions (rings of polar angle 0, 30, 60 degrees): the reduced sampling of the twin's
 end-to-end check, 13 x 13 light x view combinations."""
-_OECF_BAND_NM = 550.0
-_OECF_EXPOSURES = 200  # thesis 3.3: 200 exposures for the response curve
+_OECF_BANDS_NM = (420.0, 450.0, 550.0, 650.0, 700.0)
+_OECF_EXPOSURES = 200  # per band; thesis 3.3: 200 exposures for the response curve
 _DARK_FRAMES = 8
 
 
@@ -196,7 +196,9 @@ def run_gonio_calibration(
 
     The response series photographs the colour checker on its holder (view 1, seen frontally,
     lit from 30 degrees: its fields, card and print give the spread of radiances Robertson's
-    method needs, a uniform target gives one value per exposure) at 1/15 s to 20 s at 550 nm,
+    method needs, a uniform target gives one value per exposure) at 1/15 s to 20 s in
+    five bands (420-700 nm: five scenes for Robertson's method, the weak blue band fills the low
+    levels),
     about 150 distinct whole numbers of flicker periods (thesis 3.3: 200 exposures). The white
     photographs (view 0) share one exposure time, the longest whole number of flicker periods
     that keeps the brightest band below ``white_fill`` of saturation (the operator's test shots).
@@ -209,11 +211,11 @@ def run_gonio_calibration(
     saturation_s = sensor.saturation_capacity_e / white.rates_e_per_s()
     white_s = max(np.floor(white_fill * saturation_s.min() / HMI_FLICKER_PERIOD_S), 1)
     white_s *= HMI_FLICKER_PERIOD_S
-    oecf_band = float(bands[np.argmin(np.abs(bands - _OECF_BAND_NM))])
     oecf_s = _flicker_multiples(np.geomspace(HMI_FLICKER_PERIOD_S, 20.0, _OECF_EXPOSURES))
     plan = dark_series(CAMERA_ID, [white_s], _DARK_FRAMES)
     oecf = response_curve_series(CAMERA_ID, oecf_s)
-    plan += _with_view([{**step, "band_nm": oecf_band} for step in oecf], 1)
+    for band in _OECF_BANDS_NM:
+        plan += _with_view([{**step, "band_nm": band} for step in oecf], 1)
     plan += _with_view(white_reference_run(CAMERA_ID, bands, np.full(bands.size, white_s)), 0)
     (chart_pose,) = GonioPairs(config, direction(30.0, 0.0)[None], direction(0.0, 0.0)[None]).poses
     chart = RenderedGonioSignal(

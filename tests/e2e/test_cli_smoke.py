@@ -103,4 +103,4 @@ def test_capture_dry_run_then_capture_then_refuse_to_overwrite(tmp_path):
     assert done.exit_code == 0, done.output
     assert json.loads(done.output)["complete"] is True
     again = runner.invoke(app, ["capture", str(store)])
-    assert again.exit_code != 0 and "exists" in str(again.exception)
+    assert again.exit_code == 2 and "exists" in again.output

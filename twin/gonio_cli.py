@@ -1,0 +1,241 @@
+"""``spectwin`` commands of the gonioreflectometer pipeline: capture, calibrate, process, evaluate.
+
+A full twin run at reduced sampling (thesis 3.3 and 4.1)::
+
+    spectwin capture out/cal.capture.zarr --program gonio-calibration
+    spectwin calibrate out/cal.capture.zarr --out out/cal.json
+    spectwin capture out/run.capture.zarr --program gonio-run --calibration out/cal.json
+    spectwin process out/run.capture.zarr --calibration out/cal.json --out out/cc.btf.zarr
+    spectwin evaluate out/cc.btf.zarr --figure out/cc_vs_truth.png
+"""
+
+from __future__ import annotations
+
+import json
+from collections import Counter
+from enum import StrEnum
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.table import Table
+
+__all__ = ["register"]
+
+console = Console()
+JsonFlag = Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")]
+
+
+class Program(StrEnum):
+    demo = "demo"
+    gonio_calibration = "gonio-calibration"
+    gonio_run = "gonio-run"
+
+
+def _print(summary: dict[str, object], title: str, as_json: bool) -> None:
+    if as_json:
+        typer.echo(json.dumps(summary, indent=2))
+        return
+    table = Table("quantity", "value", title=title)
+    for key, value in summary.items():
+        table.add_row(key, str(value))
+    console.print(table)
+
+
+def _fail(message: str) -> None:
+    console.print(f"[red]error:[/red] {message}")
+    raise typer.Exit(code=2)
+
+
+def capture(
+    store: Annotated[
+        Path, typer.Argument(help="Capture store to write, e.g. out/run.capture.zarr.")
+    ],
+    program: Annotated[
+        Program,
+        typer.Option(
+            help="demo: darks + 2 pairs x 33 bands of the white standard; gonio-calibration: "
+            "darks, response series, white standard; gonio-run: a measurement run "
+            "(needs --calibration)."
+        ),
+    ] = Program.demo,
+    calibration: Annotated[
+        Path | None, typer.Option(help="spectwin calibrate's JSON: the band exposure plan.")
+    ] = None,
+    material: Annotated[str, typer.Option(help="Material on the holder.")] = "colorchecker16",
+    pixels: Annotated[int, typer.Option(help="Rendered window, pixels per side.")] = 256,
+    spp: Annotated[int, typer.Option(help="Samples per pixel of the renders.")] = 64,
+    seed: Annotated[int, typer.Option(help="Session seed (noise of every frame).")] = 0,
+    resume: Annotated[
+        bool, typer.Option("--resume", help="Continue an interrupted session.")
+    ] = False,
+    dry_run: Annotated[
+        bool, typer.Option("--dry-run", help="Demo program: print the plan and its duration.")
+    ] = False,
+    fault_rate: Annotated[
+        float, typer.Option(help="Demo program: injected device faults per call (0-1).")
+    ] = 0.0,
+    as_json: JsonFlag = False,
+) -> None:
+    """Capture a simulated gonioreflectometer session into a capture store (resumable).
+
+    Example: spectwin capture out/run.capture.zarr --program gonio-run --calibration cal.json
+    """
+    from hwbridge.errors import BridgeInputError
+    from hwbridge.plans import estimate_duration_s
+    from recon.errors import SpectwinInputError
+
+    summary: dict[str, object] = {"store": str(store), "program": program.value}
+    try:
+        if program is Program.demo:
+            from twin.sim_session import demo_plan, run_demo_session
+
+            plan = demo_plan()
+            summary["estimated_duration_s"] = round(estimate_duration_s(plan), 1)
+            if dry_run:
+                summary |= {"steps": len(plan), "kinds": dict(Counter(s["kind"] for s in plan))}
+                _print(summary, "capture (dry run)", as_json)
+                return
+            result = run_demo_session(
+                store, seed, resume=resume, fault_rate=fault_rate, show_progress=not as_json
+            )
+        elif program is Program.gonio_calibration:
+            from twin.gonio_capture import run_gonio_calibration
+
+            result = run_gonio_calibration(
+                store, seed=seed, resume=resume, show_progress=not as_json
+            )
+        else:
+            from recon.gonio_calibration import GonioCalibration
+            from twin.gonio_capture import run_gonio_measurement
+
+            if calibration is None:
+                _fail("--program gonio-run needs --calibration (the JSON of spectwin calibrate)")
+            plan = GonioCalibration.load(calibration)
+            result = run_gonio_measurement(
+                store,
+                plan.planned_exposure_s,
+                material=material,
+                pixels=pixels,
+                spp=spp,
+                seed=seed,
+                resume=resume,
+                show_progress=not as_json,
+            )
+    except (SpectwinInputError, BridgeInputError) as error:
+        _fail(str(error))
+    index = result.index(result.attrs["plan"][0]["camera"])
+    summary |= {
+        "complete": result.complete,
+        "frames": dict(Counter(index["kind"].tolist())),
+        "frames_with_faults": int(sum(status != "ok" for status in index["status"])),
+    }
+    _print(summary, "capture (simulated backend)", as_json)
+
+
+def calibrate(
+    store: Annotated[Path, typer.Argument(help="A gonio-calibration capture store.")],
+    out: Annotated[Path, typer.Option(help="Calibration JSON to write.")] = Path("cal.json"),
+    white_fill: Annotated[
+        float, typer.Option(help="Fraction of the range the white standard should reach.")
+    ] = 0.7,
+    as_json: JsonFlag = False,
+) -> None:
+    """Response curve (Robertson), white factors F' (Eq. 3.3) and the exposure plan (Eq. 3.4,
+    multiples of 1/15 s for the HMI lamp) from a calibration capture.
+
+    Example: spectwin calibrate out/cal.capture.zarr --out out/cal.json
+    """
+    from recon.errors import SpectwinInputError
+    from recon.gonio_calibration import calibrate_gonio
+
+    try:
+        with console.status("calibrating"):
+            result = calibrate_gonio(store, white_fill=white_fill)
+    except SpectwinInputError as error:
+        _fail(str(error))
+    result.save(out)
+    summary = {
+        "calibration": str(out),
+        "bands": int(result.bands_nm.size),
+        "base_s": round(result.base_s, 4),
+        "planned_exposure_s": np.round(result.planned_exposure_s, 4).tolist(),
+        "exposure_per_pair_s": round(float(result.planned_exposure_s.sum()), 3),
+        "all_multiples_of_1_15_s": bool(
+            np.allclose(result.planned_exposure_s * 15, np.round(result.planned_exposure_s * 15))
+        ),
+    }
+    _print(summary, "gonio calibration", as_json)
+
+
+def process(
+    store: Annotated[Path, typer.Argument(help="A gonio-run capture store.")],
+    calibration: Annotated[Path, typer.Option(help="spectwin calibrate's JSON.")],
+    out: Annotated[Path, typer.Option(help="BTF store to write (<name>.btf.zarr).")],
+    texels: Annotated[int, typer.Option(help="Texture resolution per side.")] = 128,
+    manual_corners: Annotated[
+        Path | None, typer.Option(help="Manual corner file for frames detection misses.")
+    ] = None,
+    resume: Annotated[
+        bool, typer.Option("--resume", help="Continue an interrupted process.")
+    ] = False,
+    as_json: JsonFlag = False,
+) -> None:
+    """Calibrate and register a measurement run into a spectral BTF store (Eq. 3.6, 4.1.2).
+
+    Example: spectwin process out/run.capture.zarr --calibration out/cal.json --out out/cc.btf.zarr
+    """
+    from recon.errors import SpectwinInputError
+    from recon.gonio_calibration import GonioCalibration
+    from recon.gonio_processing import process_gonio
+    from recon.registration import read_manual_corners
+
+    try:
+        corners = read_manual_corners(manual_corners) if manual_corners else None
+        btf = process_gonio(
+            store,
+            GonioCalibration.load(calibration),
+            out,
+            texels=texels,
+            manual_corners=corners,
+            resume=resume,
+            show_progress=not as_json,
+        )
+    except SpectwinInputError as error:
+        _fail(str(error))
+    summary = {"btf": str(out), "shape": list(btf.shape), "complete": btf.complete}
+    _print(summary, "gonio processing", as_json)
+
+
+def evaluate(
+    btf: Annotated[Path, typer.Argument(help="A BTF store made by spectwin process.")],
+    figure: Annotated[Path | None, typer.Option(help="PNG of errors and spectra.")] = None,
+    spp: Annotated[int, typer.Option(help="Samples per pixel of the truth renders.")] = 64,
+    as_json: JsonFlag = False,
+) -> None:
+    """Compare a processed BTF with the twin's true BTF: per-field Eq. 6.8, corner errors.
+
+    Example: spectwin evaluate out/cc.btf.zarr --figure out/cc_vs_truth.png --json
+    """
+    from recon.btf_store import BTFStore
+    from recon.errors import SpectwinInputError
+    from twin.gonio_evaluation import evaluate_gonio
+    from twin.gonio_report import write_gonio_figure
+
+    try:
+        with console.status("rendering the truth and comparing"):
+            result = evaluate_gonio(btf, spp=spp)
+    except SpectwinInputError as error:
+        _fail(str(error))
+    summary = result.summary()
+    if figure is not None:
+        summary["figure"] = str(write_gonio_figure(result, BTFStore.open(btf), figure))
+    _print(summary, "BTF vs the twin's truth", as_json)
+
+
+def register(app: typer.Typer) -> None:
+    """Add the commands to ``app``."""
+    for command in (capture, calibrate, process, evaluate):
+        app.command()(command)
