@@ -1,0 +1,262 @@
+"""A measured spectral BTF as a Mitsuba BSDF (Python plugin ``spectral_btf``), thesis 4.2.
+
+A BTF measured on a light x view product set of directions (Sattler's 81 x 81, or the twin's
+reduced 13 x 13) is rendered by interpolating, per shading point:
+
+- in direction: barycentric interpolation on the hemisphere, separately for the light and the
+  view direction (Delaunay triangulation of the directions' orthographic projections onto the
+  unit disk, precomputed on a ``resolution x resolution`` lookup grid; outside the measured
+  directions' hull the nearest direction is used), i.e. 3 x 3 measured pairs per lookup;
+- in space: bilinear between texels (texture coordinates ``uv`` of the shape, texel ``(i, j)``
+  at ``u = (j + 0.5) / W``, ``v = 1 - (i + 0.5) / H``: rows run from the sample's +y edge down,
+  as in the BTF store);
+- in wavelength: linear between bands, zero outside the grid.
+
+Pairs the rig could not measure (light and view too close) are filled from the nearest measured
+view of the same light. Directions use the shading frame (x = dp/du), as the BTF uses the
+sample frame. The BSDF samples the cosine-weighted hemisphere. A BTF sampled from a known BRDF
+renders like the BRDF itself (``tests/twin/test_btf_bsdf.py``).
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import Delaunay
+
+from recon.errors import SpectwinInputError
+from recon.spectra import WavelengthGrid
+from twin.variant import activate
+
+__all__ = ["BTFTable", "btf_bsdf", "hemisphere_lookup", "product_table"]
+
+_TABLES: dict[str, BTFTable] = {}
+_KEYS = itertools.count()
+
+
+@dataclass(frozen=True)
+class BTFTable:
+    """A BTF on a product set: ``values`` ``(n_lights, n_views, H, W, K)`` in 1/sr."""
+
+    light_dirs: np.ndarray
+    view_dirs: np.ndarray
+    values: np.ndarray
+    grid: WavelengthGrid
+
+    def __post_init__(self) -> None:
+        shape = self.values.shape
+        if (
+            len(shape) != 5
+            or shape[:2] != (len(self.light_dirs), len(self.view_dirs))
+            or shape[4] != self.grid.size
+        ):
+            raise SpectwinInputError(
+                f"values: expected (n_lights, n_views, H, W, K) = ({len(self.light_dirs)}, "
+                f"{len(self.view_dirs)}, H, W, {self.grid.size}), got {shape}"
+            )
+        if not np.all(np.isfinite(self.values)):
+            raise SpectwinInputError("values: expected finite reflectance")
+        steps = np.diff(self.grid.wavelengths_nm)
+        if steps.size and not np.allclose(steps, steps[0]):
+            raise SpectwinInputError("grid: expected a regular wavelength grid (resample first)")
+
+
+def _unique_directions(directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    rounded = np.round(np.asarray(directions, np.float64), 9)
+    unique, inverse = np.unique(rounded, axis=0, return_inverse=True)
+    return unique / np.linalg.norm(unique, axis=1, keepdims=True), inverse.ravel()
+
+
+def product_table(
+    light_dirs: np.ndarray, view_dirs: np.ndarray, reflectance: np.ndarray, grid: WavelengthGrid
+) -> BTFTable:
+    """Arrange pairs ``(n_pairs, H, W, K)`` (e.g. a BTF store's) on their light x view product
+    set; a missing combination takes the nearest measured view of the same light."""
+    lights, light_index = _unique_directions(light_dirs)
+    views, view_index = _unique_directions(view_dirs)
+    values = np.full((len(lights), len(views), *reflectance.shape[1:]), np.nan, np.float32)
+    values[light_index, view_index] = reflectance
+    measured = np.zeros((len(lights), len(views)), bool)
+    measured[light_index, view_index] = True
+    for light in range(len(lights)):
+        have = np.flatnonzero(measured[light])
+        if have.size == 0:
+            raise SpectwinInputError(f"light direction {lights[light].tolist()} has no views")
+        for view in np.flatnonzero(~measured[light]):
+            nearest = have[np.argmax(views[have] @ views[view])]
+            values[light, view] = values[light, nearest]
+    return BTFTable(lights, views, values, grid)
+
+
+def hemisphere_lookup(directions: np.ndarray, resolution: int = 128):
+    """Barycentric weights over ``directions`` on a grid over the unit disk.
+
+    Returns ``(indices, weights)``, each ``(resolution, resolution, 3)``: grid cell ``(a, b)``
+    holds the point ``x = -1 + (b + 0.5) 2 / resolution``, ``y = -1 + (a + 0.5) 2 / resolution``
+    of the orthographic projection (a direction's ``(x, y)``).
+    """
+    points = np.asarray(directions, np.float64)[:, :2]
+    centres = -1 + (np.arange(resolution) + 0.5) * 2 / resolution
+    x, y = np.meshgrid(centres, centres)
+    queries = np.column_stack([x.ravel(), y.ravel()])
+    indices = np.zeros((queries.shape[0], 3), np.int64)
+    weights = np.zeros((queries.shape[0], 3))
+    if len(points) >= 3:
+        triangulation = Delaunay(points)
+        simplex = triangulation.find_simplex(queries)
+        inside = simplex >= 0
+        transform = triangulation.transform[simplex[inside]]
+        partial = np.einsum("nij,nj->ni", transform[:, :2], queries[inside] - transform[:, 2])
+        weights[inside] = np.column_stack([partial, 1 - partial.sum(axis=1)])
+        indices[inside] = triangulation.simplices[simplex[inside]]
+    else:
+        inside = np.zeros(queries.shape[0], bool)
+    nearest = np.argmin(((queries[~inside, None] - points[None]) ** 2).sum(axis=2), axis=1)
+    indices[~inside] = nearest[:, None]
+    weights[~inside] = [1.0, 0.0, 0.0]
+    shape = (resolution, resolution, 3)
+    return indices.reshape(shape), np.clip(weights, 0, 1).reshape(shape)
+
+
+def btf_bsdf(table: BTFTable, *, resolution: int = 128) -> dict[str, object]:
+    """Scene-dict entry of the BSDF for ``table`` (registers the plugin)."""
+    _register_plugin()
+    key = f"btf{next(_KEYS)}"
+    _TABLES[key] = table
+    return {"type": "spectral_btf", "btf": key, "resolution": resolution}
+
+
+_REGISTERED = False
+
+
+def _register_plugin() -> None:
+    global _REGISTERED
+    if _REGISTERED:
+        return
+    activate()
+    import mitsuba as mi
+
+    plugin = _plugin_class()
+    mi.register_bsdf("spectral_btf", lambda props: plugin(props))
+    _REGISTERED = True
+
+
+def _plugin_class():
+    """The plugin class, built once the Mitsuba variant is set."""
+    import drjit as dr
+    import mitsuba as mi
+
+    class SpectralBTF(mi.BSDF):
+        def __init__(self, props):
+            super().__init__(props)
+            table = _TABLES[props["btf"]]
+            self._resolution = int(props.get("resolution", 128))
+            n_lights, n_views, height, width, bands = table.values.shape
+            self._shape = (n_views, height, width, bands)
+            self._values = mi.Float(table.values.astype(np.float32).ravel())
+            self._lookups = []
+            for directions in (table.light_dirs, table.view_dirs):
+                indices, weights = hemisphere_lookup(directions, self._resolution)
+                self._lookups.append(
+                    (mi.UInt32(indices.ravel().astype(np.uint32)), mi.Float(weights.ravel()))
+                )
+            wavelengths = table.grid.wavelengths_nm
+            self._first_nm = float(wavelengths[0])
+            self._step_nm = float(wavelengths[1] - wavelengths[0]) if bands > 1 else 1.0
+            flags = (
+                mi.BSDFFlags.DiffuseReflection
+                | mi.BSDFFlags.FrontSide
+                | mi.BSDFFlags.SpatiallyVarying
+            )
+            self.m_components = [flags]
+            self.m_flags = flags
+
+        def _corners(self, which, direction):
+            """Three (direction index, weight) of the lookup grid cell of ``direction``."""
+            indices, weights = self._lookups[which]
+            scale = self._resolution / 2
+            column = dr.clip(mi.Int32(dr.floor((direction.x + 1) * scale)), 0, self._resolution - 1)
+            row = dr.clip(mi.Int32(dr.floor((direction.y + 1) * scale)), 0, self._resolution - 1)
+            cell = mi.UInt32(row * self._resolution + column) * 3
+            return [
+                (dr.gather(mi.UInt32, indices, cell + k), dr.gather(mi.Float, weights, cell + k))
+                for k in range(3)
+            ]
+
+        def _texels(self, uv):
+            """Four (texel offset, weight) of the bilinear footprint of ``uv``."""
+            _, height, width, _ = self._shape
+            x = dr.clip(uv.x * width - 0.5, 0.0, width - 1.0)
+            y = dr.clip((1 - uv.y) * height - 0.5, 0.0, height - 1.0)
+            x0 = dr.minimum(mi.UInt32(x), max(width - 2, 0))
+            y0 = dr.minimum(mi.UInt32(y), max(height - 2, 0))
+            fx, fy = dr.clip(x - mi.Float(x0), 0, 1), dr.clip(y - mi.Float(y0), 0, 1)
+            x1, y1 = dr.minimum(x0 + 1, width - 1), dr.minimum(y0 + 1, height - 1)
+            return [
+                (y0 * width + x0, (1 - fx) * (1 - fy)),
+                (y0 * width + x1, fx * (1 - fy)),
+                (y1 * width + x0, (1 - fx) * fy),
+                (y1 * width + x1, fx * fy),
+            ]
+
+        def _reflectance(self, si, light, view, active):
+            n_views, height, width, bands = self._shape
+            value = mi.UnpolarizedSpectrum(0.0)
+            positions, lows, fractions, insides = [], [], [], []
+            for channel in range(4):
+                position = (si.wavelengths[channel] - self._first_nm) / self._step_nm
+                low = dr.minimum(mi.UInt32(dr.maximum(position, 0.0)), max(bands - 2, 0))
+                positions.append(position)
+                lows.append(low)
+                fractions.append(dr.clip(position - mi.Float(low), 0.0, 1.0))
+                insides.append((position >= 0) & (position <= bands - 1))
+            texels = self._texels(si.uv)
+            for light_index, light_weight in self._corners(0, light):
+                for view_index, view_weight in self._corners(1, view):
+                    pair = (light_index * n_views + view_index) * (height * width)
+                    for texel, texel_weight in texels:
+                        weight = light_weight * view_weight * texel_weight
+                        base = (pair + texel) * bands
+                        for channel in range(4):
+                            mask = active & insides[channel] & (weight > 0)
+                            first = dr.gather(mi.Float, self._values, base + lows[channel], mask)
+                            second = dr.gather(
+                                mi.Float,
+                                self._values,
+                                base + dr.minimum(lows[channel] + 1, bands - 1),
+                                mask,
+                            )
+                            sample = first + fractions[channel] * (second - first)
+                            value[channel] += dr.select(mask, weight * sample, 0.0)
+            return value
+
+        def sample(self, ctx, si, sample1, sample2, active=True):
+            cos_view = mi.Frame3f.cos_theta(si.wi)
+            bs = dr.zeros(mi.BSDFSample3f)
+            bs.wo = mi.warp.square_to_cosine_hemisphere(sample2)
+            bs.pdf = mi.warp.square_to_cosine_hemisphere_pdf(bs.wo)
+            bs.eta = 1.0
+            bs.sampled_type = mi.UInt32(+mi.BSDFFlags.DiffuseReflection)
+            bs.sampled_component = mi.UInt32(0)
+            active = active & (cos_view > 0) & (bs.pdf > 0)
+            value = self._reflectance(si, bs.wo, si.wi, active) * dr.pi
+            return bs, dr.select(active, value, 0.0)
+
+        def eval(self, ctx, si, wo, active=True):
+            cos_light = mi.Frame3f.cos_theta(wo)
+            active = active & (mi.Frame3f.cos_theta(si.wi) > 0) & (cos_light > 0)
+            return dr.select(active, self._reflectance(si, wo, si.wi, active) * cos_light, 0.0)
+
+        def pdf(self, ctx, si, wo, active=True):
+            active = active & (mi.Frame3f.cos_theta(si.wi) > 0)
+            return dr.select(active, mi.warp.square_to_cosine_hemisphere_pdf(wo), 0.0)
+
+        def eval_pdf(self, ctx, si, wo, active=True):
+            return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
+
+        def to_string(self):
+            return f"SpectralBTF[{self._shape}]"
+
+    return SpectralBTF
