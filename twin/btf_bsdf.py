@@ -10,7 +10,7 @@ reduced 13 x 13) is rendered by interpolating, per shading point:
 - in space: bilinear between texels (texture coordinates ``uv`` of the shape, texel ``(i, j)``
   at ``u = (j + 0.5) / W``, ``v = 1 - (i + 0.5) / H``: rows run from the sample's +y edge down,
   as in the BTF store);
-- in wavelength: linear between bands, zero outside the grid.
+- in wavelength: linear between bands, constant beyond the first and last band.
 
 Pairs the rig could not measure (light and view too close) are filled from the nearest measured
 view of the same light. Directions use the shading frame (x = dp/du), as the BTF uses the
@@ -204,14 +204,12 @@ def _plugin_class():
         def _reflectance(self, si, light, view, active):
             n_views, height, width, bands = self._shape
             value = mi.UnpolarizedSpectrum(0.0)
-            positions, lows, fractions, insides = [], [], [], []
+            lows, fractions = [], []
             for channel in range(4):
                 position = (si.wavelengths[channel] - self._first_nm) / self._step_nm
                 low = dr.minimum(mi.UInt32(dr.maximum(position, 0.0)), max(bands - 2, 0))
-                positions.append(position)
                 lows.append(low)
                 fractions.append(dr.clip(position - mi.Float(low), 0.0, 1.0))
-                insides.append((position >= 0) & (position <= bands - 1))
             texels = self._texels(si.uv)
             for light_index, light_weight in self._corners(0, light):
                 for view_index, view_weight in self._corners(1, view):
@@ -220,7 +218,7 @@ def _plugin_class():
                         weight = light_weight * view_weight * texel_weight
                         base = (pair + texel) * bands
                         for channel in range(4):
-                            mask = active & insides[channel] & (weight > 0)
+                            mask = active & (weight > 0)
                             first = dr.gather(mi.Float, self._values, base + lows[channel], mask)
                             second = dr.gather(
                                 mi.Float,

@@ -5,8 +5,8 @@ Figure 4.6 lights BTFs with a *spectral* environment map captured with the spect
 (section 4.2). The map is a lat-long image ``(H, W, K)`` of radiance in W m^-2 sr^-1 nm^-1 on a
 regular wavelength grid: row ``r`` covers polar angles ``[r, r + 1] pi / H`` from the map's +z
 axis, column ``c`` azimuths ``[c, c + 1] 2 pi / W`` from +x towards +y; radiance is constant
-over a pixel (the texel a camera measured) and linear in wavelength between bands, zero
-outside the grid.
+over a pixel (the texel a camera measured), linear in wavelength between bands and constant
+beyond the first and last band (a camera band's passband reaches past its centre).
 
 Importance sampling picks a pixel with probability proportional to its band-mean radiance times
 its solid angle :math:`\\Omega_p = \\frac{2\\pi}{W}(\\cos\\theta_r - \\cos\\theta_{r+1})` and a
@@ -128,13 +128,12 @@ def _plugin_class():
             value = mi.UnpolarizedSpectrum(0.0)
             for channel in range(4):
                 position = (wavelengths[channel] - self._first_nm) / self._step_nm
-                inside = (position >= 0) & (position <= self._bands - 1) & active
                 low = dr.minimum(mi.UInt32(dr.maximum(position, 0.0)), max(self._bands - 2, 0))
                 high = dr.minimum(low + 1, self._bands - 1)
                 t = dr.clip(position - mi.Float(low), 0.0, 1.0)
-                first = dr.gather(mi.Float, self._radiance, base + low, inside)
-                second = dr.gather(mi.Float, self._radiance, base + high, inside)
-                value[channel] = dr.select(inside, first + t * (second - first), 0.0)
+                first = dr.gather(mi.Float, self._radiance, base + low, active)
+                second = dr.gather(mi.Float, self._radiance, base + high, active)
+                value[channel] = dr.select(active, first + t * (second - first), 0.0)
             return value
 
         def _pdf(self, direction):
