@@ -30,7 +30,14 @@ from recon.errors import SpectwinInputError
 from recon.spectra import WavelengthGrid
 from twin.variant import activate
 
-__all__ = ["BTFTable", "btf_bsdf", "hemisphere_lookup", "product_table"]
+__all__ = [
+    "BTFTable",
+    "barycentric",
+    "btf_bsdf",
+    "hemisphere_lookup",
+    "interpolate_table",
+    "product_table",
+]
 
 _TABLES: dict[str, BTFTable] = {}
 _KEYS = itertools.count()
@@ -90,19 +97,15 @@ def product_table(
     return BTFTable(lights, views, values, grid)
 
 
-def hemisphere_lookup(directions: np.ndarray, resolution: int = 128):
-    """Barycentric weights over ``directions`` on a grid over the unit disk.
-
-    Returns ``(indices, weights)``, each ``(resolution, resolution, 3)``: grid cell ``(a, b)``
-    holds the point ``x = -1 + (b + 0.5) 2 / resolution``, ``y = -1 + (a + 0.5) 2 / resolution``
-    of the orthographic projection (a direction's ``(x, y)``).
-    """
+def barycentric(directions: np.ndarray, queries: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Indices and weights ``(n, 3)`` interpolating ``directions`` at ``queries`` ``(n, 3)`` (or
+    their ``(n, 2)`` disk projections): barycentric in the Delaunay triangulation of the
+    directions' orthographic projections, the nearest direction outside their hull."""
     points = np.asarray(directions, np.float64)[:, :2]
-    centres = -1 + (np.arange(resolution) + 0.5) * 2 / resolution
-    x, y = np.meshgrid(centres, centres)
-    queries = np.column_stack([x.ravel(), y.ravel()])
+    queries = np.asarray(queries, np.float64)[:, :2]
     indices = np.zeros((queries.shape[0], 3), np.int64)
     weights = np.zeros((queries.shape[0], 3))
+    inside = np.zeros(queries.shape[0], bool)
     if len(points) >= 3:
         triangulation = Delaunay(points)
         simplex = triangulation.find_simplex(queries)
@@ -111,13 +114,36 @@ def hemisphere_lookup(directions: np.ndarray, resolution: int = 128):
         partial = np.einsum("nij,nj->ni", transform[:, :2], queries[inside] - transform[:, 2])
         weights[inside] = np.column_stack([partial, 1 - partial.sum(axis=1)])
         indices[inside] = triangulation.simplices[simplex[inside]]
-    else:
-        inside = np.zeros(queries.shape[0], bool)
     nearest = np.argmin(((queries[~inside, None] - points[None]) ** 2).sum(axis=2), axis=1)
     indices[~inside] = nearest[:, None]
     weights[~inside] = [1.0, 0.0, 0.0]
+    return indices, np.clip(weights, 0, 1)
+
+
+def hemisphere_lookup(directions: np.ndarray, resolution: int = 128):
+    """Barycentric weights over ``directions`` (:func:`barycentric`) on a grid over the unit disk.
+
+    Returns ``(indices, weights)``, each ``(resolution, resolution, 3)``: grid cell ``(a, b)``
+    holds the point ``x = -1 + (b + 0.5) 2 / resolution``, ``y = -1 + (a + 0.5) 2 / resolution``
+    of the orthographic projection (a direction's ``(x, y)``).
+    """
+    centres = -1 + (np.arange(resolution) + 0.5) * 2 / resolution
+    x, y = np.meshgrid(centres, centres)
+    indices, weights = barycentric(directions, np.column_stack([x.ravel(), y.ravel()]))
     shape = (resolution, resolution, 3)
-    return indices.reshape(shape), np.clip(weights, 0, 1).reshape(shape)
+    return indices.reshape(shape), weights.reshape(shape)
+
+
+def interpolate_table(table: BTFTable, light: np.ndarray, view: np.ndarray) -> np.ndarray:
+    """The table's texture ``(H, W, K)`` at one (light, view) pair, interpolated like the plugin
+    does (without its lookup grid)."""
+    light_indices, light_weights = barycentric(table.light_dirs, np.atleast_2d(light))
+    view_indices, view_weights = barycentric(table.view_dirs, np.atleast_2d(view))
+    texture = np.zeros(table.values.shape[2:])
+    for i, wi in zip(light_indices[0], light_weights[0], strict=True):
+        for j, wj in zip(view_indices[0], view_weights[0], strict=True):
+            texture += wi * wj * table.values[i, j]
+    return texture
 
 
 def btf_bsdf(table: BTFTable, *, resolution: int = 128) -> dict[str, object]:

@@ -1,21 +1,22 @@
-"""Virtual capture of a spectral environment map with a mirror sphere (thesis 4.2).
+r"""Virtual capture of a spectral environment map with a mirror sphere (thesis 4.2).
 
 The thesis captures the illumination of its validation scene by photographing a chrome sphere at
 the sample's position with the spectral camera. Here a mirror sphere of radius ``radius_m`` at
 the origin is rendered from ``distance_m`` along ``camera_direction`` through a calibrated
 spectral camera (one channel per band, unit-area passbands: band-averaged radiance); the image is
-unwrapped into a lat-long :class:`twin.spectral_envmap.SpectralMap`: the environment direction
-:math:`d` is seen where the sphere's normal is :math:`n = (d + c) / |d + c|` (:math:`c` the
-direction to the camera; exact for a distant camera, which the narrow field of view makes nearly
-so). The sphere's reflectance is 1 (a real ball's measured reflectance is divided out); the
-directions within ``blind_spot_deg`` of :math:`-c`, hidden behind the sphere, take the nearest
-seen row.
+unwrapped into a lat-long :class:`twin.spectral_envmap.SpectralMap` by splatting: every image
+pixel on the sphere is traced (camera ray, sphere hit, mirror reflection) to the environment
+direction it shows and averaged into that map pixel. Seen orthographically, a mirror sphere
+covers the sphere of directions with a constant density per image area (:math:`d\omega/dA =
+4/r^2`), so these averages are solid-angle averages and small bright sources (spot lamps) keep
+their power. The sphere's reflectance is 1 (a real ball's measured reflectance is divided out);
+map pixels within ``blind_spot_deg`` of the direction away from the camera, hidden behind the
+sphere, and pixels no image pixel reached take the nearest seen row.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from scipy.ndimage import map_coordinates
 
 from recon.errors import SpectwinInputError
 from recon.spectra import WavelengthGrid
@@ -28,13 +29,29 @@ from twin.variant import activate
 __all__ = ["capture_mirror_sphere", "unwrap_mirror_sphere"]
 
 
-def _lat_long_directions(height: int, width: int) -> np.ndarray:
-    theta = (np.arange(height) + 0.5) * np.pi / height
-    phi = (np.arange(width) + 0.5) * 2 * np.pi / width
-    theta, phi = np.meshgrid(theta, phi, indexing="ij")
-    return np.stack(
-        [np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=-1
-    )
+def _reflected_directions(camera: PinholeCamera, radius_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per image pixel centre that sees the sphere: its flat index and the direction it
+    reflects (``(n,)``, ``(n, 3)``)."""
+    left, up, forward = camera._frame()
+    focal = camera.pixels / 2 / np.tan(np.radians(camera.fov_deg) / 2)
+    centres = np.arange(camera.pixels) + 0.5
+    column, row = np.meshgrid(centres, centres)
+    rays = (
+        forward
+        + ((camera.pixels / 2 - column) / focal)[..., None] * left
+        + ((camera.pixels / 2 - row) / focal)[..., None] * up
+    ).reshape(-1, 3)
+    rays /= np.linalg.norm(rays, axis=1, keepdims=True)
+    origin = np.asarray(camera.position_m, np.float64)
+    along = -(rays @ origin)
+    closest = origin + along[:, None] * rays
+    miss_sq = radius_m**2 - np.einsum("ij,ij->i", closest, closest)
+    hit = miss_sq > 0
+    points = closest[hit] - np.sqrt(miss_sq[hit])[:, None] * rays[hit]
+    normals = points / radius_m
+    incoming = rays[hit]
+    reflected = incoming - 2 * np.einsum("ij,ij->i", incoming, normals)[:, None] * normals
+    return np.flatnonzero(hit), reflected
 
 
 def unwrap_mirror_sphere(
@@ -49,27 +66,39 @@ def unwrap_mirror_sphere(
 ) -> SpectralMap:
     """Lat-long map ``(height, width, K)`` from an image ``(P, P, K)`` of a mirror sphere at the
     origin (module docstring)."""
-    to_camera = camera.position_m / np.linalg.norm(camera.position_m)
-    directions = _lat_long_directions(height, width)
-    normals = directions + to_camera
-    normals /= np.linalg.norm(normals, axis=-1, keepdims=True)
-    points = camera.project((radius_m * normals).reshape(-1, 3))
-    # Image arrays are indexed (row, column) with pixel centres at integer + 0.5.
-    coordinates = [points[:, 1] - 0.5, points[:, 0] - 0.5]
-    values = np.stack(
-        [
-            map_coordinates(image[..., band], coordinates, order=1, mode="nearest")
-            for band in range(image.shape[-1])
-        ],
+    pixels, directions = _reflected_directions(camera, radius_m)
+    theta = np.arccos(np.clip(directions[:, 2], -1, 1))
+    phi = np.arctan2(directions[:, 1], directions[:, 0]) % (2 * np.pi)
+    row = np.minimum((theta / np.pi * height).astype(int), height - 1)
+    column = np.minimum((phi / (2 * np.pi) * width).astype(int), width - 1)
+    cell = row * width + column
+    counts = np.bincount(cell, minlength=height * width)
+    flat = image.reshape(-1, image.shape[-1])[pixels]
+    sums = np.stack(
+        [np.bincount(cell, flat[:, k], minlength=height * width) for k in range(flat.shape[1])],
         axis=-1,
-    ).reshape(height, width, -1)
-    hidden = angle_between_deg(directions, -to_camera) < blind_spot_deg
+    )
+    values = (sums / np.maximum(counts, 1)[:, None]).reshape(height, width, -1)
+    theta_c = (np.arange(height) + 0.5) * np.pi / height
+    phi_c = (np.arange(width) + 0.5) * 2 * np.pi / width
+    centres = np.stack(
+        np.broadcast_arrays(
+            np.sin(theta_c)[:, None] * np.cos(phi_c),
+            np.sin(theta_c)[:, None] * np.sin(phi_c),
+            np.cos(theta_c)[:, None],
+        ),
+        axis=-1,
+    )
+    away = -np.asarray(camera.position_m, np.float64)
+    hidden = (angle_between_deg(centres, away / np.linalg.norm(away)) < blind_spot_deg) | (
+        counts.reshape(height, width) == 0
+    )
     if hidden.all():
         raise SpectwinInputError("blind_spot_deg: hides every direction of the map")
     seen = np.argwhere(~hidden)
-    for row, column in np.argwhere(hidden):
-        nearest = seen[np.argmin(np.abs(seen[:, 0] - row) + 0.01 * np.abs(seen[:, 1] - column))]
-        values[row, column] = values[tuple(nearest)]
+    for row_index, column_index in np.argwhere(hidden):
+        distance = np.abs(seen[:, 0] - row_index) + 0.01 * np.abs(seen[:, 1] - column_index)
+        values[row_index, column_index] = values[tuple(seen[np.argmin(distance)])]
     return SpectralMap(np.maximum(values, 0.0), grid)
 
 
@@ -78,7 +107,7 @@ def capture_mirror_sphere(
     grid: WavelengthGrid,
     *,
     camera_direction: tuple[float, float, float] = (0.0, -1.0, 0.3),
-    distance_m: float = 30.0,
+    distance_m: float = 1.0,
     radius_m: float = 0.05,
     pixels: int = 256,
     spp: int = 64,

@@ -1,0 +1,365 @@
+"""The thesis's Figure 4.6 validation: photograph, spectral rendering and RGB rendering of a
+measured BTF in a room lit by halogen spots and fluorescent tubes (thesis 4.2).
+
+- The room: grey walls, two small halogen spots (the lab tungsten spectrum of
+  ``shared/data/spectra/lights``) and two long fluorescent tubes (the office fluorescent
+  spectrum there); the sample lies at the origin, facing +z.
+- Its illumination is captured as a lat-long spectral map with a mirror sphere at the sample's
+  position (:mod:`twin.envmap_capture`).
+- (a) "Photograph": the true material (its geometry and part spectra) rendered in the room and
+  recorded by a colorimetric RGB camera (CIE 1931 colour matching functions, so that the panel
+  differences come from the data, not from the camera's own metamerism).
+- (b) Spectral rendering: a square with the measured BTF (:mod:`twin.btf_bsdf`) under the
+  captured spectral map, recorded through the same colour matching functions.
+- (c) RGB rendering: BTF and map converted to CIE 1931 RGB first (reflectance under equal
+  energy, a perfect white = 1; radiance by the matching functions), one rendering per channel.
+
+All three are compared in CIE L*a*b* relative to the white point of the map (one white
+balance), Delta E94 per pixel over the interiors of the chart's fields (matte and glossy
+reported apart); the PNG shows them with one tone curve.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import colour
+import numpy as np
+
+from recon.shared_data import read_spectra_csv
+from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid, resample
+from twin.btf_bsdf import BTFTable, btf_bsdf
+from twin.components import FINE_GRID
+from twin.envmap_capture import capture_mirror_sphere
+from twin.materials import Material
+from twin.mitsuba_spectra import irregular_spectrum
+from twin.rig_scene import PinholeCamera
+from twin.spectral_envmap import SpectralMap, spectral_envmap
+from twin.surfaces import mitsuba_shape
+from twin.variant import activate
+
+__all__ = ["Figure46", "render_figure46", "room_entries", "write_figure46"]
+
+_OBSERVER = "CIE 1931 2 Degree Standard Observer"
+_CAMERA_POSITION_M = np.array([0.0, -0.22, 0.16])
+_CONSTANT = WavelengthGrid(np.array([400.0, 720.0]))
+"""Grid of the one-channel (RGB) tables and maps: the same value at both ends, constant."""
+
+
+def _light(name: str, scale: float) -> dict[str, str]:
+    spectrum = read_spectra_csv(f"spectra/lights/{name}.csv")
+    on_grid = resample(spectrum, FINE_GRID, out_of_range="clamp").values[0]
+    return irregular_spectrum(SampledSpectra(FINE_GRID, scale * on_grid / on_grid.max()))
+
+
+def _diffuse(value: float) -> dict[str, object]:
+    return {
+        "type": "diffuse",
+        "reflectance": irregular_spectrum(
+            SampledSpectra(FINE_GRID, np.full(FINE_GRID.size, value))
+        ),
+    }
+
+
+def room_entries(*, spot_radiance: float = 4000.0, tube_radiance: float = 60.0) -> dict:
+    """Mitsuba scene entries of the room (walls, spots, tubes); sample position at the origin."""
+    activate()
+    import mitsuba as mi
+
+    transform = mi.ScalarTransform4f
+    entries: dict[str, object] = {
+        "room": {
+            "type": "cube",
+            "to_world": transform().translate([0.0, 0.0, 0.7]).scale([2.0, 2.0, 1.5]),
+            "flip_normals": True,
+            "bsdf": _diffuse(0.5),
+        }
+    }
+    for index, position in enumerate(([0.9, 0.6, 1.4], [-0.7, 1.0, 1.2])):
+        entries[f"spot_{index}"] = {
+            "type": "sphere",
+            "center": position,
+            "radius": 0.03,
+            "emitter": {"type": "area", "radiance": _light("tungsten_lab", spot_radiance)},
+        }
+    for index, x in enumerate((-0.6, 0.5)):
+        entries[f"tube_{index}"] = {
+            "type": "rectangle",
+            "to_world": transform()
+            .translate([x, 0.2, 2.15])
+            .rotate([1, 0, 0], 180)
+            .scale([0.05, 0.8, 1.0]),
+            "emitter": {"type": "area", "radiance": _light("fluorescent_office", tube_radiance)},
+        }
+    return entries
+
+
+def _camera(pixels: int) -> PinholeCamera:
+    return PinholeCamera(_CAMERA_POSITION_M, 0.055, pixels)
+
+
+def _xyz_film() -> SampledSpectra:
+    cmfs = colour.MSDS_CMFS[_OBSERVER]
+    values = np.stack(
+        [np.interp(FINE_GRID.wavelengths_nm, cmfs.wavelengths, cmfs.values[:, i]) for i in range(3)]
+    )
+    return SampledSpectra(FINE_GRID, values, ("X", "Y", "Z"))
+
+
+def _render(entries: dict, pixels: int, spp: int, channels: SampledSpectra) -> np.ndarray:
+    activate()
+    import mitsuba as mi
+
+    scene = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": 4},
+        "sensor": _camera(pixels).mitsuba_sensor(channels, spp),
+        **entries,
+    }
+    return np.array(mi.render(mi.load_dict(scene), seed=3), dtype=np.float64)
+
+
+def _sample_square(size_m: float, height_m: float) -> dict[str, object]:
+    """The BTF's square, at the height of the material's top face."""
+    activate()
+    import mitsuba as mi
+
+    transform = mi.ScalarTransform4f().translate([0.0, 0.0, height_m]).scale(size_m / 2)
+    return {"type": "rectangle", "to_world": transform}
+
+
+def _cie_rgb_matrix() -> np.ndarray:
+    return colour.RGB_COLOURSPACES["CIE RGB"].matrix_XYZ_to_RGB
+
+
+def _rgb_table(table: BTFTable) -> list[BTFTable]:
+    """The BTF as three one-channel tables of CIE RGB reflectance (equal energy, white = 1)."""
+    cmfs = colour.MSDS_CMFS[_OBSERVER]
+    wavelengths = table.grid.wavelengths_nm
+    xyz = np.stack([np.interp(wavelengths, cmfs.wavelengths, cmfs.values[:, i]) for i in range(3)])
+    rgb_cmfs = _cie_rgb_matrix() @ xyz
+    weights = rgb_cmfs / rgb_cmfs.sum(axis=1, keepdims=True)
+    rgb = np.maximum(np.einsum("...k,ck->...c", table.values, weights), 0.0)
+    return [
+        BTFTable(table.light_dirs, table.view_dirs, rgb[..., [c, c]].astype(np.float32), _CONSTANT)
+        for c in range(3)
+    ]
+
+
+def _rgb_maps(spectral_map: SpectralMap) -> list[SpectralMap]:
+    """The map as three one-channel maps of CIE RGB radiance (matching functions, per nm)."""
+    cmfs = colour.MSDS_CMFS[_OBSERVER]
+    wavelengths = spectral_map.grid.wavelengths_nm
+    xyz = np.stack([np.interp(wavelengths, cmfs.wavelengths, cmfs.values[:, i]) for i in range(3)])
+    step = wavelengths[1] - wavelengths[0]
+    rgb = np.maximum(np.einsum("hwk,ck->hwc", spectral_map.radiance, _cie_rgb_matrix() @ xyz), 0)
+    return [SpectralMap(rgb[..., [c, c]] * step, _CONSTANT) for c in range(3)]
+
+
+def _flat_film() -> SampledSpectra:
+    """One channel of unit area over 400-720 nm: a one-band rendering's value times 1."""
+    inside = (FINE_GRID.wavelengths_nm >= 400) & (FINE_GRID.wavelengths_nm <= 720)
+    return SampledSpectra(FINE_GRID, (inside / 320.0)[None, :], ("flat",))
+
+
+@dataclass(frozen=True)
+class Figure46:
+    """The three panels in XYZ ``(H, W, 3)``, the map's white, the interiors of the matte and of
+    the glossy fields, and Delta E94 against the photograph per pixel."""
+
+    photograph: np.ndarray
+    spectral: np.ndarray
+    rgb: np.ndarray
+    white_xyz: np.ndarray
+    fields: np.ndarray
+    glossy: np.ndarray
+    delta_e_spectral: np.ndarray
+    delta_e_rgb: np.ndarray
+    environment: SpectralMap
+
+    @property
+    def mask(self) -> np.ndarray:
+        """Pixels of the matte fields' interiors."""
+        return self.fields[~self.glossy].any(axis=0)
+
+    def field_delta_e(self) -> tuple[np.ndarray, np.ndarray]:
+        """Delta E94 of every field's mean colour (interior), spectral and RGB rendering."""
+        means = [
+            np.array([image[field].mean(axis=0) for field in self.fields])
+            for image in (self.photograph, self.spectral, self.rgb)
+        ]
+        reference = _lab(means[0], self.white_xyz)
+        return tuple(
+            colour.delta_E(_lab(mean, self.white_xyz), reference, method="CIE 1994")
+            for mean in means[1:]
+        )
+
+    def summary(self) -> dict[str, float]:
+        spectral, rgb = self.delta_e_spectral[self.mask], self.delta_e_rgb[self.mask]
+        field_spectral, field_rgb = self.field_delta_e()
+        matte = ~self.glossy
+        return {
+            "field_mean_delta_e94_spectral": float(field_spectral[matte].mean()),
+            "field_mean_delta_e94_rgb": float(field_rgb[matte].mean()),
+            "field_ratio_rgb_over_spectral": float(
+                field_rgb[matte].mean() / field_spectral[matte].mean()
+            ),
+            "field_mean_delta_e94_spectral_glossy": float(field_spectral[~matte].mean()),
+            "field_mean_delta_e94_rgb_glossy": float(field_rgb[~matte].mean()),
+            "mean_delta_e94_spectral": float(spectral.mean()),
+            "mean_delta_e94_rgb": float(rgb.mean()),
+            "ratio_rgb_over_spectral": float(rgb.mean() / spectral.mean()),
+            "median_delta_e94_spectral": float(np.median(spectral)),
+            "median_delta_e94_rgb": float(np.median(rgb)),
+            "matte_field_pixels": int(self.mask.sum()),
+        }
+
+
+def _lab(xyz: np.ndarray, white: np.ndarray) -> np.ndarray:
+    return colour.XYZ_to_Lab(xyz / white[1], colour.XYZ_to_xyY(white / white[1])[:2])
+
+
+def _field_interiors(material: Material, pixels: int, interior: float = 0.5) -> np.ndarray:
+    """``(n_fields, H, W)`` image masks of the central ``interior`` of every chart field's top
+    face (the comparison leaves out field edges, where the flat BTF square and the raised fields
+    of the true material differ by parallax)."""
+    from matplotlib.path import Path as Polygon
+
+    camera = _camera(pixels)
+    centres = np.arange(pixels) + 0.5
+    x, y = np.meshgrid(centres, centres)
+    pixel_centres = np.column_stack([x.ravel(), y.ravel()])
+    masks = []
+    for part in (p for p in material.parts if p.name.startswith("field_")):
+        low, high = part.mesh.bounds
+        middle, half = (low + high) / 2, interior * (high - low) / 2
+        corners = np.array(
+            [
+                [middle[0] + sx * half[0], middle[1] + sy * half[1], high[2]]
+                for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))
+            ]
+        )
+        masks.append(Polygon(camera.project(corners)).contains_points(pixel_centres))
+    return np.stack(masks).reshape(-1, pixels, pixels)
+
+
+def render_figure46(
+    material: Material,
+    table: BTFTable,
+    *,
+    pixels: int = 96,
+    spp: int = 64,
+    map_size: tuple[int, int] = (32, 64),
+) -> Figure46:
+    """Capture the room's map, render the three panels and compare them (module docstring)."""
+    room = room_entries()
+    environment, _ = capture_mirror_sphere(
+        room,
+        DEFAULT_GRID,
+        camera_direction=(0.3, -0.4, 1.0),
+        pixels=256,
+        spp=256,
+        height=map_size[0],
+        width=map_size[1],
+    )
+    film = _xyz_film()
+    true_sample = {part.name: mitsuba_shape(part) for part in material.parts}
+    photograph = _render({**room, **true_sample}, pixels, spp, film)
+    top = max(float(part.mesh.bounds[1][2]) for part in material.parts)
+    square = _sample_square(material.size_m, top)
+    spectral = _render(
+        {
+            "environment": spectral_envmap(environment),
+            "sample": {**square, "bsdf": btf_bsdf(table)},
+        },
+        pixels,
+        spp,
+        film,
+    )
+    channels = []
+    for rgb_table, rgb_map in zip(_rgb_table(table), _rgb_maps(environment), strict=True):
+        entries = {
+            "environment": spectral_envmap(rgb_map),
+            "sample": {**square, "bsdf": btf_bsdf(rgb_table)},
+        }
+        channels.append(_render(entries, pixels, spp, _flat_film())[..., 0])
+    rgb = np.einsum("ij,hwj->hwi", np.linalg.inv(_cie_rgb_matrix()), np.stack(channels, -1))
+    # White of the scene: a perfect white diffuser facing +z under the map, E / pi in XYZ.
+    directions_cos = np.cos((np.arange(map_size[0]) + 0.5) * np.pi / map_size[0])
+    weights = environment.solid_angles() * np.maximum(directions_cos, 0)[:, None]
+    radiance = np.einsum("hwk,hw->k", environment.radiance, weights) / np.pi
+    white = (
+        np.einsum("k,kc->c", radiance, _cmfs_on(environment.grid))
+        * np.diff(environment.grid.wavelengths_nm)[0]
+    )
+    reference = _lab(photograph, white)
+    fields = _field_interiors(material, pixels)
+    glossy = np.array(
+        [p.roughness is not None for p in material.parts if p.name.startswith("field_")]
+    )
+    return Figure46(
+        photograph,
+        spectral,
+        rgb,
+        white,
+        fields,
+        glossy,
+        colour.delta_E(_lab(spectral, white), reference, method="CIE 1994"),
+        colour.delta_E(_lab(rgb, white), reference, method="CIE 1994"),
+        environment,
+    )
+
+
+def _cmfs_on(grid: WavelengthGrid) -> np.ndarray:
+    cmfs = colour.MSDS_CMFS[_OBSERVER]
+    return np.stack(
+        [np.interp(grid.wavelengths_nm, cmfs.wavelengths, cmfs.values[:, i]) for i in range(3)],
+        axis=1,
+    )
+
+
+def write_figure46(figure: Figure46, path: str | Path) -> Path:
+    """Three panels (one white balance, one tone curve) and the two Delta E94 maps (matte field
+    interiors)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    white = figure.white_xyz / figure.white_xyz[1]
+    panels = []
+    for xyz in (figure.photograph, figure.spectral, figure.rgb):
+        adapted = colour.chromatic_adaptation(
+            xyz / figure.white_xyz[1],
+            white,
+            colour.xy_to_XYZ([0.3127, 0.3290]),
+            method="Von Kries",
+            transform="CAT02",
+        )
+        panels.append(np.clip(colour.XYZ_to_sRGB(adapted * 1.6, apply_cctf_encoding=True), 0, 1))
+    plot, axes = plt.subplots(1, 5, figsize=(20, 4.5))
+    titles = ("(a) photograph", "(b) spectral rendering", "(c) RGB rendering")
+    for axis, panel, title in zip(axes[:3], panels, titles, strict=True):
+        axis.imshow(panel)
+        axis.set_title(title)
+        axis.axis("off")
+    limit = float(np.percentile(figure.delta_e_rgb[figure.mask], 99))
+    summary = figure.summary()
+    for axis, values, name in (
+        (axes[3], figure.delta_e_spectral, "spectral"),
+        (axes[4], figure.delta_e_rgb, "rgb"),
+    ):
+        shown = axis.imshow(np.where(figure.mask, values, np.nan), vmin=0, vmax=limit)
+        axis.set_title(
+            f"Delta E94 {name}, matte fields: pixels {summary[f'mean_delta_e94_{name}']:.2f}, "
+            f"field means {summary[f'field_mean_delta_e94_{name}']:.2f}",
+            fontsize=9,
+        )
+        axis.axis("off")
+        plot.colorbar(shown, ax=axis, fraction=0.046)
+    plot.tight_layout()
+    plot.savefig(path, dpi=100)
+    plt.close(plot)
+    return path
