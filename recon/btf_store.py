@@ -408,6 +408,11 @@ class BTFStore:
         if self._all_written():
             self._set_complete(True)
 
+    def set_attribute(self, name: str, value: Any) -> None:
+        """Record a JSON-serialisable attribute (e.g. processing facts) on the store."""
+        self._require_writable()
+        self._group.attrs[name] = _json_attr(name, value)
+
     def corners_xy(self) -> np.ndarray:
         """``(n_pairs, 4, 2)`` registered image corners per pair (NaN where none were given)."""
         if "corners_xy" not in self._group:

@@ -66,6 +66,11 @@ TEXTURE_CORNERS_UV.setflags(write=False)
 MARKS = ("dark", "bright")
 
 
+class CornerRefinementError(SpectwinInputError):
+    """The two-region model put a corner at the edge of its piece: no border corner was found
+    near the coarse corner (too few pixels across the border, e.g. at grazing views)."""
+
+
 def validate_corners(corners_xy: object, name: str = "corners_xy") -> np.ndarray:
     """``corners_xy`` as a float64 ``(4, 2)`` array of a convex, non-degenerate quadrilateral.
 
@@ -453,7 +458,7 @@ def refine_corners(
                 fit_edge_width=width is not None,
             )
             if np.any(corner <= 0.5) or np.any(corner >= piece_texels - 0.5):
-                raise SpectwinInputError(
+                raise CornerRefinementError(
                     f"corners_xy: corner {index} at {np.round(corners[index], 2)} refined to the "
                     "edge of its piece; expected the border's corner within "
                     f"{piece_size / 2} texture units of the coarse corner"

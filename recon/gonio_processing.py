@@ -11,8 +11,10 @@ monitor with every lit frame) and the camera calibration (:mod:`recon.gonio_cali
    lamp, so this is radiance over normal irradiance and is divided by :math:`\\cos\\theta_i` to
    give the BRDF in 1/sr;
 3. registration of the pair on its band mean (:func:`recon.registration.register_frame`, with the
-   rig's approximate corners to order them), the texture square of the sample (a known fraction
-   of the marks' square, centred) mapped to ``texels x texels`` (bilinear);
+   rig's approximate corners to order them; where the sub-pixel refinement finds no corner, e.g.
+   a border only two pixels wide at a grazing view, the coarse corners are kept and the pair is
+   listed in the store's ``coarse_corner_pairs`` attribute), the texture square of the sample (a
+   known fraction of the marks' square, centred) mapped to ``texels x texels`` (bilinear);
 4. the texture written to the BTF store, pair by pair (an interrupted run resumes).
 
 The capture's ``rig`` attribute supplies the nominal directions (``light_dirs``, ``view_dirs``),
@@ -28,11 +30,11 @@ import numpy as np
 from hwbridge.store import CaptureStore
 from recon.btf_store import BTFStore
 from recon.capture_io import select_frames
-from recon.corner_refinement import texture_transform
+from recon.corner_refinement import CornerRefinementError, texture_transform
 from recon.errors import SpectwinInputError
 from recon.gonio_calibration import GonioCalibration, dark_model, white_reflectance
 from recon.progress import progress_steps
-from recon.registration import extract_texture, register_frame
+from recon.registration import detect_corners, extract_texture, register_frame
 from recon.spectral_calibration import drift_factors, reflectance, run_white_factors
 
 __all__ = ["inset_corners", "process_gonio"]
@@ -146,7 +148,7 @@ def process_gonio(
             source_capture=store.path,
             calibration={"run_factors": factors.tolist(), "source": calibration.source},
         )
-    pending = btf.pending_pairs()
+    pending, coarse = btf.pending_pairs(), list(btf.attrs.get("coarse_corner_pairs", []))
     with progress_steps("process", len(pending), enabled=show_progress) as advance:
         for pair in pending:
             frames, exposure, monitor = _pair_frames(store, camera, index, pair, bands)
@@ -154,15 +156,20 @@ def process_gonio(
             linear = darks.linear_signal(frames, exposure, curve)
             brdf = reflectance(linear, exposure, factors, drift=float(drift[1]))
             image = np.moveaxis(brdf / light_dirs[pair, 2], 0, -1)
-            corners = register_frame(
-                image,
-                frame_id=f"pair{pair}",
-                manual_corners=manual_corners,
-                expected_xy=expected[pair],
-            )
+            try:
+                corners = register_frame(
+                    image,
+                    frame_id=f"pair{pair}",
+                    manual_corners=manual_corners,
+                    expected_xy=expected[pair],
+                )
+            except CornerRefinementError:
+                corners = detect_corners(image, expected_xy=expected[pair]).corners_xy
+                coarse.append(pair)
             texture = extract_texture(
                 image, inset_corners(corners, float(rig["sample_fraction"])), resolution=texels
             )
             btf.write_pair(pair, texture, grid=calibration.grid, corners_xy=corners)
             advance()
+    btf.set_attribute("coarse_corner_pairs", sorted(set(coarse)))
     return btf

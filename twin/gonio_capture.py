@@ -243,6 +243,7 @@ def run_gonio_measurement(
     rings: tuple[tuple[float, int], ...] = REDUCED_RINGS,
     pairs: GonioPairs | None = None,
     pixels: int = 256,
+    window: int | None = None,
     spp: int = 64,
     seed: int = 0,
     resume: bool = False,
@@ -261,8 +262,9 @@ def run_gonio_measurement(
     rings, pairs
         The direction sampling: every reachable light x view combination of ``rings``, or the
         given pairs.
-    pixels, spp
-        Rendered window (pixels per side over the camera's 20 cm field) and samples per pixel.
+    pixels, window, spp
+        Pixels per side over the camera's 20 cm field, the centred window of them read out
+        (default all; the K4's region of interest) and samples per pixel.
     seed, resume, show_progress
         Session seed (noise, robot repeatability), resume an interrupted run, progress bar.
     """
@@ -283,7 +285,8 @@ def run_gonio_measurement(
         )
     pairs = pairs or gonio_pairs(config, rings)
     n_pairs = len(pairs.poses)
-    sensor = Sensor(config.camera.definition, roi=(pixels, pixels))
+    side = window or pixels
+    sensor = Sensor(config.camera.definition, roi=(side, side))
     dark_s = _flicker_multiples(np.linspace(exposures.min(), exposures.max(), 4))
     plan = dark_series(CAMERA_ID, dark_s, _DARK_FRAMES)
     plan += _with_view(white_reference_run(CAMERA_ID, bands, exposures), n_pairs)
@@ -294,15 +297,17 @@ def run_gonio_measurement(
         actual_poses(config, pairs.poses, seed),
         pixels=pixels,
         spp=spp,
+        window=window,
     )
     signal = _GonioSignal(_white_signal(config, sensor), n_pairs, rendered)
     expected = np.stack(
         [
-            gonio_camera(config, pose.rail_deg, pixels).project(texture_corners_world(pose))
+            gonio_camera(config, pose.rail_deg, pixels, window).project(texture_corners_world(pose))
             for pose in pairs.poses
         ]
     )
-    attrs = _rig_attrs(config, pixels, "gonio-run") | {
+    attrs = _rig_attrs(config, side, "gonio-run") | {
+        "sensor_px": pixels,
         "material": material,
         "spp": spp,
         "white_view_id": n_pairs,
@@ -313,5 +318,5 @@ def run_gonio_measurement(
         "sample_fraction": load_material(material).size_m / (2 * PRINT_OUTER_HALF_M),
     }
     return _session(
-        Path(store), plan, signal, n_pairs + 1, pixels, attrs, seed, resume, show_progress
+        Path(store), plan, signal, n_pairs + 1, side, attrs, seed, resume, show_progress
     )

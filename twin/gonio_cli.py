@@ -65,7 +65,13 @@ def capture(
         Path | None, typer.Option(help="spectwin calibrate's JSON: the band exposure plan.")
     ] = None,
     material: Annotated[str, typer.Option(help="Material on the holder.")] = "colorchecker16",
-    pixels: Annotated[int, typer.Option(help="Rendered window, pixels per side.")] = 256,
+    pixels: Annotated[
+        int, typer.Option(help="Pixels across the camera's 20 cm field (rendered sensor).")
+    ] = 256,
+    window: Annotated[
+        int | None,
+        typer.Option(help="Read out only the centred window of this many pixels (ROI)."),
+    ] = None,
     spp: Annotated[int, typer.Option(help="Samples per pixel of the renders.")] = 64,
     seed: Annotated[int, typer.Option(help="Session seed (noise of every frame).")] = 0,
     resume: Annotated[
@@ -119,6 +125,7 @@ def capture(
                 plan.planned_exposure_s,
                 material=material,
                 pixels=pixels,
+                window=window,
                 spp=spp,
                 seed=seed,
                 resume=resume,

@@ -120,10 +120,10 @@ def _true_corners(capture: CaptureStore, btf: BTFStore) -> np.ndarray:
     rig = capture.attrs["rig"]
     pairs = GonioPairs(config, btf.light_dirs, btf.view_dirs)
     poses = actual_poses(config, pairs.poses, int(capture.attrs["seed"]))
-    pixels = int(rig["window_px"])
+    pixels, window = int(rig.get("sensor_px", rig["window_px"])), int(rig["window_px"])
     return np.stack(
         [
-            gonio_camera(config, pose.rail_deg, pixels).project(texture_corners_world(pose))
+            gonio_camera(config, pose.rail_deg, pixels, window).project(texture_corners_world(pose))
             for pose in poses
         ]
     )

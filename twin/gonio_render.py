@@ -29,12 +29,15 @@ def gonio_lamp(config: GonioConfig, lamp_id: str) -> tuple[Lamp, np.ndarray]:
     return lamp, lamp_position(placement.azimuth_deg, placement.elevation_deg, placement.distance_m)
 
 
-def gonio_camera(config: GonioConfig, rail_deg: float, pixels: int) -> PinholeCamera:
-    """The spectral camera on the rail at ``rail_deg``."""
+def gonio_camera(
+    config: GonioConfig, rail_deg: float, pixels: int, window: int | None = None
+) -> PinholeCamera:
+    """The spectral camera on the rail at ``rail_deg``: ``pixels`` across its field, the centred
+    ``window`` of them read out (default all)."""
     position = config.rail.radius_m * np.array(
         [np.cos(np.radians(rail_deg)), np.sin(np.radians(rail_deg)), 0.0]
     )
-    return PinholeCamera(position, config.camera.field_of_view_m, pixels)
+    return PinholeCamera(position, config.camera.field_of_view_m, pixels, window=window)
 
 
 def pose_matrix(pose: GonioPose) -> np.ndarray:
@@ -55,11 +58,13 @@ def gonio_part_rates(
     seed: int = 0,
     holder: bool = True,
     extra_parts: list[SurfacePart] | None = None,
+    window: int | None = None,
 ) -> np.ndarray:
     """Photo-electron rates ``(n_parts, H, W, n_bands)`` in e-/s per pixel, one per lamp part.
 
     ``holder`` puts the material on the sample holder; ``extra_parts`` adds surfaces in the
-    sample frame (e.g. a white target).
+    sample frame (e.g. a white target); ``window`` reads out only the centred window of the
+    ``pixels`` across the field.
     """
     sensor = Sensor(config.camera.definition)
     bands = LiquidCrystalTunableFilter.varispec(config.camera.filter).transmission(FINE_GRID)
@@ -67,7 +72,7 @@ def gonio_part_rates(
     lamp, position = gonio_lamp(config, pose.lamp_id)
     parts = (holder_parts() if holder else []) + list(material.parts if material else [])
     parts += list(extra_parts or [])
-    camera = gonio_camera(config, pose.rail_deg, pixels)
+    camera = gonio_camera(config, pose.rail_deg, pixels, window)
     spectral_parts = lamp.spectral_parts(FINE_GRID)
     return np.stack(
         [

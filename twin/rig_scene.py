@@ -28,13 +28,21 @@ __all__ = ["PinholeCamera", "lamp_position", "render_view"]
 class PinholeCamera:
     """A camera looking at the rig centre from ``position_m``; square image of ``pixels``.
 
-    ``field_of_view_m`` is the width of the field at the rig centre.
+    ``field_of_view_m`` is the width of the field at the rig centre. With ``window`` only the
+    centred ``window x window`` pixels are read out (a sensor region of interest): images and
+    projected coordinates are those of the window.
     """
 
     position_m: np.ndarray
     field_of_view_m: float
     pixels: int
     up: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    window: int | None = None
+
+    @property
+    def window_offset(self) -> int:
+        """Pixels between the sensor's edge and the window's."""
+        return 0 if self.window is None else (self.pixels - self.window) // 2
 
     @property
     def fov_deg(self) -> float:
@@ -59,20 +67,32 @@ class PinholeCamera:
         focal = self.pixels / 2 / np.tan(np.radians(self.fov_deg) / 2)
         column = self.pixels / 2 - focal * (relative @ left) / depth
         row = self.pixels / 2 - focal * (relative @ up) / depth
-        return np.column_stack([column, row])
+        return np.column_stack([column, row]) - self.window_offset
 
     def mitsuba_sensor(self, channels: SampledSpectra, spp: int) -> dict[str, object]:
         activate()
         import mitsuba as mi
 
         left, up, forward = self._frame()
+        film = specfilm(channels, self.pixels, self.pixels)
+        if self.window is not None:
+            if not 0 < self.window <= self.pixels:
+                raise SpectwinInputError(
+                    f"window: expected 1 to {self.pixels} pixels, got {self.window}"
+                )
+            film |= {
+                "crop_offset_x": self.window_offset,
+                "crop_offset_y": self.window_offset,
+                "crop_width": self.window,
+                "crop_height": self.window,
+            }
         return {
             "type": "perspective",
             "fov": self.fov_deg,
             "to_world": mi.ScalarTransform4f.look_at(
                 origin=self.position_m.tolist(), target=[0.0, 0.0, 0.0], up=up.tolist()
             ),
-            "film": specfilm(channels, self.pixels, self.pixels),
+            "film": film,
             "sampler": {"type": "ldsampler", "sample_count": spp},
         }
 

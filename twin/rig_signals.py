@@ -66,9 +66,10 @@ class RenderedGonioSignal:
         *,
         pixels: int,
         spp: int = 16,
+        window: int | None = None,
     ):
         self._config, self._material, self._poses = config, material, poses
-        self._pixels, self._spp = pixels, spp
+        self._pixels, self._spp, self._window = pixels, spp, window
         self._bands_nm = np.asarray(
             LiquidCrystalTunableFilter.varispec(config.camera.filter).band_centres_nm
         )
@@ -84,6 +85,7 @@ class RenderedGonioSignal:
                 self._material,
                 pixels=self._pixels,
                 spp=self._spp,
+                window=self._window,
             )
         return self._cache[view_id]
 

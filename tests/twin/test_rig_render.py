@@ -7,6 +7,7 @@ import pytest
 
 from recon.metamers import camera_signal
 from recon.metrics import relative_error
+from recon.registration import register_frame
 from recon.spectra import DEFAULT_GRID, resample
 from twin.calibration_targets import colorchecker_chart, esser_chart, zenith_white_target
 from twin.components import (
@@ -21,7 +22,6 @@ from twin.gonio_render import gonio_camera, gonio_part_rates, pose_matrix
 from twin.hemisphere import direction
 from twin.materials import MATERIAL_GRID, Material, load_material
 from twin.materials.geometry import box
-from twin.registration_marks import find_print_corners
 from twin.rig_config import load_rig
 from twin.sample_holder import registration_corners
 from twin.sensor import Sensor
@@ -72,7 +72,7 @@ def test_projected_border_corners_agree_with_the_kinematics_within_a_pixel(gonio
     matrix = pose_matrix(pose)
     corners_world = registration_corners() @ matrix[:3, :3].T + matrix[:3, 3]
     expected = gonio_camera(gonio, pose.rail_deg, 256).project(corners_world)
-    found = find_print_corners(image, expected)
+    found = register_frame(image, expected_xy=expected)
     assert np.linalg.norm(found - expected, axis=1).max() < 1.0
 
 
@@ -90,8 +90,9 @@ def test_perturbed_robot_poses_move_the_corners_as_the_kinematics_say(gonio):
     matrix = pose_matrix(actual)
     expected = camera.project(registration_corners() @ matrix[:3, :3].T + matrix[:3, 3])
     nominal = camera.project(registration_corners() @ pose_matrix(pose)[:3, :3].T)
-    found = find_print_corners(
-        gonio_part_rates(gonio, actual, None, pixels=256, spp=16)[0].sum(axis=-1), nominal
+    found = register_frame(
+        gonio_part_rates(gonio, actual, None, pixels=256, spp=16)[0].sum(axis=-1),
+        expected_xy=nominal,
     )
     assert np.linalg.norm(found - expected, axis=1).max() < 1.0
     assert np.linalg.norm(found - nominal, axis=1).max() > 1.0  # the frame needs registration
