@@ -251,12 +251,13 @@ def render_figure46(
     pixels: int = 96,
     spp: int = 64,
     map_size: tuple[int, int] = (32, 64),
+    map_grid: WavelengthGrid = DEFAULT_GRID,
 ) -> Figure46:
     """Capture the room's map, render the three panels and compare them (module docstring)."""
     room = room_entries()
     environment, _ = capture_mirror_sphere(
         room,
-        DEFAULT_GRID,
+        map_grid,
         camera_direction=(0.3, -0.4, 1.0),
         pixels=256,
         spp=256,

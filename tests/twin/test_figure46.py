@@ -1,0 +1,30 @@
+"""Figure 4.6 (thesis 4.2): photograph, spectral and RGB renderings of a BTF in the room."""
+
+import numpy as np
+import pytest
+
+from recon.spectra import DEFAULT_GRID
+from twin.btf_bsdf import product_table
+from twin.figure46 import render_figure46, write_figure46
+from twin.hemisphere import direction
+from twin.materials import load_material
+from twin.truth import truth_btf
+
+pytestmark = pytest.mark.render
+
+
+def test_spectral_rendering_of_the_true_btf_is_closer_to_the_photograph_than_rgb(tmp_path):
+    material = load_material("colorchecker16")
+    light, view = direction(30.0, 0.0)[None], direction(0.0, 0.0)[None]
+    table = product_table(
+        light, view, truth_btf(material, light, view, texels=48, spp=64), DEFAULT_GRID
+    )
+    figure = render_figure46(material, table, pixels=64, spp=64)
+    summary = figure.summary()
+    # Measured: field means Delta E94 1.6 (spectral) vs 3.1 (RGB). The spectral rendering of the
+    # matte fields is about 5 % darker than the photograph, which the map capture (2 % low for a
+    # white diffuser) does not fully explain: under investigation (see the session notes).
+    assert summary["field_mean_delta_e94_spectral"] < 2.0
+    assert summary["field_ratio_rgb_over_spectral"] > 1.5
+    assert np.isfinite(figure.delta_e_rgb[figure.mask]).all()
+    assert write_figure46(figure, tmp_path / "figure46.png").stat().st_size > 30_000
