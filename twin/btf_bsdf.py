@@ -20,7 +20,6 @@ renders like the BRDF itself (``tests/twin/test_btf_bsdf.py``).
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,7 +27,7 @@ from scipy.spatial import Delaunay
 
 from recon.errors import SpectwinInputError
 from recon.spectra import WavelengthGrid
-from twin.variant import activate
+from twin.mitsuba_plugins import PluginData, register_once
 
 __all__ = [
     "BTFTable",
@@ -39,8 +38,7 @@ __all__ = [
     "product_table",
 ]
 
-_TABLES: dict[str, BTFTable] = {}
-_KEYS = itertools.count()
+_TABLES = PluginData("btf")
 
 
 @dataclass(frozen=True)
@@ -148,25 +146,8 @@ def interpolate_table(table: BTFTable, light: np.ndarray, view: np.ndarray) -> n
 
 def btf_bsdf(table: BTFTable, *, resolution: int = 128) -> dict[str, object]:
     """Scene-dict entry of the BSDF for ``table`` (registers the plugin)."""
-    _register_plugin()
-    key = f"btf{next(_KEYS)}"
-    _TABLES[key] = table
-    return {"type": "spectral_btf", "btf": key, "resolution": resolution}
-
-
-_REGISTERED = False
-
-
-def _register_plugin() -> None:
-    global _REGISTERED
-    if _REGISTERED:
-        return
-    activate()
-    import mitsuba as mi
-
-    plugin = _plugin_class()
-    mi.register_bsdf("spectral_btf", lambda props: plugin(props))
-    _REGISTERED = True
+    register_once("bsdf", "spectral_btf", _plugin_class)
+    return {"type": "spectral_btf", "btf": _TABLES.keep(table), "resolution": resolution}
 
 
 def _plugin_class():

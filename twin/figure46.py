@@ -100,11 +100,7 @@ def _camera(pixels: int) -> PinholeCamera:
 
 
 def _xyz_film() -> SampledSpectra:
-    cmfs = colour.MSDS_CMFS[_OBSERVER]
-    values = np.stack(
-        [np.interp(FINE_GRID.wavelengths_nm, cmfs.wavelengths, cmfs.values[:, i]) for i in range(3)]
-    )
-    return SampledSpectra(FINE_GRID, values, ("X", "Y", "Z"))
+    return SampledSpectra(FINE_GRID, _cmfs_on(FINE_GRID).T, ("X", "Y", "Z"))
 
 
 def _render(entries: dict, pixels: int, spp: int, channels: SampledSpectra) -> np.ndarray:
@@ -135,10 +131,7 @@ def _cie_rgb_matrix() -> np.ndarray:
 
 def _rgb_table(table: BTFTable) -> list[BTFTable]:
     """The BTF as three one-channel tables of CIE RGB reflectance (equal energy, white = 1)."""
-    cmfs = colour.MSDS_CMFS[_OBSERVER]
-    wavelengths = table.grid.wavelengths_nm
-    xyz = np.stack([np.interp(wavelengths, cmfs.wavelengths, cmfs.values[:, i]) for i in range(3)])
-    rgb_cmfs = _cie_rgb_matrix() @ xyz
+    rgb_cmfs = _cie_rgb_matrix() @ _cmfs_on(table.grid).T
     weights = rgb_cmfs / rgb_cmfs.sum(axis=1, keepdims=True)
     rgb = np.maximum(np.einsum("...k,ck->...c", table.values, weights), 0.0)
     return [
@@ -149,11 +142,10 @@ def _rgb_table(table: BTFTable) -> list[BTFTable]:
 
 def _rgb_maps(spectral_map: SpectralMap) -> list[SpectralMap]:
     """The map as three one-channel maps of CIE RGB radiance (matching functions, per nm)."""
-    cmfs = colour.MSDS_CMFS[_OBSERVER]
     wavelengths = spectral_map.grid.wavelengths_nm
-    xyz = np.stack([np.interp(wavelengths, cmfs.wavelengths, cmfs.values[:, i]) for i in range(3)])
     step = wavelengths[1] - wavelengths[0]
-    rgb = np.maximum(np.einsum("hwk,ck->hwc", spectral_map.radiance, _cie_rgb_matrix() @ xyz), 0)
+    rgb_cmfs = _cie_rgb_matrix() @ _cmfs_on(spectral_map.grid).T
+    rgb = np.maximum(np.einsum("hwk,ck->hwc", spectral_map.radiance, rgb_cmfs), 0)
     return [SpectralMap(rgb[..., [c, c]] * step, _CONSTANT) for c in range(3)]
 
 
@@ -313,6 +305,7 @@ def render_figure46(
 
 
 def _cmfs_on(grid: WavelengthGrid) -> np.ndarray:
+    """CIE 1931 colour matching functions ``(K, 3)`` on ``grid``."""
     cmfs = colour.MSDS_CMFS[_OBSERVER]
     return np.stack(
         [np.interp(grid.wavelengths_nm, cmfs.wavelengths, cmfs.values[:, i]) for i in range(3)],

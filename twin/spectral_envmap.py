@@ -18,19 +18,17 @@ properties cannot carry arrays.
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass
 
 import numpy as np
 
 from recon.errors import SpectwinInputError
 from recon.spectra import WavelengthGrid
-from twin.variant import activate
+from twin.mitsuba_plugins import PluginData, register_once
 
 __all__ = ["SpectralMap", "register_map", "spectral_envmap"]
 
-_MAPS: dict[str, SpectralMap] = {}
-_KEYS = itertools.count()
+_MAPS = PluginData("map")
 
 
 @dataclass(frozen=True)
@@ -61,30 +59,13 @@ class SpectralMap:
 
 def register_map(spectral_map: SpectralMap) -> str:
     """Keep ``spectral_map`` for the plugin and return the key to put in the scene dict."""
-    key = f"map{next(_KEYS)}"
-    _MAPS[key] = spectral_map
-    return key
+    return _MAPS.keep(spectral_map)
 
 
 def spectral_envmap(spectral_map: SpectralMap, *, importance: bool = True) -> dict[str, object]:
     """Scene-dict entry of the emitter for ``spectral_map`` (registers the plugin)."""
-    _register_plugin()
+    register_once("emitter", "spectral_envmap", _plugin_class)
     return {"type": "spectral_envmap", "map": register_map(spectral_map), "importance": importance}
-
-
-_REGISTERED = False
-
-
-def _register_plugin() -> None:
-    global _REGISTERED
-    if _REGISTERED:
-        return
-    activate()
-    import mitsuba as mi
-
-    plugin = _plugin_class()
-    mi.register_emitter("spectral_envmap", lambda props: plugin(props))
-    _REGISTERED = True
 
 
 def _plugin_class():
