@@ -29,7 +29,7 @@ from twin.materials import Material
 from twin.rig_config import load_rig
 from twin.truth import truth_btf
 
-__all__ = ["FortyFiveZero", "compare_45_0", "field_spots"]
+__all__ = ["FortyFiveZero", "compare_45_0", "field_spots", "write_45_0_figure"]
 
 
 def field_spots(material: Material, texels: int, *, spot_fraction: float = 0.6) -> np.ndarray:
@@ -98,3 +98,33 @@ def compare_45_0(
         from_btf,
         relative_error(from_btf, instrument),
     )
+
+
+def write_45_0_figure(result: FortyFiveZero, wavelengths_nm: np.ndarray, path) -> None:
+    """One panel per field: the instrument's and the BTF's reflectance factors (Fig. 4.3/4.4)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    count = len(result.field_names)
+    columns = int(np.ceil(np.sqrt(count)))
+    rows = int(np.ceil(count / columns))
+    figure, axes = plt.subplots(rows, columns, figsize=(3 * columns, 2.4 * rows), sharex=True)
+    for index, axis in enumerate(np.ravel(axes)):
+        if index >= count:
+            axis.axis("off")
+            continue
+        axis.plot(wavelengths_nm, result.instrument[index], "k-", label="45/0 instrument")
+        axis.plot(wavelengths_nm, result.btf[index], "o", markersize=3, label="BTF")
+        kind = "glossy" if result.glossy[index] else "matte"
+        axis.set_title(
+            f"{result.field_names[index]} ({kind}): {result.error_pct[index]:.1f} %", fontsize=9
+        )
+        axis.set_ylim(bottom=0)
+    np.ravel(axes)[0].legend(fontsize=7)
+    figure.supxlabel("wavelength, nm")
+    figure.supylabel("reflectance factor")
+    figure.tight_layout()
+    figure.savefig(path, dpi=100)
+    plt.close(figure)

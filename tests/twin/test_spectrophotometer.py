@@ -9,7 +9,7 @@ from twin.gonio_evaluation import instrument_passbands
 from twin.hemisphere import sattler_directions
 from twin.materials import load_material
 from twin.rig_config import load_rig
-from twin.spectrophotometer import compare_45_0, field_spots
+from twin.spectrophotometer import compare_45_0, field_spots, write_45_0_figure
 from twin.truth import truth_btf
 
 pytestmark = pytest.mark.render
@@ -42,3 +42,5 @@ def test_btf_integrated_over_the_45_degree_ring_matches_the_instrument_on_matte_
     white = result.field_names.index("field_12")  # white 9.5: reflectance factor about 0.9
     assert 0.8 < result.instrument[white][10:25].mean() < 0.95
     assert field_spots(material, texels).sum(axis=(1, 2)).min() > 20
+    write_45_0_figure(result, DEFAULT_GRID.wavelengths_nm, tmp_path / "45_0.png")
+    assert (tmp_path / "45_0.png").stat().st_size > 30_000
