@@ -15,7 +15,9 @@ monitor with every lit frame) and the camera calibration (:mod:`recon.gonio_cali
    a border only two pixels wide at a grazing view, the coarse corners are kept and the pair is
    listed in the store's ``coarse_corner_pairs`` attribute), the texture square of the sample (a
    known fraction of the marks' square, centred) mapped to ``texels x texels`` (bilinear);
-4. the texture written to the BTF store, pair by pair (an interrupted run resumes).
+4. the texture written to the BTF store, pair by pair (an interrupted run resumes). Pairs whose
+   border is not found at all are left unwritten and listed in ``unregistered_pairs``: give their
+   corners in a manual corner file (keys ``"pair<i>"``) and process again with ``resume``.
 
 The capture's ``rig`` attribute supplies the nominal directions (``light_dirs``, ``view_dirs``),
 ``expected_corners_xy``, ``sample_fraction``, ``white_view_id`` and the material's name.
@@ -34,7 +36,12 @@ from recon.corner_refinement import CornerRefinementError, texture_transform
 from recon.errors import SpectwinInputError
 from recon.gonio_calibration import GonioCalibration, dark_model, white_reflectance
 from recon.progress import progress_steps
-from recon.registration import detect_corners, extract_texture, register_frame
+from recon.registration import (
+    MarksNotFoundError,
+    detect_corners,
+    extract_texture,
+    register_frame,
+)
 from recon.spectral_calibration import drift_factors, reflectance, run_white_factors
 
 __all__ = ["inset_corners", "process_gonio"]
@@ -149,6 +156,7 @@ def process_gonio(
             calibration={"run_factors": factors.tolist(), "source": calibration.source},
         )
     pending, coarse = btf.pending_pairs(), list(btf.attrs.get("coarse_corner_pairs", []))
+    unregistered: list[int] = []
     with progress_steps("process", len(pending), enabled=show_progress) as advance:
         for pair in pending:
             frames, exposure, monitor = _pair_frames(store, camera, index, pair, bands)
@@ -166,10 +174,15 @@ def process_gonio(
             except CornerRefinementError:
                 corners = detect_corners(image, expected_xy=expected[pair]).corners_xy
                 coarse.append(pair)
+            except MarksNotFoundError:
+                unregistered.append(pair)
+                advance()
+                continue
             texture = extract_texture(
                 image, inset_corners(corners, float(rig["sample_fraction"])), resolution=texels
             )
             btf.write_pair(pair, texture, grid=calibration.grid, corners_xy=corners)
             advance()
     btf.set_attribute("coarse_corner_pairs", sorted(set(coarse)))
+    btf.set_attribute("unregistered_pairs", unregistered)
     return btf

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import Delaunay
 
+from recon.btf_store import BTFStore
 from recon.errors import SpectwinInputError
 from recon.spectra import WavelengthGrid
 from twin.mitsuba_plugins import PluginData, register_once
@@ -36,6 +37,7 @@ __all__ = [
     "hemisphere_lookup",
     "interpolate_table",
     "product_table",
+    "written_table",
 ]
 
 _TABLES = PluginData("btf")
@@ -93,6 +95,13 @@ def product_table(
             nearest = have[np.argmax(views[have] @ views[view])]
             values[light, view] = values[light, nearest]
     return BTFTable(lights, views, values, grid)
+
+
+def written_table(btf: BTFStore) -> BTFTable:
+    """The written pairs of a BTF store on their product set (:func:`product_table`)."""
+    written = np.flatnonzero(btf.written())
+    values = np.stack([btf.read_pair(pair, allow_incomplete=True) for pair in written])
+    return product_table(btf.light_dirs[written], btf.view_dirs[written], values, btf.grid)
 
 
 def barycentric(directions: np.ndarray, queries: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -212,8 +212,20 @@ def process(
         )
     except SpectwinInputError as error:
         _fail(str(error))
-    summary = {"btf": str(out), "shape": list(btf.shape), "complete": btf.complete}
+    summary = {
+        "btf": str(out),
+        "shape": list(btf.shape),
+        "complete": btf.complete,
+        "coarse_corner_pairs": btf.attrs["coarse_corner_pairs"],
+        "unregistered_pairs": btf.attrs["unregistered_pairs"],
+    }
     _print(summary, "gonio processing", as_json)
+    if summary["unregistered_pairs"]:
+        Console(stderr=True).print(
+            "[yellow]some pairs were not registered:[/yellow] give their corners in a manual "
+            'corner file (keys "pair<i>") and run again with --manual-corners FILE --resume'
+        )
+        raise typer.Exit(code=1)
 
 
 def evaluate(

@@ -74,7 +74,7 @@ def field_masks(
 
 @dataclass(frozen=True)
 class GonioEvaluation:
-    """Per pair and field: Eq. 6.8 of the field means, %; corner errors, px."""
+    """Per written pair and field: Eq. 6.8 of the field means, %; corner errors, px."""
 
     field_names: tuple[str, ...]
     glossy: np.ndarray
@@ -87,7 +87,7 @@ class GonioEvaluation:
     def summary(self) -> dict[str, object]:
         matte = ~self.glossy
         return {
-            "pairs": int(self.field_error.shape[0]),
+            "pairs_compared": int(self.field_error.shape[0]),
             "mean_relative_error_matte_fields_pct": float(self.field_error[:, matte].mean()),
             "max_relative_error_matte_fields_pct": float(self.field_error[:, matte].max()),
             "mean_relative_error_glossy_fields_pct": float(self.field_error[:, ~matte].mean()),
@@ -139,31 +139,33 @@ def evaluate_gonio(
     """Compare a BTF store made by ``spectwin process`` with the twin's truth (module docstring).
 
     The capture store named in the BTF's provenance supplies the session seed (the robot's
-    actual poses) and the rendered window.
+    actual poses) and the rendered window. Pairs not written (unregistered) are left out and
+    counted in :meth:`GonioEvaluation.summary`.
     """
     btf = BTFStore.open(btf_path)
     capture = CaptureStore.open(btf.attrs["source_capture"])
     material = load_material(btf.material)
     texels = btf.texels[0]
+    written = np.flatnonzero(btf.written())
     truth = truth_btf(
         material,
-        btf.light_dirs,
-        btf.view_dirs,
+        btf.light_dirs[written],
+        btf.view_dirs[written],
         texels=texels,
         passbands=instrument_passbands(load_rig("gonio")),
         spp=spp,
     )
-    measured = btf.read()
     field_means, truth_means, texel_errors = [], [], []
-    for pair, view in enumerate(btf.view_dirs):
-        fields = field_masks(material, view, texels, interior=interior)
-        field_means.append([measured[pair][mask].mean(axis=0) for mask in fields.masks])
-        truth_means.append([truth[pair][mask].mean(axis=0) for mask in fields.masks])
-        per_texel = relative_error(measured[pair], truth[pair])
+    for index, pair in enumerate(written):
+        measured = btf.read_pair(pair, allow_incomplete=True)
+        fields = field_masks(material, btf.view_dirs[pair], texels, interior=interior)
+        field_means.append([measured[mask].mean(axis=0) for mask in fields.masks])
+        truth_means.append([truth[index][mask].mean(axis=0) for mask in fields.masks])
+        per_texel = relative_error(measured, truth[index])
         texel_errors.append([per_texel[mask].mean() for mask in fields.masks])
     field_means, truth_means = np.array(field_means), np.array(truth_means)
-    corners = btf.corners_xy()
-    error = np.linalg.norm(corners - _true_corners(capture, btf), axis=2)
+    corners = btf.corners_xy()[written]
+    error = np.linalg.norm(corners - _true_corners(capture, btf)[written], axis=2)
     return GonioEvaluation(
         fields.names,
         fields.glossy,

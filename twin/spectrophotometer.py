@@ -22,7 +22,7 @@ import numpy as np
 
 from recon.btf_store import BTFStore
 from recon.metrics import relative_error
-from twin.btf_bsdf import interpolate_table, product_table
+from twin.btf_bsdf import interpolate_table, written_table
 from twin.gonio_evaluation import instrument_passbands
 from twin.hemisphere import direction
 from twin.materials import Material
@@ -85,7 +85,7 @@ def compare_45_0(
         passbands=instrument_passbands(load_rig("gonio")),
         spp=spp,
     ).mean(axis=0)
-    table = product_table(btf.light_dirs, btf.view_dirs, btf.read(), btf.grid)
+    table = written_table(btf)
     measured = np.mean([interpolate_table(table, light, top) for light in lights], axis=0)
     spots = field_spots(material, texels)
     instrument = np.pi * np.array([truth[spot].mean(axis=0) for spot in spots])
