@@ -78,6 +78,7 @@ class GonioEvaluation:
 
     field_names: tuple[str, ...]
     glossy: np.ndarray
+    pairs: np.ndarray  # (n_pairs,) the BTF store's indices of the compared (written) pairs
     field_error: np.ndarray  # (n_pairs, n_fields)
     texel_error: np.ndarray  # (n_pairs, n_fields): mean over the interior of per-texel Eq. 6.8
     corner_error_px: np.ndarray  # (n_pairs, 4)
@@ -169,6 +170,7 @@ def evaluate_gonio(
     return GonioEvaluation(
         fields.names,
         fields.glossy,
+        written,
         relative_error(field_means, truth_means),
         np.array(texel_errors),
         error,

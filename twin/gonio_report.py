@@ -51,7 +51,8 @@ def write_gonio_figure(evaluation: GonioEvaluation, btf: BTFStore, path: str | P
         title=f"matte fields: mean {matte.mean():.2f} %, 95th percentile "
         f"{np.percentile(matte, 95):.2f} %",
     )
-    oblique = int(np.argmax(np.arccos(btf.view_dirs[:, 2])))
+    views = btf.view_dirs[evaluation.pairs]
+    oblique = int(np.argmax(np.arccos(views[:, 2])))
     wavelengths = btf.grid.wavelengths_nm
     for field in np.flatnonzero(~evaluation.glossy)[::3]:
         (line,) = axes[1, 0].plot(
@@ -63,13 +64,15 @@ def write_gonio_figure(evaluation: GonioEvaluation, btf: BTFStore, path: str | P
     axes[1, 0].set(
         xlabel="wavelength, nm",
         ylabel="BRDF, 1/sr",
-        title=f"lines: truth, dots: measured; {_pair_label(btf, oblique)}",
+        title=f"lines: truth, dots: measured; {_pair_label(btf, evaluation.pairs[oblique])}",
     )
     axes[1, 0].legend(fontsize=8)
-    frontal = int(np.argmin(np.arccos(btf.view_dirs[:, 2])))
-    previews = [spectral_to_srgb(btf.read_pair(pair), btf.grid) for pair in (frontal, oblique)]
+    shown = [evaluation.pairs[int(np.argmin(np.arccos(views[:, 2])))], evaluation.pairs[oblique]]
+    previews = [
+        spectral_to_srgb(btf.read_pair(pair, allow_incomplete=True), btf.grid) for pair in shown
+    ]
     axes[1, 1].imshow(np.concatenate(previews, axis=1))
-    axes[1, 1].set_title(f"measured textures: {_pair_label(btf, frontal)} | oblique", fontsize=9)
+    axes[1, 1].set_title(f"measured textures: {_pair_label(btf, shown[0])} | oblique", fontsize=9)
     axes[1, 1].axis("off")
     figure.tight_layout()
     figure.savefig(path, dpi=110)
