@@ -50,6 +50,7 @@ __all__ = [
     "calibrate_gonio",
     "dark_model",
     "extend_curve",
+    "store_white_factors",
     "white_reflectance",
 ]
 
@@ -200,6 +201,19 @@ class GonioCalibration:
         )
 
 
+def store_white_factors(
+    store: CaptureStore, camera: str, darks: DarkModel, inverse_response: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Band centres and :math:`F'_\\lambda` (Eq. 3.3/3.6) from the store's white photographs."""
+    white = select_frames(store, camera, kind="white")
+    order = np.argsort(white.band_nm)
+    bands = white.band_nm[order].astype(np.float64)
+    exposure = white.exposure_s[order]
+    signal = darks.linear_signal(white.frames[order], exposure, inverse_response)
+    reflectance = white_reflectance(store.attrs["rig"], bands)
+    return bands, run_white_factors(signal, exposure, reflectance)
+
+
 def _response_series_curve(store: CaptureStore, camera: str, bit_depth: int) -> np.ndarray:
     """Robertson's inverse response from the ``oecf`` frames; the series of each band is one
     scene, all shot with the same exposure times."""
@@ -246,13 +260,8 @@ def calibrate_gonio(
     camera = str(store.attrs["rig"].get("camera_id", "k4"))
     darks = dark_model(store, camera)
     curve = extend_curve(_response_series_curve(store, camera, bit_depth))
-    white = select_frames(store, camera, kind="white")
-    order = np.argsort(white.band_nm)
-    bands = white.band_nm[order].astype(np.float64)
-    exposure = white.exposure_s[order]
-    signal = darks.linear_signal(white.frames[order], exposure, curve)
+    bands, factors = store_white_factors(store, camera, darks, curve)
     reflectance = white_reflectance(store.attrs["rig"], bands)
-    factors = run_white_factors(signal, exposure, reflectance)
     dark_level = float(np.median(darks.mean_frames[0]))
     top = dark_level + white_fill * (2**bit_depth - 1 - dark_level)
     target = float(interpolate_curve(curve, np.array([top]))[0]) - float(

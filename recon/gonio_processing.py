@@ -31,10 +31,9 @@ import numpy as np
 
 from hwbridge.store import CaptureStore
 from recon.btf_store import BTFStore
-from recon.capture_io import select_frames
 from recon.corner_refinement import CornerRefinementError, texture_transform
 from recon.errors import SpectwinInputError
-from recon.gonio_calibration import GonioCalibration, dark_model, white_reflectance
+from recon.gonio_calibration import GonioCalibration, dark_model, store_white_factors
 from recon.progress import progress_steps
 from recon.registration import (
     MarksNotFoundError,
@@ -42,7 +41,7 @@ from recon.registration import (
     extract_texture,
     register_frame,
 )
-from recon.spectral_calibration import drift_factors, reflectance, run_white_factors
+from recon.spectral_calibration import drift_factors, reflectance
 
 __all__ = ["inset_corners", "process_gonio"]
 
@@ -126,17 +125,12 @@ def process_gonio(
     bands = calibration.bands_nm
     curve = calibration.inverse_response
     darks = dark_model(store, camera)
-    white = select_frames(store, camera, kind="white")
-    order = np.argsort(white.band_nm)
-    if not np.allclose(white.band_nm[order], bands):
+    white_bands, factors = store_white_factors(store, camera, darks, curve)
+    if not np.allclose(white_bands, bands):
         raise SpectwinInputError(
-            f"{store.path}: white photographs at {white.band_nm[order].tolist()} nm, the "
-            f"calibration has {bands.tolist()} nm"
+            f"{store.path}: white photographs at {white_bands.tolist()} nm, the calibration has "
+            f"{bands.tolist()} nm"
         )
-    white_signal = darks.linear_signal(white.frames[order], white.exposure_s[order], curve)
-    factors = run_white_factors(
-        white_signal, white.exposure_s[order], white_reflectance(rig, bands)
-    )
     index = store.index(camera)
     reference = index["lamp_monitor"][index["kind"] == "white"].astype(np.float64).mean(axis=0)
     light_dirs = np.asarray(rig["light_dirs"], np.float64)
