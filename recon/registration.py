@@ -337,8 +337,11 @@ def detect_corners(
         Lines meeting at this angle or less are not intersected (the thesis: 10 degrees).
     expected_xy
         Optional approximate corners ``(4, 2)`` in texture order (e.g. from the rig kinematics):
-        picks the quadrilateral nearest to them and orders its corners alike. Without it the
-        largest adequate quadrilateral is taken and ordered by :func:`order_corners`.
+        picks the quadrilateral nearest to them and orders its corners alike; a quadrilateral
+        whose corners lie on average more than a tenth of the expected mean side away is not the
+        border (e.g. the border cut by the frame's edge left only an inner square), and the
+        search goes on. Without it the largest adequate quadrilateral is taken and ordered by
+        :func:`order_corners`.
 
     Returns
     -------
@@ -385,6 +388,10 @@ def detect_corners(
         side_px or (max(4.0, 0.02 * min(height, width)), float(max(height, width))), "side_px"
     )
     expected = None if expected_xy is None else validate_corners(expected_xy, "expected_xy")
+    if expected is not None:
+        tolerance = 0.1 * float(
+            np.linalg.norm(np.roll(expected, -1, axis=0) - expected, axis=1).mean()
+        )
     level = float(threshold)
     for attempt in range(1, int(max_attempts) + 1):
         binary = intensity < level if marks == "dark" else intensity > level
@@ -407,8 +414,11 @@ def detect_corners(
         if quadrilaterals:
             if expected is not None:
                 ordered = [order_corners(quad, expected_xy=expected) for quad in quadrilaterals]
-                costs = [np.linalg.norm(quad - expected, axis=1).sum() for quad in ordered]
-                return CornerDetection(ordered[int(np.argmin(costs))], level, attempt)
+                costs = [np.linalg.norm(quad - expected, axis=1).mean() for quad in ordered]
+                if min(costs) <= tolerance:
+                    return CornerDetection(ordered[int(np.argmin(costs))], level, attempt)
+                level *= threshold_step
+                continue
             largest = max(quadrilaterals, key=lambda quad: abs(_signed_area(quad)))
             return CornerDetection(order_corners(largest), level, attempt)
         level *= threshold_step

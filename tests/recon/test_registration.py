@@ -271,3 +271,11 @@ def test_bad_input_is_rejected_with_the_argument_named(tmp_path):
     broken.write_text("{not json")
     with pytest.raises(SpectwinInputError, match="not valid JSON"):
         read_manual_corners(broken)
+
+
+def test_detection_refuses_a_border_far_from_the_expected_corners(frames):
+    rates, truth = frames["tilted"]
+    side = np.linalg.norm(np.roll(truth, -1, axis=0) - truth, axis=1).mean()
+    detect_corners(rates, expected_xy=truth + 0.05 * side)  # within a tenth of a side: found
+    with pytest.raises(MarksNotFoundError, match="no adequate border"):
+        detect_corners(rates, expected_xy=truth + 0.3 * side)
