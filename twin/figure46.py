@@ -116,13 +116,14 @@ def _render(entries: dict, pixels: int, spp: int, channels: SampledSpectra) -> n
     return np.array(mi.render(mi.load_dict(scene), seed=3), dtype=np.float64)
 
 
-def _sample_square(size_m: float, height_m: float) -> dict[str, object]:
-    """The BTF's square, at the height of the material's top face."""
+def _sample_square(size_m: float) -> dict[str, object]:
+    """The BTF's square in its reference plane z = 0 (the plane its textures are rectified to:
+    the holder's marks, the truth's sample plane); the parallax of the material's relief is in
+    the view-dependent textures."""
     activate()
     import mitsuba as mi
 
-    transform = mi.ScalarTransform4f().translate([0.0, 0.0, height_m]).scale(size_m / 2)
-    return {"type": "rectangle", "to_world": transform}
+    return {"type": "rectangle", "to_world": mi.ScalarTransform4f().scale(size_m / 2)}
 
 
 def _cie_rgb_matrix() -> np.ndarray:
@@ -259,8 +260,7 @@ def render_figure46(
     film = _xyz_film()
     true_sample = {part.name: mitsuba_shape(part) for part in material.parts}
     photograph = _render({**room, **true_sample}, pixels, spp, film)
-    top = max(float(part.mesh.bounds[1][2]) for part in material.parts)
-    square = _sample_square(material.size_m, top)
+    square = _sample_square(material.size_m)
     spectral = _render(
         {
             "environment": spectral_envmap(environment),

@@ -6,7 +6,7 @@ import pytest
 from recon.spectra import DEFAULT_GRID
 from twin.btf_bsdf import product_table
 from twin.figure46 import render_figure46, write_figure46
-from twin.hemisphere import direction
+from twin.hemisphere import direction, sattler_directions
 from twin.materials import load_material
 from twin.truth import truth_btf
 
@@ -15,9 +15,12 @@ pytestmark = pytest.mark.render
 
 def test_spectral_rendering_of_the_true_btf_is_closer_to_the_photograph_than_rgb(tmp_path):
     material = load_material("colorchecker16")
-    light, view = direction(30.0, 0.0)[None], direction(0.0, 0.0)[None]
+    # The true BTF for one light and the twin's 13 reduced view directions: the oblique views
+    # carry the parallax of the raised fields, as a measured BTF does.
+    views = sattler_directions(((0.0, 1), (30.0, 4), (60.0, 8)))
+    lights = np.tile(direction(30.0, 0.0), (len(views), 1))
     table = product_table(
-        light, view, truth_btf(material, light, view, texels=48, spp=64), DEFAULT_GRID
+        lights, views, truth_btf(material, lights, views, texels=48, spp=64), DEFAULT_GRID
     )
     figure = render_figure46(material, table, pixels=64, spp=64)
     summary = figure.summary()
