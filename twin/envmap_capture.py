@@ -20,7 +20,7 @@ import numpy as np
 
 from recon.errors import SpectwinInputError
 from recon.spectra import WavelengthGrid
-from twin.hemisphere import angle_between_deg
+from twin.hemisphere import angle_between_deg, direction, spherical_deg
 from twin.rig_scene import PinholeCamera
 from twin.spectral_envmap import SpectralMap
 from twin.truth import band_passbands
@@ -32,7 +32,7 @@ __all__ = ["capture_mirror_sphere", "unwrap_mirror_sphere"]
 def _reflected_directions(camera: PinholeCamera, radius_m: float) -> tuple[np.ndarray, np.ndarray]:
     """Per image pixel centre that sees the sphere: its flat index and the direction it
     reflects (``(n,)``, ``(n, 3)``)."""
-    left, up, forward = camera._frame()
+    left, up, forward = camera.frame()
     focal = camera.pixels / 2 / np.tan(np.radians(camera.fov_deg) / 2)
     centres = np.arange(camera.pixels) + 0.5
     column, row = np.meshgrid(centres, centres)
@@ -67,10 +67,9 @@ def unwrap_mirror_sphere(
     """Lat-long map ``(height, width, K)`` from an image ``(P, P, K)`` of a mirror sphere at the
     origin (module docstring)."""
     pixels, directions = _reflected_directions(camera, radius_m)
-    theta = np.arccos(np.clip(directions[:, 2], -1, 1))
-    phi = np.arctan2(directions[:, 1], directions[:, 0]) % (2 * np.pi)
-    row = np.minimum((theta / np.pi * height).astype(int), height - 1)
-    column = np.minimum((phi / (2 * np.pi) * width).astype(int), width - 1)
+    theta_deg, phi_deg = spherical_deg(directions)
+    row = np.minimum((theta_deg / 180 * height).astype(int), height - 1)
+    column = np.minimum((phi_deg / 360 * width).astype(int), width - 1)
     cell = row * width + column
     counts = np.bincount(cell, minlength=height * width)
     flat = image.reshape(-1, image.shape[-1])[pixels]
@@ -79,15 +78,9 @@ def unwrap_mirror_sphere(
         axis=-1,
     )
     values = (sums / np.maximum(counts, 1)[:, None]).reshape(height, width, -1)
-    theta_c = (np.arange(height) + 0.5) * np.pi / height
-    phi_c = (np.arange(width) + 0.5) * 2 * np.pi / width
-    centres = np.stack(
-        np.broadcast_arrays(
-            np.sin(theta_c)[:, None] * np.cos(phi_c),
-            np.sin(theta_c)[:, None] * np.sin(phi_c),
-            np.cos(theta_c)[:, None],
-        ),
-        axis=-1,
+    centres = direction(
+        ((np.arange(height) + 0.5) * 180 / height)[:, None],
+        ((np.arange(width) + 0.5) * 360 / width)[None, :],
     )
     away = -np.asarray(camera.position_m, np.float64)
     hidden = (angle_between_deg(centres, away / np.linalg.norm(away)) < blind_spot_deg) | (

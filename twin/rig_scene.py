@@ -49,7 +49,8 @@ class PinholeCamera:
         distance = float(np.linalg.norm(self.position_m))
         return float(2 * np.degrees(np.arctan(self.field_of_view_m / 2 / distance)))
 
-    def _frame(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def frame(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Unit vectors (left, up, forward) of the camera in the world."""
         forward = -np.asarray(self.position_m, np.float64)
         forward /= np.linalg.norm(forward)
         up = np.asarray(self.up, np.float64)
@@ -61,7 +62,7 @@ class PinholeCamera:
 
     def project(self, points_m: np.ndarray) -> np.ndarray:
         """Continuous pixel coordinates ``(n, 2)`` (column, row; pixel centres at +0.5)."""
-        left, up, forward = self._frame()
+        left, up, forward = self.frame()
         relative = np.atleast_2d(points_m) - self.position_m
         depth = relative @ forward
         focal = self.pixels / 2 / np.tan(np.radians(self.fov_deg) / 2)
@@ -73,7 +74,7 @@ class PinholeCamera:
         activate()
         import mitsuba as mi
 
-        left, up, forward = self._frame()
+        left, up, forward = self.frame()
         film = specfilm(channels, self.pixels, self.pixels)
         if self.window is not None:
             if not 0 < self.window <= self.pixels:
