@@ -16,6 +16,12 @@ Pairs the rig could not measure (light and view too close) are filled from the n
 view of the same light. Directions use the shading frame (x = dp/du), as the BTF uses the
 sample frame. The BSDF samples the cosine-weighted hemisphere. A BTF sampled from a known BRDF
 renders like the BRDF itself (``tests/twin/test_btf_bsdf.py``).
+
+The BTF is either decoded (:class:`BTFTable`, ``4 L V H W K`` bytes) or PCA-compressed
+(:class:`CompressedTable`, :mod:`recon.btf_compression`, thesis 4.1.2). A compressed BTF stays
+compressed on the renderer's side: every lookup decodes its texels from the factors,
+:math:`R = (\\mu_b + A_b[p] C_b)(\\mu_s + A_s[p, k] C_s)`, in two Dr.Jit loops over the components
+(``c_b + c_s`` steps per measured pair and texel), so memory is the factors' size.
 """
 
 from __future__ import annotations
@@ -25,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import Delaunay
 
+from recon.btf_compression import CompressedBTF, load_compressed
 from recon.btf_store import BTFStore
 from recon.errors import SpectwinInputError
 from recon.spectra import WavelengthGrid
@@ -32,6 +39,9 @@ from twin.mitsuba_plugins import PluginData, register_once
 
 __all__ = [
     "BTFTable",
+    "CompressedTable",
+    "compressed_product_table",
+    "store_table",
     "barycentric",
     "btf_bsdf",
     "hemisphere_lookup",
@@ -65,9 +75,57 @@ class BTFTable:
             )
         if not np.all(np.isfinite(self.values)):
             raise SpectwinInputError("values: expected finite reflectance")
-        steps = np.diff(self.grid.wavelengths_nm)
-        if steps.size and not np.allclose(steps, steps[0]):
-            raise SpectwinInputError("grid: expected a regular wavelength grid (resample first)")
+        _check_regular(self.grid)
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes the renderer holds for the reflectance (float32)."""
+        return 4 * self.values.size
+
+    def texture(self, light: int, view: int) -> np.ndarray:
+        """The texture ``(H, W, K)`` of the product set's ``(light, view)`` combination."""
+        return self.values[light, view]
+
+
+@dataclass(frozen=True)
+class CompressedTable:
+    """A PCA-compressed BTF on a product set: combination ``(light, view)`` reads the
+    compressed BTF's pair ``pairs[light, view]``."""
+
+    light_dirs: np.ndarray
+    view_dirs: np.ndarray
+    pairs: np.ndarray
+    compressed: CompressedBTF
+
+    def __post_init__(self) -> None:
+        want = (len(self.light_dirs), len(self.view_dirs))
+        if self.pairs.shape != want:
+            raise SpectwinInputError(f"pairs: expected shape {want}, got {self.pairs.shape}")
+        n_pairs = self.compressed.shape[0]
+        if self.pairs.min() < 0 or self.pairs.max() >= n_pairs:
+            raise SpectwinInputError(
+                f"pairs: expected indices of the compressed BTF's {n_pairs} pairs"
+            )
+        _check_regular(self.compressed.grid)
+
+    @property
+    def grid(self) -> WavelengthGrid:
+        return self.compressed.grid
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes the renderer holds for the reflectance: the factors (float32)."""
+        return self.compressed.nbytes
+
+    def texture(self, light: int, view: int) -> np.ndarray:
+        """The decoded texture ``(H, W, K)`` of the combination ``(light, view)``."""
+        return self.compressed.decode_pair(int(self.pairs[light, view]))
+
+
+def _check_regular(grid: WavelengthGrid) -> None:
+    steps = np.diff(grid.wavelengths_nm)
+    if steps.size and not np.allclose(steps, steps[0]):
+        raise SpectwinInputError("grid: expected a regular wavelength grid (resample first)")
 
 
 def _unique_directions(directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -76,25 +134,45 @@ def _unique_directions(directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return unique / np.linalg.norm(unique, axis=1, keepdims=True), inverse.ravel()
 
 
+def _product_set(
+    light_dirs: np.ndarray, view_dirs: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The distinct lights and views of pairs given by their directions, and for every light x
+    view combination the pair it reads: its own, or the nearest measured view of its light."""
+    lights, light_index = _unique_directions(light_dirs)
+    views, view_index = _unique_directions(view_dirs)
+    pairs = np.full((len(lights), len(views)), -1, np.int64)
+    pairs[light_index, view_index] = np.arange(len(light_index))
+    for light in range(len(lights)):
+        have = np.flatnonzero(pairs[light] >= 0)
+        if have.size == 0:
+            raise SpectwinInputError(f"light direction {lights[light].tolist()} has no views")
+        for view in np.flatnonzero(pairs[light] < 0):
+            pairs[light, view] = pairs[light, have[np.argmax(views[have] @ views[view])]]
+    return lights, views, pairs
+
+
 def product_table(
     light_dirs: np.ndarray, view_dirs: np.ndarray, reflectance: np.ndarray, grid: WavelengthGrid
 ) -> BTFTable:
     """Arrange pairs ``(n_pairs, H, W, K)`` (e.g. a BTF store's) on their light x view product
     set; a missing combination takes the nearest measured view of the same light."""
-    lights, light_index = _unique_directions(light_dirs)
-    views, view_index = _unique_directions(view_dirs)
-    values = np.full((len(lights), len(views), *reflectance.shape[1:]), np.nan, np.float32)
-    values[light_index, view_index] = reflectance
-    measured = np.zeros((len(lights), len(views)), bool)
-    measured[light_index, view_index] = True
-    for light in range(len(lights)):
-        have = np.flatnonzero(measured[light])
-        if have.size == 0:
-            raise SpectwinInputError(f"light direction {lights[light].tolist()} has no views")
-        for view in np.flatnonzero(~measured[light]):
-            nearest = have[np.argmax(views[have] @ views[view])]
-            values[light, view] = values[light, nearest]
-    return BTFTable(lights, views, values, grid)
+    lights, views, pairs = _product_set(light_dirs, view_dirs)
+    return BTFTable(lights, views, np.asarray(reflectance, np.float32)[pairs], grid)
+
+
+def compressed_product_table(
+    light_dirs: np.ndarray, view_dirs: np.ndarray, compressed: CompressedBTF
+) -> CompressedTable:
+    """The compressed BTF's pairs (directions in its pair order) on their product set, filled
+    like :func:`product_table`."""
+    if len(light_dirs) != compressed.shape[0] or len(view_dirs) != compressed.shape[0]:
+        raise SpectwinInputError(
+            f"light_dirs, view_dirs: expected one per compressed pair ({compressed.shape[0]}), "
+            f"got {len(light_dirs)} and {len(view_dirs)}"
+        )
+    lights, views, pairs = _product_set(light_dirs, view_dirs)
+    return CompressedTable(lights, views, pairs, compressed)
 
 
 def written_table(btf: BTFStore) -> BTFTable:
@@ -102,6 +180,14 @@ def written_table(btf: BTFStore) -> BTFTable:
     written = np.flatnonzero(btf.written())
     values = np.stack([btf.read_pair(pair, allow_incomplete=True) for pair in written])
     return product_table(btf.light_dirs[written], btf.view_dirs[written], values, btf.grid)
+
+
+def store_table(btf: BTFStore, *, compressed: bool = False) -> BTFTable | CompressedTable:
+    """A BTF store as the plugin's table: its written pairs decoded (:func:`written_table`), or
+    with ``compressed`` its ``pca/`` form (``spectwin compress``), left compressed."""
+    if not compressed:
+        return written_table(btf)
+    return compressed_product_table(btf.light_dirs, btf.view_dirs, load_compressed(btf))
 
 
 def barycentric(directions: np.ndarray, queries: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -141,22 +227,154 @@ def hemisphere_lookup(directions: np.ndarray, resolution: int = 128):
     return indices.reshape(shape), weights.reshape(shape)
 
 
-def interpolate_table(table: BTFTable, light: np.ndarray, view: np.ndarray) -> np.ndarray:
+def interpolate_table(
+    table: BTFTable | CompressedTable, light: np.ndarray, view: np.ndarray
+) -> np.ndarray:
     """The table's texture ``(H, W, K)`` at one (light, view) pair, interpolated like the plugin
     does (without its lookup grid)."""
     light_indices, light_weights = barycentric(table.light_dirs, np.atleast_2d(light))
     view_indices, view_weights = barycentric(table.view_dirs, np.atleast_2d(view))
-    texture = np.zeros(table.values.shape[2:])
+    texture = 0.0
     for i, wi in zip(light_indices[0], light_weights[0], strict=True):
         for j, wj in zip(view_indices[0], view_weights[0], strict=True):
-            texture += wi * wj * table.values[i, j]
+            if wi * wj > 0:
+                texture = texture + wi * wj * table.texture(i, j).astype(np.float64)
     return texture
 
 
-def btf_bsdf(table: BTFTable, *, resolution: int = 128) -> dict[str, object]:
+def btf_bsdf(table: BTFTable | CompressedTable, *, resolution: int = 128) -> dict[str, object]:
     """Scene-dict entry of the BSDF for ``table`` (registers the plugin)."""
     register_once("bsdf", "spectral_btf", _plugin_class)
     return {"type": "spectral_btf", "btf": _TABLES.keep(table), "resolution": resolution}
+
+
+class _DecodedSpectra:
+    """Texel spectra of a :class:`BTFTable`, gathered from its values (Dr.Jit side)."""
+
+    def __init__(self, table: BTFTable):
+        import mitsuba as mi
+
+        _, self.n_views, self.height, self.width, self.bands = table.values.shape
+        self._values = mi.Float(table.values.astype(np.float32).ravel())
+
+    def __call__(self, combination, texel, lows, fractions, mask):
+        """Reflectance of ``texel`` at the product set's ``combination`` (light * n_views +
+        view), one value per wavelength channel, linear between the bands ``lows`` and
+        ``lows + 1``."""
+        import drjit as dr
+        import mitsuba as mi
+
+        base = (combination * (self.height * self.width) + texel) * self.bands
+        channels = []
+        for low, fraction in zip(lows, fractions, strict=True):
+            first = dr.gather(mi.Float, self._values, base + low, mask)
+            second = dr.gather(
+                mi.Float, self._values, base + dr.minimum(low + 1, self.bands - 1), mask
+            )
+            channels.append(first + fraction * (second - first))
+        return channels
+
+
+class _CompressedSpectra:
+    """Texel spectra of a :class:`CompressedTable`, decoded from the PCA factors per lookup."""
+
+    def __init__(self, table: CompressedTable):
+        import mitsuba as mi
+
+        compressed = table.compressed
+        _, self.height, self.width, self.bands = compressed.shape
+        self.n_views = len(table.view_dirs)
+        self._texels = self.height * self.width
+        self._per_band = compressed.layout == "per_band"
+        self._n_brightness, self._n_spectral = compressed.n_brightness, compressed.n_spectral
+        self._pairs = mi.UInt32(table.pairs.ravel().astype(np.uint32))
+        self._factors = {
+            name: mi.Float(np.asarray(getattr(compressed, name), np.float32).ravel())
+            for name in (
+                "brightness_mean",
+                "brightness_scores",
+                "brightness_components",
+                "spectral_mean",
+                "spectral_scores",
+                "spectral_components",
+            )
+        }
+
+    def _gather(self, name, index, mask):
+        import drjit as dr
+        import mitsuba as mi
+
+        return dr.gather(mi.Float, self._factors[name], index, mask)
+
+    @staticmethod
+    def _sum_over_components(count, terms, width):
+        """``sum_{c < count} terms(c)`` for every entry of the list ``terms`` returns, as a
+        symbolic Dr.Jit loop (one compiled loop, not ``count`` unrolled steps)."""
+        import drjit as dr
+        import mitsuba as mi
+
+        n_terms = len(terms(dr.zeros(mi.UInt32, width)))
+        state = (dr.zeros(mi.UInt32, width), *[dr.zeros(mi.Float, width) for _ in range(n_terms)])
+
+        def body(component, *sums):
+            return (component + 1, *[s + t for s, t in zip(sums, terms(component), strict=True)])
+
+        return dr.while_loop(state, lambda component, *_: component < count, body)[1:]
+
+    def __call__(self, combination, texel, lows, fractions, mask):
+        """As :meth:`_DecodedSpectra.__call__`, decoding b and s at the texel (module docstring)."""
+        import drjit as dr
+        import mitsuba as mi
+
+        width = dr.width(texel)
+        pair = dr.gather(mi.UInt32, self._pairs, combination, mask)
+        c_b, c_s, n_texels = self._n_brightness, self._n_spectral, self._texels
+
+        (brightness,) = self._sum_over_components(
+            c_b,
+            lambda c: [
+                self._gather("brightness_scores", pair * c_b + c, mask)
+                * self._gather("brightness_components", c * n_texels + texel, mask)
+            ],
+            width,
+        )
+        brightness += self._gather("brightness_mean", texel, mask)
+        highs = [dr.minimum(low + 1, self.bands - 1) for low in lows]
+        groups = [
+            (low, high) if self._per_band else (mi.UInt32(0), mi.UInt32(0))
+            for low, high in zip(lows, highs, strict=True)
+        ]
+
+        def spectral_terms(c):
+            terms = []
+            for low, high, fraction, (g_low, g_high) in zip(
+                lows, highs, fractions, groups, strict=True
+            ):
+                score_low = self._gather(
+                    "spectral_scores", (pair * self.bands + low) * c_s + c, mask
+                )
+                score_high = self._gather(
+                    "spectral_scores", (pair * self.bands + high) * c_s + c, mask
+                )
+                component_low = self._gather(
+                    "spectral_components", (g_low * c_s + c) * n_texels + texel, mask
+                )
+                component_high = self._gather(
+                    "spectral_components", (g_high * c_s + c) * n_texels + texel, mask
+                )
+                terms.append(
+                    (1 - fraction) * score_low * component_low
+                    + fraction * score_high * component_high
+                )
+            return terms
+
+        spectra = self._sum_over_components(c_s, spectral_terms, width)
+        channels = []
+        for spectrum, fraction, (g_low, g_high) in zip(spectra, fractions, groups, strict=True):
+            mean_low = self._gather("spectral_mean", g_low * n_texels + texel, mask)
+            mean_high = self._gather("spectral_mean", g_high * n_texels + texel, mask)
+            channels.append(brightness * (spectrum + mean_low + fraction * (mean_high - mean_low)))
+        return channels
 
 
 def _plugin_class():
@@ -169,9 +387,10 @@ def _plugin_class():
             super().__init__(props)
             table = _TABLES[props["btf"]]
             self._resolution = int(props.get("resolution", 128))
-            n_lights, n_views, height, width, bands = table.values.shape
-            self._shape = (n_views, height, width, bands)
-            self._values = mi.Float(table.values.astype(np.float32).ravel())
+            if isinstance(table, CompressedTable):
+                self._spectra = _CompressedSpectra(table)
+            else:
+                self._spectra = _DecodedSpectra(table)
             self._lookups = []
             for directions in (table.light_dirs, table.view_dirs):
                 indices, weights = hemisphere_lookup(directions, self._resolution)
@@ -180,7 +399,7 @@ def _plugin_class():
                 )
             wavelengths = table.grid.wavelengths_nm
             self._first_nm = float(wavelengths[0])
-            self._step_nm = float(wavelengths[1] - wavelengths[0]) if bands > 1 else 1.0
+            self._step_nm = float(wavelengths[1] - wavelengths[0]) if len(wavelengths) > 1 else 1.0
             flags = (
                 mi.BSDFFlags.DiffuseReflection
                 | mi.BSDFFlags.FrontSide
@@ -203,7 +422,7 @@ def _plugin_class():
 
         def _texels(self, uv):
             """Four (texel offset, weight) of the bilinear footprint of ``uv``."""
-            _, height, width, _ = self._shape
+            height, width = self._spectra.height, self._spectra.width
             x = dr.clip(uv.x * width - 0.5, 0.0, width - 1.0)
             y = dr.clip((1 - uv.y) * height - 0.5, 0.0, height - 1.0)
             x0 = dr.minimum(mi.UInt32(x), max(width - 2, 0))
@@ -218,7 +437,7 @@ def _plugin_class():
             ]
 
         def _reflectance(self, si, light, view, active):
-            n_views, height, width, bands = self._shape
+            bands = self._spectra.bands
             value = mi.UnpolarizedSpectrum(0.0)
             lows, fractions = [], []
             for channel in range(4):
@@ -229,20 +448,12 @@ def _plugin_class():
             texels = self._texels(si.uv)
             for light_index, light_weight in self._corners(0, light):
                 for view_index, view_weight in self._corners(1, view):
-                    pair = (light_index * n_views + view_index) * (height * width)
+                    combination = light_index * self._spectra.n_views + view_index
                     for texel, texel_weight in texels:
                         weight = light_weight * view_weight * texel_weight
-                        base = (pair + texel) * bands
-                        for channel in range(4):
-                            mask = active & (weight > 0)
-                            first = dr.gather(mi.Float, self._values, base + lows[channel], mask)
-                            second = dr.gather(
-                                mi.Float,
-                                self._values,
-                                base + dr.minimum(lows[channel] + 1, bands - 1),
-                                mask,
-                            )
-                            sample = first + fractions[channel] * (second - first)
+                        mask = active & (weight > 0)
+                        samples = self._spectra(combination, texel, lows, fractions, mask)
+                        for channel, sample in enumerate(samples):
                             value[channel] += dr.select(mask, weight * sample, 0.0)
             return value
 
@@ -271,6 +482,7 @@ def _plugin_class():
             return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
 
         def to_string(self):
-            return f"SpectralBTF[{self._shape}]"
+            spectra = self._spectra
+            return f"SpectralBTF[{type(spectra).__name__}, {spectra.height}x{spectra.width}]"
 
     return SpectralBTF
