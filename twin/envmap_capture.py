@@ -16,15 +16,17 @@ sphere, and pixels no image pixel reached take the nearest seen row.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from recon.errors import SpectwinInputError
 from recon.spectra import WavelengthGrid
 from twin.hemisphere import angle_between_deg, direction, spherical_deg
+from twin.light_groups import LightGroup, render_lit
 from twin.rig_scene import PinholeCamera
 from twin.spectral_envmap import SpectralMap
 from twin.truth import band_passbands
-from twin.variant import activate
 
 __all__ = ["capture_mirror_sphere", "unwrap_mirror_sphere"]
 
@@ -99,6 +101,7 @@ def capture_mirror_sphere(
     scene_entries: dict[str, object],
     grid: WavelengthGrid,
     *,
+    groups: Sequence[LightGroup] = (),
     camera_direction: tuple[float, float, float] = (0.0, -1.0, 0.3),
     distance_m: float = 1.0,
     radius_m: float = 0.05,
@@ -107,26 +110,24 @@ def capture_mirror_sphere(
     height: int = 32,
     width: int = 64,
 ) -> tuple[SpectralMap, np.ndarray]:
-    """Render a mirror sphere at the origin inside ``scene_entries`` (emitters and shapes of a
-    Mitsuba scene dict) with a spectral camera of bands ``grid``; returns the unwrapped map and
-    the sphere image ``(pixels, pixels, K)``."""
-    activate()
-    import mitsuba as mi
-
+    """Render a mirror sphere at the origin inside ``scene_entries`` (shapes and emitters of a
+    Mitsuba scene dict) lit by ``groups`` (:func:`twin.light_groups.render_lit`) with a spectral
+    camera of bands ``grid``; returns the unwrapped map and the sphere image
+    ``(pixels, pixels, K)``."""
     direction = np.asarray(camera_direction, np.float64)
     camera = PinholeCamera(
         distance_m * direction / np.linalg.norm(direction), 2.2 * radius_m, pixels
     )
-    scene: dict[str, object] = {
-        "type": "scene",
-        "integrator": {"type": "path", "max_depth": 4},
-        "sensor": camera.mitsuba_sensor(band_passbands(grid), spp),
-        "mirror_sphere": {
-            "type": "sphere",
-            "radius": radius_m,
-            "bsdf": {"type": "conductor", "material": "none"},
-        },
-        **scene_entries,
+    sphere = {
+        "type": "sphere",
+        "radius": radius_m,
+        "bsdf": {"type": "conductor", "material": "none"},
     }
-    image = np.array(mi.render(mi.load_dict(scene)), dtype=np.float64)
+    image = render_lit(
+        camera,
+        band_passbands(grid),
+        {"mirror_sphere": sphere, **scene_entries},
+        groups,
+        spp=spp,
+    )
     return unwrap_mirror_sphere(image, camera, radius_m, grid, height=height, width=width), image

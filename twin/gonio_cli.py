@@ -1,4 +1,5 @@
-"""``spectwin`` commands of the gonioreflectometer pipeline: capture, calibrate, process, evaluate.
+"""``spectwin`` commands of the gonioreflectometer pipeline: capture, calibrate, process, compress,
+evaluate.
 
 A full twin run at reduced sampling (thesis 3.3 and 4.1)::
 
@@ -6,6 +7,7 @@ A full twin run at reduced sampling (thesis 3.3 and 4.1)::
     spectwin calibrate out/cal.capture.zarr --out out/cal.json
     spectwin capture out/run.capture.zarr --program gonio-run --calibration out/cal.json
     spectwin process out/run.capture.zarr --calibration out/cal.json --out out/cc.btf.zarr
+    spectwin compress out/cc.btf.zarr --layout joint
     spectwin evaluate out/cc.btf.zarr --figure out/cc_vs_truth.png
 """
 
@@ -32,6 +34,11 @@ class Program(StrEnum):
     demo = "demo"
     gonio_calibration = "gonio-calibration"
     gonio_run = "gonio-run"
+
+
+class Layout(StrEnum):
+    per_band = "per_band"
+    joint = "joint"
 
 
 def _print(summary: dict[str, object], title: str, as_json: bool) -> None:
@@ -228,6 +235,47 @@ def process(
         raise typer.Exit(code=1)
 
 
+def compress(
+    btf: Annotated[Path, typer.Argument(help="A complete BTF store (spectwin process).")],
+    brightness: Annotated[int, typer.Option(help="PCA components of the brightness.")] = 250,
+    spectral: Annotated[
+        int, typer.Option(help="PCA components of the normalized spectra (per band or joint).")
+    ] = 60,
+    layout: Annotated[
+        Layout,
+        typer.Option(
+            help="per_band: one PCA per band (the thesis); joint: one PCA over all bands."
+        ),
+    ] = Layout.per_band,
+    as_json: JsonFlag = False,
+) -> None:
+    """Compress a BTF by PCA of brightness and normalized spectra (thesis 4.1.2: 250 and 60
+    components) into the store's pca/ group; report size and Eq. 6.8 error against the store.
+
+    Example: spectwin compress out/cc.btf.zarr --layout joint --json
+    """
+    from recon.btf_compression import compress_btf, compression_report, save_compressed
+    from recon.btf_store import BTFStore
+    from recon.errors import SpectwinInputError
+
+    try:
+        store = BTFStore.open(btf, writable=True)
+        with console.status("compressing"):
+            reflectance = np.asarray(store.reflectance())
+            compressed = compress_btf(
+                reflectance,
+                store.grid,
+                n_brightness=brightness,
+                n_spectral=spectral,
+                layout=layout.value,
+            )
+            save_compressed(store, compressed)
+            report = compression_report(compressed, reflectance)
+    except SpectwinInputError as error:
+        _fail(str(error))
+    _print({"btf": str(btf), **report.as_dict()}, "BTF compression", as_json)
+
+
 def evaluate(
     btf: Annotated[Path, typer.Argument(help="A BTF store made by spectwin process.")],
     figure: Annotated[Path | None, typer.Option(help="PNG of errors and spectra.")] = None,
@@ -256,5 +304,5 @@ def evaluate(
 
 def register(app: typer.Typer) -> None:
     """Add the commands to ``app``."""
-    for command in (capture, calibrate, process, evaluate):
+    for command in (capture, calibrate, process, compress, evaluate):
         app.command()(command)

@@ -17,6 +17,7 @@ import numpy as np
 from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra
 from twin.hemisphere import direction
+from twin.light_groups import lamp_weighted_channels
 from twin.mitsuba_spectra import irregular_spectrum, specfilm
 from twin.surfaces import SurfacePart, mitsuba_shape, transformed
 from twin.variant import activate
@@ -112,27 +113,17 @@ def render_view(
     """Render ``parts`` moved by the 4x4 ``sample_to_world``, lit by a point light of spectral
     intensity ``light_intensity`` (W sr^-1 nm^-1, on the channels' grid); returns ``(H, W, n)``.
 
-    Light transport is linear in the emitted spectrum wavelength by wavelength, so the lamp
-    spectrum is moved into the film's channel responses and the point light emits a flat unit
-    spectrum: the expectation is unchanged, but Mitsuba then samples wavelengths in proportion to
-    response x lamp spectrum, which keeps the per-band noise of spiky lamp spectra (the HMI's
-    emission lines: 49 % per pixel and band at 64 spp before, see ``tests/twin``) at the level of
-    smooth ones. Each channel is also normalized to unit area for the render and scaled back
-    after it, so that every band gets an equal share of the wavelength samples (weak blue bands
-    of the K4 under the HMI lamp otherwise got few: 30 % noise at 400 nm, 64 spp).
+    The lamp spectrum is moved into the film's channel responses and the point light emits a
+    flat unit spectrum (:mod:`twin.light_groups`): the expectation is unchanged, and the per-band
+    noise of spiky lamp spectra (the HMI's emission lines: 49 % per pixel and band at 64 spp
+    before, see ``tests/twin``) falls to the level of smooth ones; unit-area channels give weak
+    bands their share of wavelength samples (the K4's blue bands under the HMI lamp: 30 % noise
+    at 400 nm, 64 spp, before).
     """
     activate()
     import mitsuba as mi
 
-    if light_intensity.grid != channels.grid:
-        raise SpectwinInputError(
-            "light_intensity: expected the channels' grid "
-            f"({channels.grid.describe()}), got {light_intensity.grid.describe()}"
-        )
-    weighted = np.atleast_2d(channels.values * light_intensity.values)
-    areas = np.trapezoid(weighted, channels.grid.wavelengths_nm, axis=-1)
-    areas = np.where(areas > 0, areas, 1.0)
-    normalized = SampledSpectra(channels.grid, weighted / areas[:, None], channels.names)
+    normalized, areas = lamp_weighted_channels(channels, light_intensity)
     flat = SampledSpectra(channels.grid, np.ones(channels.grid.size))
     scene: dict[str, object] = {
         "type": "scene",

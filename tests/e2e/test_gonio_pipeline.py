@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from recon.btf_compression import load_compressed
 from recon.btf_store import BTFStore
 from recon.gonio_calibration import GonioCalibration
 from recon.spectral_calibration import HMI_FLICKER_PERIOD_S
@@ -89,6 +90,24 @@ def test_btf_matches_the_truth_on_matte_fields_and_corners_within_a_quarter_pixe
     assert (root / "cc.png").stat().st_size > 20_000
     btf = BTFStore.open(root / "cc.btf.zarr")
     assert np.isfinite(btf.corners_xy()).all()
+
+
+def test_compress_writes_the_pca_form_and_reports_its_size_and_error(pipeline):
+    root, *_ = pipeline
+    btf = root / "cc.btf.zarr"
+    report = _invoke(
+        "compress", btf, "--brightness", 2, "--spectral", 8, "--layout", "joint", "--json"
+    )
+    # 2 pairs: the brightness is exact with both components, the spectra nearly so with 8 of 66.
+    assert report["n_brightness"] == 2 and report["n_spectral"] == 8
+    stored = load_compressed(btf)
+    assert stored.layout == "joint" and report["ratio"] == pytest.approx(stored.compression_ratio)
+    reference = BTFStore.open(btf).read_pair(1)
+    decoded = stored.decode_pair(1)
+    assert report["mean_relative_error_percent"] < 1.0
+    assert np.median(np.abs(decoded - reference) / np.abs(reference).max()) < 0.01
+    refused = runner.invoke(app, ["compress", str(btf), "--spectral", "0"])
+    assert refused.exit_code == 2 and "n_spectral" in refused.output
 
 
 def test_process_refuses_a_calibration_capture_and_a_missing_calibration(pipeline, tmp_path):

@@ -24,10 +24,10 @@ def test_spectral_rendering_of_the_true_btf_is_closer_to_the_photograph_than_rgb
     )
     figure = render_figure46(material, table, pixels=64, spp=64)
     summary = figure.summary()
-    # Measured: field means Delta E94 1.6 (spectral) vs 3.1 (RGB). The spectral rendering of the
-    # matte fields is about 5 % darker than the photograph, which the map capture (2 % low for a
-    # white diffuser) does not fully explain: under investigation (see the session notes).
-    assert summary["field_mean_delta_e94_spectral"] < 2.0
-    assert summary["field_ratio_rgb_over_spectral"] > 1.5
+    # Measured: field means Delta E94 0.61 (spectral) vs 2.79 (RGB), 4.5x; per pixel 2.05 vs
+    # 3.31, where the photograph's path-tracing noise at 64 spp adds to both.
+    assert summary["field_mean_delta_e94_spectral"] < 1.2
+    assert summary["field_ratio_rgb_over_spectral"] > 2.0
+    assert summary["mean_delta_e94_spectral"] < summary["mean_delta_e94_rgb"]
     assert np.isfinite(figure.delta_e_rgb[figure.mask]).all()
     assert write_figure46(figure, tmp_path / "figure46.png").stat().st_size > 30_000
