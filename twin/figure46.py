@@ -31,7 +31,7 @@ import numpy as np
 
 from recon.shared_data import read_spectra_csv
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid, resample
-from twin.btf_bsdf import BTFTable, btf_bsdf
+from twin.btf_bsdf import BTFTable, CompressedTable, btf_bsdf
 from twin.components import FINE_GRID
 from twin.envmap_capture import capture_mirror_sphere
 from twin.light_groups import LightGroup, render_lit
@@ -160,11 +160,20 @@ def _cie_rgb_matrix() -> np.ndarray:
     return colour.RGB_COLOURSPACES["CIE RGB"].matrix_XYZ_to_RGB
 
 
-def _rgb_table(table: BTFTable) -> list[BTFTable]:
-    """The BTF as three one-channel tables of CIE RGB reflectance (equal energy, white = 1)."""
+def _rgb_table(table: BTFTable | CompressedTable) -> list[BTFTable]:
+    """The BTF as three one-channel tables of CIE RGB reflectance (equal energy, white = 1);
+    a compressed BTF is decoded one combination at a time."""
     rgb_cmfs = _cie_rgb_matrix() @ _cmfs_on(table.grid).T
     weights = rgb_cmfs / rgb_cmfs.sum(axis=1, keepdims=True)
-    rgb = np.maximum(np.einsum("...k,ck->...c", table.values, weights), 0.0)
+    rgb = np.maximum(
+        np.stack(
+            [
+                np.stack([table.texture(i, j) @ weights.T for j in range(len(table.view_dirs))])
+                for i in range(len(table.light_dirs))
+            ]
+        ),
+        0.0,
+    )
     return [
         BTFTable(table.light_dirs, table.view_dirs, rgb[..., [c, c]].astype(np.float32), _CONSTANT)
         for c in range(3)
@@ -269,7 +278,7 @@ def _field_interiors(material: Material, pixels: int, interior: float = 0.5) -> 
 
 def render_figure46(
     material: Material,
-    table: BTFTable,
+    table: BTFTable | CompressedTable,
     *,
     pixels: int = 96,
     spp: int = 64,

@@ -1,5 +1,5 @@
 """``spectwin`` commands of the gonioreflectometer pipeline: capture, calibrate, process, compress,
-evaluate.
+evaluate, validate.
 
 A full twin run at reduced sampling (thesis 3.3 and 4.1)::
 
@@ -9,6 +9,7 @@ A full twin run at reduced sampling (thesis 3.3 and 4.1)::
     spectwin process out/run.capture.zarr --calibration out/cal.json --out out/cc.btf.zarr
     spectwin compress out/cc.btf.zarr --layout joint
     spectwin evaluate out/cc.btf.zarr --figure out/cc_vs_truth.png
+    spectwin validate out/cc.btf.zarr --out out/validation
 """
 
 from __future__ import annotations
@@ -302,7 +303,58 @@ def evaluate(
     _print(summary, "BTF vs the twin's truth", as_json)
 
 
+def validate(
+    btf: Annotated[Path, typer.Argument(help="A BTF store of the twin's colour checker.")],
+    out: Annotated[Path, typer.Option(help="Folder for the PNGs and metrics.json.")] = Path(
+        "validation"
+    ),
+    compressed: Annotated[
+        bool, typer.Option("--compressed", help="Render the store's PCA form (spectwin compress).")
+    ] = False,
+    pixels: Annotated[int, typer.Option(help="Image size of the three panels.")] = 96,
+    spp: Annotated[int, typer.Option(help="Samples per pixel.")] = 64,
+    map_height: Annotated[
+        int, typer.Option(help="Rows of the captured environment map (2x as many columns).")
+    ] = 64,
+    as_json: JsonFlag = False,
+) -> None:
+    """Render the BTF back (thesis 4.2): Figure 4.6 (photograph, spectral and RGB renderings,
+    Delta E94 maps) and the 45/0 spectrophotometer comparison, with a metrics JSON.
+
+    Example: spectwin validate out/cc.btf.zarr --out out/validation --compressed
+    """
+    from recon.errors import SpectwinInputError
+    from twin.validation import validate_btf
+
+    try:
+        with console.status("validating") as status:
+            metrics = validate_btf(
+                btf,
+                out,
+                compressed=compressed,
+                pixels=pixels,
+                spp=spp,
+                map_height=map_height,
+                step=lambda name: status.update(name),
+            )
+    except SpectwinInputError as error:
+        _fail(str(error))
+    figure46, forty_five = metrics["figure46"], metrics["spectrophotometer_45_0"]
+    summary = {
+        "out": str(out),
+        "form": metrics["form"],
+        "field_mean_delta_e94_spectral": round(figure46["field_mean_delta_e94_spectral"], 3),
+        "field_mean_delta_e94_rgb": round(figure46["field_mean_delta_e94_rgb"], 3),
+        "field_ratio_rgb_over_spectral": round(figure46["field_ratio_rgb_over_spectral"], 2),
+        "mean_delta_e94_spectral": round(figure46["mean_delta_e94_spectral"], 3),
+        "mean_delta_e94_rgb": round(figure46["mean_delta_e94_rgb"], 3),
+        "45_0_mean_error_matte_fields_pct": round(forty_five["mean_error_matte_fields_pct"], 3),
+        "45_0_max_error_matte_fields_pct": round(forty_five["max_error_matte_fields_pct"], 3),
+    }
+    _print(metrics if as_json else summary, "BTF rendered back (Figure 4.6, 45/0)", as_json)
+
+
 def register(app: typer.Typer) -> None:
     """Add the commands to ``app``."""
-    for command in (capture, calibrate, process, compress, evaluate):
+    for command in (capture, calibrate, process, compress, evaluate, validate):
         app.command()(command)

@@ -22,7 +22,7 @@ import numpy as np
 
 from recon.btf_store import BTFStore
 from recon.metrics import relative_error
-from twin.btf_bsdf import interpolate_table, written_table
+from twin.btf_bsdf import BTFTable, CompressedTable, interpolate_table, written_table
 from twin.gonio_evaluation import instrument_passbands
 from twin.hemisphere import direction
 from twin.materials import Material
@@ -71,12 +71,18 @@ class FortyFiveZero:
 
 
 def compare_45_0(
-    btf: BTFStore, material: Material, *, azimuths: int = 8, spp: int = 64
+    btf: BTFStore | BTFTable | CompressedTable,
+    material: Material,
+    *,
+    azimuths: int = 8,
+    spp: int = 64,
 ) -> FortyFiveZero:
-    """45/0 reflectance factors per field from the true material and from ``btf``."""
+    """45/0 reflectance factors per field from the true material and from ``btf`` (a store's
+    written pairs, or a table such as :func:`twin.btf_bsdf.store_table` gives)."""
     lights = direction(np.full(azimuths, 45.0), np.arange(azimuths) * 360.0 / azimuths)
     top = np.array([0.0, 0.0, 1.0])
-    texels = btf.texels[0]
+    table = written_table(btf) if isinstance(btf, BTFStore) else btf
+    texels = table.texture(0, 0).shape[0]
     truth = truth_btf(
         material,
         lights,
@@ -85,7 +91,6 @@ def compare_45_0(
         passbands=instrument_passbands(load_rig("gonio")),
         spp=spp,
     ).mean(axis=0)
-    table = written_table(btf)
     measured = np.mean([interpolate_table(table, light, top) for light in lights], axis=0)
     spots = field_spots(material, texels)
     instrument = np.pi * np.array([truth[spot].mean(axis=0) for spot in spots])
