@@ -6,8 +6,7 @@ bootstrap:
 	bash scripts/bootstrap.sh
 
 demo: bootstrap
-	$(VENV_BIN)/spectwin --help
-	$(VENV_BIN)/spectwin smoke --out out/smoke
+	$(VENV_BIN)/spectwin demo --out out/demo
 
 test: bootstrap
 	$(VENV_BIN)/python -m pytest -q

@@ -201,6 +201,35 @@ def spectralize_study(
     console.print(f"wrote {out / 'study.json'} and the figures in {out}")
 
 
+@app.command()
+def demo(
+    out: Annotated[
+        Path, typer.Option(help="Folder for stores, PNGs, metrics.json, report.html.")
+    ] = Path("out/demo"),
+    as_json: JsonFlag = False,
+) -> None:
+    """The whole pipeline at small size on built-in defaults, with an HTML report: gonio
+    calibration and measurement of the colour checker, BTF, evaluation against the truth,
+    spectralization, Figure 4.6 validation (about 10 minutes on 2 cores).
+
+    Example: spectwin demo --out out/demo
+    """
+    from recon.errors import SpectwinInputError
+    from twin.demo import run_demo
+
+    try:
+        with console.status("demo") as status:
+            metrics = run_demo(out, step=lambda name: status.update(f"demo: {name}"))
+    except SpectwinInputError as error:
+        console.print(f"[red]error:[/red] {error}")
+        raise typer.Exit(code=2) from None
+    if as_json:
+        typer.echo(json.dumps(metrics["headline"], indent=2))
+        return
+    _print_table(metrics["headline"], "spectwin demo")
+    console.print(f"report: {out / 'report.html'}")
+
+
 register_gonio(app)
 
 
