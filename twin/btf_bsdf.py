@@ -193,13 +193,14 @@ def store_table(btf: BTFStore, *, compressed: bool = False) -> BTFTable | Compre
 def barycentric(directions: np.ndarray, queries: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Indices and weights ``(n, 3)`` interpolating ``directions`` at ``queries`` ``(n, 3)`` (or
     their ``(n, 2)`` disk projections): barycentric in the Delaunay triangulation of the
-    directions' orthographic projections, the nearest direction outside their hull."""
+    directions' orthographic projections, the nearest direction outside their hull (and
+    everywhere when the projections lie on one line: no triangle to interpolate in)."""
     points = np.asarray(directions, np.float64)[:, :2]
     queries = np.asarray(queries, np.float64)[:, :2]
     indices = np.zeros((queries.shape[0], 3), np.int64)
     weights = np.zeros((queries.shape[0], 3))
     inside = np.zeros(queries.shape[0], bool)
-    if len(points) >= 3:
+    if np.linalg.matrix_rank(points - points.mean(axis=0), tol=1e-9) == 2:
         triangulation = Delaunay(points)
         simplex = triangulation.find_simplex(queries)
         inside = simplex >= 0

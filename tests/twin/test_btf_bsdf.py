@@ -9,6 +9,7 @@ from recon.errors import SpectwinInputError
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid
 from twin.btf_bsdf import (
     BTFTable,
+    barycentric,
     btf_bsdf,
     compressed_product_table,
     hemisphere_lookup,
@@ -35,6 +36,13 @@ def test_barycentric_lookup_reproduces_linear_functions_inside_the_measured_hull
     linear = 0.3 + 2.0 * directions[:, 0] - 1.5 * directions[:, 1]
     interpolated = (linear[indices] * weights).sum(axis=2)
     np.testing.assert_allclose(interpolated[inside], (0.3 + 2.0 * x - 1.5 * y)[inside], atol=1e-9)
+
+
+def test_directions_on_one_line_interpolate_by_the_nearest_direction():
+    directions = np.array([[0.0, 0.0, 1.0], [0.5, 0.0, np.sqrt(0.75)], [-0.5, 0.0, np.sqrt(0.75)]])
+    indices, weights = barycentric(directions, np.array([[0.4, 0.1], [-0.1, 0.0]]))
+    np.testing.assert_array_equal(indices[:, 0], [1, 0])
+    np.testing.assert_array_equal(weights, [[1.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
 
 
 def test_product_table_fills_an_unmeasured_pair_from_the_nearest_view_of_its_light():
