@@ -64,6 +64,7 @@ class DemoSettings:
     texels: int = 64
     spp: int = 64
     figure_pixels: int = 96
+    figure_spp: int = 256
     map_height: int = 32
     texture_texels: int = 48
     seed: int = 0
@@ -138,7 +139,7 @@ def run_demo(
             out / "cc.btf.zarr",
             out / "validation",
             pixels=settings.figure_pixels,
-            spp=settings.spp,
+            spp=settings.figure_spp,
             map_height=settings.map_height,
         )
     gonio = evaluation.summary()

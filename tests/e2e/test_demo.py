@@ -17,6 +17,7 @@ TINY = DemoSettings(
     texels=48,
     spp=32,
     figure_pixels=32,
+    figure_spp=16,
     map_height=8,
     texture_texels=16,
 )
