@@ -52,7 +52,8 @@ def validate_btf(
     pixels, spp
         Image size and samples per pixel of the three panels. At 64 spp the path-tracing noise
         of the photograph and the renderings dominates per-pixel Delta E94 (measured on the
-        twin's 13 x 13 BTF: 2.32 spectral vs 3.23 RGB at 64 spp, 1.16 vs 2.72 at 256 spp).
+        twin's 13 x 13 BTF: 2.32 spectral vs 3.23 RGB at 128 px and 64 spp, 1.16 vs 2.72 at 96 px
+        and 256 spp).
     map_height
         Rows of the captured lat-long map (twice as many columns).
     step
