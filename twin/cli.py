@@ -216,6 +216,7 @@ def demo(
     """
     from recon.errors import SpectwinInputError
     from twin.demo import run_demo
+    from twin.json_output import dumps
 
     try:
         with console.status("demo") as status:
@@ -224,7 +225,7 @@ def demo(
         console.print(f"[red]error:[/red] {error}")
         raise typer.Exit(code=2) from None
     if as_json:
-        typer.echo(json.dumps(metrics["headline"], indent=2))
+        typer.echo(dumps(metrics["headline"]))
         return
     _print_table(metrics["headline"], "spectwin demo")
     console.print(f"report: {out / 'report.html'}")

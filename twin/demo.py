@@ -16,7 +16,6 @@ previous demo wrote is replaced; any other non-empty folder is refused.
 
 from __future__ import annotations
 
-import json
 import shutil
 import time
 from collections.abc import Callable
@@ -42,6 +41,7 @@ from twin.demo_spectralization import band_image_spectralization
 from twin.gonio_capture import CAMERA_ID, run_gonio_calibration, run_gonio_measurement
 from twin.gonio_evaluation import evaluate_gonio
 from twin.gonio_report import write_gonio_figure
+from twin.json_output import dumps
 from twin.validation import validate_btf
 
 __all__ = ["DEMO_RINGS", "DemoSettings", "run_demo"]
@@ -175,14 +175,6 @@ def run_demo(
         "validation": validation,
         "timings_s": timings,
     }
-    (out / "metrics.json").write_text(json.dumps(metrics, indent=2, default=_plain))
+    (out / "metrics.json").write_text(dumps(metrics))
     write_report(out, metrics)
     return metrics
-
-
-def _plain(value):
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    raise TypeError(f"not JSON serializable: {type(value).__name__}")

@@ -12,17 +12,15 @@ Writes ``figure46.png``, ``spectrophotometer_45_0.png`` and ``metrics.json`` int
 
 from __future__ import annotations
 
-import json
 import time
 from collections.abc import Callable
 from pathlib import Path
-
-import numpy as np
 
 from recon.btf_store import BTFStore
 from recon.errors import SpectwinInputError
 from twin.btf_bsdf import store_table
 from twin.figure46 import render_figure46, write_figure46
+from twin.json_output import dumps
 from twin.materials import load_material
 from twin.spectrophotometer import compare_45_0, write_45_0_figure
 
@@ -116,11 +114,5 @@ def validate_btf(
             "spectrophotometer_45_0": str(out / "spectrophotometer_45_0.png"),
         },
     }
-    (out / "metrics.json").write_text(json.dumps(metrics, indent=2, default=_plain))
+    (out / "metrics.json").write_text(dumps(metrics))
     return metrics
-
-
-def _plain(value):
-    if isinstance(value, np.generic):
-        return value.item()
-    raise TypeError(f"not JSON serializable: {type(value).__name__}")
