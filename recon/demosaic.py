@@ -17,7 +17,7 @@ import numpy as np
 
 from recon.errors import SpectwinInputError
 
-__all__ = ["DEMOSAIC_METHODS", "demosaic"]
+__all__ = ["DEMOSAIC_METHODS", "bin_quads", "demosaic"]
 
 DEMOSAIC_METHODS = {
     "bilinear": colour_demosaicing.demosaicing_CFA_Bayer_bilinear,
@@ -43,3 +43,24 @@ def demosaic(
     if pattern not in ("RGGB", "BGGR", "GRBG", "GBRG"):
         raise SpectwinInputError(f"pattern: expected RGGB, BGGR, GRBG or GBRG, got {pattern!r}")
     return np.asarray(DEMOSAIC_METHODS[method](mosaic, pattern))
+
+
+def bin_quads(mosaic: np.ndarray, *, pattern: Literal["RGGB", "BGGR", "GRBG", "GBRG"] = "RGGB"):
+    """Superpixel demosaicing: each 2x2 Bayer quad of ``mosaic`` ``(..., 2H, 2W)`` becomes one
+    RGB pixel ``(..., H, W, 3)`` (its red, the mean of its two greens, its blue).
+
+    No interpolation across quads, so no colour fringes at edges; the price is half the
+    resolution. Used where one quad images one texel (the dome simulation, thesis 10.4).
+    """
+    mosaic = np.asarray(mosaic, dtype=np.float64)
+    if mosaic.ndim < 2 or mosaic.shape[-1] % 2 or mosaic.shape[-2] % 2:
+        raise SpectwinInputError(
+            f"mosaic: expected (..., 2H, 2W) with even sides, got shape {mosaic.shape}"
+        )
+    if pattern not in ("RGGB", "BGGR", "GRBG", "GBRG"):
+        raise SpectwinInputError(f"pattern: expected RGGB, BGGR, GRBG or GBRG, got {pattern!r}")
+    sites = {(0, 0): pattern[0], (0, 1): pattern[1], (1, 0): pattern[2], (1, 1): pattern[3]}
+    planes = {"R": [], "G": [], "B": []}
+    for (row, column), channel in sites.items():
+        planes[channel].append(mosaic[..., row::2, column::2])
+    return np.stack([np.mean(planes[channel], axis=0) for channel in "RGB"], axis=-1)
