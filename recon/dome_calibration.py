@@ -11,13 +11,14 @@ Spectral camera, in the low-SNR range its short band exposures live in (thesis 1
    reference lit by the LED, divided by the LED spectrum (and the reference's reflectance).
 
 A band frame then gives reflectance factors
-:math:`\\rho = f(y - D_t + 30) / (t\\, E_\\lambda L_\\lambda \\cos\\theta_i)`, pixel by pixel and
-noisy; the reconstruction filters them (Eq. 10.1).
+:math:`\\rho = f(y - D_t + 30) / (t\\, E_\\lambda L_\\lambda \\cos\\theta_i)`, pixel by pixel,
+averaged over the pixels of each texel and still noisy; the reconstruction filters them
+(Eq. 10.1).
 
 RGB cameras: Robertson's algorithm on the raw exposure series (the curve absorbs the ADC
 offset, thesis 10.3: "Linearizing the response of the RGB cameras is straightforward"), HDR
-merging of each image's four exposures (Eq. 10.3), one RGB value per Bayer quad, and white
-balance by the white reference under the same LED: :math:`V_c = x_c / x^{white}_c`.
+merging of each image's four exposures (Eq. 10.3), one RGB value per Bayer quad, the quads of a
+texel averaged, and white balance by the white reference under the same LED: :math:`V_c = x_c / x^{white}_c`.
 """
 
 from __future__ import annotations
@@ -25,6 +26,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from skimage.measure import block_reduce
 
 from recon.dark_frames import average_dark_frames, dark_frames_at
 from recon.demosaic import bin_quads
@@ -40,10 +43,21 @@ __all__ = [
     "calibrate_rgb_camera",
     "calibrate_spectral_camera",
     "curve_linearity",
+    "texel_mean",
 ]
 
 DARK_VALUE_OFFSET = 30.0
 """Added to dark-subtracted values before the curve (thesis Fig. 10.3: "offset by 30")."""
+
+
+def texel_mean(image: np.ndarray, texel_px: int) -> np.ndarray:
+    """Mean over ``texel_px x texel_px`` pixel blocks of the first two axes of ``image``."""
+    if texel_px < 1 or image.shape[0] % texel_px or image.shape[1] % texel_px:
+        raise SpectwinInputError(
+            f"texel_px: expected a divisor of the image sides {image.shape[:2]}, got {texel_px}"
+        )
+    block = (texel_px, texel_px) + (1,) * (image.ndim - 2)
+    return block_reduce(image, block, np.mean)
 
 
 def curve_linearity(curve: np.ndarray, offset: float = 0.0) -> float:
@@ -93,12 +107,19 @@ class SpectralCameraCalibration:
         return interpolate_curve(self.inverse_response, values) / float(exposure_s)
 
     def reflectance(
-        self, frame: np.ndarray, exposure_s: float, band: int, light: float, cos_incidence: float
+        self,
+        frame: np.ndarray,
+        exposure_s: float,
+        band: int,
+        light: float,
+        cos_incidence: float,
+        *,
+        texel_px: int = 1,
     ) -> np.ndarray:
-        """Reflectance factors ``(H, W)`` of band ``band`` from one raw frame, for a sample lit
-        with LED intensity ``light`` (the spectrometer's value in that band) at
-        :math:`\\cos\\theta_i` = ``cos_incidence``."""
-        rate = self.linear_rate(frame, exposure_s)
+        """Reflectance factors ``(H, W)`` of band ``band`` from one raw frame
+        ``(texel_px H, texel_px W)``, for a sample lit with LED intensity ``light`` (the
+        spectrometer's value in that band) at :math:`\\cos\\theta_i` = ``cos_incidence``."""
+        rate = texel_mean(self.linear_rate(frame, exposure_s), texel_px)
         return rate / (self.sensitivity[band] * light * cos_incidence)
 
 
@@ -193,14 +214,18 @@ class RgbCameraCalibration:
     white: np.ndarray
 
     def hdr(self, frames: np.ndarray) -> np.ndarray:
-        """Dark-subtracted HDR RGB ``(H, W, 3)`` from one image's raw exposure set
-        ``(n_exposures, 2H, 2W)``."""
+        """Dark-subtracted HDR RGB per Bayer quad ``(H, W, 3)`` from one image's raw exposure
+        set ``(n_exposures, 2H, 2W)``."""
         return bin_quads(merge_hdr(frames, self.exposure_s, self.inverse_response)) - self.dark
 
-    def white_balanced(self, frames: np.ndarray, cos_incidence: float) -> np.ndarray:
-        """:math:`V` ``(H, W, 3)``: the HDR image relative to the white reference, per unit
-        :math:`\\cos\\theta_i`."""
-        return self.hdr(frames) / (self.white * cos_incidence)
+    def white_balanced(
+        self, frames: np.ndarray, cos_incidence: float, *, texel_px: int = 2
+    ) -> np.ndarray:
+        """:math:`V` ``(H, W, 3)`` per texel of ``texel_px`` pixels (an even count): the HDR
+        image relative to the white reference, per unit :math:`\\cos\\theta_i`."""
+        if texel_px % 2:
+            raise SpectwinInputError(f"texel_px: expected whole Bayer quads, got {texel_px}")
+        return texel_mean(self.hdr(frames), texel_px // 2) / (self.white * cos_incidence)
 
 
 def calibrate_rgb_camera(

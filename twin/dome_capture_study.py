@@ -37,8 +37,6 @@ __all__ = [
     "sphere_lit_spectra",
 ]
 
-_GRID_BANDS = slice(1, 31)  # DEFAULT_GRID (400-720 nm) -> the 30 bands 410-700 nm
-
 
 @dataclass(frozen=True)
 class DomeCapture:
@@ -47,7 +45,8 @@ class DomeCapture:
     Attributes
     ----------
     truth
-        ``(n, H, W, 30)`` true reflectance factors on the 30 bands.
+        ``(n, H, W, 30)`` true reflectance factors in the spectral camera's 30 bands
+        (:meth:`twin.dome_capture.DomeCameras.band_reflectance`).
     rgb
         ``(n, H, W, 3)`` white-balanced HDR RGB :math:`V` per unit :math:`\\cos\\theta_i`.
     band_images
@@ -163,7 +162,7 @@ def simulate_capture(
             band_images.append(BandImage(image, int(band), values, sigma))
             spectral_s += exposure
     return DomeCapture(
-        truth.reflectance[..., _GRID_BANDS], np.stack(rgb), tuple(band_images), spectral_s
+        cameras.band_reflectance(truth), np.stack(rgb), tuple(band_images), spectral_s
     )
 
 

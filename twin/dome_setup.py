@@ -73,6 +73,7 @@ _CALIBRATION_LIGHT = direction(15.0, 195.0)
 _SERIES_BAND = 14  # 550 nm
 _GREY = 0.2
 _RGB_DARK_FRAMES = 16
+_LONGEST_DARK_S = 100.0  # dark frames up to here, for long reference captures
 _TARGET_RELATIVE_NOISE = 0.02
 
 
@@ -159,9 +160,8 @@ def dome_setup(
     series = np.stack(
         [cameras.band_frame(chart_bands[..., _SERIES_BAND], float(t), rng) for t in series_t]
     )
-    longest = max(longest_band_s, white_t.max(), series_t.max())
-    dark_times = np.array([0.01, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0])
-    dark_times = dark_times[: np.searchsorted(dark_times, longest) + 1]
+    longest = max(_LONGEST_DARK_S, longest_band_s, white_t.max(), series_t.max())
+    dark_times = np.geomspace(0.01, 0.01 * 2 ** np.ceil(np.log2(longest / 0.01)), 8)
     darks, dark_t = cameras.dark_frames(dark_times, DARK_FRAMES_PER_TIME, rng)
     spectral = calibrate_spectral_camera(
         darks,
