@@ -18,7 +18,8 @@ averaged over the pixels of each texel and still noisy; the reconstruction filte
 RGB cameras: Robertson's algorithm on the raw exposure series (the curve absorbs the ADC
 offset, thesis 10.3: "Linearizing the response of the RGB cameras is straightforward"), HDR
 merging of each image's four exposures (Eq. 10.3), one RGB value per Bayer quad, the quads of a
-texel averaged, and white balance by the white reference under the same LED: :math:`V_c = x_c / x^{white}_c`.
+texel averaged, and white balance by the white reference under the same LED:
+:math:`V_c = x_c / x^{white}_c`.
 """
 
 from __future__ import annotations
@@ -26,7 +27,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
 from skimage.measure import block_reduce
 
 from recon.dark_frames import average_dark_frames, dark_frames_at
@@ -124,8 +124,8 @@ class SpectralCameraCalibration:
 
 
 def calibrate_spectral_camera(
-    dark_frames: np.ndarray,
     dark_exposure_s: np.ndarray,
+    mean_dark_frames: np.ndarray,
     series_frames: np.ndarray,
     series_exposure_s: np.ndarray,
     white_frames: np.ndarray,
@@ -140,8 +140,9 @@ def calibrate_spectral_camera(
 
     Parameters
     ----------
-    dark_frames, dark_exposure_s
-        ``(n, H, W)`` raw dark frames and their ``(n,)`` exposure times (200 per time in the
+    dark_exposure_s, mean_dark_frames
+        Increasing exposure times ``(n_times,)`` and the dark frames averaged at each
+        ``(n_times, H, W)`` (:func:`recon.dark_frames.average_dark_frames`; 200 per time in the
         thesis); they must span the exposure times used later.
     series_frames, series_exposure_s
         ``(m, H, W)`` raw frames of a static scene in one band at ``(m,)`` exposure times, low
@@ -166,7 +167,12 @@ def calibrate_spectral_camera(
             f"white_frames, led_per_band, white_reflectance: expected (n_bands, H, W), (n_bands,) "
             f"and (n_bands,), got {frames.shape}, {led.shape} and {white.shape}"
         )
-    times, means = average_dark_frames(dark_frames, dark_exposure_s)
+    times, means = np.asarray(dark_exposure_s, np.float64), np.asarray(mean_dark_frames)
+    if times.ndim != 1 or means.shape[:1] != times.shape or np.any(np.diff(times) <= 0):
+        raise SpectwinInputError(
+            f"dark_exposure_s, mean_dark_frames: expected increasing times (n,) and frames "
+            f"(n, H, W), got {times.shape} and {means.shape}"
+        )
     series_times = np.asarray(series_exposure_s, np.float64)
     curve, _ = robertson_filtered(
         series_frames,
@@ -256,6 +262,8 @@ def calibrate_rgb_camera(
     order = np.argsort(times)
     dark = np.empty_like(mean_darks)
     dark[order] = mean_darks
-    partial = RgbCameraCalibration(curve, times, bin_quads(merge_hdr(dark, times, curve)), np.ones(3))
+    partial = RgbCameraCalibration(
+        curve, times, bin_quads(merge_hdr(dark, times, curve)), np.ones(3)
+    )
     white = partial.hdr(white_frames).reshape(-1, 3).mean(0)
     return RgbCameraCalibration(curve, times, partial.dark, white)

@@ -80,9 +80,7 @@ class DomeCameras:
         """Photo-electrons per second per unit weight of each basis spectrum facing the LED:
         RGB ``(n_basis, 3)`` and spectral bands ``(n_basis, 30)``."""
         radiance = self._radiance(truth.fine_basis)
-        return self.rgb.mean_electrons(radiance), self.spectral.mean_electrons(
-            radiance, self.bands
-        )
+        return self.rgb.mean_electrons(radiance), self.spectral.mean_electrons(radiance, self.bands)
 
     def band_reflectance(self, truth: TextureTruth) -> np.ndarray:
         """True reflectance factors ``(n, H, W, 30)`` as the spectral camera defines its bands:
@@ -96,9 +94,7 @@ class DomeCameras:
     def white_rates(self) -> tuple[np.ndarray, np.ndarray]:
         """Rates of the white reference (Zenith) facing the LED: RGB ``(3,)``, bands ``(30,)``."""
         radiance = self._radiance(zenith_white_reflectance(FINE_GRID).values)
-        return self.rgb.mean_electrons(radiance), self.spectral.mean_electrons(
-            radiance, self.bands
-        )
+        return self.rgb.mean_electrons(radiance), self.spectral.mean_electrons(radiance, self.bands)
 
     def rgb_frames(
         self,

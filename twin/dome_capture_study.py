@@ -151,12 +151,19 @@ def simulate_capture(
     for image in range(n):
         weights = cos_i[image] * truth.weights[image]
         frames = cameras.rgb_frames(weights @ rgb_basis, np.array(THESIS_RGB_EXPOSURES_S), rng)
-        rgb.append(setup.rgb.white_balanced(frames, cos_i[image]))
+        rgb.append(
+            setup.rgb.white_balanced(frames, cos_i[image], texel_px=cameras.pixels_per_texel)
+        )
         for band in bands_per_image[image]:
             exposure = float(setup.exposures_s[band] * exposure_scale)
             frame = cameras.band_frame(weights @ band_basis[:, band], exposure, rng)
             values = setup.spectral.reflectance(
-                frame, exposure, band, setup.led_per_band[band], cos_i[image]
+                frame,
+                exposure,
+                band,
+                setup.led_per_band[band],
+                cos_i[image],
+                texel_px=cameras.pixels_per_texel,
             )
             sigma = float(setup.sigma_px[band] / np.sqrt(exposure_scale))
             band_images.append(BandImage(image, int(band), values, sigma))
@@ -203,7 +210,12 @@ def sphere_lit_spectra(
         frame = setup.cameras.band_frame(rates[..., band], float(exposure), rng)
         bands.append(
             setup.spectral.reflectance(
-                frame, float(exposure), band, setup.led_per_band[band], irradiance
+                frame,
+                float(exposure),
+                band,
+                setup.led_per_band[band],
+                irradiance,
+                texel_px=setup.cameras.pixels_per_texel,
             )
         )
     return np.stack(bands, axis=-1)

@@ -123,7 +123,8 @@ def _rgb_response(cameras: DomeCameras) -> np.ndarray:
 
 
 def _band_frames_of_white(cameras, rates, exposures, rng) -> np.ndarray:
-    shape = (cameras.spectral.height, cameras.spectral.width)
+    side = cameras.spectral.height // cameras.pixels_per_texel
+    shape = (side, side)
     return np.stack(
         [
             cameras.band_frame(np.full(shape, rate), float(t), rng)
@@ -135,6 +136,7 @@ def _band_frames_of_white(cameras, rates, exposures, rng) -> np.ndarray:
 def dome_setup(
     texels: int = 48,
     *,
+    sample_size_m: float = 0.04,
     longest_band_s: float = THESIS_LONGEST_BAND_S,
     target_relative_noise: float = _TARGET_RELATIVE_NOISE,
     seed: int = 0,
@@ -143,14 +145,18 @@ def dome_setup(
     if not longest_band_s > 0:
         raise SpectwinInputError(f"longest_band_s: expected a positive time, got {longest_band_s}")
     rng = np.random.default_rng(seed)
-    cameras = dome_cameras(texels)
+    cameras = dome_cameras(texels, sample_size_m=sample_size_m)
     led = np.interp(THESIS_BANDS_NM, FINE_GRID.wavelengths_nm, cameras.led.values)
     white_reflectance = zenith_white_reflectance(BAND_GRID).values
     white_rgb_rate, white_band_rate = cameras.white_rates()
-    # White reference frames: about 60 % of full scale, but no band longer than 8 s (averaging
+    # White reference frames: 300 DN above the offset, inside the range the low-signal series
+    # calibrates (beyond it the curve is extrapolated), but no band longer than 8 s (averaging
     # the whole frame leaves the weak blue bands' noise far below 0.1 %).
-    white_t = np.clip(0.6 * cameras.spectral.saturation_capacity_e / white_band_rate, 1e-3, 8.0)
-    chart = texture_truth("colorchecker16", _CALIBRATION_LIGHT[None], SPECTRAL_VIEW[None], texels=texels)
+    gain = cameras.spectral.config.system_gain_dn_per_e
+    white_t = np.clip(300.0 / (gain * white_band_rate), 1e-3, 8.0)
+    chart = texture_truth(
+        "colorchecker16", _CALIBRATION_LIGHT[None], SPECTRAL_VIEW[None], texels=texels
+    )
     cos_i = float(_CALIBRATION_LIGHT[2])
     rgb_basis, band_basis = cameras.basis_rates(chart)
     chart_bands = cos_i * chart.weights[0] @ band_basis
@@ -162,10 +168,8 @@ def dome_setup(
     )
     longest = max(_LONGEST_DARK_S, longest_band_s, white_t.max(), series_t.max())
     dark_times = np.geomspace(0.01, 0.01 * 2 ** np.ceil(np.log2(longest / 0.01)), 8)
-    darks, dark_t = cameras.dark_frames(dark_times, DARK_FRAMES_PER_TIME, rng)
     spectral = calibrate_spectral_camera(
-        darks,
-        dark_t,
+        *cameras.dark_frames(dark_times, DARK_FRAMES_PER_TIME, rng),
         series,
         series_t,
         _band_frames_of_white(cameras, white_band_rate, white_t, rng),
@@ -182,7 +186,10 @@ def dome_setup(
         cameras.rgb_frames(chart_rgb, rgb_series_t, rng),
         rgb_series_t,
         np.concatenate(
-            [cameras.rgb_frames(np.zeros_like(chart_rgb), hdr_set, rng) for _ in range(_RGB_DARK_FRAMES)]
+            [
+                cameras.rgb_frames(np.zeros_like(chart_rgb), hdr_set, rng)
+                for _ in range(_RGB_DARK_FRAMES)
+            ]
         ),
         np.tile(hdr_set, _RGB_DARK_FRAMES),
         cameras.rgb_frames(
@@ -196,9 +203,13 @@ def dome_setup(
     exposures = spectral_exposures(
         base_s, spectral.sensitivity, led, limits_s=cameras.spectral.config.exposure_range_s
     )
-    grey = _band_frames_of_white(cameras, _GREY * white_band_rate / white_reflectance, exposures, rng)
+    grey = _band_frames_of_white(
+        cameras, _GREY * white_band_rate / white_reflectance, exposures, rng
+    )
     grey_values = [
-        spectral.reflectance(frame, float(t), band, led[band], 1.0)
+        spectral.reflectance(
+            frame, float(t), band, led[band], 1.0, texel_px=cameras.pixels_per_texel
+        )
         for band, (frame, t) in enumerate(zip(grey, exposures, strict=True))
     ]
     relative_noise = np.array([np.std(v) / np.mean(v) for v in grey_values])
