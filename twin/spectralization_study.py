@@ -22,7 +22,6 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from scipy import optimize  # noqa: E402
 
 from recon.shared_data import read_llanos2019_multispectral  # noqa: E402
 from recon.sparse_experiments import (  # noqa: E402
@@ -32,10 +31,9 @@ from recon.sparse_experiments import (  # noqa: E402
     spot_count_sweep,
 )
 from recon.sparse_sampling import exclude_region, push_broom_mask, whisk_broom_mask  # noqa: E402
-from recon.spectra import DEFAULT_GRID, resample  # noqa: E402
-from twin.components import FINE_GRID, cie_illuminant, rgb_camera_response  # noqa: E402
-from twin.materials import load_material  # noqa: E402
-from twin.truth import band_passbands, truth_btf  # noqa: E402
+from recon.spectra import DEFAULT_GRID  # noqa: E402
+from twin.components import cie_illuminant, rgb_camera_response  # noqa: E402
+from twin.texture_truth import texture_truth  # noqa: E402
 
 __all__ = ["study_response", "run_study", "twin_texture"]
 
@@ -46,27 +44,11 @@ _VIEW = np.array([[0.0, 0.0, 1.0]])
 
 def twin_texture(material: str, *, texels: int = 96, spp: int = 64) -> np.ndarray:
     """Reflectance factors ``(texels, texels, 33)`` of a twin material, lit 15 degrees off
-    the normal and seen from above (``truth_btf`` times :math:`\\pi`).
-
-    A spectral render samples wavelengths at random per path, so at 64 spp neighbouring bands
-    of one texel differ by tens of percent of Monte Carlo noise (two seeds: 34 % mean relative
-    error; 9 % at 1024 spp), which no method could predict from RGB. Each texel is therefore
-    replaced by its non-negative least-squares fit with the material's part reflectances: the
-    shading, shadowing and mixing of parts within a texel stay, the noise goes.
-    """
-    model = load_material(material)
-    btf = np.pi * truth_btf(model, _LIGHT, _VIEW, texels=texels, spp=spp)[0].astype(np.float64)
-    passbands = band_passbands(DEFAULT_GRID)
-    basis = np.array(
-        [
-            (passbands.values * FINE_GRID.quadrature_weights())
-            @ resample(part.reflectance, FINE_GRID, method="linear").values
-            for part in model.parts
-        ]
-    )
-    pixels = btf.reshape(-1, btf.shape[-1])
-    weights = np.array([optimize.nnls(basis.T, pixel)[0] for pixel in pixels])
-    return (weights @ basis).reshape(btf.shape)
+    the normal and seen from above, each texel fitted with the material's part reflectances
+    (:func:`twin.texture_truth.texture_truth` without the flat surface spectrum: no highlight
+    reaches the view from this light)."""
+    truth = texture_truth(material, _LIGHT, _VIEW, texels=texels, spp=spp, surface=False)
+    return truth.reflectance[0]
 
 
 def study_response() -> np.ndarray:

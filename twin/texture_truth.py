@@ -59,14 +59,16 @@ class TextureTruth:
         return self.weights @ self.band_basis
 
 
-def _basis(material: Material) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
-    fine = np.array(
-        [resample(part.reflectance, FINE_GRID, method="linear").values for part in material.parts]
-        + [np.ones(FINE_GRID.size)]
-    )
+def _basis(material: Material, surface: bool) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    spectra = [
+        resample(part.reflectance, FINE_GRID, method="linear").values for part in material.parts
+    ]
+    names = tuple(part.name for part in material.parts)
+    if surface:
+        spectra, names = spectra + [np.ones(FINE_GRID.size)], names + ("surface",)
+    fine = np.array(spectra)
     passbands = band_passbands(DEFAULT_GRID)
-    bands = fine @ (passbands.values * FINE_GRID.quadrature_weights()).T
-    return fine, bands, tuple(part.name for part in material.parts) + ("surface",)
+    return fine, fine @ (passbands.values * FINE_GRID.quadrature_weights()).T, names
 
 
 def texture_truth(
@@ -76,6 +78,7 @@ def texture_truth(
     *,
     texels: int = 48,
     spp: int = 64,
+    surface: bool = True,
 ) -> TextureTruth:
     """Render ``material`` for each (light, view) pair and fit every texel with its basis.
 
@@ -89,12 +92,14 @@ def texture_truth(
         Texture side in texels.
     spp
         Samples per pixel of the renders.
+    surface
+        Include the flat spectrum (highlights) in the basis.
     """
     model = load_material(material) if isinstance(material, str) else material
     if texels < 2:
         raise SpectwinInputError(f"texels: expected at least 2, got {texels}")
     btf = np.pi * truth_btf(model, light_dirs, view_dirs, texels=texels, spp=spp)
-    fine, bands, names = _basis(model)
+    fine, bands, names = _basis(model, surface)
     pixels = btf.reshape(-1, btf.shape[-1]).astype(np.float64)
     weights = np.array([optimize.nnls(bands.T, pixel)[0] for pixel in pixels])
     return TextureTruth(weights.reshape(*btf.shape[:-1], len(names)), fine, bands, names)
