@@ -50,6 +50,7 @@ from twin.truth import band_passbands
 
 __all__ = [
     "BAND_GRID",
+    "CALIBRATION_LIGHT",
     "DARK_FRAMES_PER_TIME",
     "SPECTRAL_VIEW",
     "THESIS_LONGEST_BAND_S",
@@ -69,11 +70,11 @@ DARK_FRAMES_PER_TIME = 200
 SPECTRAL_VIEW = direction(45.0, 15.0)
 """The spectral camera's direction: 45 degrees elevation, 15 degrees from the RGB arc."""
 
-_CALIBRATION_LIGHT = direction(15.0, 195.0)
+CALIBRATION_LIGHT = direction(15.0, 195.0)
 _SERIES_BAND = 14  # 550 nm
 _GREY = 0.2
 _RGB_DARK_FRAMES = 16
-_LONGEST_DARK_S = 100.0  # dark frames up to here, for long reference captures
+_LONGEST_DARK_S = 600.0  # dark frames up to here, for long reference captures
 _TARGET_RELATIVE_NOISE = 0.02
 
 
@@ -155,19 +156,20 @@ def dome_setup(
     gain = cameras.spectral.config.system_gain_dn_per_e
     white_t = np.clip(300.0 / (gain * white_band_rate), 1e-3, 8.0)
     chart = texture_truth(
-        "colorchecker16", _CALIBRATION_LIGHT[None], SPECTRAL_VIEW[None], texels=texels
+        "colorchecker16", CALIBRATION_LIGHT[None], SPECTRAL_VIEW[None], texels=texels
     )
-    cos_i = float(_CALIBRATION_LIGHT[2])
+    cos_i = float(CALIBRATION_LIGHT[2])
     rgb_basis, band_basis = cameras.basis_rates(chart)
     chart_bands = cos_i * chart.weights[0] @ band_basis
-    # Low-signal series: up to about 400 DN above the offset for the brightest field.
+    # Series from a few DN (the darkest field at the shortest time) to about 3000 DN above the
+    # offset for the brightest field: the low-SNR range and the long reference exposures.
     # (evenly spaced, so no two ratios are powers of one factor: see recon.response_curve)
-    series_t = np.linspace(0.02, 2000.0 / (chart_bands[..., _SERIES_BAND].max()), 12)
+    series_t = np.linspace(0.02, 15000.0 / (chart_bands[..., _SERIES_BAND].max()), 12)
     series = np.stack(
         [cameras.band_frame(chart_bands[..., _SERIES_BAND], float(t), rng) for t in series_t]
     )
     longest = max(_LONGEST_DARK_S, longest_band_s, white_t.max(), series_t.max())
-    dark_times = np.geomspace(0.01, 0.01 * 2 ** np.ceil(np.log2(longest / 0.01)), 8)
+    dark_times = np.geomspace(0.01, longest, 8)
     spectral = calibrate_spectral_camera(
         *cameras.dark_frames(dark_times, DARK_FRAMES_PER_TIME, rng),
         series,
