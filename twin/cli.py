@@ -10,6 +10,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from twin.dome_cli import register as register_dome
 from twin.gonio_cli import register as register_gonio
 
 app = typer.Typer(
@@ -232,6 +233,7 @@ def demo(
 
 
 register_gonio(app)
+register_dome(app)
 
 
 if __name__ == "__main__":
