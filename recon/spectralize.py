@@ -69,6 +69,7 @@ __all__ = [
     "SpectralizationProblem",
     "SpectralizationResult",
     "build_problem",
+    "dynamic_scale",
     "reconstruct",
     "spectralize",
 ]
@@ -277,7 +278,7 @@ def _checked_response(response: np.ndarray, channels: int) -> np.ndarray:
     return response
 
 
-def _dynamic_scale(images: np.ndarray, p_dyn: float) -> np.ndarray:
+def dynamic_scale(images: np.ndarray, p_dyn: float) -> np.ndarray:
     """:math:`f_i = (\\sum_c V_i^c)^{-p_{dyn}}` (Eq. 10.2). Sums below 0.1 % of the mean sum
     (dark, noisy pixels; noise can make them negative) are raised to that floor."""
     if not 0 <= p_dyn <= 1:
@@ -407,7 +408,7 @@ def build_problem(
     response = _checked_response(response_values, images.shape[-1])
     bands, channels = response.shape
     image_shape = images.shape[:3]
-    scale = _dynamic_scale(images, p_dyn)
+    scale = dynamic_scale(images, p_dyn)
     scaled_rgb = images.reshape(-1, channels) * scale[:, None]
 
     data_terms: list = []

@@ -29,6 +29,7 @@ from recon.baselines import dong_2016, spectral_a_plus
 from recon.dome_schedule import THESIS_RGB_EXPOSURES_S, fewest_images, schedule_bands
 from recon.errors import SpectwinInputError
 from recon.metrics import relative_error
+from recon.spectralize import dynamic_scale
 from twin.components.targets import zenith_white_reflectance
 from twin.dome_capture_study import (
     DomeCapture,
@@ -209,7 +210,7 @@ def metamer_diagnosis(setup: DomeSetup, capture: DomeCapture) -> dict[str, float
     """
     rgb = capture.rgb[:1]
     truth = capture.truth[0].reshape(-1, capture.truth.shape[-1])
-    scale = rgb.sum(-1, keepdims=True) ** -P_DYN
+    scale = dynamic_scale(rgb, P_DYN).reshape(*rgb.shape[:-1], 1)
     graph = appearance_neighbours(appearance_points(rgb * scale, "rgb"), k=3)
     flat_rgb = rgb.reshape(-1, 3)
     material = truth.mean(-1) >= 0.01
