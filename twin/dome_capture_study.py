@@ -147,6 +147,7 @@ def simulate_capture(
     cameras = setup.cameras
     rgb_basis, band_basis = cameras.basis_rates(truth)
     cos_i = np.asarray(light_dirs)[:, 2]
+    sigma = setup.filter_sigma(exposure_scale)
     rgb, band_images, spectral_s = [], [], 0.0
     for image in range(n):
         weights = cos_i[image] * truth.weights[image]
@@ -165,8 +166,7 @@ def simulate_capture(
                 cos_i[image],
                 texel_px=cameras.pixels_per_texel,
             )
-            sigma = float(setup.sigma_px[band] / np.sqrt(exposure_scale))
-            band_images.append(BandImage(image, int(band), values, sigma))
+            band_images.append(BandImage(image, int(band), values, float(sigma[band])))
             spectral_s += exposure
     return DomeCapture(
         cameras.band_reflectance(truth), np.stack(rgb), tuple(band_images), spectral_s

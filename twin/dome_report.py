@@ -97,7 +97,7 @@ def _plan(setup: DomeSetup, plans: dict, path: Path) -> None:
     axes[0].axhline(plans["rgb_set_s"], color="black", label="RGB set 3.402 s")
     axes[0].set(xlabel="band (nm)", ylabel="t_lambda (s)", title="exposure times")
     axes[0].legend(fontsize=8)
-    axes[1].bar(THESIS_BANDS_NM, 5 * setup.sigma_px, width=8, color="tab:orange")
+    axes[1].bar(THESIS_BANDS_NM, 5 * setup.filter_sigma(), width=8, color="tab:orange")
     axes[1].set(xlabel="band (nm)", ylabel="filter size (texels)", title="filter sizes (5 sigma)")
     schedule = plans["10_images"]
     bottom = np.zeros(schedule["n_images"])
@@ -224,7 +224,7 @@ def run_dome_study(
     metrics["plan"] = {
         "bands_nm": THESIS_BANDS_NM,
         "exposures_s": first.exposures_s,
-        "filter_sigma_texels": first.sigma_px,
+        "filter_sigma_texels": first.filter_sigma(),
         "grey_relative_noise": first.relative_noise,
     }
     step("figures")

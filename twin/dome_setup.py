@@ -92,10 +92,11 @@ class DomeSetup:
         ``(30,)`` the LED intensity per band as a spectrometer reports it.
     exposures_s
         ``(30,)`` planned band exposures :math:`t_\\lambda`.
-    sigma_px
-        ``(30,)`` Gaussian filter per band, size / 5 (Fig. 10.5).
     relative_noise
-        ``(30,)`` simulated relative noise of a grey card (reflectance 0.2) per band.
+        ``(30,)`` simulated relative noise of a grey card (reflectance 0.2) per band and
+        texel.
+    target_relative_noise
+        The noise the filters leave (:func:`recon.dome_schedule.filter_sizes`).
     response
         ``(30, 3)`` :math:`R_{cam}`.
     calibration_truth
@@ -107,10 +108,16 @@ class DomeSetup:
     rgb: RgbCameraCalibration
     led_per_band: np.ndarray
     exposures_s: np.ndarray
-    sigma_px: np.ndarray
     relative_noise: np.ndarray
+    target_relative_noise: float
     response: np.ndarray
     calibration_truth: TextureTruth
+
+    def filter_sigma(self, exposure_scale: float = 1.0) -> np.ndarray:
+        """``(30,)`` Gaussian sigma per band (texels) for the planned exposures times
+        ``exposure_scale``: shot-noise-limited noise grows as its inverse square root."""
+        noise = self.relative_noise / np.sqrt(exposure_scale)
+        return filter_sizes(noise, self.target_relative_noise) / FILTER_SIZE_PER_SIGMA
 
 
 def _rgb_response(cameras: DomeCameras) -> np.ndarray:
@@ -215,15 +222,14 @@ def dome_setup(
         for band, (frame, t) in enumerate(zip(grey, exposures, strict=True))
     ]
     relative_noise = np.array([np.std(v) / np.mean(v) for v in grey_values])
-    sizes = filter_sizes(relative_noise, target_relative_noise)
     return DomeSetup(
         cameras,
         spectral,
         rgb,
         led,
         exposures,
-        sizes / FILTER_SIZE_PER_SIGMA,
         relative_noise,
+        target_relative_noise,
         _rgb_response(cameras),
         chart,
     )

@@ -221,7 +221,7 @@ def metamer_diagnosis(setup: DomeSetup, capture: DomeCapture) -> dict[str, float
     metameric = (rgb_distance < 0.03) & (spectral_distance > 10.0)
     band = int(np.flatnonzero(THESIS_BANDS_NM == 600.0)[0])
     image = capture.truth[0][..., band]
-    sigma = max(float(setup.sigma_px[band]), 1.0)
+    sigma = max(float(setup.filter_sigma()[band]), 1.0)
     filtered = ndimage.gaussian_filter(image, sigma)
     return {
         "links": int(first.size),
