@@ -271,8 +271,7 @@ def exposure_comparison(
             }
         )
     material_texels = errors.material[0]
-    _, white = setup.cameras.white_rates()
-    reference = equalized_exposures_s(setup.cameras.spectral, white, white_fill=0.8)
+    reference = _reference_exposures(setup)
     rates = _band_rates(setup, capture)
     totals, direct_errors = [], []
     for factor in (1.0, 4.0, 16.0, 64.0):
@@ -322,6 +321,13 @@ def _spectral_only(
     )
 
 
+def _reference_exposures(setup: DomeSetup) -> np.ndarray:
+    """Spectral-only reference exposures: the white reference at 80 % of saturation in every
+    band (Eq. 3.4)."""
+    _, white = setup.cameras.white_rates()
+    return equalized_exposures_s(setup.cameras.spectral, white, white_fill=0.8)
+
+
 def _band_rates(setup: DomeSetup, capture: DomeCapture) -> np.ndarray:
     """Noise-free band rates ``(H, W, 30)`` of image 0 facing the LED (cos 1): the truth times
     the white reference's rates over its reflectance."""
@@ -333,8 +339,7 @@ def cross_check(setup: DomeSetup, rng: np.random.Generator) -> dict[str, object]
     """Fig. 10.4: the colour checker's RGB predicted from a spectral image (long exposures,
     calibrated, times :math:`R_{cam}`) against its measured HDR RGB, per field (medians over
     each field's inner texels)."""
-    _, white = setup.cameras.white_rates()
-    exposures = equalized_exposures_s(setup.cameras.spectral, white, white_fill=0.8)
+    exposures = _reference_exposures(setup)
     capture = simulate_capture(setup, setup.calibration_truth, CALIBRATION_LIGHT[None], [[]], rng)
     spectral = _spectral_only(setup, _band_rates(setup, capture), exposures, rng)
     predicted = spectral @ setup.response
