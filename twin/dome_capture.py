@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from recon.dark_frames import average_dark_frames
+from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra
 from twin.components import FINE_GRID, LiquidCrystalTunableFilter, PhosphorWhiteLED
 from twin.components.targets import zenith_white_reflectance
@@ -148,11 +149,22 @@ def dome_cameras(
     sample_size_m: float = 0.04,
     config: DomeConfig | None = None,
     bands_nm: np.ndarray = THESIS_BANDS_NM,
+    texel_px: int | None = None,
 ) -> DomeCameras:
     """The dome's cameras for ``texels`` square images of a ``sample_size_m`` sample
-    (``scenes/rigs/dome.yaml`` by default)."""
+    (``scenes/rigs/dome.yaml`` by default).
+
+    ``texel_px`` replaces the pixels per texel that the sample size gives: 2 images each texel
+    with one Bayer quad of the RGB camera and 2 x 2 spectral-camera pixels, the per-pixel regime
+    in which the thesis evaluates real captures (10.5, Fig. 10.24: pixel spectra).
+    """
     config = config if config is not None else load_rig("dome")
-    block = pixels_per_texel(config, sample_size_m, texels)
+    if texel_px is not None and (texel_px < 2 or texel_px % 2):
+        raise SpectwinInputError(
+            f"texel_px: expected an even number of pixels per texel, at least 2 (whole Bayer "
+            f"quads), got {texel_px}"
+        )
+    block = texel_px if texel_px is not None else pixels_per_texel(config, sample_size_m, texels)
     lctf = LiquidCrystalTunableFilter.varispec(
         config.spectral_camera.filter, band_centres_nm=tuple(bands_nm)
     )

@@ -90,12 +90,14 @@ class ReconstructionErrors:
         )
 
     def summary(self, images: slice | Sequence[int] = slice(None)) -> dict[str, float]:
-        """Means (and the 95th percentile of Delta E94) over the material texels of
+        """Means (and the median relative error, which the few near-black texels of shadows do
+        not dominate, and the 95th percentile of Delta E94) over the material texels of
         ``images``."""
         material = self.material[images]
         relative, colour = self.relative_pct[images][material], self.delta_e94[images][material]
         return {
             "mean_relative_error_pct": float(relative.mean()),
+            "median_relative_error_pct": float(np.median(relative)),
             "mean_delta_e94": float(colour.mean()),
             "p95_delta_e94": float(np.percentile(colour, 95)),
             "material_texel_fraction": float(material.mean()),

@@ -145,15 +145,18 @@ def dome_setup(
     texels: int = 48,
     *,
     sample_size_m: float = 0.04,
+    texel_px: int | None = None,
     longest_band_s: float = THESIS_LONGEST_BAND_S,
     target_relative_noise: float = _TARGET_RELATIVE_NOISE,
     seed: int = 0,
 ) -> DomeSetup:
-    """Calibrate the twin dome and plan its spectral exposures (module description)."""
+    """Calibrate the twin dome and plan its spectral exposures (module description);
+    ``texels``, ``sample_size_m`` and ``texel_px`` size the cameras
+    (:func:`twin.dome_capture.dome_cameras`)."""
     if not longest_band_s > 0:
         raise SpectwinInputError(f"longest_band_s: expected a positive time, got {longest_band_s}")
     rng = np.random.default_rng(seed)
-    cameras = dome_cameras(texels, sample_size_m=sample_size_m)
+    cameras = dome_cameras(texels, sample_size_m=sample_size_m, texel_px=texel_px)
     led = np.interp(THESIS_BANDS_NM, FINE_GRID.wavelengths_nm, cameras.led.values)
     white_reflectance = zenith_white_reflectance(BAND_GRID).values
     white_rgb_rate, white_band_rate = cameras.white_rates()
