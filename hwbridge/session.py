@@ -14,13 +14,19 @@ alignment frames). With a ``monitor`` (Spectrometer) the lamp spectrum is record
 frame (thesis 3.3: the i1 tracks the lamp at every measurement point). Device timeouts are
 retried with exponential backoff, disconnected devices are staged again, and both are recorded
 in the frame's ``status``.
+
+:func:`run_session` does it all in one process. Its two halves serve a distributed capture
+(``twin.cluster``): :func:`open_session_store` creates (or reopens to resume) the store once,
+in the coordinator, and :func:`capture_steps` runs a subset of the steps into it, in a worker that
+owns those steps' chunks.
 """
 
 from __future__ import annotations
 
 import time
+from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import Any
+from typing import Any, Required, TypedDict
 
 import numpy as np
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
@@ -28,7 +34,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from hwbridge.errors import BridgeInputError, DeviceDisconnected, DeviceTimeout
 from hwbridge.store import CaptureStore, FrameRecord
 
-__all__ = ["run_session"]
+__all__ = ["SessionDevices", "capture_steps", "open_session_store", "run_session"]
 
 
 def _with_retries(action, device: Any, retries: int, backoff_s: float) -> tuple[Any, list[str]]:
@@ -46,6 +52,175 @@ def _with_retries(action, device: Any, retries: int, backoff_s: float) -> tuple[
             if hasattr(device, "stage"):
                 device.stage()
     raise AssertionError("unreachable")  # pragma: no cover
+
+
+class SessionDevices(TypedDict, total=False):
+    """The devices of a session, named as :func:`run_session`'s keywords.
+
+    ``cameras`` maps camera ids to cameras; ``tunable_filter``, ``positioner``, ``monitor``
+    (a Spectrometer) and ``leds`` (an LedArray of ``led_count`` LEDs) are needed when the plan
+    names bands, views, lit frames to record or lights.
+    """
+
+    cameras: Required[dict[str, Any]]
+    tunable_filter: Any
+    positioner: Any
+    monitor: Any
+    leds: Any
+    led_count: int
+
+
+def _check_devices(plan: list[dict], devices: SessionDevices) -> None:
+    unknown = sorted({step["camera"] for step in plan} - set(devices["cameras"]))
+    if unknown:
+        raise BridgeInputError(f"plan: names cameras {unknown} that the session was not given")
+    if any("band_nm" in step for step in plan) and devices.get("tunable_filter") is None:
+        raise BridgeInputError("plan: steps name filter bands but no tunable_filter was given")
+    if any(step.get("view_id", -1) != -1 for step in plan) and devices.get("positioner") is None:
+        raise BridgeInputError("plan: steps name views but no positioner was given")
+
+
+def open_session_store(
+    store_path: str | Path,
+    plan: list[dict],
+    devices: SessionDevices,
+    *,
+    rig: dict[str, Any],
+    backend: str,
+    seed: int,
+    resume: bool = False,
+) -> CaptureStore:
+    """Create the capture store of a session, or reopen it to resume.
+
+    Parameters
+    ----------
+    store_path
+        The store, ``<name>.capture.zarr``; never overwritten.
+    plan
+        One dict per step (:mod:`hwbridge.plans`).
+    devices
+        The session's devices; their frame shapes and monitor samples size the store.
+    rig, backend, seed
+        Stored with the plan as the store's attributes.
+    resume
+        Reopen an existing store instead; it must hold the same plan and seed.
+
+    Returns
+    -------
+    CaptureStore
+        The store, with :meth:`~hwbridge.store.CaptureStore.pending_steps` still to capture.
+    """
+    _check_devices(plan, devices)
+    path = Path(store_path)
+    if resume:
+        store = CaptureStore.open(path)
+        if store.attrs["plan"] != plan or store.attrs["seed"] != seed:
+            raise BridgeInputError(
+                f"{path}: resume needs the same plan and seed as the stored session"
+            )
+        return store
+    monitor = devices.get("monitor")
+    return CaptureStore.create(
+        path,
+        rig=rig,
+        backend=backend,
+        seed=seed,
+        plan=plan,
+        cameras={name: camera.frame_shape for name, camera in devices["cameras"].items()},
+        monitor_samples=monitor.samples if monitor is not None else 0,
+    )
+
+
+def capture_steps(
+    store: CaptureStore,
+    steps: Iterable[int],
+    devices: SessionDevices,
+    *,
+    seed: int,
+    retries: int = 3,
+    backoff_s: float = 0.01,
+    check_complete: bool = True,
+    advance: Callable[[], None] = lambda: None,
+) -> None:
+    """Capture ``steps`` of the store's plan into their slots and flag each one done.
+
+    Parameters
+    ----------
+    store
+        A store made by :func:`open_session_store`.
+    steps
+        Plan steps to take, in this order (steps done already are taken again, identically
+        when the devices derive their noise from the step).
+    devices
+        The session's devices.
+    seed
+        The session seed (``set_step(seed, step)`` of cameras that have it).
+    retries, backoff_s
+        Retries of a device call that times out or disconnects, and the first wait (doubling).
+    check_complete
+        Mark the store complete after its last step (``False`` in the workers of a distributed
+        capture, see :meth:`hwbridge.store.CaptureStore.mark_done`).
+    advance
+        Called after each step (a progress bar).
+    """
+    plan = store.attrs["plan"]
+    cameras = devices["cameras"]
+    tunable_filter = devices.get("tunable_filter")
+    positioner = devices.get("positioner")
+    monitor = devices.get("monitor")
+    leds = devices.get("leds")
+    led_count = devices.get("led_count", 0)
+    for step in steps:
+        settings = plan[step]
+        camera = cameras[settings["camera"]]
+        faults: list[str] = []
+        if settings.get("view_id", -1) != -1:
+            _, seen = _with_retries(
+                lambda s=settings: positioner.set({"view_id": s["view_id"]}),
+                positioner,
+                retries,
+                backoff_s,
+            )
+            faults += seen
+        if leds is not None and settings.get("light_id", -1) != -1:
+            light = int(settings["light_id"])
+            pattern = np.ones(led_count, bool) if light == -2 else np.arange(led_count) == light
+            _, seen = _with_retries(lambda p=pattern: leds.set(p), leds, retries, backoff_s)
+            faults += seen
+        if "band_nm" in settings:
+            _, seen = _with_retries(
+                lambda s=settings: tunable_filter.set(s["band_nm"]),
+                tunable_filter,
+                retries,
+                backoff_s,
+            )
+            faults += seen
+        camera.set_exposure(settings["exposure_s"])
+        if hasattr(camera, "set_shutter"):
+            camera.set_shutter(settings["kind"] != "dark")
+        if hasattr(camera, "set_step"):
+            camera.set_step(seed, step)
+        (frame, metadata), seen = _with_retries(camera.snap, camera, retries, backoff_s)
+        faults += seen
+        spectrum = None
+        if monitor is not None and settings["kind"] != "dark":
+            _, seen = _with_retries(monitor.trigger, monitor, retries, backoff_s)
+            faults += seen
+            (reading,) = monitor.read().values()
+            spectrum = reading["value"]
+        record = FrameRecord(
+            kind=settings["kind"],
+            exposure_s=settings["exposure_s"],
+            timestamp=float(metadata.get("timestamp", time.time())),
+            light_id=int(settings.get("light_id", -1)),
+            view_id=int(settings.get("view_id", -1)),
+            band_nm=float(settings.get("band_nm", float("nan"))),
+            lamp_monitor=spectrum,
+            status="ok" if not faults else "ok after " + ", ".join(faults),
+        )
+        store.write_frame(step, frame, record)
+        store.mark_done(step, check_complete=check_complete)
+        advance()
 
 
 def run_session(
@@ -67,31 +242,17 @@ def run_session(
     show_progress: bool = True,
 ) -> CaptureStore:
     """Capture every pending step of ``plan``; returns the (complete) store."""
-    unknown = sorted({step["camera"] for step in plan} - set(cameras))
-    if unknown:
-        raise BridgeInputError(f"plan: names cameras {unknown} that the session was not given")
-    if any("band_nm" in step for step in plan) and tunable_filter is None:
-        raise BridgeInputError("plan: steps name filter bands but no tunable_filter was given")
-    if any(step.get("view_id", -1) != -1 for step in plan) and positioner is None:
-        raise BridgeInputError("plan: steps name views but no positioner was given")
-    path = Path(store_path)
-    if resume:
-        store = CaptureStore.open(path)
-        if store.attrs["plan"] != plan or store.attrs["seed"] != seed:
-            raise BridgeInputError(
-                f"{path}: resume needs the same plan and seed as the stored session"
-            )
-    else:
-        shapes = {name: camera.frame_shape for name, camera in cameras.items()}
-        store = CaptureStore.create(
-            path,
-            rig=rig,
-            backend=backend,
-            seed=seed,
-            plan=plan,
-            cameras=shapes,
-            monitor_samples=monitor.samples if monitor is not None else 0,
-        )
+    devices = SessionDevices(
+        cameras=cameras,
+        tunable_filter=tunable_filter,
+        positioner=positioner,
+        monitor=monitor,
+        leds=leds,
+        led_count=led_count,
+    )
+    store = open_session_store(
+        store_path, plan, devices, rig=rig, backend=backend, seed=seed, resume=resume
+    )
     pending = store.pending_steps()
     columns = (
         TextColumn("capture"),
@@ -101,55 +262,13 @@ def run_session(
     )
     with Progress(*columns, disable=not show_progress) as progress:
         task = progress.add_task("capture", total=len(plan), completed=len(plan) - len(pending))
-        for step in pending:
-            settings = plan[step]
-            camera = cameras[settings["camera"]]
-            faults: list[str] = []
-            if settings.get("view_id", -1) != -1:
-                _, seen = _with_retries(
-                    lambda s=settings: positioner.set({"view_id": s["view_id"]}),
-                    positioner,
-                    retries,
-                    backoff_s,
-                )
-                faults += seen
-            if leds is not None and settings.get("light_id", -1) != -1:
-                light = int(settings["light_id"])
-                pattern = np.ones(led_count, bool) if light == -2 else np.arange(led_count) == light
-                _, seen = _with_retries(lambda p=pattern: leds.set(p), leds, retries, backoff_s)
-                faults += seen
-            if "band_nm" in settings:
-                _, seen = _with_retries(
-                    lambda s=settings: tunable_filter.set(s["band_nm"]),
-                    tunable_filter,
-                    retries,
-                    backoff_s,
-                )
-                faults += seen
-            camera.set_exposure(settings["exposure_s"])
-            if hasattr(camera, "set_shutter"):
-                camera.set_shutter(settings["kind"] != "dark")
-            if hasattr(camera, "set_step"):
-                camera.set_step(seed, step)
-            (frame, metadata), seen = _with_retries(camera.snap, camera, retries, backoff_s)
-            faults += seen
-            spectrum = None
-            if monitor is not None and settings["kind"] != "dark":
-                _, seen = _with_retries(monitor.trigger, monitor, retries, backoff_s)
-                faults += seen
-                (reading,) = monitor.read().values()
-                spectrum = reading["value"]
-            record = FrameRecord(
-                kind=settings["kind"],
-                exposure_s=settings["exposure_s"],
-                timestamp=float(metadata.get("timestamp", time.time())),
-                light_id=int(settings.get("light_id", -1)),
-                view_id=int(settings.get("view_id", -1)),
-                band_nm=float(settings.get("band_nm", float("nan"))),
-                lamp_monitor=spectrum,
-                status="ok" if not faults else "ok after " + ", ".join(faults),
-            )
-            store.write_frame(step, frame, record)
-            store.mark_done(step)
-            progress.advance(task)
+        capture_steps(
+            store,
+            pending,
+            devices,
+            seed=seed,
+            retries=retries,
+            backoff_s=backoff_s,
+            advance=lambda: progress.advance(task),
+        )
     return store

@@ -10,6 +10,13 @@ Layout of ``<name>.capture.zarr`` (ARCHITECTURE.md, "Stores"):
   (the monitor spectrum, when the rig has one);
 - ``progress``: one flag per plan step, set only after the step's frame and index are written.
 
+Every per-frame array (frames, each index field, progress) has one chunk per frame, so writers
+that own disjoint sets of steps write disjoint chunks: the workers of a distributed capture
+(``twin.cluster``) write straight into one store, and the coordinator that created it sets
+``complete`` when they are done (:meth:`CaptureStore.refresh_complete`). Stores created before
+``kind`` and ``status`` were chunked per frame hold them in one chunk per camera; they are read
+and resumed as before, by one writer (:attr:`CaptureStore.one_chunk_per_frame`).
+
 A step's frame slot is fixed by the plan, so redoing a step after a crash overwrites the same
 slot: an interrupted session resumes without losing or duplicating a frame, and ``complete``
 turns true only when every step is done.
@@ -30,6 +37,7 @@ from hwbridge.errors import BridgeInputError
 __all__ = ["FRAME_KINDS", "CaptureStore", "FrameRecord"]
 
 FRAME_KINDS = ("dark", "white", "chart", "sample", "oecf", "alignment")
+_STRING_FIELDS = ("kind", "status")
 _NUMERIC_FIELDS = {
     "light_id": "int32",
     "view_id": "int32",
@@ -133,12 +141,10 @@ class CaptureStore:
                 dtype="uint16",
             )
             index = f"index/{camera}"
-            group.create_array(
-                f"{index}/kind", shape=(count,), chunks=(count,), dtype=str, fill_value=""
-            )
-            group.create_array(
-                f"{index}/status", shape=(count,), chunks=(count,), dtype=str, fill_value=""
-            )
+            for name in _STRING_FIELDS:
+                group.create_array(
+                    f"{index}/{name}", shape=(count,), chunks=(1,), dtype=str, fill_value=""
+                )
             for name, dtype in _NUMERIC_FIELDS.items():
                 fill = -1 if dtype.startswith("int") else np.nan
                 group.create_array(
@@ -185,12 +191,7 @@ class CaptureStore:
             )
         frames[slot] = frame
         index = self._group[f"index/{camera}"]
-        # Strings live in one chunk per camera: rewrite them whole (one writer per store).
-        for name in ("kind", "status"):
-            values = index[name][:]
-            values[slot] = getattr(record, name)
-            index[name][:] = values
-        for name in _NUMERIC_FIELDS:
+        for name in (*_STRING_FIELDS, *_NUMERIC_FIELDS):
             index[name][slot] = getattr(record, name)
         index["pose"][slot] = np.asarray(record.pose, dtype=np.float64)
         if record.lamp_monitor is not None:
@@ -200,10 +201,21 @@ class CaptureStore:
                 )
             index["lamp_monitor"][slot] = np.asarray(record.lamp_monitor, dtype=np.float32)
 
-    def mark_done(self, step: int) -> None:
-        """Flag ``step`` done; when every step is, the store is marked complete."""
+    def mark_done(self, step: int, *, check_complete: bool = True) -> None:
+        """Flag ``step`` done; when every step is, the store is marked complete.
+
+        Parameters
+        ----------
+        step
+            Plan step whose frame and index are written.
+        check_complete
+            ``False`` for a worker of a distributed capture: it owns only its steps' chunks and
+            leaves the store's attributes to the coordinator (:meth:`refresh_complete`).
+        """
         self._camera_and_slot(step)
         self._group["progress"][step] = True
+        if not check_complete:
+            return
         if self._unseen is None:
             self._unseen = set(self.pending_steps())
         self._unseen.discard(step)
@@ -211,6 +223,13 @@ class CaptureStore:
             self._unseen = set(self.pending_steps())
             if not self._unseen:
                 self._group.attrs["complete"] = True
+
+    def refresh_complete(self) -> bool:
+        """Set ``complete`` from the progress flags on disk (after the workers of a distributed
+        capture are done) and return it."""
+        self._unseen = set(self.pending_steps())
+        self._group.attrs["complete"] = not self._unseen
+        return not self._unseen
 
     # -- reading -------------------------------------------------------------------------------
 
@@ -220,6 +239,17 @@ class CaptureStore:
     @property
     def complete(self) -> bool:
         return bool(self._group.attrs["complete"])
+
+    @property
+    def one_chunk_per_frame(self) -> bool:
+        """Whether every per-frame array has one chunk per frame, so that several writers may
+        fill disjoint steps at once (false for stores created before ``kind`` and ``status`` were
+        chunked per frame)."""
+        return all(
+            self._group[f"index/{camera}/{name}"].chunks == (1,)
+            for camera in set(self._cameras)
+            for name in _STRING_FIELDS
+        )
 
     @property
     def attrs(self) -> dict[str, Any]:

@@ -23,8 +23,9 @@ Layout of ``<name>.btf.zarr`` (ARCHITECTURE.md, "Stores"):
 
 Conventions shared with the capture store (``hwbridge.store``): a store is never overwritten by
 :meth:`BTFStore.create`; data are written before the flag that declares them; one writer owns each
-chunk (a worker writes the pairs it owns), and rewriting a pair first clears its flag, so an
-interrupted rewrite leaves the pair pending, never silently corrupt.
+chunk (a worker writes the pairs it owns, and the coordinator of a distributed run sets
+``complete`` when the workers are done: :meth:`BTFStore.refresh_complete`), and rewriting a pair
+first clears its flag, so an interrupted rewrite leaves the pair pending, never silently corrupt.
 
 References
 ----------
@@ -330,6 +331,7 @@ class BTFStore:
         light_dir: np.ndarray | None = None,
         view_dir: np.ndarray | None = None,
         corners_xy: np.ndarray | None = None,
+        check_complete: bool = True,
     ) -> None:
         """Write the texture of direction ``pair``, then flag it written.
 
@@ -351,6 +353,9 @@ class BTFStore:
         corners_xy
             ``(4, 2)`` image corners ``(x, y)`` of the texture square in the raw frames, when the
             texture was registered (thesis 4.1.2); kept for checks, see :meth:`corners_xy`.
+        check_complete
+            ``False`` for a worker of a distributed run: it owns only its pairs' chunks and
+            leaves ``complete`` to the coordinator (:meth:`refresh_complete`).
         """
         self._require_writable()
         pair = self._check_pair(pair)
@@ -405,8 +410,16 @@ class BTFStore:
             self._group["corners_xy"][pair] = corners
         written[pair] = True
         self._known_written[pair] = True
-        if self._all_written():
+        if check_complete and self._all_written():
             self._set_complete(True)
+
+    def refresh_complete(self) -> bool:
+        """Set ``complete`` from the flags on disk (after the workers of a distributed run are
+        done) and return it."""
+        self._require_writable()
+        complete = not self.pending_pairs()
+        self._set_complete(complete)
+        return complete
 
     def set_attribute(self, name: str, value: Any) -> None:
         """Record a JSON-serialisable attribute (e.g. processing facts) on the store."""

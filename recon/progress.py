@@ -11,8 +11,9 @@ __all__ = ["progress_steps"]
 
 
 @contextmanager
-def progress_steps(description: str, total: int, *, enabled: bool) -> Iterator[Callable[[], None]]:
-    """Yield a function that advances a ``total``-step bar labelled ``description``.
+def progress_steps(description: str, total: int, *, enabled: bool) -> Iterator[Callable[..., None]]:
+    """Yield a function that advances a ``total``-step bar labelled ``description`` by one step,
+    or by its argument.
 
     With ``enabled=False`` the function does nothing, so callers never branch on it.
     """
@@ -24,4 +25,4 @@ def progress_steps(description: str, total: int, *, enabled: bool) -> Iterator[C
     )
     with Progress(*columns, disable=not enabled, transient=False) as progress:
         task = progress.add_task(description, total=total)
-        yield lambda: progress.advance(task)
+        yield lambda steps=1: progress.advance(task, steps)

@@ -22,6 +22,7 @@ Exposure times are multiples of 1/15 s (HMI flicker, thesis 3.2.2).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -32,11 +33,11 @@ from hwbridge.plans import (
     response_curve_series,
     white_reference_run,
 )
-from hwbridge.session import run_session
 from hwbridge.store import CaptureStore
 from recon.errors import SpectwinInputError
 from recon.spectra import DEFAULT_GRID
 from recon.spectral_calibration import HMI_FLICKER_PERIOD_S
+from twin.cluster import run_capture
 from twin.components import HMILamp, LiquidCrystalTunableFilter, zenith_white_reflectance
 from twin.gonio_kinematics import GonioPose, perturbed_pose, solve_pairs
 from twin.gonio_render import gonio_camera, pose_matrix
@@ -46,7 +47,10 @@ from twin.rig_config import GonioConfig, load_rig
 from twin.rig_signals import RenderedGonioSignal, WhiteReferenceSignal
 from twin.sample_holder import PRINT_OUTER_HALF_M, registration_corners
 from twin.sensor import Sensor
-from twin.sim_devices import SimCamera, SimPositioner, SimSpectrometer, SimTunableFilter, VirtualRig
+from twin.sim_devices import SimGonioDevices, VirtualRig
+
+if TYPE_CHECKING:
+    from distributed import Client
 
 __all__ = [
     "CAMERA_ID",
@@ -149,7 +153,7 @@ class _GonioSignal:
         return self._material(rig, start_s, exposure_s)
 
 
-def _session(
+def _capture(
     store: Path,
     plan: list[dict],
     signal,
@@ -159,22 +163,24 @@ def _session(
     seed: int,
     resume: bool,
     show_progress: bool,
+    client: Client | None,
 ) -> CaptureStore:
-    sensor = Sensor(str(rig_attrs["camera"]), roi=(pixels, pixels))
-    rig = VirtualRig()
-    camera = SimCamera(rig, sensor, signal, plan_start_times_s(plan), name=CAMERA_ID)
-    return run_session(
+    devices = SimGonioDevices(
+        CAMERA_ID,
+        Sensor(str(rig_attrs["camera"]), roi=(pixels, pixels)),
+        signal,
+        plan_start_times_s(plan),
+        views,
+    )
+    return run_capture(
         store,
         plan,
-        cameras={CAMERA_ID: camera},
-        tunable_filter=SimTunableFilter(rig),
-        positioner=SimPositioner(rig, views),
-        monitor=SimSpectrometer(rig, HMILamp(), DEFAULT_GRID),
+        devices,
         rig=rig_attrs,
-        backend="sim",
         seed=seed,
         resume=resume,
         show_progress=show_progress,
+        client=client,
     )
 
 
@@ -191,6 +197,7 @@ def run_gonio_calibration(
     white_fill: float = 0.6,
     resume: bool = False,
     show_progress: bool = False,
+    client: Client | None = None,
 ) -> CaptureStore:
     """The calibration session (see the module docstring) into ``store``.
 
@@ -202,6 +209,7 @@ def run_gonio_calibration(
     about 150 distinct whole numbers of flicker periods (thesis 3.3: 200 exposures). The white
     photographs (view 0) share one exposure time, the longest whole number of flicker periods
     that keeps the brightest band below ``white_fill`` of saturation (the operator's test shots).
+    With a Dask ``client`` the session runs over its cluster (:mod:`twin.cluster`).
     """
     config = load_rig("gonio")
     sensor = Sensor(config.camera.definition, roi=(pixels, pixels))
@@ -222,7 +230,7 @@ def run_gonio_calibration(
         config, load_material("colorchecker16"), {1: chart_pose}, pixels=pixels, spp=spp
     )
     attrs = _rig_attrs(config, pixels, "gonio-calibration")
-    return _session(
+    return _capture(
         Path(store),
         plan,
         _GonioSignal(white, 0, chart),
@@ -232,6 +240,7 @@ def run_gonio_calibration(
         seed,
         resume,
         show_progress,
+        client,
     )
 
 
@@ -248,6 +257,7 @@ def run_gonio_measurement(
     seed: int = 0,
     resume: bool = False,
     show_progress: bool = False,
+    client: Client | None = None,
 ) -> CaptureStore:
     """One measurement run (see the module docstring) with the band exposures of the plan.
 
@@ -267,6 +277,9 @@ def run_gonio_measurement(
         (default all; the K4's region of interest) and samples per pixel.
     seed, resume, show_progress
         Session seed (noise, robot repeatability), resume an interrupted run, progress bar.
+    client
+        A Dask client to capture over its cluster (:mod:`twin.cluster`), ``None`` to capture
+        in this process; the frames are the same.
     """
     config = load_rig("gonio")
     lctf = LiquidCrystalTunableFilter.varispec(config.camera.filter)
@@ -317,6 +330,6 @@ def run_gonio_measurement(
         "expected_corners_xy": expected.tolist(),
         "sample_fraction": load_material(material).size_m / (2 * PRINT_OUTER_HALF_M),
     }
-    return _session(
-        Path(store), plan, signal, n_pairs + 1, side, attrs, seed, resume, show_progress
+    return _capture(
+        Path(store), plan, signal, n_pairs + 1, side, attrs, seed, resume, show_progress, client
     )

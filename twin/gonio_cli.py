@@ -29,6 +29,22 @@ __all__ = ["register"]
 
 console = Console()
 JsonFlag = Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")]
+WorkersOption = Annotated[
+    int,
+    typer.Option(
+        min=0,
+        help="Worker processes of a local Dask cluster (one thread each); 0 or 1: run in this "
+        "process. Same results either way.",
+    ),
+]
+SchedulerOption = Annotated[
+    str | None,
+    typer.Option(
+        envvar="DASK_SCHEDULER_ADDRESS",
+        help="Run on the Dask cluster of this scheduler (tcp://host:8786); its workers must "
+        "see the stores under the same paths.",
+    ),
+]
 
 
 class Program(StrEnum):
@@ -91,54 +107,70 @@ def capture(
     fault_rate: Annotated[
         float, typer.Option(help="Demo program: injected device faults per call (0-1).")
     ] = 0.0,
+    workers: WorkersOption = 1,
+    scheduler: SchedulerOption = None,
     as_json: JsonFlag = False,
 ) -> None:
     """Capture a simulated gonioreflectometer session into a capture store (resumable).
+
+    With --workers N (a local cluster) or --scheduler ADDRESS the steps run as Dask tasks, view
+    by view; the frames are bit-identical to a capture in one process.
 
     Example: spectwin capture out/run.capture.zarr --program gonio-run --calibration cal.json
     """
     from hwbridge.errors import BridgeInputError
     from hwbridge.plans import estimate_duration_s
     from recon.errors import SpectwinInputError
+    from twin.cluster import cluster_description, dask_client
 
     summary: dict[str, object] = {"store": str(store), "program": program.value}
+    if program is Program.demo:
+        from twin.sim_session import demo_plan
+
+        plan = demo_plan()
+        summary["estimated_duration_s"] = round(estimate_duration_s(plan), 1)
+        if dry_run:
+            summary |= {"steps": len(plan), "kinds": dict(Counter(s["kind"] for s in plan))}
+            _print(summary, "capture (dry run)", as_json)
+            return
+    if program is Program.gonio_run and calibration is None:
+        _fail("--program gonio-run needs --calibration (the JSON of spectwin calibrate)")
     try:
-        if program is Program.demo:
-            from twin.sim_session import demo_plan, run_demo_session
+        with dask_client(workers, scheduler) as client:
+            summary["cluster"] = cluster_description(client)
+            if program is Program.demo:
+                from twin.sim_session import run_demo_session
 
-            plan = demo_plan()
-            summary["estimated_duration_s"] = round(estimate_duration_s(plan), 1)
-            if dry_run:
-                summary |= {"steps": len(plan), "kinds": dict(Counter(s["kind"] for s in plan))}
-                _print(summary, "capture (dry run)", as_json)
-                return
-            result = run_demo_session(
-                store, seed, resume=resume, fault_rate=fault_rate, show_progress=not as_json
-            )
-        elif program is Program.gonio_calibration:
-            from twin.gonio_capture import run_gonio_calibration
+                result = run_demo_session(
+                    store,
+                    seed,
+                    resume=resume,
+                    fault_rate=fault_rate,
+                    show_progress=not as_json,
+                    client=client,
+                )
+            elif program is Program.gonio_calibration:
+                from twin.gonio_capture import run_gonio_calibration
 
-            result = run_gonio_calibration(
-                store, seed=seed, resume=resume, show_progress=not as_json
-            )
-        else:
-            from recon.gonio_calibration import GonioCalibration
-            from twin.gonio_capture import run_gonio_measurement
+                result = run_gonio_calibration(
+                    store, seed=seed, resume=resume, show_progress=not as_json, client=client
+                )
+            else:
+                from recon.gonio_calibration import GonioCalibration
+                from twin.gonio_capture import run_gonio_measurement
 
-            if calibration is None:
-                _fail("--program gonio-run needs --calibration (the JSON of spectwin calibrate)")
-            plan = GonioCalibration.load(calibration)
-            result = run_gonio_measurement(
-                store,
-                plan.planned_exposure_s,
-                material=material,
-                pixels=pixels,
-                window=window,
-                spp=spp,
-                seed=seed,
-                resume=resume,
-                show_progress=not as_json,
-            )
+                result = run_gonio_measurement(
+                    store,
+                    GonioCalibration.load(calibration).planned_exposure_s,
+                    material=material,
+                    pixels=pixels,
+                    window=window,
+                    spp=spp,
+                    seed=seed,
+                    resume=resume,
+                    show_progress=not as_json,
+                    client=client,
+                )
     except (SpectwinInputError, BridgeInputError) as error:
         _fail(str(error))
     index = result.index(result.attrs["plan"][0]["camera"])
@@ -196,28 +228,36 @@ def process(
     resume: Annotated[
         bool, typer.Option("--resume", help="Continue an interrupted process.")
     ] = False,
+    workers: WorkersOption = 1,
+    scheduler: SchedulerOption = None,
     as_json: JsonFlag = False,
 ) -> None:
     """Calibrate and register a measurement run into a spectral BTF store (Eq. 3.6, 4.1.2).
+
+    With --workers N (a local cluster) or --scheduler ADDRESS the direction pairs are Dask
+    tasks; the BTF is the same as from one process.
 
     Example: spectwin process out/run.capture.zarr --calibration out/cal.json --out out/cc.btf.zarr
     """
     from recon.errors import SpectwinInputError
     from recon.gonio_calibration import GonioCalibration
-    from recon.gonio_processing import process_gonio
     from recon.registration import read_manual_corners
+    from twin.cluster import cluster_description, dask_client, run_process
 
     try:
         corners = read_manual_corners(manual_corners) if manual_corners else None
-        btf = process_gonio(
-            store,
-            GonioCalibration.load(calibration),
-            out,
-            texels=texels,
-            manual_corners=corners,
-            resume=resume,
-            show_progress=not as_json,
-        )
+        with dask_client(workers, scheduler) as client:
+            cluster = cluster_description(client)
+            btf = run_process(
+                store,
+                GonioCalibration.load(calibration),
+                out,
+                texels=texels,
+                manual_corners=corners,
+                resume=resume,
+                show_progress=not as_json,
+                client=client,
+            )
     except SpectwinInputError as error:
         _fail(str(error))
     summary = {
@@ -226,6 +266,7 @@ def process(
         "complete": btf.complete,
         "coarse_corner_pairs": btf.attrs["coarse_corner_pairs"],
         "unregistered_pairs": btf.attrs["unregistered_pairs"],
+        "cluster": cluster,
     }
     _print(summary, "gonio processing", as_json)
     if summary["unregistered_pairs"]:

@@ -6,7 +6,11 @@ from the sensor model (``twin.sensor``) fed by a *signal*: the mean photo-electr
 state over the exposure window (the lamp's flicker included, see ``twin.rig_signals``). Step
 ``k`` of a session with seed ``s`` draws its noise from ``numpy.random.default_rng([s, k])``
 and starts its exposure at the plan's start time for that step, so a resumed session reproduces
-an uninterrupted one. Optional fault injection raises timeouts and disconnects.
+an uninterrupted one, and a capture split over Dask workers a serial one. Optional fault injection
+raises timeouts and disconnects.
+
+:class:`SimGonioDevices` is the recipe of the gonioreflectometer's devices: plain data that builds
+them over a fresh :class:`VirtualRig` when called, in the process that runs the steps.
 """
 
 from __future__ import annotations
@@ -20,11 +24,15 @@ import numpy as np
 
 from hwbridge.errors import BridgeInputError, DeviceDisconnected, DeviceTimeout
 from hwbridge.protocols import description, reading
+from hwbridge.session import SessionDevices
+from recon.spectra import DEFAULT_GRID
+from twin.components import HMILamp
 from twin.sensor import Sensor
 
 __all__ = [
     "Signal",
     "SimCamera",
+    "SimGonioDevices",
     "SimLamp",
     "SimLedArray",
     "SimPositioner",
@@ -274,4 +282,51 @@ class SimCamera:
             dtype="array",
             shape=list(self.frame_shape),
             units="DN",
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class SimGonioDevices:
+    """The simulated gonioreflectometer's devices for one plan, as a recipe.
+
+    Calling it builds, over a fresh :class:`VirtualRig`, the camera ``camera_id`` (``sensor`` fed
+    by ``signal``, exposure ``k`` starting at ``start_times_s[k]``), the LCTF, the positioner
+    over ``views`` views and the HMI lamp monitor. It holds plain data, so it pickles: each Dask
+    worker of a distributed capture builds its own devices from it (:mod:`twin.cluster`).
+
+    Attributes
+    ----------
+    camera_id
+        The camera's id in the plan.
+    sensor
+        Sensor model of the camera (its window is the frame shape).
+    signal
+        Mean photo-electrons of the rig's state (:mod:`twin.rig_signals`).
+    start_times_s
+        Exposure start of every plan step (:func:`hwbridge.plans.plan_start_times_s`).
+    views
+        Number of views (direction pairs) the positioner knows.
+    fault_rate, fault_seed
+        Injected device faults per call and the seed of their draws (``[fault_seed, 99]``);
+        each build starts the draws afresh.
+    """
+
+    camera_id: str
+    sensor: Sensor
+    signal: Signal
+    start_times_s: np.ndarray
+    views: int
+    fault_rate: float = 0.0
+    fault_seed: int = 0
+
+    def __call__(self) -> SessionDevices:
+        rig = VirtualRig(
+            fault_rate=self.fault_rate, fault_rng=np.random.default_rng([self.fault_seed, 99])
+        )
+        camera = SimCamera(rig, self.sensor, self.signal, self.start_times_s, name=self.camera_id)
+        return SessionDevices(
+            cameras={self.camera_id: camera},
+            tunable_filter=SimTunableFilter(rig),
+            positioner=SimPositioner(rig, self.views),
+            monitor=SimSpectrometer(rig, HMILamp(), DEFAULT_GRID),
         )

@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from hwbridge.plans import dark_series, gonio_sample_run, plan_start_times_s
-from hwbridge.session import run_session
 from hwbridge.store import CaptureStore
-from recon.spectra import DEFAULT_GRID
+from twin.cluster import run_capture
 from twin.components import HMILamp, LiquidCrystalTunableFilter
 from twin.gonio_kinematics import solve_pairs
 from twin.hemisphere import direction
@@ -24,13 +24,10 @@ from twin.materials import load_material
 from twin.rig_config import load_rig
 from twin.rig_signals import RenderedGonioSignal, WhiteReferenceSignal
 from twin.sensor import Sensor
-from twin.sim_devices import (
-    SimCamera,
-    SimPositioner,
-    SimSpectrometer,
-    SimTunableFilter,
-    VirtualRig,
-)
+from twin.sim_devices import SimGonioDevices
+
+if TYPE_CHECKING:
+    from distributed import Client
 
 __all__ = ["demo_plan", "run_demo_session"]
 
@@ -57,11 +54,13 @@ def run_demo_session(
     fault_rate: float = 0.0,
     rendered: bool = False,
     show_progress: bool = False,
+    client: Client | None = None,
 ) -> CaptureStore:
-    """Run (or resume) the session into ``store``; see the module docstring."""
+    """Run (or resume) the session into ``store``; see the module docstring. With a Dask
+    ``client`` it runs over its cluster (:mod:`twin.cluster`): the frames are the same, the
+    injected faults (drawn afresh in every task) fall on other steps."""
     sensor = Sensor("coolsnap_k4", roi=(_PIXELS, _PIXELS))
     plan = demo_plan()
-    rig = VirtualRig(fault_rate=fault_rate, fault_rng=np.random.default_rng([seed, 99]))
     if rendered:
         config = load_rig("gonio")
         light = direction(np.array([v[0] for v in _VIEWS]), np.array([v[1] for v in _VIEWS]))
@@ -70,18 +69,24 @@ def run_demo_session(
         signal = RenderedGonioSignal(config, load_material("colorchecker16"), poses, pixels=_PIXELS)
     else:
         signal = WhiteReferenceSignal(sensor, HMILamp())
-    return run_session(
+    devices = SimGonioDevices(
+        "k4",
+        sensor,
+        signal,
+        plan_start_times_s(plan),
+        len(_VIEWS),
+        fault_rate=fault_rate,
+        fault_seed=seed,
+    )
+    return run_capture(
         store,
         plan,
-        cameras={"k4": SimCamera(rig, sensor, signal, plan_start_times_s(plan), name="k4")},
-        tunable_filter=SimTunableFilter(rig),
-        positioner=SimPositioner(rig, len(_VIEWS)),
-        monitor=SimSpectrometer(rig, HMILamp(), DEFAULT_GRID),
+        devices,
         rig={"rig": "gonioreflectometer", "camera": "coolsnap_k4", "window_px": _PIXELS},
-        backend="sim",
         seed=seed,
         resume=resume,
         show_progress=show_progress,
+        client=client,
     )
 
 

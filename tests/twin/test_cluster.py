@@ -1,0 +1,185 @@
+"""Capture and processing over a two-worker Dask LocalCluster (twin.cluster) give the results
+of one process, bit for bit (timestamps are wall-clock time and differ)."""
+
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from hwbridge.plans import plan_start_times_s
+from hwbridge.session import capture_steps, open_session_store
+from hwbridge.store import CaptureStore
+from recon.btf_store import BTFStore
+from recon.errors import SpectwinInputError
+from recon.gonio_calibration import GonioCalibration
+from recon.gonio_processing import process_gonio
+from recon.spectral_calibration import HMI_FLICKER_PERIOD_S
+from twin.cli import app
+from twin.cluster import dask_client, view_tasks
+from twin.components import HMILamp, LiquidCrystalTunableFilter
+from twin.gonio_capture import CAMERA_ID, GonioPairs, run_gonio_measurement
+from twin.hemisphere import direction
+from twin.rig_config import load_rig
+from twin.rig_signals import WhiteReferenceSignal
+from twin.sensor import Sensor
+from twin.sim_devices import SimGonioDevices
+from twin.sim_session import demo_plan, run_demo_session
+
+runner = CliRunner()
+BANDS_NM = np.asarray(LiquidCrystalTunableFilter.varispec("VS-10").band_centres_nm, np.float64)
+EXPOSURES_S = np.full(BANDS_NM.size, 6 * HMI_FLICKER_PERIOD_S)
+
+
+@pytest.fixture(scope="module")
+def client():
+    with dask_client(workers=2) as client:
+        yield client
+
+
+@pytest.fixture(scope="module")
+def captures(client, tmp_path_factory):
+    """A two-pair run at 96 px captured serially and on the cluster."""
+    root = tmp_path_factory.mktemp("distributed")
+    pairs = GonioPairs(
+        load_rig("gonio"),
+        direction(np.array([30.0, 30.0]), np.array([0.0, 0.0])),
+        direction(np.array([0.0, 30.0]), np.array([0.0, 135.0])),
+    )
+    stores = {
+        name: run_gonio_measurement(
+            root / f"{name}.capture.zarr",
+            EXPOSURES_S,
+            pairs=pairs,
+            pixels=96,
+            spp=16,
+            seed=3,
+            client=cluster,
+        )
+        for name, cluster in (("serial", None), ("cluster", client))
+    }
+    return root, stores
+
+
+def _without_timestamps(store: CaptureStore, camera: str):
+    index = store.index(camera)
+    del index["timestamp"]
+    return store.frames(camera)[:], index
+
+
+def _assert_same_capture(store: CaptureStore, reference: CaptureStore, camera: str) -> None:
+    frames, index = _without_timestamps(store, camera)
+    reference_frames, reference_index = _without_timestamps(reference, camera)
+    np.testing.assert_array_equal(frames, reference_frames)
+    assert index.keys() == reference_index.keys()
+    for name, values in reference_index.items():
+        np.testing.assert_array_equal(index[name], values, err_msg=name)
+    assert store.complete and reference.complete
+    assert store.attrs["plan"] == reference.attrs["plan"]
+
+
+@pytest.mark.render
+def test_a_capture_on_two_workers_is_bit_identical_to_the_serial_one(captures):
+    _, stores = captures
+    serial, cluster = stores["serial"], stores["cluster"]
+    assert serial.frames(CAMERA_ID).shape == (8 + 33 + 2 * 33, 96, 96)  # darks, white, pairs
+    _assert_same_capture(cluster, serial, CAMERA_ID)
+    # The frames are not trivially equal: lit, noisy, and the lamp monitor saw the drift.
+    _, index = _without_timestamps(cluster, CAMERA_ID)
+    assert np.unique(cluster.frames(CAMERA_ID)[90]).size > 50
+    assert np.ptp(index["lamp_monitor"][index["kind"] == "sample"].sum(axis=1)) > 0
+
+
+@pytest.mark.render
+def test_process_on_two_workers_from_the_command_line_equals_the_serial_btf(captures):
+    root, stores = captures
+    calibration = GonioCalibration(
+        bands_nm=BANDS_NM,
+        inverse_response=np.arange(4096.0),
+        run_factors=np.ones(BANDS_NM.size),
+        planned_exposure_s=EXPOSURES_S,
+        base_s=1.0,
+        round_to_s=HMI_FLICKER_PERIOD_S,
+        white_fill=0.7,
+        source="synthetic",
+    )
+    calibration.save(root / "cal.json")
+    serial = process_gonio(stores["serial"], calibration, root / "serial.btf.zarr", texels=32)
+    result = runner.invoke(
+        app,
+        [
+            "process",
+            str(stores["serial"].path),
+            "--calibration",
+            str(root / "cal.json"),
+            "--out",
+            str(root / "cluster.btf.zarr"),
+            "--texels",
+            "32",
+            "--workers",
+            "2",
+            "--json",
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.output)
+    assert summary["complete"] and summary["cluster"].endswith("(2 workers)")
+    cluster = BTFStore.open(root / "cluster.btf.zarr")
+    np.testing.assert_array_equal(cluster.reflectance(), serial.reflectance())
+    np.testing.assert_array_equal(cluster.corners_xy(), serial.corners_xy())
+    for name in ("complete", "coarse_corner_pairs", "unregistered_pairs", "calibration"):
+        assert cluster.attrs[name] == serial.attrs[name]
+    assert serial.complete and np.isfinite(serial.reflectance()).all()
+
+
+def _demo_devices(seed: int) -> SimGonioDevices:
+    """The devices of :func:`twin.sim_session.run_demo_session` (white standard, 32 px)."""
+    sensor = Sensor("coolsnap_k4", roi=(32, 32))
+    signal = WhiteReferenceSignal(sensor, HMILamp())
+    plan = demo_plan()
+    return SimGonioDevices("k4", sensor, signal, plan_start_times_s(plan), 2, fault_seed=seed)
+
+
+def test_a_capture_cut_short_resumes_on_the_cluster_with_the_same_frames(client, tmp_path):
+    reference = run_demo_session(tmp_path / "reference.capture.zarr", 11)
+    path, plan, devices = tmp_path / "resumed.capture.zarr", demo_plan(), _demo_devices(11)
+    store = open_session_store(path, plan, devices(), rig={}, backend="sim", seed=11)
+    capture_steps(store, range(len(plan) // 2), devices(), seed=11)  # then the session died
+    assert not store.complete
+    resumed = run_demo_session(path, 11, resume=True, client=client)
+    _assert_same_capture(resumed, reference, "k4")
+
+
+def test_workers_of_one_session_fill_disjoint_steps_of_one_store(tmp_path):
+    plan, devices = demo_plan(), _demo_devices(1)
+    path = tmp_path / "shared.capture.zarr"
+    coordinator = open_session_store(path, plan, devices(), rig={}, backend="sim", seed=1)
+    tasks = view_tasks(plan, coordinator.pending_steps())
+    assert [len(task) for task in tasks] == [6, 33, 33]
+    for task in tasks[::-1]:  # each "worker" opens the store and builds its own devices
+        capture_steps(CaptureStore.open(path), task, devices(), seed=1, check_complete=False)
+    assert not coordinator.complete and coordinator.pending_steps() == []
+    assert coordinator.refresh_complete() and coordinator.complete
+    assert coordinator.one_chunk_per_frame
+    assert list(coordinator.index("k4")["kind"]) == [step["kind"] for step in plan]
+
+
+def test_view_tasks_split_runs_of_one_view_and_respect_gaps_and_the_size_limit():
+    plan = [{"view_id": view} for view in (-1, -1, 0, 0, 0, 0, 1, 1)]
+    assert view_tasks(plan, list(range(8)), max_steps=3) == [[0, 1], [2, 3, 4], [5], [6, 7]]
+    assert view_tasks(plan, [0, 2, 3, 5, 7]) == [[0], [2, 3], [5], [7]]
+    with pytest.raises(SpectwinInputError, match="max_steps"):
+        view_tasks(plan, [0], max_steps=0)
+
+
+def test_cluster_errors_name_the_scheduler_and_the_conflict(tmp_path):
+    address = "tcp://127.0.0.1:9"  # the discard port: nothing listens there
+    with pytest.raises(SpectwinInputError, match="tcp://127.0.0.1:9.*no Dask scheduler"):
+        with dask_client(scheduler=address, connect_timeout_s=0.5):
+            pass
+    store = tmp_path / "x.capture.zarr"
+    both = runner.invoke(app, ["capture", str(store), "--workers", "2", "--scheduler", address])
+    assert both.exit_code == 2 and "scheduler" in both.output
+    negative = runner.invoke(app, ["capture", str(store), "--workers", "-1"])
+    assert negative.exit_code == 2
+    assert not store.exists()
