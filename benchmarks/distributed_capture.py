@@ -71,16 +71,7 @@ def main() -> None:
     pairs = gonio_pairs(config, DEMO_RINGS)
     bands = np.asarray(LiquidCrystalTunableFilter.varispec(config.camera.filter).band_centres_nm)
     exposures = np.full(bands.size, 6 * HMI_FLICKER_PERIOD_S)
-    calibration = GonioCalibration(
-        bands_nm=bands,
-        inverse_response=np.arange(4096.0),
-        run_factors=np.ones(bands.size),
-        planned_exposure_s=exposures,
-        base_s=1.0,
-        round_to_s=HMI_FLICKER_PERIOD_S,
-        white_fill=0.7,
-        source="synthetic",
-    )
+    calibration = GonioCalibration.identity(exposures, bands, HMI_FLICKER_PERIOD_S)
     results: dict[str, object] = {
         "machine": machine_description(),
         "variant": activate().as_dict(),

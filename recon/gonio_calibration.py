@@ -146,6 +146,24 @@ class GonioCalibration:
     white_fill: float
     source: str
 
+    @classmethod
+    def identity(
+        cls, planned_exposure_s: np.ndarray, bands_nm: np.ndarray, round_to_s: float | None
+    ) -> GonioCalibration:
+        """A calibration that leaves the signal as it is: a straight response over 12 bits and
+        unit run factors. For timing and comparing the processing (benchmarks, tests), where
+        the values do not matter."""
+        return cls(
+            bands_nm=np.asarray(bands_nm, np.float64),
+            inverse_response=np.arange(4096.0),
+            run_factors=np.ones(len(bands_nm)),
+            planned_exposure_s=np.asarray(planned_exposure_s, np.float64),
+            base_s=1.0,
+            round_to_s=round_to_s,
+            white_fill=0.7,
+            source="identity",
+        )
+
     @property
     def grid(self) -> WavelengthGrid:
         return WavelengthGrid(self.bands_nm)

@@ -93,16 +93,7 @@ def test_a_capture_on_two_workers_is_bit_identical_to_the_serial_one(captures):
 @pytest.mark.render
 def test_process_on_two_workers_from_the_command_line_equals_the_serial_btf(captures):
     root, stores = captures
-    calibration = GonioCalibration(
-        bands_nm=BANDS_NM,
-        inverse_response=np.arange(4096.0),
-        run_factors=np.ones(BANDS_NM.size),
-        planned_exposure_s=EXPOSURES_S,
-        base_s=1.0,
-        round_to_s=HMI_FLICKER_PERIOD_S,
-        white_fill=0.7,
-        source="synthetic",
-    )
+    calibration = GonioCalibration.identity(EXPOSURES_S, BANDS_NM, HMI_FLICKER_PERIOD_S)
     calibration.save(root / "cal.json")
     serial = process_gonio(stores["serial"], calibration, root / "serial.btf.zarr", texels=32)
     result = runner.invoke(
