@@ -25,6 +25,7 @@ turns true only when every step is done.
 from __future__ import annotations
 
 import shutil
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -258,9 +259,12 @@ class CaptureStore:
     def frames(self, camera: str) -> zarr.Array:
         return self._group[f"frames/{camera}"]
 
-    def index(self, camera: str) -> dict[str, np.ndarray]:
+    def index(self, camera: str, fields: Sequence[str] | None = None) -> dict[str, np.ndarray]:
+        """The index of ``camera``'s frames: every field, or only ``fields`` (each field is one
+        chunk per frame, so reading fewer is proportionally faster)."""
         group = self._group[f"index/{camera}"]
-        return {name: group[name][:] for name in group.array_keys()}
+        names = list(group.array_keys()) if fields is None else list(fields)
+        return {name: group[name][:] for name in names}
 
     def _camera_and_slot(self, step: int) -> tuple[str, int]:
         if not 0 <= step < len(self._cameras):

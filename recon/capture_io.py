@@ -44,7 +44,7 @@ def select_frames(
         raise SpectwinInputError(
             f"{store.path}: the capture is incomplete ({len(store.pending_steps())} steps pending)"
         )
-    index = store.index(camera)
+    index = store.index(camera, ("kind", "band_nm", "exposure_s", "light_id", "view_id"))
     mask = index["kind"] == kind
     if band_nm is not None:
         mask &= np.isclose(index["band_nm"], band_nm)

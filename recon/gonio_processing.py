@@ -169,8 +169,7 @@ def prepare_gonio_run(
             f"{store.path}: white photographs at {white_bands.tolist()} nm, the calibration has "
             f"{calibration.bands_nm.tolist()} nm"
         )
-    full_index = store.index(camera)
-    index = {name: full_index[name] for name in _INDEX_FIELDS}
+    index = store.index(camera, _INDEX_FIELDS)
     reference = index["lamp_monitor"][index["kind"] == "white"].astype(np.float64).mean(axis=0)
     return GonioRun(
         capture_path=store.path.resolve(),
