@@ -60,6 +60,14 @@ class DomeCapture:
     band_images: tuple[BandImage, ...]
     spectral_exposure_s: float
 
+    def band_values(self) -> np.ndarray:
+        """The noisy band images as they are, ``(n, H, W, 30)``, NaN where a band was not taken
+        (a band taken twice: its last image)."""
+        values = np.full(self.truth.shape, np.nan)
+        for band_image in self.band_images:
+            values[band_image.image, ..., band_image.band] = band_image.values
+        return values
+
     @property
     def rgb_exposure_s(self) -> float:
         """Summed RGB exposure time: the HDR set per image."""

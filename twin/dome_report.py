@@ -81,9 +81,7 @@ def _spectra(results: dict[str, SingleImage], path: Path) -> None:
     fig, axes = plt.subplots(1, len(results), figsize=(4 * len(results), 3.2), squeeze=False)
     for axis, (material, result) in zip(axes[0], results.items(), strict=True):
         capture, cube, errors = result.captures[0], result.cubes[0], result.errors[0]
-        noisy = np.full(capture.truth.shape[1:], np.nan)
-        for band_image in capture.band_images:
-            noisy[..., band_image.band] = band_image.values
+        noisy = capture.band_values()[0]
         candidates = np.flatnonzero(errors.material[0].ravel())
         texels = candidates[np.linspace(0, candidates.size - 1, 4).astype(int)]
         for index, texel in enumerate(texels):
