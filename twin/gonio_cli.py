@@ -14,7 +14,6 @@ A full twin run at reduced sampling (thesis 3.3 and 4.1)::
 
 from __future__ import annotations
 
-import json
 from collections import Counter
 from enum import StrEnum
 from pathlib import Path
@@ -24,6 +23,8 @@ import numpy as np
 import typer
 from rich.console import Console
 from rich.table import Table
+
+from twin.json_output import dumps
 
 __all__ = ["register"]
 
@@ -60,7 +61,7 @@ class Layout(StrEnum):
 
 def _print(summary: dict[str, object], title: str, as_json: bool) -> None:
     if as_json:
-        typer.echo(json.dumps(summary, indent=2))
+        typer.echo(dumps(summary))
         return
     table = Table("quantity", "value", title=title)
     for key, value in summary.items():
