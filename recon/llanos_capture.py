@@ -1,7 +1,8 @@
 """Read Llanos's (2019) real exposure series of a ColorChecker behind band-pass filters.
 
-The capture lies in ``shared/data/real/llanos2019`` (B. Llanos, University of Alberta, 2019,
-Boost Software License 1.0; see ``shared/data/README.md`` and ``captured_images/about.txt``): a
+The capture ships with spectwin in ``recon/data/real/llanos2019`` (B. Llanos, University of
+Alberta, 2019, Boost Software License 1.0; see ``SOURCES.md`` and ``captured_images/about.txt``
+there): a
 Point Grey Flea3 FL3-GE-50S5C (Sony ICX655 CCD, GBRG Bayer mosaic, raw 12-bit) photographed an
 X-Rite ColorChecker Classic lit by a projector through 7 band-pass filters (nominally 400 to 700 nm
 in 50 nm steps; the spectrometer places their peaks at 398, 438, 498, 544, 595, 640 and 692 nm), at
@@ -32,7 +33,7 @@ from skimage import io as skimage_io
 from hwbridge.store import CaptureStore
 from recon.capture_io import select_frames
 from recon.errors import SpectwinDataError, SpectwinInputError
-from recon.shared_data import shared_data_dir
+from recon.measured_data import data_path
 from recon.spectra import SampledSpectra, WavelengthGrid
 
 __all__ = [
@@ -141,14 +142,14 @@ def read_llanos2019_chart_capture() -> Llanos2019ChartCapture:
     Files: ``real/llanos2019/captured_images/images_filtered_light/color_checker/
     d2_colorChecker30cm_<band>nm_<t>ms_*.tif`` (one frame per band and exposure),
     ``captured_images/dark_frames/d2_dark_<t>ms_*.tif`` and
-    ``colorChecker_labels/d2_colorChecker30cm_550nm_labels.png`` in ``shared/data``.
+    ``colorChecker_labels/d2_colorChecker30cm_550nm_labels.png`` in spectwin's data.
 
     Returns
     -------
     Llanos2019ChartCapture
         See its description.
     """
-    root = shared_data_dir() / _FOLDER
+    root = data_path(_FOLDER)
     chart = _match(root / "captured_images" / "images_filtered_light" / "color_checker", _CHART)
     keys = [(int(groups["exposure_ms"]), int(groups["band_nm"])) for _, groups in chart]
     exposures_ms = sorted({key[0] for key in keys})
@@ -183,7 +184,7 @@ def _assemble(
 ) -> Llanos2019ChartCapture:
     """Add the patch labels, check that everything fits together and freeze the arrays."""
     label_path = (
-        shared_data_dir() / _FOLDER / "colorChecker_labels" / "d2_colorChecker30cm_550nm_labels.png"
+        data_path(_FOLDER) / "colorChecker_labels" / "d2_colorChecker30cm_550nm_labels.png"
     )
     if not label_path.is_file():
         raise SpectwinDataError(f"Llanos 2019 patch labels {label_path} do not exist")
@@ -280,7 +281,7 @@ def read_llanos2019_chart_spectra(
         ``(24, K)`` reflectances relative to a Spectralon tile, named as
         :data:`LLANOS2019_PATCH_NAMES` (label order).
     """
-    path = shared_data_dir() / _FOLDER / "spectral_data" / "spectra_averaged.csv"
+    path = data_path(_FOLDER) / "spectral_data" / "spectra_averaged.csv"
     if not path.is_file():
         raise SpectwinDataError(f"Llanos 2019 spectra file {path} does not exist")
     lines = path.read_text().splitlines()

@@ -1,5 +1,5 @@
 """Calibration targets as surfaces in the sample frame: the Zenith white standard (thesis 3.3,
-Eq. 3.3) and colour charts (the ColorChecker; the Esser test chart of ``shared/data``).
+Eq. 3.3) and colour charts (the ColorChecker; the Esser test chart of ``recon/data``).
 
 Patches are separate flat parts with their measured reflectance, on a black card, laid out row
 by row from the top left; the parts are named ``patch_<index>`` in the chart's order.

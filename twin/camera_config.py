@@ -25,13 +25,14 @@ from twin.yaml_config import (
     StrictModel,
     read_yaml_mapping,
     resolve_scene_file,
+    scene_folder,
     scene_names,
     validate_document,
 )
 
 __all__ = ["CAMERA_DIR", "CameraConfig", "available_cameras", "load_camera_config"]
 
-CAMERA_DIR = Path(__file__).resolve().parents[1] / "scenes" / "cameras"
+CAMERA_DIR = scene_folder("cameras")
 
 
 class OpticsConfig(StrictModel):

@@ -2,7 +2,7 @@
 measured BTF in a room lit by halogen spots and fluorescent tubes (thesis 4.2).
 
 - The room: grey walls, two small halogen spots (disks of 3 cm radius aimed at the sample, the
-  lab tungsten spectrum of ``shared/data/spectra/lights``) and two long fluorescent tubes (the
+  lab tungsten spectrum of ``recon/data/spectra/lights``) and two long fluorescent tubes (the
   office fluorescent spectrum there); the sample lies at the origin, facing +z. Spots and tubes
   are rendered as two light groups with their spectra in the film (:mod:`twin.light_groups`),
   which keeps the fluorescent lines from adding Monte Carlo noise to the colours.
@@ -29,7 +29,7 @@ from pathlib import Path
 import colour
 import numpy as np
 
-from recon.shared_data import read_spectra_csv
+from recon.measured_data import read_spectra_csv
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid, resample
 from twin.btf_bsdf import BTFTable, CompressedTable, btf_bsdf
 from twin.components import FINE_GRID
@@ -51,7 +51,7 @@ _CONSTANT = WavelengthGrid(np.array([400.0, 720.0]))
 
 
 def _lamp_spectrum(name: str, scale: float) -> SampledSpectra:
-    """A lamp spectrum of ``shared/data/spectra/lights`` on ``FINE_GRID``, peak ``scale``."""
+    """A lamp spectrum of ``recon/data/spectra/lights`` on ``FINE_GRID``, peak ``scale``."""
     spectrum = read_spectra_csv(f"spectra/lights/{name}.csv")
     on_grid = resample(spectrum, FINE_GRID, out_of_range="clamp").values[0]
     return SampledSpectra(FINE_GRID, scale * on_grid / on_grid.max())

@@ -20,13 +20,14 @@ from twin.yaml_config import (
     StrictModel,
     read_yaml_mapping,
     resolve_scene_file,
+    scene_folder,
     scene_names,
     validate_document,
 )
 
 __all__ = ["RIG_DIR", "DomeConfig", "GonioConfig", "available_rigs", "load_rig"]
 
-RIG_DIR = Path(__file__).resolve().parents[1] / "scenes" / "rigs"
+RIG_DIR = scene_folder("rigs")
 
 
 class RailConfig(StrictModel):

@@ -4,7 +4,7 @@ Textures: the noise-free reflectance of ground-truth materials (``twin.truth.tru
 light and view direction, times :math:`\\pi` so a white Lambertian surface reads 1, as
 reflectance factors do for Eq. 6.8's :math:`\\epsilon = 10^{-3}`). Camera: the Nikon D70 response
 under CIE D65 (the thesis's SVS Vistek stand-in, ``scenes/cameras/svs_vistek_4022.yaml``). Real
-image: the llanos2019 seven-band image with its own camera (``recon.shared_data``).
+image: the llanos2019 seven-band image with its own camera (``recon.measured_data``).
 
 Outputs: ``study.json`` and PNGs: mean errors per method for whisk-broom and push-broom data,
 relative error maps, example spectra, the spot-count sweep (Fig. 7.9), the noise sweep
@@ -23,7 +23,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from recon.shared_data import read_llanos2019_multispectral  # noqa: E402
+from recon.measured_data import read_llanos2019_multispectral  # noqa: E402
 from recon.sparse_experiments import (  # noqa: E402
     ProtocolResult,
     noise_sweep,

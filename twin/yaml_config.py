@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from importlib import resources
 from pathlib import Path
 from typing import Annotated, TypeVar
 
@@ -16,6 +17,7 @@ __all__ = [
     "StrictModel",
     "read_yaml_mapping",
     "resolve_scene_file",
+    "scene_folder",
     "scene_names",
     "validate_document",
 ]
@@ -29,6 +31,12 @@ class StrictModel(BaseModel):
     """Base of every scene schema: unknown keys are errors, loaded settings are immutable."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+def scene_folder(kind: str) -> Path:
+    """The folder of the shipped scene files of one kind: ``"rigs"``, ``"cameras"``,
+    ``"materials"`` (package data of :mod:`scenes`)."""
+    return Path(str(resources.files("scenes").joinpath(kind)))
 
 
 def scene_names(folder: Path) -> list[str]:

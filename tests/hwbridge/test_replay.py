@@ -7,9 +7,9 @@ import tifffile
 from hwbridge.errors import BridgeInputError
 from hwbridge.replay import ingest, load_mapping
 from hwbridge.store import CaptureStore
-from recon.shared_data import shared_data_dir
+from recon.measured_data import data_path
 
-SOURCE = shared_data_dir() / "real" / "llanos2019"
+SOURCE = data_path("real/llanos2019")
 
 
 def test_llanos2019_becomes_a_complete_capture_store(tmp_path):

@@ -1,6 +1,8 @@
 """Camera spectral characterization (recon.camera_char) on synthetic chart photographs built
 from measured spectra: the Esser chart (113 fields), CIE illuminants and measured cameras."""
 
+from pathlib import Path
+
 import colour
 import numpy as np
 import pytest
@@ -13,8 +15,8 @@ from recon.camera_char import (
     reference_response,
 )
 from recon.errors import SpectwinInputError
+from recon.measured_data import read_spectra_csv
 from recon.metrics import peak_relative_rmse
-from recon.shared_data import read_spectra_csv
 from recon.spectra import DEFAULT_GRID, WavelengthGrid, from_colour, resample
 from twin.components import (
     LiquidCrystalTunableFilter,
@@ -22,6 +24,8 @@ from twin.components import (
     esser_reflectances,
     rgb_camera_response,
 )
+
+TEST_DATA = Path(__file__).resolve().parents[1] / "data"
 
 WAVELENGTHS = DEFAULT_GRID.wavelengths_nm
 CHART = esser_reflectances(DEFAULT_GRID).values  # (113, 33)
@@ -33,7 +37,7 @@ BIG_CHART = np.clip(
         [
             CHART,
             resample(
-                read_spectra_csv("spectra/reflectances/dupont_paint_chips.csv"),
+                read_spectra_csv(TEST_DATA / "spectra" / "dupont_paint_chips.csv"),
                 DEFAULT_GRID,
                 out_of_range="clamp",
             ).values,

@@ -6,7 +6,7 @@ import pytest
 from hwbridge.replay import ingest
 from recon.capture_io import select_frames
 from recon.errors import SpectwinInputError
-from recon.shared_data import shared_data_dir
+from recon.measured_data import data_path
 from twin.sim_session import run_demo_session
 
 
@@ -14,7 +14,7 @@ from twin.sim_session import run_demo_session
 def stores(tmp_path_factory):
     folder = tmp_path_factory.mktemp("stores")
     replay = ingest(
-        shared_data_dir() / "real" / "llanos2019", "llanos2019", folder / "llanos.capture.zarr"
+        data_path("real/llanos2019"), "llanos2019", folder / "llanos.capture.zarr"
     )
     simulated = run_demo_session(folder / "sim.capture.zarr", 4)
     return {"replay": (replay, "flea3", 0.1), "sim": (simulated, "k4", 0.1)}

@@ -1,4 +1,4 @@
-"""Real data: Llanos's (2019) ColorChecker exposure series (shared/data/real/llanos2019).
+"""Real data: Llanos's (2019) ColorChecker exposure series (recon/data/real/llanos2019).
 
 A Flea3 (Sony ICX655 CCD) photographed a ColorChecker through 7 band-pass filters at 7 exposure
 times (25 ms to 3916 ms); see :mod:`recon.llanos_capture`. Here: recover the camera's response with
@@ -32,8 +32,8 @@ from recon.llanos_capture import (
     read_llanos2019_chart_capture,
     read_llanos2019_chart_spectra,
 )
+from recon.measured_data import data_path
 from recon.response_curve import robertson
-from recon.shared_data import shared_data_dir
 from recon.spectra import band_integrals
 
 WHITE = LLANOS2019_PATCH_NAMES.index("white 9.5 (.05 D)")
@@ -44,7 +44,7 @@ EROSION_PX = 3  # patch masks are drawn on the 550 nm image; chromatic aberratio
 def capture(tmp_path_factory):
     """The series as calibration sees it: replayed into a capture store (hwbridge.replay)."""
     store = ingest(
-        shared_data_dir() / "real" / "llanos2019",
+        data_path("real/llanos2019"),
         "llanos2019",
         tmp_path_factory.mktemp("replay") / "llanos.capture.zarr",
     )

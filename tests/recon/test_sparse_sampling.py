@@ -1,5 +1,7 @@
 """Sparse sampling protocols of thesis chapter 7 (recon.sparse_sampling) and the real Llanos 2019
-multispectral image (recon.shared_data.read_llanos2019_multispectral)."""
+multispectral image (recon.measured_data.read_llanos2019_multispectral)."""
+
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -7,7 +9,7 @@ from scipy import io
 from skimage import measure
 
 from recon.errors import SpectwinDataError, SpectwinInputError
-from recon.shared_data import read_llanos2019_multispectral
+from recon.measured_data import data_path, read_llanos2019_multispectral
 from recon.sparse_sampling import (
     add_rgb_noise,
     exclude_region,
@@ -17,6 +19,8 @@ from recon.sparse_sampling import (
     spot_mean_spectra,
     whisk_broom_mask,
 )
+
+TEST_DATA = Path(__file__).resolve().parents[1] / "data"
 
 
 def _regular_spacing(values: np.ndarray) -> np.ndarray:
@@ -167,7 +171,7 @@ def test_llanos2019_multispectral_image_and_camera():
     assert np.all(np.isfinite(means / means[1])) and np.all(means > 0)
     # Llanos's own simulated RAW image (GBRG Bayer) from this image and sensor: its Green sites
     # equal image @ response exactly (the demosaiced Green keeps the measured Green samples).
-    raw = io.loadmat(data.source.with_name("d2_colorChecker30cm_raw.mat"))["I_raw"]
+    raw = io.loadmat(TEST_DATA / "llanos2019" / "d2_colorChecker30cm_raw.mat")["I_raw"]
     green = np.concatenate([raw[0::2, 0::2].ravel(), raw[1::2, 1::2].ravel()])
     ours = np.concatenate([rgb[0::2, 0::2, 1].ravel(), rgb[1::2, 1::2, 1].ravel()])
     np.testing.assert_allclose(ours, green, rtol=0, atol=1e-6)
@@ -177,7 +181,6 @@ def test_llanos2019_multispectral_image_and_camera():
         assert correlation[0, 1] > 0.95
 
 
-def test_llanos2019_missing_files_raise_with_the_path(tmp_path, monkeypatch):
-    monkeypatch.setenv("SPECTWIN_SHARED_DATA", str(tmp_path))
-    with pytest.raises(SpectwinDataError, match="d2_colorChecker30cm_dHyper.mat does not exist"):
-        read_llanos2019_multispectral()
+def test_missing_shipped_data_raises_with_the_path():
+    with pytest.raises(SpectwinDataError, match="real/nosuch.mat is missing .* reinstall"):
+        data_path("real/nosuch.mat")

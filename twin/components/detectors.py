@@ -12,7 +12,7 @@ References
   camera spectral sensitivity estimation. JOSA A, 32(3), 381-391. doi:10.1364/JOSAA.32.000381
   (the NPL-measured Nikon 5100 and Sigma SD Merrill, shipped by ``colour``).
 - isetbio (MIT licence): Nikon D70, Nikon D100 and Aptina MT9M131 sensitivities in
-  ``shared/data/spectra/sensors``.
+  ``recon/data/spectra/sensors``.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ import colour
 import numpy as np
 
 from recon.errors import SpectwinInputError
-from recon.shared_data import read_spectra_csv
+from recon.measured_data import read_spectra_csv
 from recon.spectra import (
     OutOfRangePolicy,
     SampledSpectra,
@@ -67,16 +67,16 @@ def _colour_camera(name: str) -> Callable[[], SampledSpectra]:
     return lambda: from_colour(colour.MSDS_CAMERA_SENSITIVITIES[name])
 
 
-def _shared_camera(file_name: str) -> Callable[[], SampledSpectra]:
+def _isetbio_camera(file_name: str) -> Callable[[], SampledSpectra]:
     return lambda: read_spectra_csv(f"spectra/sensors/{file_name}")
 
 
 RGB_CAMERA_RESPONSES: dict[str, Callable[[], SampledSpectra]] = {
     "Nikon 5100 (NPL)": _colour_camera("Nikon 5100 (NPL)"),
     "Sigma SDMerill (NPL)": _colour_camera("Sigma SDMerill (NPL)"),
-    "Nikon D70": _shared_camera("nikon_d70_rgb.csv"),
-    "Nikon D100": _shared_camera("nikon_d100_rgb.csv"),
-    "Aptina MT9M131": _shared_camera("aptina_mt9m131_rgb.csv"),
+    "Nikon D70": _isetbio_camera("nikon_d70_rgb.csv"),
+    "Nikon D100": _isetbio_camera("nikon_d100_rgb.csv"),
+    "Aptina MT9M131": _isetbio_camera("aptina_mt9m131_rgb.csv"),
 }
 """Measured RGB camera sensitivities by name, each loaded on first use."""
 

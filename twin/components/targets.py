@@ -5,7 +5,7 @@ References
 - The thesis, Eq. 3.3 and Fig. 3.5d (Zenith Ultra-White reflectance standard of Sphere Optics,
   barium sulphate, nearly perfect white and diffuse); section 9.3 (colour charts).
 - Ohta, N. ColorChecker spectra as shipped by ``colour`` ("ColorChecker N Ohta").
-- isetbio (MIT licence): ``shared/data/spectra/reflectances/macbeth_colorchecker.csv``.
+- isetbio (MIT licence): ``recon/data/spectra/reflectances/macbeth_colorchecker.csv``.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import colour
 import numpy as np
 
 from recon.errors import SpectwinInputError
-from recon.shared_data import read_spectra_csv
+from recon.measured_data import read_spectra_csv
 from recon.spectra import OutOfRangePolicy, SampledSpectra, WavelengthGrid, from_colour, resample
 
 __all__ = [
@@ -56,7 +56,7 @@ def colorchecker_reflectances(
     """The 24 ColorChecker patch reflectances, values ``(24, K)`` named by patch.
 
     ``source`` is a chart of ``colour.SDS_COLOURCHECKERS`` or ``"isetbio"`` (the measured chart
-    in ``shared/data``); ``out_of_range`` says how to extend the data (380-780 nm for ``colour``)
+    in spectwin's data); ``out_of_range`` says how to extend the data (380-780 nm for ``colour``)
     to a wider grid (see ``recon.spectra.resample``).
     """
     if source not in COLORCHECKER_SOURCES:
@@ -78,7 +78,7 @@ def colorchecker_reflectances(
 def esser_reflectances(
     grid: WavelengthGrid, *, brightest: float = 0.9, out_of_range: OutOfRangePolicy = "error"
 ) -> SampledSpectra:
-    """The 113 Esser test chart patches (isetbio data in ``shared/data``), values ``(113, K)``.
+    """The 113 Esser test chart patches (isetbio data in ``recon/data``), values ``(113, K)``.
 
     The isetbio table is in relative units (its largest value is about 1.5e-3): it is scaled so
     that the brightest patch has a mean reflectance of ``brightest`` over 400-700 nm.

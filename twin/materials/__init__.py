@@ -16,11 +16,17 @@ from twin.materials.builders import build_colorchecker16, build_fabric, build_le
 from twin.materials.config import MaterialConfig
 from twin.materials.spectra import MATERIAL_GRID
 from twin.surfaces import SurfacePart
-from twin.yaml_config import read_yaml_mapping, resolve_scene_file, scene_names, validate_document
+from twin.yaml_config import (
+    read_yaml_mapping,
+    resolve_scene_file,
+    scene_folder,
+    scene_names,
+    validate_document,
+)
 
 __all__ = ["MATERIAL_DIR", "MATERIAL_GRID", "Material", "available_materials", "load_material"]
 
-MATERIAL_DIR = Path(__file__).resolve().parents[2] / "scenes" / "materials"
+MATERIAL_DIR = scene_folder("materials")
 
 _BUILDERS = {
     "colorchecker16": build_colorchecker16,

@@ -1,14 +1,14 @@
-"""Locate and read the measured data in the workplace's ``shared/data`` folder.
+"""Read the measured data that ships with spectwin (package data of ``recon``: ``recon/data``).
 
-The folder sits beside the repository (``../shared/data``) unless the environment variable
-``SPECTWIN_SHARED_DATA`` names another location. Spectra there are CSV files whose first column is
-``wavelength_nm`` and whose ``#`` lines name the source; see ``shared/data/README.md``.
+Spectra are CSV files whose first column is ``wavelength_nm`` and whose ``#`` lines name the
+source; every data folder has a ``SOURCES.md`` naming origin and licence
+(``recon/data/spectra/SOURCES.md``, ``recon/data/real/llanos2019/SOURCES.md``).
 """
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -20,38 +20,48 @@ from recon.spectra import SampledSpectra, WavelengthGrid
 __all__ = [
     "Llanos2019Multispectral",
     "read_llanos2019_multispectral",
+    "data_path",
     "read_spectra_csv",
-    "shared_data_dir",
 ]
 
-_ENV_VARIABLE = "SPECTWIN_SHARED_DATA"
+def data_path(relative_path: str | Path = "") -> Path:
+    """The path of a file or folder of spectwin's measured data (``recon/data``).
 
+    Parameters
+    ----------
+    relative_path
+        Path inside the data folder, e.g. ``"real/llanos2019"``; empty for the folder itself.
 
-def shared_data_dir() -> Path:
-    """The ``shared/data`` folder: ``$SPECTWIN_SHARED_DATA`` or ``<repository>/../shared/data``."""
-    configured = os.environ.get(_ENV_VARIABLE)
-    folder = (
-        Path(configured) if configured else Path(__file__).resolve().parents[2] / "shared" / "data"
-    )
-    if not folder.is_dir():
+    Raises
+    ------
+    SpectwinDataError
+        When the file or folder is not part of the installed package.
+    """
+    path = Path(str(resources.files("recon").joinpath("data"))) / relative_path
+    if not path.exists():
         raise SpectwinDataError(
-            f"shared data folder {folder} does not exist: put the workplace's shared/ beside the "
-            f"repository or set {_ENV_VARIABLE} to its data folder"
+            f"measured data {relative_path!s} is missing from the installed spectwin package "
+            f"(expected {path}): reinstall spectwin"
         )
-    return folder
+    return path
 
 
 def read_spectra_csv(relative_path: str | Path) -> SampledSpectra:
-    """Read a spectra CSV of ``shared/data`` (e.g. ``"spectra/sensors/nikon_d70_rgb.csv"``).
+    """Read a spectra CSV of spectwin's data (e.g. ``"spectra/sensors/nikon_d70_rgb.csv"``).
+
+    Parameters
+    ----------
+    relative_path
+        Path inside ``recon/data``, or an absolute path to a CSV file of the same layout.
 
     Returns
     -------
     SampledSpectra
         Values ``(n_columns, K)`` named by the CSV header, on the file's wavelengths.
     """
-    path = shared_data_dir() / relative_path
+    path = Path(relative_path) if Path(relative_path).is_absolute() else data_path(relative_path)
     if not path.is_file():
-        raise SpectwinDataError(f"spectra file {path} does not exist")
+        raise SpectwinDataError(f"spectra file {path} does not exist: expected a CSV file")
     lines = [line for line in path.read_text().splitlines() if line and not line.startswith("#")]
     header = [column.strip() for column in lines[0].split(",")]
     if header[0] != "wavelength_nm" or len(header) < 2:
@@ -125,12 +135,12 @@ def _load_mat(path: Path, names: tuple[str, ...]) -> dict[str, np.ndarray]:
 
 
 def read_llanos2019_multispectral() -> Llanos2019Multispectral:
-    """Read Llanos's 7-band ColorChecker image and camera sensitivities from ``shared/data``.
+    """Read Llanos's 7-band ColorChecker image and camera sensitivities (spectwin's data).
 
     Files: ``real/llanos2019/multispectral_images/d2_colorChecker30cm_dHyper.mat``
     (``I_hyper``) and ``sensor.mat`` (``bands``, ``sensor_map``); B. Llanos, University of
-    Alberta, 2019, Boost Software License 1.0 (see ``shared/data/README.md``). A real
-    multispectral image and the RGB response that goes with it, for the sparse-to-dense
+    Alberta, 2019, Boost Software License 1.0 (see ``recon/data/real/llanos2019/SOURCES.md``).
+    A real multispectral image and the RGB response that goes with it, for the sparse-to-dense
     experiments of thesis chapter 7 on real data.
 
     Returns
@@ -138,7 +148,7 @@ def read_llanos2019_multispectral() -> Llanos2019Multispectral:
     Llanos2019Multispectral
         See its description for the meaning and units of the arrays.
     """
-    folder = shared_data_dir() / _LLANOS2019_FOLDER
+    folder = data_path(_LLANOS2019_FOLDER)
     image_path = folder / "d2_colorChecker30cm_dHyper.mat"
     image = np.asarray(_load_mat(image_path, ("I_hyper",))["I_hyper"], dtype=np.float64)
     sensor = _load_mat(folder / "sensor.mat", ("bands", "sensor_map"))

@@ -1,0 +1,6 @@
+"""Declarative YAML of spectwin's rigs (``rigs/``), cameras (``cameras/``) and ground-truth
+materials (``materials/``).
+
+The files ship inside the installed package and are read through :mod:`importlib.resources`
+(:func:`twin.yaml_config.scene_folder`); a user's own YAML file is given to the commands by path.
+"""
