@@ -1,4 +1,4 @@
-"""Spectralization at scale (issue: 1 megapixel x 33 bands, point spectra, k = 3).
+"""Spectralization at scale (1 megapixel x 33 bands, point spectra, k = 3).
 
 Prints JSON: neighbour-graph time, multigrid solve time, peak memory, energy and error, and
 (with ``--lsqr-iterations N``) the thesis's LSQR for comparison, which at 1 MP takes long.

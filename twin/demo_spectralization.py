@@ -6,7 +6,7 @@ under D65, 1 % noise) and, at every ``band_step``-th band, by a spectral camera 
 exposures leave ``band_noise`` relative Gaussian noise. :func:`recon.spectralize.spectralize`
 fuses them (Eq. 10.12, the band images matched after a Gaussian filter of ``sigma_px``); the
 error is Eq. 6.8 and Delta E94 against the texture. The noise is drawn here, not by the sensor
-model: the dome's own capture simulation is the Dome issue's.
+model (the dome's own capture simulation is in ``twin.dome_capture``).
 """
 
 from __future__ import annotations

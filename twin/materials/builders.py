@@ -1,4 +1,4 @@
-"""Builders of the four ground-truth materials (issue: colour checker, red fabric, Lego,
+"""Builders of the four ground-truth materials (colour checker, red fabric, Lego,
 wallpaper). Each returns surface parts in the sample frame: z is the normal, the sample fills
 ``[-size/2, size/2]^2`` around the origin and rests on z = 0.
 """
