@@ -107,7 +107,8 @@ class CaptureStore:
         path = Path(path)
         if path.exists():
             raise BridgeInputError(
-                f"{path} exists: resume it or choose another name (nothing was overwritten)"
+                f"{path} exists: continue it with --resume or choose another name (nothing was "
+                "overwritten)"
             )
         if backend not in ("sim", "real", "replay"):
             raise BridgeInputError(f"backend: expected 'sim', 'real' or 'replay', got {backend!r}")
@@ -172,8 +173,15 @@ class CaptureStore:
     def open(cls, path: str | Path) -> CaptureStore:
         path = Path(path)
         if not path.exists():
-            raise BridgeInputError(f"{path} does not exist")
-        group = zarr.open_group(str(path), mode="r+")
+            raise BridgeInputError(f"{path} does not exist: expected a capture store")
+        if not path.is_dir():
+            raise BridgeInputError(f"{path} is a file: expected a capture store (a folder)")
+        try:
+            group = zarr.open_group(str(path), mode="r+")
+        except (OSError, ValueError) as error:
+            raise BridgeInputError(
+                f"{path} is not a capture store (not a Zarr group: {error})"
+            ) from None
         if "plan" not in group.attrs or "progress" not in group:
             raise BridgeInputError(f"{path} is not a capture store (no plan or progress)")
         return cls(group, path)

@@ -204,8 +204,8 @@ class BTFStore:
         path = Path(path)
         if path.exists():
             raise SpectwinInputError(
-                f"{path} exists: reopen it with BTFStore.open or choose another name "
-                "(nothing was overwritten)"
+                f"{path} exists: continue it (spectwin process --resume) or choose another "
+                "name (nothing was overwritten)"
             )
         light_dirs = _check_directions("light_dirs", light_dirs, None)
         view_dirs = _check_directions("view_dirs", view_dirs, light_dirs.shape[0])
@@ -267,11 +267,19 @@ class BTFStore:
         """Open an existing store, read-only unless ``writable`` (to resume writing pairs)."""
         path = Path(path)
         if not path.exists():
-            raise SpectwinInputError(f"{path} does not exist")
+            raise SpectwinInputError(
+                f"{path} does not exist: expected a BTF store made by spectwin process"
+            )
+        if not path.is_dir():
+            raise SpectwinInputError(
+                f"{path} is a file: expected a BTF store (a folder made by spectwin process)"
+            )
         try:
             group = zarr.open_group(str(path), mode="r+" if writable else "r", zarr_format=3)
-        except (FileNotFoundError, ValueError, TypeError) as error:
-            raise SpectwinInputError(f"{path}: not a Zarr v3 group ({error})") from None
+        except (OSError, ValueError, TypeError) as error:
+            raise SpectwinInputError(
+                f"{path}: not a BTF store made by spectwin process (not a Zarr v3 group: {error})"
+            ) from None
         return cls(group, path, writable=writable)
 
     # -- description ---------------------------------------------------------------------------
@@ -535,7 +543,7 @@ class BTFStore:
     def _require_writable(self) -> None:
         if not self.writable:
             raise SpectwinInputError(
-                f"{self.path}: opened read-only; use BTFStore.open(path, writable=True)"
+                f"{self.path}: the store was opened read-only and cannot be written"
             )
 
     def _require_complete(self, allow_incomplete: bool, action: str) -> None:
@@ -543,8 +551,8 @@ class BTFStore:
             pending = self.pending_pairs()
             raise SpectwinInputError(
                 f"{self.path}: cannot {action} an incomplete BTF store ({len(pending)} of "
-                f"{self.n_pairs} pairs pending, first {pending[:5]}); pass allow_incomplete=True "
-                "to read the written pairs"
+                f"{self.n_pairs} pairs pending, first {pending[:5]}); finish it with spectwin "
+                "process --resume"
             )
 
     def _all_written(self) -> bool:

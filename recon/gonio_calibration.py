@@ -55,6 +55,8 @@ __all__ = [
 ]
 
 _FORMAT = "spectwin-gonio-calibration"
+_ARRAY_KEYS = ("bands_nm", "inverse_response", "run_factors", "planned_exposure_s")
+_KEYS = (*_ARRAY_KEYS, "base_s", "round_to_s", "white_fill", "source")
 
 
 @dataclass(frozen=True)
@@ -199,22 +201,33 @@ class GonioCalibration:
             raise SpectwinInputError(
                 f"{path}: expected a calibration written by spectwin calibrate (format {_FORMAT})"
             )
-        arrays = {
-            name: np.asarray(document[name], np.float64)
-            for name in ("bands_nm", "inverse_response", "run_factors", "planned_exposure_s")
-        }
+        missing = [name for name in _KEYS if name not in document]
+        if missing:
+            raise SpectwinInputError(
+                f"{path}: calibration lacks {missing}; write it again with spectwin calibrate"
+            )
+        arrays, numbers = {}, {}
+        for name in _KEYS:
+            try:
+                if name in _ARRAY_KEYS:
+                    arrays[name] = np.asarray(document[name], np.float64)
+                elif name in ("base_s", "white_fill"):
+                    numbers[name] = float(document[name])
+            except (TypeError, ValueError):
+                raise SpectwinInputError(
+                    f"{path}: {name}: expected numbers, got {str(document[name])[:40]!r}"
+                ) from None
         bands = arrays["bands_nm"].size
-        if arrays["run_factors"].shape != (bands,) or arrays["planned_exposure_s"].shape != (
-            bands,
+        if arrays["bands_nm"].shape != (bands,) or any(
+            arrays[name].shape != (bands,) for name in ("run_factors", "planned_exposure_s")
         ):
             raise SpectwinInputError(
-                f"{path}: run_factors and planned_exposure_s need {bands} bands"
+                f"{path}: bands_nm, run_factors and planned_exposure_s need one value per band"
             )
         return cls(
             **arrays,
-            base_s=float(document["base_s"]),
+            **numbers,
             round_to_s=document["round_to_s"],
-            white_fill=float(document["white_fill"]),
             source=str(document["source"]),
         )
 

@@ -20,8 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
+from hwbridge.errors import BridgeInputError
 from hwbridge.store import CaptureStore
 from recon.btf_store import BTFStore
+from recon.errors import SpectwinInputError
 from recon.metrics import relative_error
 from recon.spectra import SampledSpectra
 from twin.components import FINE_GRID, HMILamp, LiquidCrystalTunableFilter
@@ -143,11 +145,36 @@ def evaluate_gonio(
     actual poses) and the rendered window. Pairs not written (unregistered) are left out and
     counted in :meth:`GonioEvaluation.summary`.
     """
+    if isinstance(spp, bool) or not isinstance(spp, int | np.integer) or spp < 1:
+        raise SpectwinInputError(f"spp: expected a positive number of samples, got {spp!r}")
     btf = BTFStore.open(btf_path)
-    capture = CaptureStore.open(btf.attrs["source_capture"])
+    written = np.flatnonzero(btf.written())
+    if not written.size:
+        raise SpectwinInputError(
+            f"{btf_path}: no direction pair is written yet; finish the BTF with spectwin "
+            "process --resume"
+        )
+    source = btf.attrs.get("source_capture")
+    if not source:
+        raise SpectwinInputError(
+            f"{btf_path}: records no source capture; evaluate compares BTFs made by spectwin "
+            "process from a twin capture"
+        )
+    try:
+        capture = CaptureStore.open(source)
+    except BridgeInputError as error:
+        raise SpectwinInputError(
+            f"{btf_path}: the capture store it was processed from is needed: {error}"
+        ) from None
     material = load_material(btf.material)
     texels = btf.texels[0]
-    written = np.flatnonzero(btf.written())
+    for pair in written:
+        fields = field_masks(material, btf.view_dirs[pair], texels, interior=interior)
+        if not fields.masks.any(axis=(1, 2)).all():
+            raise SpectwinInputError(
+                f"{btf_path}: at {texels} texels some chart fields have no interior texel to "
+                "compare; process the capture again with more --texels (at least 8)"
+            )
     truth = truth_btf(
         material,
         btf.light_dirs[written],

@@ -19,12 +19,16 @@ from pathlib import Path
 from recon.btf_store import BTFStore
 from recon.errors import SpectwinInputError
 from twin.btf_bsdf import store_table
-from twin.figure46 import render_figure46, write_figure46
+from twin.figure46 import _field_interiors, render_figure46, write_figure46
 from twin.json_output import dumps
 from twin.materials import load_material
 from twin.spectrophotometer import compare_45_0, write_45_0_figure
 
-__all__ = ["validate_btf"]
+__all__ = ["MIN_PIXELS", "validate_btf"]
+
+MIN_PIXELS = 23
+"""Smallest image size at which every field of the colour checker keeps an interior pixel (and
+the Delta E94 of every field is a number); larger sizes all do."""
 
 
 def validate_btf(
@@ -74,6 +78,17 @@ def validate_btf(
     if compressed and not btf.has_compressed:
         raise SpectwinInputError(
             f"{btf_path}: no compressed form stored; run spectwin compress first"
+        )
+    if not compressed and not btf.written().any():
+        raise SpectwinInputError(
+            f"{btf_path}: no direction pair is written yet; finish the BTF with spectwin "
+            "process --resume"
+        )
+    field_pixels = _field_interiors(material, pixels).reshape(-1, pixels * pixels).sum(axis=1)
+    if not field_pixels.all():
+        raise SpectwinInputError(
+            f"pixels: {pixels} px leave chart fields of {btf.material!r} without an interior "
+            f"pixel to compare; expected at least {MIN_PIXELS}"
         )
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

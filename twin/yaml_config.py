@@ -59,9 +59,11 @@ def resolve_scene_file(name_or_path: str | Path, folder: Path, what: str) -> Pat
 def read_yaml_mapping(path: Path) -> dict:
     """The YAML document at ``path``, which must be a mapping."""
     try:
-        document = yaml.safe_load(path.read_text())
+        document = yaml.safe_load(path.read_text(encoding="utf-8"))
     except yaml.YAMLError as error:
         raise SpectwinInputError(f"{path}: malformed YAML: {error}") from error
+    except (OSError, UnicodeDecodeError) as error:
+        raise SpectwinInputError(f"{path}: not a readable YAML text file ({error})") from error
     if not isinstance(document, dict):
         raise SpectwinInputError(f"{path}: expected a mapping of settings")
     return document
@@ -73,7 +75,8 @@ def validate_document(model: type[Model], document: dict, path: Path) -> Model:
         return model.model_validate(document)
     except ValidationError as error:
         problems = "; ".join(
-            f"{'.'.join(str(part) for part in item['loc']) or 'document'}: {item['msg']}"
+            f"{'.'.join(str(part) for part in item['loc']) or 'document'}: "
+            f"{item['msg'].removeprefix('Value error, ')}"
             for item in error.errors()
         )
         raise SpectwinInputError(f"{path}: {problems}") from error
