@@ -1,34 +1,31 @@
-"""The ``spectwin`` command line (typer). Commands that compute figures have ``--json``."""
+"""The ``spectwin`` command line (typer). Commands that compute figures have ``--json``.
+
+Every option is checked before any work starts; a user error prints one line ``error: ...``
+to stderr (exit 2 for usage errors, 1 for failed runs), see :mod:`twin.cli_errors`.
+"""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.console import Console
-from rich.table import Table
 
+from twin.cli_choices import Chart, Light, RGBCamera
+from twin.cli_errors import SpectwinGroup, require_output_folder, run_failed
+from twin.cli_output import console, print_summary
 from twin.dome_cli import register as register_dome
 from twin.gonio_cli import register as register_gonio
 
 app = typer.Typer(
+    cls=SpectwinGroup,
     help="spectwin: a simulation-first digital twin of spectral reflectance capture rigs.",
     no_args_is_help=True,
     add_completion=False,
 )
-console = Console()
 
 JsonFlag = Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")]
-
-
-def _print_table(summary: dict[str, object], title: str, *, skip: tuple[str, ...] = ()) -> None:
-    table = Table("quantity", "value", title=title)
-    for key, value in summary.items():
-        if key not in skip:
-            table.add_row(key, str(value))
-    console.print(table)
+SeedOption = Annotated[int, typer.Option(min=0, help="Seed of the simulated noise.")]
 
 
 @app.command()
@@ -36,11 +33,7 @@ def info(as_json: JsonFlag = False) -> None:
     """Show the Mitsuba variant spectwin uses, the LLVM it found and the thread count."""
     from twin.variant import activate
 
-    report = activate().as_dict()
-    if as_json:
-        typer.echo(json.dumps(report, indent=2))
-        return
-    _print_table(report, "spectwin renderer")
+    print_summary(activate().as_dict(), "spectwin renderer", as_json)
 
 
 @app.command()
@@ -48,48 +41,64 @@ def smoke(
     out: Annotated[Path, typer.Option(help="Folder for the EXR, PNGs and summary.json.")] = Path(
         "out/smoke"
     ),
-    pixels_per_patch: Annotated[int, typer.Option(min=4, help="Pixels per chart patch.")] = 24,
-    spp: Annotated[int, typer.Option(min=1, help="Samples per pixel.")] = 256,
+    pixels_per_patch: Annotated[
+        int, typer.Option(min=4, max=256, help="Pixels per chart patch.")
+    ] = 24,
+    spp: Annotated[int, typer.Option(min=1, max=65536, help="Samples per pixel.")] = 256,
     as_json: JsonFlag = False,
 ) -> None:
-    """Render a ColorChecker under the QTH lamp through the LCTF bands, check the closed form."""
+    """Render a ColorChecker under the QTH lamp through the LCTF bands and check it against
+    the closed form: PASS or FAIL (exit 1) with the tolerance."""
     from twin.smoke import run_smoke
 
+    require_output_folder(out)
     with console.status("rendering the smoke scene"):
         summary = run_smoke(out, pixels_per_patch=pixels_per_patch, spp=spp)
-    if as_json:
-        typer.echo(json.dumps(summary, indent=2))
-        return
-    height, width = summary["image_px"]
-    console.print(
-        f"[bold]smoke render[/bold] {width}x{height} px, {summary['bands']} bands, "
-        f"{summary['spp']} spp, variant {summary['variant']['variant']}, "
-        f"{summary['render_s']:.2f} s"
+    verdict = (
+        f"{summary['verdict']}: largest relative band error vs closed form "
+        f"{100 * summary['max_abs_relative_error']:.2f} % (tolerance "
+        f"{100 * summary['tolerance']:.0f} %)"
     )
-    error_percent = 100 * summary["max_abs_relative_error"]
-    console.print(f"largest relative band error vs closed form: {error_percent:.2f} %")
-    console.print(f"wrote {', '.join(str(out / name) for name in summary['outputs'])}")
+    if as_json:
+        print_summary(summary, "smoke render", as_json)
+    else:
+        height, width = summary["image_px"]
+        console.print(
+            f"[bold]smoke render[/bold] {width}x{height} px, {summary['bands']} bands, "
+            f"{summary['spp']} spp, variant {summary['variant']['variant']}, "
+            f"{summary['render_s']:.2f} s"
+        )
+        console.print(f"wrote {', '.join(str(out / name) for name in summary['outputs'])}")
+    if summary["verdict"] != "PASS":
+        run_failed(f"smoke render {verdict}; more --spp lowers the render noise")
+    if not as_json:
+        console.print(verdict)
 
 
 @app.command()
 def camera(
-    name: Annotated[str, typer.Argument(help="Camera file in scenes/cameras, e.g. coolsnap_k4.")],
+    name: Annotated[
+        str, typer.Argument(help="Camera file in scenes/cameras (e.g. coolsnap_k4) or a path.")
+    ],
     out: Annotated[
         Path, typer.Option(help="Folder for camera_report.png and summary.json.")
     ] = Path("out/camera"),
-    seed: Annotated[int, typer.Option(help="Seed of the simulated frames.")] = 0,
+    seed: SeedOption = 0,
     as_json: JsonFlag = False,
 ) -> None:
     """Bench-test a camera: photon transfer, dark frames, HMI flicker vs exposure time."""
+    from twin.camera_config import load_camera_config
     from twin.camera_report import run_camera_report
 
-    with console.status(f"simulating {name}"):
-        summary = run_camera_report(name, out / name, seed=seed)
-    if as_json:
-        typer.echo(json.dumps(summary, indent=2))
-        return
-    _print_table(summary, str(summary["camera"]), skip=("camera", "outputs"))
-    console.print(f"wrote {out / name / 'camera_report.png'}")
+    config = load_camera_config(name)
+    folder = out / Path(name).stem
+    require_output_folder(out)
+    require_output_folder(folder)
+    with console.status(f"simulating {config.name}"):
+        summary = run_camera_report(name, folder, seed=seed)
+    print_summary(summary, str(summary["camera"]), as_json, skip=("camera", "outputs"))
+    if not as_json:
+        console.print(f"wrote {folder / 'camera_report.png'}")
 
 
 @app.command()
@@ -115,14 +124,13 @@ def estimate(
             "leds": config.led_count,
             "rgb_cameras": len(config.rgb_camera_polar_deg),
             "frames_per_camera": config.rotation_stage_positions * (config.led_count + 1),
-            "total_s": round(total_s, 1),
-            "total_h": round(total_s / 3600, 2),
+            "total_s": total_s,
+            "total_h": total_s / 3600,
         }
     summary = {"rig": config.name, **summary}
-    if as_json:
-        typer.echo(json.dumps(summary, indent=2))
-        return
-    _print_table(summary, f"capture time: {config.name}", skip=("rig", "band_exposures_s"))
+    print_summary(
+        summary, f"capture time: {config.name}", as_json, skip=("rig", "band_exposures_s")
+    )
 
 
 @app.command()
@@ -130,13 +138,16 @@ def gallery(
     out: Annotated[Path, typer.Option(help="Folder for the PNGs and gallery.json.")] = Path(
         "out/gallery"
     ),
-    pixels: Annotated[int, typer.Option(min=32, help="Rendered frame size (square).")] = 256,
-    spp: Annotated[int, typer.Option(min=1, help="Samples per pixel.")] = 64,
-    seed: Annotated[int, typer.Option(help="Seed of the sensor noise.")] = 0,
+    pixels: Annotated[
+        int, typer.Option(min=32, max=2048, help="Rendered frame size (square).")
+    ] = 256,
+    spp: Annotated[int, typer.Option(min=1, max=65536, help="Samples per pixel.")] = 64,
+    seed: SeedOption = 0,
 ) -> None:
     """Simulate one raw frame of every ground-truth material in every rig, as PNGs."""
     from twin.rig_gallery import run_gallery
 
+    require_output_folder(out)
     with console.status("rendering every material in every rig"):
         summary = run_gallery(out, pixels=pixels, spp=spp, seed=seed)
     console.print(f"wrote {len(summary['outputs'])} frames to {out}")
@@ -147,25 +158,30 @@ def camchar(
     out: Annotated[
         Path, typer.Option(help="Folder for the photo, the curves and summary.json.")
     ] = Path("out/camchar"),
-    chart: Annotated[str, typer.Option(help="esser (113 fields) or colorchecker (24).")] = "esser",
-    light: Annotated[str, typer.Option(help="daylight, halogen, fluorescent or hmi.")] = "daylight",
-    camera: Annotated[
-        str, typer.Option(help="A camera of twin.components.RGB_CAMERA_RESPONSES.")
-    ] = "Nikon D70",
+    chart: Annotated[Chart, typer.Option(help="esser: 113 fields; colorchecker: 24.")] = (
+        Chart.esser
+    ),
+    light: Annotated[Light, typer.Option(help="The light of the photograph.")] = Light.daylight,
+    camera: Annotated[RGBCamera, typer.Option(help="The camera to characterize.")] = (
+        RGBCamera.nikon_d70
+    ),
     glossy: Annotated[bool, typer.Option(help="Glossy coating on the fields.")] = True,
     spot: Annotated[bool, typer.Option(help="Spot light (else a large area light).")] = True,
     occluder: Annotated[bool, typer.Option(help="An occluder casting a soft shadow.")] = False,
-    bend: Annotated[float, typer.Option(help="Bend of the chart, in chart widths (0-0.2).")] = 0.0,
+    bend: Annotated[
+        float, typer.Option(min=0.0, max=0.2, help="Bend of the chart, in chart widths.")
+    ] = 0.0,
     as_json: JsonFlag = False,
 ) -> None:
     """Characterize a camera from a rendered chart photograph (thesis chapter 9)."""
     from twin.camchar_report import run_camchar
     from twin.camchar_scenes import ChartScenario
 
+    require_output_folder(out)
     scenario = ChartScenario(
-        chart=chart,
-        light=light,
-        camera=camera,
+        chart=chart.value,
+        light=light.value,
+        camera=camera.value,
         glossy=glossy,
         spot=spot,
         occluder=occluder,
@@ -173,11 +189,14 @@ def camchar(
     )
     with console.status("rendering the chart photograph and estimating the response"):
         summary = run_camchar(scenario, out)
-    if as_json:
-        typer.echo(json.dumps(summary, indent=2))
-        return
-    _print_table(summary, f"camera characterization: {camera}", skip=("scenario", "outputs"))
-    console.print(f"wrote {out / 'responses.png'} and {out / 'chart_photo.png'}")
+    print_summary(
+        summary,
+        f"camera characterization: {camera.value}",
+        as_json,
+        skip=("scenario", "outputs"),
+    )
+    if not as_json:
+        console.print(f"wrote {out / 'responses.png'} and {out / 'chart_photo.png'}")
 
 
 @app.command(name="spectralize-study")
@@ -185,20 +204,29 @@ def spectralize_study(
     out: Annotated[Path, typer.Option(help="Folder for study.json and the PNGs.")] = Path(
         "out/spectralize"
     ),
-    texels: Annotated[int, typer.Option(min=16, help="Texture size of the twin materials.")] = 96,
+    texels: Annotated[
+        int,
+        typer.Option(
+            min=32,
+            max=512,
+            help="Texture size of the twin materials (at least 32: the push-broom lines must "
+            "hold the 64 spectra that A+ learns from, the sweeps up to 1000 spots).",
+        ),
+    ] = 96,
     sweeps: Annotated[bool, typer.Option(help="Run the Fig. 7.9 / 7.10 / 7.6 sweeps.")] = True,
     as_json: JsonFlag = False,
 ) -> None:
     """Chapter 7: spectralization vs. Imai, Hardeberg, Murakami, Dong and A+ on sparse data."""
     from twin.spectralization_study import run_study
 
+    require_output_folder(out)
     with console.status("rendering twin textures and running the chapter 7 protocols"):
         summary = run_study(out, texels=texels, sweeps=sweeps)
     if as_json:
-        typer.echo(json.dumps(summary, indent=2))
+        print_summary(summary, "spectralization study", as_json)
         return
     for case, result in summary["cases"].items():
-        _print_table(result["whisk_broom"], f"{case}: whisk-broom mean relative error, %")
+        print_summary(result["whisk_broom"], f"{case}: whisk-broom mean relative error", unit="%")
     console.print(f"wrote {out / 'study.json'} and the figures in {out}")
 
 
@@ -215,21 +243,14 @@ def demo(
 
     Example: spectwin demo --out out/demo
     """
-    from recon.errors import SpectwinInputError
     from twin.demo import run_demo
-    from twin.json_output import dumps
 
-    try:
-        with console.status("demo") as status:
-            metrics = run_demo(out, step=lambda name: status.update(f"demo: {name}"))
-    except SpectwinInputError as error:
-        console.print(f"[red]error:[/red] {error}")
-        raise typer.Exit(code=2) from None
-    if as_json:
-        typer.echo(dumps(metrics["headline"]))
-        return
-    _print_table(metrics["headline"], "spectwin demo")
-    console.print(f"report: {out / 'report.html'}")
+    require_output_folder(out)
+    with console.status("demo") as status:
+        metrics = run_demo(out, step=lambda name: status.update(f"demo: {name}"))
+    print_summary(metrics["headline"], "spectwin demo", as_json)
+    if not as_json:
+        console.print(f"report: {out / 'report.html'}")
 
 
 register_gonio(app)

@@ -7,7 +7,10 @@ from typing import Annotated
 
 import typer
 
-from twin.gonio_cli import JsonFlag, _fail, _print, console
+from twin.cli_choices import DomeMaterial
+from twin.cli_errors import fail, require_output_folder
+from twin.cli_output import console, print_summary
+from twin.gonio_cli import JsonFlag
 
 __all__ = ["register"]
 
@@ -16,12 +19,15 @@ def dome_study(
     out: Annotated[Path, typer.Option(help="Folder for dome_study.json and the PNGs.")] = Path(
         "dome_study"
     ),
-    texels: Annotated[int, typer.Option(help="Texture side in texels (a multiple of 4).")] = 32,
+    texels: Annotated[
+        int,
+        typer.Option(min=8, max=256, help="Texture side in texels (a multiple of 4)."),
+    ] = 32,
     materials: Annotated[
-        list[str] | None,
-        typer.Option("--material", help="lego, wallpaper, colorchecker16, red_fabric (repeat)."),
+        list[DomeMaterial] | None,
+        typer.Option("--material", help="A material to study (repeat); default: all four."),
     ] = None,
-    seed: Annotated[int, typer.Option(help="Seed of the cameras' noise.")] = 0,
+    seed: Annotated[int, typer.Option(min=0, help="Seed of the cameras' noise.")] = 0,
     as_json: JsonFlag = False,
 ) -> None:
     """Exposure plan, band schedules, low-SNR calibration, virtual dome captures and their
@@ -30,20 +36,23 @@ def dome_study(
 
     Example: spectwin dome-study --out out/dome --material lego --material red_fabric
     """
-    from recon.errors import SpectwinInputError
     from twin.dome_report import DOME_MATERIALS, run_dome_study
 
-    try:
-        with console.status("dome study") as status:
-            metrics = run_dome_study(
-                out,
-                texels=texels,
-                materials=tuple(materials or DOME_MATERIALS),
-                seed=seed,
-                step=lambda name: status.update(name),
-            )
-    except SpectwinInputError as error:
-        _fail(str(error))
+    if texels % 4:
+        fail(f"--texels {texels}: expected a multiple of 4")
+    require_output_folder(out)
+    chosen = tuple(dict.fromkeys(m.value for m in materials)) if materials else DOME_MATERIALS
+    with console.status("dome study") as status:
+        metrics = run_dome_study(
+            out,
+            texels=texels,
+            materials=chosen,
+            seed=seed,
+            step=lambda name: status.update(name),
+        )
+    if as_json:
+        print_summary(metrics, "", as_json)
+        return
     summary: dict[str, object] = {"out": str(out)}
     for name, plan in metrics["schedules"].items():
         if isinstance(plan, dict):
@@ -69,7 +78,7 @@ def dome_study(
         )
     check = metrics["cross_check_10_4"]
     summary["Fig. 10.4 field difference"] = f"{check['mean_abs_field_difference_pct']:.2f} % mean"
-    _print(metrics if as_json else summary, "dome study (thesis chapter 10)", as_json)
+    print_summary(summary, "dome study (thesis chapter 10)")
 
 
 def register(app: typer.Typer) -> None:

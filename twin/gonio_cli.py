@@ -21,19 +21,18 @@ from typing import Annotated
 
 import numpy as np
 import typer
-from rich.console import Console
-from rich.table import Table
 
-from twin.json_output import dumps
+from twin.cli_errors import fail, require_output_file, require_output_folder, run_failed
+from twin.cli_output import console, print_summary
 
 __all__ = ["register"]
 
-console = Console()
 JsonFlag = Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")]
 WorkersOption = Annotated[
     int,
     typer.Option(
         min=0,
+        max=256,
         help="Worker processes of a local Dask cluster (one thread each); 0 or 1: run in this "
         "process. Same results either way.",
     ),
@@ -46,6 +45,11 @@ SchedulerOption = Annotated[
         "see the stores under the same paths.",
     ),
 ]
+SppOption = Annotated[int, typer.Option(min=1, max=65536, help="Samples per pixel of the renders.")]
+MAX_FAULT_RATE = 0.1
+"""Largest injected fault rate: each device call is retried 3 times, so at 0.1 a fault outlasts
+the retries about once in 10^4 calls (the demo session makes about 250); at 0.2 most sessions
+stop."""
 
 
 class Program(StrEnum):
@@ -59,22 +63,55 @@ class Layout(StrEnum):
     joint = "joint"
 
 
-def _print(summary: dict[str, object], title: str, as_json: bool) -> None:
-    if as_json:
-        typer.echo(dumps(summary))
-        return
-    table = Table("quantity", "value", title=title)
-    for key, value in summary.items():
-        table.add_row(key, str(value))
-    console.print(table)
+# The capture options that only some programs use (the others refuse them).
+_PROGRAM_OPTIONS = {
+    "calibration": {Program.gonio_run},
+    "material": {Program.gonio_run},
+    "pixels": {Program.gonio_run},
+    "window": {Program.gonio_run},
+    "spp": {Program.gonio_run},
+    "fault_rate": {Program.demo},
+    "dry_run": {Program.demo},
+}
+# Options a --dry-run (which captures nothing) refuses.
+_CAPTURE_ONLY = ("seed", "resume", "fault_rate", "workers", "scheduler")
 
 
-def _fail(message: str) -> None:
-    console.print(f"[red]error:[/red] {message}")
-    raise typer.Exit(code=2)
+def _given(ctx: typer.Context, name: str) -> bool:
+    """Whether option ``name`` was given on the command line."""
+    source = ctx.get_parameter_source(name)
+    return source is not None and source.name == "COMMANDLINE"
+
+
+def _option(ctx: typer.Context, name: str) -> str:
+    return next(p.opts[0] for p in ctx.command.params if p.name == name)
+
+
+def _refuse_unused(ctx: typer.Context, program: Program, dry_run: bool) -> None:
+    for name, programs in _PROGRAM_OPTIONS.items():
+        if program not in programs and _given(ctx, name):
+            used_by = ", ".join(sorted(p.value for p in programs))
+            fail(
+                f"{_option(ctx, name)} is not used by --program {program.value} "
+                f"(only by {used_by}); leave it out"
+            )
+    if dry_run:
+        for name in _CAPTURE_ONLY:
+            if _given(ctx, name):
+                fail(f"{_option(ctx, name)} is not used by --dry-run, which captures nothing")
+
+
+def _require_complete(capture, path: Path) -> None:
+    if not capture.complete:
+        fail(
+            f"{path}: the capture is incomplete ({len(capture.pending_steps())} of "
+            f"{len(capture.attrs['plan'])} steps pending); "
+            "finish it with spectwin capture --resume"
+        )
 
 
 def capture(
+    ctx: typer.Context,
     store: Annotated[
         Path, typer.Argument(help="Capture store to write, e.g. out/run.capture.zarr.")
     ],
@@ -87,26 +124,42 @@ def capture(
         ),
     ] = Program.demo,
     calibration: Annotated[
-        Path | None, typer.Option(help="spectwin calibrate's JSON: the band exposure plan.")
+        Path | None,
+        typer.Option(help="gonio-run: spectwin calibrate's JSON, the band exposure plan."),
     ] = None,
-    material: Annotated[str, typer.Option(help="Material on the holder.")] = "colorchecker16",
+    material: Annotated[
+        str, typer.Option(help="gonio-run: material on the holder (scenes/materials).")
+    ] = "colorchecker16",
     pixels: Annotated[
-        int, typer.Option(help="Pixels across the camera's 20 cm field (rendered sensor).")
+        int,
+        typer.Option(min=32, max=4096, help="gonio-run: pixels across the camera's 20 cm field."),
     ] = 256,
     window: Annotated[
         int | None,
-        typer.Option(help="Read out only the centred window of this many pixels (ROI)."),
+        typer.Option(
+            min=16,
+            max=4096,
+            help="gonio-run: read out only the centred window of this many pixels (ROI; at "
+            "most --pixels).",
+        ),
     ] = None,
-    spp: Annotated[int, typer.Option(help="Samples per pixel of the renders.")] = 64,
-    seed: Annotated[int, typer.Option(help="Session seed (noise of every frame).")] = 0,
+    spp: Annotated[
+        int, typer.Option(min=1, max=65536, help="gonio-run: samples per pixel of the renders.")
+    ] = 64,
+    seed: Annotated[int, typer.Option(min=0, help="Session seed (noise of every frame).")] = 0,
     resume: Annotated[
         bool, typer.Option("--resume", help="Continue an interrupted session.")
     ] = False,
     dry_run: Annotated[
-        bool, typer.Option("--dry-run", help="Demo program: print the plan and its duration.")
+        bool, typer.Option("--dry-run", help="demo: print the plan and its duration.")
     ] = False,
     fault_rate: Annotated[
-        float, typer.Option(help="Demo program: injected device faults per call (0-1).")
+        float,
+        typer.Option(
+            min=0.0,
+            max=MAX_FAULT_RATE,
+            help="demo: injected device faults per device call (each is retried 3 times).",
+        ),
     ] = 0.0,
     workers: WorkersOption = 1,
     scheduler: SchedulerOption = None,
@@ -119,75 +172,86 @@ def capture(
 
     Example: spectwin capture out/run.capture.zarr --program gonio-run --calibration cal.json
     """
-    from hwbridge.errors import BridgeInputError
     from hwbridge.plans import estimate_duration_s
-    from recon.errors import SpectwinInputError
-    from twin.cluster import cluster_description, dask_client
 
+    _refuse_unused(ctx, program, dry_run)
     summary: dict[str, object] = {"store": str(store), "program": program.value}
     if program is Program.demo:
         from twin.sim_session import demo_plan
 
         plan = demo_plan()
-        summary["estimated_duration_s"] = round(estimate_duration_s(plan), 1)
+        summary["estimated_duration_s"] = estimate_duration_s(plan)
         if dry_run:
             summary |= {"steps": len(plan), "kinds": dict(Counter(s["kind"] for s in plan))}
-            _print(summary, "capture (dry run)", as_json)
+            print_summary(summary, "capture (dry run)", as_json)
             return
-    if program is Program.gonio_run and calibration is None:
-        _fail("--program gonio-run needs --calibration (the JSON of spectwin calibrate)")
-    try:
-        with dask_client(workers, scheduler) as client:
-            summary["cluster"] = cluster_description(client)
-            if program is Program.demo:
-                from twin.sim_session import run_demo_session
+    exposures = None
+    if program is Program.gonio_run:
+        from recon.gonio_calibration import GonioCalibration
+        from twin.materials import load_material
 
-                result = run_demo_session(
-                    store,
-                    seed,
-                    resume=resume,
-                    fault_rate=fault_rate,
-                    show_progress=not as_json,
-                    client=client,
-                )
-            elif program is Program.gonio_calibration:
-                from twin.gonio_capture import run_gonio_calibration
+        if calibration is None:
+            fail("--program gonio-run needs --calibration (the JSON of spectwin calibrate)")
+        if window is not None and window > pixels:
+            fail(f"--window {window} is larger than --pixels {pixels}; expected at most {pixels}")
+        exposures = GonioCalibration.load(calibration).planned_exposure_s
+        load_material(material)
+    if store.exists() and not resume:
+        fail(f"{store} exists: continue it with --resume or choose another store")
+    require_output_folder(store, "STORE")
+    from twin.cluster import cluster_description, dask_client
 
-                result = run_gonio_calibration(
-                    store, seed=seed, resume=resume, show_progress=not as_json, client=client
-                )
-            else:
-                from recon.gonio_calibration import GonioCalibration
-                from twin.gonio_capture import run_gonio_measurement
+    with dask_client(workers, scheduler) as client:
+        summary["cluster"] = cluster_description(client)
+        if program is Program.demo:
+            from twin.sim_session import run_demo_session
 
-                result = run_gonio_measurement(
-                    store,
-                    GonioCalibration.load(calibration).planned_exposure_s,
-                    material=material,
-                    pixels=pixels,
-                    window=window,
-                    spp=spp,
-                    seed=seed,
-                    resume=resume,
-                    show_progress=not as_json,
-                    client=client,
-                )
-    except (SpectwinInputError, BridgeInputError) as error:
-        _fail(str(error))
+            result = run_demo_session(
+                store,
+                seed,
+                resume=resume,
+                fault_rate=fault_rate,
+                show_progress=not as_json,
+                client=client,
+            )
+        elif program is Program.gonio_calibration:
+            from twin.gonio_capture import run_gonio_calibration
+
+            result = run_gonio_calibration(
+                store, seed=seed, resume=resume, show_progress=not as_json, client=client
+            )
+        else:
+            from twin.gonio_capture import run_gonio_measurement
+
+            result = run_gonio_measurement(
+                store,
+                exposures,
+                material=material,
+                pixels=pixels,
+                window=window,
+                spp=spp,
+                seed=seed,
+                resume=resume,
+                show_progress=not as_json,
+                client=client,
+            )
     index = result.index(result.attrs["plan"][0]["camera"])
     summary |= {
         "complete": result.complete,
         "frames": dict(Counter(index["kind"].tolist())),
         "frames_with_faults": int(sum(status != "ok" for status in index["status"])),
     }
-    _print(summary, "capture (simulated backend)", as_json)
+    print_summary(summary, "capture (simulated backend)", as_json)
 
 
 def calibrate(
     store: Annotated[Path, typer.Argument(help="A gonio-calibration capture store.")],
     out: Annotated[Path, typer.Option(help="Calibration JSON to write.")] = Path("cal.json"),
     white_fill: Annotated[
-        float, typer.Option(help="Fraction of the range the white standard should reach.")
+        float,
+        typer.Option(
+            min=0.01, max=0.99, help="Fraction of the range the white standard should reach."
+        ),
     ] = 0.7,
     as_json: JsonFlag = False,
 ) -> None:
@@ -196,33 +260,35 @@ def calibrate(
 
     Example: spectwin calibrate out/cal.capture.zarr --out out/cal.json
     """
-    from recon.errors import SpectwinInputError
+    from hwbridge.store import CaptureStore
     from recon.gonio_calibration import calibrate_gonio
 
-    try:
-        with console.status("calibrating"):
-            result = calibrate_gonio(store, white_fill=white_fill)
-    except SpectwinInputError as error:
-        _fail(str(error))
+    require_output_file(out)
+    capture = CaptureStore.open(store)
+    _require_complete(capture, store)
+    with console.status("calibrating"):
+        result = calibrate_gonio(capture, white_fill=white_fill)
+    out.parent.mkdir(parents=True, exist_ok=True)
     result.save(out)
+    exposures = result.planned_exposure_s
     summary = {
         "calibration": str(out),
         "bands": int(result.bands_nm.size),
-        "base_s": round(result.base_s, 4),
-        "planned_exposure_s": np.round(result.planned_exposure_s, 4).tolist(),
-        "exposure_per_pair_s": round(float(result.planned_exposure_s.sum()), 3),
-        "all_multiples_of_1_15_s": bool(
-            np.allclose(result.planned_exposure_s * 15, np.round(result.planned_exposure_s * 15))
-        ),
+        "base_s": result.base_s,
+        "planned_exposure_s": exposures.tolist(),
+        "exposure_per_pair_s": float(exposures.sum()),
+        "all_multiples_of_1_15_s": bool(np.allclose(exposures * 15, np.round(exposures * 15))),
     }
-    _print(summary, "gonio calibration", as_json)
+    print_summary(summary, "gonio calibration", as_json)
 
 
 def process(
     store: Annotated[Path, typer.Argument(help="A gonio-run capture store.")],
     calibration: Annotated[Path, typer.Option(help="spectwin calibrate's JSON.")],
     out: Annotated[Path, typer.Option(help="BTF store to write (<name>.btf.zarr).")],
-    texels: Annotated[int, typer.Option(help="Texture resolution per side.")] = 128,
+    texels: Annotated[
+        int, typer.Option(min=8, max=1024, help="Texture resolution per side.")
+    ] = 128,
     manual_corners: Annotated[
         Path | None, typer.Option(help="Manual corner file for frames detection misses.")
     ] = None,
@@ -240,27 +306,30 @@ def process(
 
     Example: spectwin process out/run.capture.zarr --calibration out/cal.json --out out/cc.btf.zarr
     """
-    from recon.errors import SpectwinInputError
+    from hwbridge.store import CaptureStore
     from recon.gonio_calibration import GonioCalibration
     from recon.registration import read_manual_corners
     from twin.cluster import cluster_description, dask_client, run_process
 
-    try:
-        corners = read_manual_corners(manual_corners) if manual_corners else None
-        with dask_client(workers, scheduler) as client:
-            cluster = cluster_description(client)
-            btf = run_process(
-                store,
-                GonioCalibration.load(calibration),
-                out,
-                texels=texels,
-                manual_corners=corners,
-                resume=resume,
-                show_progress=not as_json,
-                client=client,
-            )
-    except SpectwinInputError as error:
-        _fail(str(error))
+    gonio_calibration = GonioCalibration.load(calibration)
+    corners = read_manual_corners(manual_corners) if manual_corners else None
+    capture = CaptureStore.open(store)
+    _require_complete(capture, store)
+    if out.exists() and not resume:
+        fail(f"--out {out} exists: continue it with --resume or choose another --out")
+    require_output_folder(out)
+    with dask_client(workers, scheduler) as client:
+        cluster = cluster_description(client)
+        btf = run_process(
+            capture,
+            gonio_calibration,
+            out,
+            texels=texels,
+            manual_corners=corners,
+            resume=resume,
+            show_progress=not as_json,
+            client=client,
+        )
     summary = {
         "btf": str(out),
         "shape": list(btf.shape),
@@ -269,20 +338,27 @@ def process(
         "unregistered_pairs": btf.attrs["unregistered_pairs"],
         "cluster": cluster,
     }
-    _print(summary, "gonio processing", as_json)
+    print_summary(summary, "gonio processing", as_json)
     if summary["unregistered_pairs"]:
-        Console(stderr=True).print(
-            "[yellow]some pairs were not registered:[/yellow] give their corners in a manual "
-            'corner file (keys "pair<i>") and run again with --manual-corners FILE --resume'
+        run_failed(
+            f"pairs {summary['unregistered_pairs']} were not registered: give their corners in "
+            'a manual corner file (keys "pair<i>") and run again with --manual-corners FILE '
+            "--resume"
         )
-        raise typer.Exit(code=1)
 
 
 def compress(
     btf: Annotated[Path, typer.Argument(help="A complete BTF store (spectwin process).")],
-    brightness: Annotated[int, typer.Option(help="PCA components of the brightness.")] = 250,
+    brightness: Annotated[
+        int, typer.Option(min=1, max=100000, help="PCA components of the brightness.")
+    ] = 250,
     spectral: Annotated[
-        int, typer.Option(help="PCA components of the normalized spectra (per band or joint).")
+        int,
+        typer.Option(
+            min=1,
+            max=100000,
+            help="PCA components of the normalized spectra (per band or joint).",
+        ),
     ] = 60,
     layout: Annotated[
         Layout,
@@ -299,30 +375,29 @@ def compress(
     """
     from recon.btf_compression import compress_btf, compression_report, save_compressed
     from recon.btf_store import BTFStore
-    from recon.errors import SpectwinInputError
 
-    try:
-        store = BTFStore.open(btf, writable=True)
-        with console.status("compressing"):
-            reflectance = np.asarray(store.reflectance())
-            compressed = compress_btf(
-                reflectance,
-                store.grid,
-                n_brightness=brightness,
-                n_spectral=spectral,
-                layout=layout.value,
-            )
-            save_compressed(store, compressed)
-            report = compression_report(compressed, reflectance)
-    except SpectwinInputError as error:
-        _fail(str(error))
-    _print({"btf": str(btf), **report.as_dict()}, "BTF compression", as_json)
+    store = BTFStore.open(btf, writable=True)
+    reflectance_array = store.reflectance()
+    with console.status("compressing"):
+        reflectance = np.asarray(reflectance_array)
+        compressed = compress_btf(
+            reflectance,
+            store.grid,
+            n_brightness=brightness,
+            n_spectral=spectral,
+            layout=layout.value,
+        )
+        save_compressed(store, compressed)
+        report = compression_report(compressed, reflectance)
+    print_summary({"btf": str(btf), **report.as_dict()}, "BTF compression", as_json)
 
 
 def evaluate(
     btf: Annotated[Path, typer.Argument(help="A BTF store made by spectwin process.")],
     figure: Annotated[Path | None, typer.Option(help="PNG of errors and spectra.")] = None,
-    spp: Annotated[int, typer.Option(help="Samples per pixel of the truth renders.")] = 64,
+    spp: Annotated[
+        int, typer.Option(min=1, max=65536, help="Samples per pixel of the truth renders.")
+    ] = 64,
     as_json: JsonFlag = False,
 ) -> None:
     """Compare a processed BTF with the twin's true BTF: per-field Eq. 6.8, corner errors.
@@ -330,19 +405,18 @@ def evaluate(
     Example: spectwin evaluate out/cc.btf.zarr --figure out/cc_vs_truth.png --json
     """
     from recon.btf_store import BTFStore
-    from recon.errors import SpectwinInputError
     from twin.gonio_evaluation import evaluate_gonio
     from twin.gonio_report import write_gonio_figure
 
-    try:
-        with console.status("rendering the truth and comparing"):
-            result = evaluate_gonio(btf, spp=spp)
-    except SpectwinInputError as error:
-        _fail(str(error))
+    if figure is not None:
+        require_output_file(figure, "--figure")
+    with console.status("rendering the truth and comparing"):
+        result = evaluate_gonio(btf, spp=spp)
     summary = result.summary()
     if figure is not None:
+        figure.parent.mkdir(parents=True, exist_ok=True)
         summary["figure"] = str(write_gonio_figure(result, BTFStore.open(btf), figure))
-    _print(summary, "BTF vs the twin's truth", as_json)
+    print_summary(summary, "BTF vs the twin's truth", as_json)
 
 
 def validate(
@@ -353,12 +427,26 @@ def validate(
     compressed: Annotated[
         bool, typer.Option("--compressed", help="Render the store's PCA form (spectwin compress).")
     ] = False,
-    pixels: Annotated[int, typer.Option(help="Image size of the three panels.")] = 96,
+    pixels: Annotated[
+        int,
+        typer.Option(
+            min=23,
+            max=2048,
+            help="Image size of the three panels (at least 23: every chart field keeps an "
+            "interior pixel).",
+        ),
+    ] = 96,
     spp: Annotated[
-        int, typer.Option(help="Samples per pixel (the photograph's noise adds to Delta E).")
+        int,
+        typer.Option(
+            min=4, max=65536, help="Samples per pixel (the photograph's noise adds to Delta E)."
+        ),
     ] = 256,
     map_height: Annotated[
-        int, typer.Option(help="Rows of the captured environment map (2x as many columns).")
+        int,
+        typer.Option(
+            min=4, max=2048, help="Rows of the captured environment map (2x as many columns)."
+        ),
     ] = 64,
     as_json: JsonFlag = False,
 ) -> None:
@@ -367,35 +455,35 @@ def validate(
 
     Example: spectwin validate out/cc.btf.zarr --out out/validation --compressed
     """
-    from recon.errors import SpectwinInputError
     from twin.validation import validate_btf
 
-    try:
-        with console.status("validating") as status:
-            metrics = validate_btf(
-                btf,
-                out,
-                compressed=compressed,
-                pixels=pixels,
-                spp=spp,
-                map_height=map_height,
-                step=lambda name: status.update(name),
-            )
-    except SpectwinInputError as error:
-        _fail(str(error))
+    require_output_folder(out)
+    with console.status("validating") as status:
+        metrics = validate_btf(
+            btf,
+            out,
+            compressed=compressed,
+            pixels=pixels,
+            spp=spp,
+            map_height=map_height,
+            step=lambda name: status.update(name),
+        )
+    if as_json:
+        print_summary(metrics, "", as_json)
+        return
     figure46, forty_five = metrics["figure46"], metrics["spectrophotometer_45_0"]
     summary = {
         "out": str(out),
         "form": metrics["form"],
-        "field_mean_delta_e94_spectral": round(figure46["field_mean_delta_e94_spectral"], 3),
-        "field_mean_delta_e94_rgb": round(figure46["field_mean_delta_e94_rgb"], 3),
-        "field_ratio_rgb_over_spectral": round(figure46["field_ratio_rgb_over_spectral"], 2),
-        "mean_delta_e94_spectral": round(figure46["mean_delta_e94_spectral"], 3),
-        "mean_delta_e94_rgb": round(figure46["mean_delta_e94_rgb"], 3),
-        "45_0_mean_error_matte_fields_pct": round(forty_five["mean_error_matte_fields_pct"], 3),
-        "45_0_max_error_matte_fields_pct": round(forty_five["max_error_matte_fields_pct"], 3),
+        "field_mean_delta_e94_spectral": figure46["field_mean_delta_e94_spectral"],
+        "field_mean_delta_e94_rgb": figure46["field_mean_delta_e94_rgb"],
+        "field_ratio_rgb_over_spectral": figure46["field_ratio_rgb_over_spectral"],
+        "mean_delta_e94_spectral": figure46["mean_delta_e94_spectral"],
+        "mean_delta_e94_rgb": figure46["mean_delta_e94_rgb"],
+        "45/0_mean_error_matte_fields_pct": forty_five["mean_error_matte_fields_pct"],
+        "45/0_max_error_matte_fields_pct": forty_five["max_error_matte_fields_pct"],
     }
-    _print(metrics if as_json else summary, "BTF rendered back (Figure 4.6, 45/0)", as_json)
+    print_summary(summary, "BTF rendered back (Figure 4.6, 45/0)")
 
 
 def register(app: typer.Typer) -> None:

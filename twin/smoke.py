@@ -32,9 +32,11 @@ from twin.components import (  # noqa: E402
 from twin.flat_target import analytic_band_radiance, patch_means, render_flat_target  # noqa: E402
 from twin.variant import activate  # noqa: E402
 
-__all__ = ["run_smoke"]
+__all__ = ["SMOKE_TOLERANCE", "run_smoke"]
 
 CHART_COLUMNS = 6
+SMOKE_TOLERANCE = 0.03
+"""Largest relative band error of a patch mean against the closed form that passes."""
 PLOTTED_PATCHES = ("dark skin", "blue", "green", "red", "yellow", "white 9.5 (.05 D)")
 
 
@@ -46,13 +48,15 @@ def run_smoke(
     lamp_distance_m: float = 2.0,
     incidence_deg: float = 30.0,
     seed: int = 0,
+    tolerance: float = SMOKE_TOLERANCE,
 ) -> dict[str, object]:
     """Render the chart, compare with the closed form, write EXR, PNGs and ``summary.json``.
 
     Returns
     -------
     dict
-        Variant report, render time, image size and the largest relative band error per band.
+        Variant report, render time, image size, the largest relative band error per band, the
+        ``tolerance`` and the ``verdict``: ``"PASS"`` when the largest error is within it.
     """
     out_dir.mkdir(parents=True, exist_ok=True)
     report = activate()
@@ -105,6 +109,8 @@ def run_smoke(
         "render_s": round(render_s, 3),
         "max_abs_relative_error": float(np.abs(relative_error).max()),
         "max_abs_relative_error_per_band": np.abs(relative_error).max(axis=0).round(5).tolist(),
+        "tolerance": tolerance,
+        "verdict": "PASS" if np.abs(relative_error).max() <= tolerance else "FAIL",
         "outputs": ["colorchecker_qth.exr", "colorchecker_qth.png", "band_radiance.png"],
     }
     (out_dir / "summary.json").write_text(json.dumps(summary, indent=2))

@@ -1,0 +1,350 @@
+"""Bad input to every ``spectwin`` command: one line ``error: ...`` on stderr, no traceback, exit
+2 for usage errors and 1 for failed runs, and nothing rendered or written before the refusal.
+
+Each probe is ``(arguments, exit code, phrase of the message)``; ``@NAME`` in an argument is a
+path of the ``inputs`` fixture (small stores and files made by hand, in about a second).
+``python -m tests.e2e.test_cli_bad_input OUT.md`` writes the probes and their messages as a
+markdown table.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from hwbridge.store import CaptureStore, FrameRecord
+from recon.btf_store import BTFStore
+from recon.gonio_calibration import GonioCalibration
+from recon.spectra import DEFAULT_GRID
+from twin.cli import app
+
+runner = CliRunner()
+SCENES = Path(__file__).resolve().parents[2] / "scenes"
+
+PROBES: list[tuple[list[str], int, str]] = [
+    # info
+    (["info", "--bogus"], 2, "No such option: --bogus"),
+    (["nosuch"], 2, "No such command 'nosuch'"),
+    # smoke
+    (["smoke", "--spp", "0"], 2, "'--spp'"),
+    (["smoke", "--pixels-per-patch", "2"], 2, "'--pixels-per-patch'"),
+    (["smoke", "--out", "@PLAIN"], 2, "is a file; expected a folder"),
+    # camera
+    (["camera", "nosuch"], 2, "expected a path or one of ['coolsnap_k4'"),
+    (["camera", "coolsnap_k4", "--seed", "-1"], 2, "'--seed'"),
+    (["camera", "@BAD_CAMERA"], 2, "bit_depth"),
+    (["camera", "@MALFORMED_YAML"], 2, "malformed YAML"),
+    (["camera", "coolsnap_k4", "--out", "@PLAIN"], 2, "is a file; expected a folder"),
+    # estimate
+    (["estimate", "nosuch"], 2, "expected a path or one of ['dome', 'gonio']"),
+    (["estimate", "@BAD_RIG_CAMERA"], 2, "camera: definition: expected one of"),
+    (["estimate", "@BAD_RIG_KIND"], 2, "expected 'gonioreflectometer' or 'dome'"),
+    (["estimate", "@MALFORMED_YAML"], 2, "malformed YAML"),
+    (["estimate", "@LIST_YAML"], 2, "expected a mapping of settings"),
+    # gallery
+    (["gallery", "--seed", "-1"], 2, "'--seed'"),
+    (["gallery", "--pixels", "8"], 2, "'--pixels'"),
+    (["gallery", "--spp", "0"], 2, "'--spp'"),
+    (["gallery", "--out", "@PLAIN"], 2, "is a file; expected a folder"),
+    # capture
+    (["capture", "@NEW", "--seed", "-1"], 2, "'--seed'"),
+    (["capture", "@NEW", "--program", "gonio-run", "--spp", "-3"], 2, "'--spp'"),
+    (
+        ["capture", "@NEW", "--program", "gonio-run", "--calibration", "@CAL"]
+        + ["--window", "64", "--pixels", "32"],
+        2,
+        "--window 64 is larger than --pixels 32",
+    ),
+    (["capture", "@NEW", "--fault-rate", "0.5"], 2, "'--fault-rate'"),
+    (["capture", "@NEW", "--fault-rate", "2"], 2, "'--fault-rate'"),
+    (["capture", "@NEW", "--fault-rate", "nan"], 2, "'--fault-rate'"),
+    (["capture", "@NEW", "--fault-rate", "-0.1"], 2, "'--fault-rate'"),
+    (["capture", "@NEW", "--pixels", "64"], 2, "--pixels is not used by --program demo"),
+    (["capture", "@NEW", "--spp", "16"], 2, "--spp is not used by --program demo"),
+    (["capture", "@NEW", "--material", "lego"], 2, "--material is not used by --program demo"),
+    (["capture", "@NEW", "--window", "32"], 2, "--window is not used by --program demo"),
+    (["capture", "@NEW", "--calibration", "@CAL"], 2, "--calibration is not used by --program"),
+    (
+        ["capture", "@NEW", "--program", "gonio-calibration", "--fault-rate", "0.05"],
+        2,
+        "--fault-rate is not used by --program gonio-calibration",
+    ),
+    (
+        ["capture", "@NEW", "--program", "gonio-run", "--calibration", "@CAL", "--dry-run"],
+        2,
+        "--dry-run is not used by --program gonio-run",
+    ),
+    (["capture", "@NEW", "--dry-run", "--seed", "3"], 2, "--seed is not used by --dry-run"),
+    (["capture", "@NEW", "--program", "gonio-run"], 2, "needs --calibration"),
+    (["capture", "@NEW", "--program", "nosuch"], 2, "'--program'"),
+    (["capture", "@CAPTURE"], 2, "exists: continue it with --resume"),
+    (
+        ["capture", "@NEW", "--program", "gonio-run", "--calibration", "@CAL"]
+        + ["--material", "nosuch"],
+        2,
+        "material: no file",
+    ),
+    (
+        ["capture", "@NEW", "--program", "gonio-run", "--calibration", "@CAL_MISSING_KEY"],
+        2,
+        "calibration lacks ['base_s']",
+    ),
+    (
+        ["capture", "@NEW", "--program", "gonio-run", "--calibration", "@NOSUCH"],
+        2,
+        "not a readable calibration file",
+    ),
+    # calibrate
+    (["calibrate", "nosuch.zarr"], 2, "nosuch.zarr does not exist: expected a capture store"),
+    (["calibrate", "@PLAIN"], 2, "is a file: expected a capture store"),
+    (["calibrate", "@EMPTY"], 2, "is not a capture store"),
+    (["calibrate", "@INCOMPLETE_CAPTURE"], 2, "the capture is incomplete"),
+    (["calibrate", "@CAPTURE", "--white-fill", "1.5"], 2, "'--white-fill'"),
+    (["calibrate", "@CAPTURE", "--out", "@EMPTY"], 2, "is a folder; expected a file name"),
+    # process
+    (
+        ["process", "@EMPTY", "--calibration", "@CAL", "--out", "@NEW_BTF"],
+        2,
+        "is not a capture store",
+    ),
+    (
+        ["process", "@CAPTURE", "--calibration", "@CAL_MISSING_KEY", "--out", "@NEW_BTF"],
+        2,
+        "calibration lacks ['base_s']",
+    ),
+    (
+        ["process", "@CAPTURE", "--calibration", "@CAL_NOT_JSON", "--out", "@NEW_BTF"],
+        2,
+        "not a readable calibration file",
+    ),
+    (
+        ["process", "@CAPTURE", "--calibration", "@CAL", "--out", "@NEW_BTF", "--texels", "0"],
+        2,
+        "'--texels'",
+    ),
+    (
+        ["process", "@CAPTURE", "--calibration", "@CAL", "--out", "@NEW_BTF"]
+        + ["--texels", "100000000"],
+        2,
+        "'--texels'",
+    ),
+    (
+        ["process", "@CAPTURE", "--calibration", "@CAL", "--out", "@NEW_BTF"],
+        2,
+        "expected a measurement run of the gonioreflectometer",
+    ),
+    (
+        ["process", "@CAPTURE", "--calibration", "@CAL", "--out", "@BTF"],
+        2,
+        "exists: continue it with --resume",
+    ),
+    (
+        ["process", "@CAPTURE", "--calibration", "@CAL", "--out", "@NEW_BTF"]
+        + ["--manual-corners", "@NOSUCH"],
+        2,
+        "cannot read manual corner file",
+    ),
+    (["process", "@CAPTURE", "--out", "@NEW_BTF"], 2, "Missing option '--calibration'"),
+    # compress
+    (["compress", "@PLAIN"], 2, "is a file: expected a BTF store"),
+    (["compress", "@CAPTURE"], 2, "not a BTF store"),
+    (["compress", "@INCOMPLETE_BTF"], 2, "finish it with spectwin process --resume"),
+    (["compress", "@BTF", "--brightness", "0"], 2, "'--brightness'"),
+    (["compress", "@BTF", "--layout", "nosuch"], 2, "'--layout'"),
+    # evaluate
+    (["evaluate", "nosuch.btf.zarr"], 2, "does not exist: expected a BTF store"),
+    (["evaluate", "@EMPTY_BTF"], 2, "no direction pair is written yet"),
+    (["evaluate", "@BTF", "--spp", "-4"], 2, "'--spp'"),
+    (["evaluate", "@BTF", "--spp", "0"], 2, "'--spp'"),
+    (["evaluate", "@BTF", "--figure", "@EMPTY"], 2, "is a folder; expected a file name"),
+    (["evaluate", "@BTF"], 2, "records no source capture"),
+    # validate
+    (["validate", "@BTF", "--pixels", "8"], 2, "'--pixels'"),
+    (["validate", "@BTF", "--spp", "0"], 2, "'--spp'"),
+    (["validate", "@EMPTY_BTF", "--out", "@NEW_FOLDER"], 2, "no direction pair is written yet"),
+    (["validate", "@BTF", "--out", "@PLAIN"], 2, "is a file; expected a folder"),
+    (["validate", "@BTF", "--compressed", "--out", "@NEW_FOLDER"], 2, "no compressed form"),
+    (["validate", "@EMPTY", "--out", "@NEW_FOLDER"], 2, "not a BTF store"),
+    # camchar
+    (["camchar", "--camera", "nosuch"], 2, "'Nikon D70'"),
+    (["camchar", "--light", "candle"], 2, "'daylight'"),
+    (["camchar", "--chart", "nosuch"], 2, "'esser'"),
+    (["camchar", "--bend", "0.5"], 2, "'--bend'"),
+    (["camchar", "--out", "@PLAIN"], 2, "is a file; expected a folder"),
+    # spectralize-study
+    (["spectralize-study", "--texels", "16", "--no-sweeps"], 2, "'--texels'"),
+    (["spectralize-study", "--out", "@PLAIN"], 2, "is a file; expected a folder"),
+    # dome-study
+    (["dome-study", "--seed", "-1"], 2, "'--seed'"),
+    (["dome-study", "--texels", "10"], 2, "--texels 10: expected a multiple of 4"),
+    (["dome-study", "--texels", "4"], 2, "'--texels'"),
+    (["dome-study", "--material", "nosuch"], 2, "'lego'"),
+    (["dome-study", "--out", "@PLAIN"], 2, "is a file; expected a folder"),
+    # demo
+    (["demo", "--out", "@PLAIN"], 2, "is a file; expected a folder"),
+    (["demo", "--out", "@FULL_FOLDER"], 2, "is not empty and was not written by spectwin demo"),
+    (["demo", "--bogus"], 2, "No such option: --bogus"),
+]
+
+
+def _capture(path: Path, *, complete: bool) -> None:
+    """A store of two dark frames (both written when ``complete``)."""
+    plan = [{"camera": "k4", "kind": "dark", "exposure_s": 0.1}] * 2
+    store = CaptureStore.create(
+        path,
+        rig={"rig": "gonioreflectometer", "camera": "coolsnap_k4"},
+        backend="sim",
+        seed=0,
+        plan=plan,
+        cameras={"k4": (4, 4)},
+    )
+    for step in range(2 if complete else 1):
+        store.write_frame(step, np.full((4, 4), 100, np.uint16), FrameRecord("dark", 0.1, 0.0))
+        store.mark_done(step)
+
+
+def _btf(path: Path, *, written: int) -> None:
+    """A 2-pair, 8-texel BTF of the colour checker, ``written`` pairs written."""
+    directions = np.array([[0.0, 0.0, 1.0], [0.5, 0.0, np.sqrt(0.75)]])
+    store = BTFStore.create(
+        path,
+        light_dirs=directions,
+        view_dirs=directions[::-1],
+        texels=8,
+        grid=DEFAULT_GRID,
+        material="colorchecker16",
+    )
+    for pair in range(written):
+        store.write_pair(pair, np.full((8, 8, DEFAULT_GRID.size), 0.2, np.float32))
+
+
+def make_inputs(root: Path) -> dict[str, Path]:
+    """The files and stores the probes name."""
+    paths = {
+        name: root / file
+        for name, file in {
+            "PLAIN": "plain.txt",
+            "EMPTY": "empty",
+            "FULL_FOLDER": "full",
+            "NEW": "new.capture.zarr",
+            "NEW_BTF": "new.btf.zarr",
+            "NEW_FOLDER": "new_folder",
+            "NOSUCH": "nosuch.json",
+            "CAL": "cal.json",
+            "CAL_MISSING_KEY": "cal_missing_key.json",
+            "CAL_NOT_JSON": "cal_not_json.json",
+            "CAPTURE": "done.capture.zarr",
+            "INCOMPLETE_CAPTURE": "half.capture.zarr",
+            "BTF": "cc.btf.zarr",
+            "EMPTY_BTF": "empty.btf.zarr",
+            "INCOMPLETE_BTF": "half.btf.zarr",
+            "BAD_CAMERA": "bad_camera.yaml",
+            "BAD_RIG_CAMERA": "bad_rig_camera.yaml",
+            "BAD_RIG_KIND": "bad_rig_kind.yaml",
+            "MALFORMED_YAML": "malformed.yaml",
+            "LIST_YAML": "list.yaml",
+        }.items()
+    }
+    paths["PLAIN"].write_text("not a store\n")
+    paths["EMPTY"].mkdir()
+    paths["FULL_FOLDER"].mkdir()
+    (paths["FULL_FOLDER"] / "notes.txt").write_text("mine\n")
+    bands = DEFAULT_GRID.wavelengths_nm
+    calibration = GonioCalibration.identity(np.full(bands.size, 2 / 15), bands, 1 / 15)
+    calibration.save(paths["CAL"])
+    document = paths["CAL"].read_text()
+    paths["CAL_MISSING_KEY"].write_text(document.replace('"base_s"', '"base"'))
+    paths["CAL_NOT_JSON"].write_text(document[:200])
+    _capture(paths["CAPTURE"], complete=True)
+    _capture(paths["INCOMPLETE_CAPTURE"], complete=False)
+    _btf(paths["BTF"], written=2)
+    _btf(paths["EMPTY_BTF"], written=0)
+    _btf(paths["INCOMPLETE_BTF"], written=1)
+    camera = (SCENES / "cameras" / "coolsnap_k4.yaml").read_text()
+    paths["BAD_CAMERA"].write_text(camera.replace("bit_depth: 12", "bit_depth: twelve"))
+    rig = (SCENES / "rigs" / "gonio.yaml").read_text()
+    paths["BAD_RIG_CAMERA"].write_text(rig.replace("definition: coolsnap_k4", "definition: k9"))
+    paths["BAD_RIG_KIND"].write_text(rig.replace("rig: gonioreflectometer", "rig: tripod"))
+    paths["MALFORMED_YAML"].write_text("name: [unclosed\nrig: dome\n")
+    paths["LIST_YAML"].write_text("- gonio\n- dome\n")
+    return paths
+
+
+def _arguments(arguments: list[str], paths: dict[str, Path]) -> list[str]:
+    return [str(paths[a[1:]]) if a.startswith("@") else a for a in arguments]
+
+
+@pytest.fixture(scope="module")
+def inputs(tmp_path_factory) -> dict[str, Path]:
+    return make_inputs(tmp_path_factory.mktemp("bad_input"))
+
+
+@pytest.mark.parametrize(
+    ("arguments", "code", "phrase"),
+    PROBES,
+    ids=[" ".join(arguments) for arguments, _, _ in PROBES],
+)
+def test_bad_input_is_one_line_without_traceback(inputs, arguments, code, phrase):
+    result = runner.invoke(app, _arguments(arguments, inputs), prog_name="spectwin")
+    assert result.exception is None or isinstance(result.exception, SystemExit), result.output
+    assert result.exit_code == code, result.output
+    assert "Traceback" not in result.output
+    assert result.stdout == ""
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), result.stderr
+    assert phrase in lines[0]
+
+
+def test_probes_write_nothing(inputs):
+    """No refused command created the stores or folders it was given."""
+    for name in ("NEW", "NEW_BTF", "NEW_FOLDER"):
+        assert not inputs[name].exists()
+    assert sorted(path.name for path in inputs["EMPTY"].iterdir()) == []
+    assert sorted(path.name for path in inputs["FULL_FOLDER"].iterdir()) == ["notes.txt"]
+
+
+def test_a_device_that_keeps_failing_stops_the_capture_with_exit_1(inputs, monkeypatch):
+    from hwbridge.errors import DeviceTimeout
+
+    def failing_session(*args, **kwargs):
+        raise DeviceTimeout("simulated timeout of k4.snap")
+
+    monkeypatch.setattr("twin.sim_session.run_demo_session", failing_session)
+    result = runner.invoke(app, ["capture", str(inputs["NEW"]), "--workers", "0"])
+    assert result.exit_code == 1, result.output
+    assert result.stderr.count("\n") == 1 and "--resume" in result.stderr
+    assert "Traceback" not in result.output
+
+
+def test_the_option_choices_are_those_of_the_modules():
+    from twin.camchar_scenes import CHARTS, LIGHTS
+    from twin.cli_choices import Chart, DomeMaterial, Light, RGBCamera
+    from twin.components import RGB_CAMERA_RESPONSES
+    from twin.dome_report import DOME_MATERIALS
+
+    assert sorted(RGBCamera) == sorted(RGB_CAMERA_RESPONSES)
+    assert sorted(Chart) == sorted(CHARTS) and sorted(Light) == sorted(LIGHTS)
+    assert sorted(DomeMaterial) == sorted(DOME_MATERIALS)
+
+
+def write_probe_table(out: Path) -> None:
+    """Run every probe and write a markdown table of command, exit code and message."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as folder:
+        paths = make_inputs(Path(folder))
+        rows = ["| command | exit code | message |", "|---|---|---|"]
+        for arguments, _, _ in PROBES:
+            result = runner.invoke(app, _arguments(arguments, paths), prog_name="spectwin")
+            message = result.stderr.strip().replace(folder, "…").replace("|", "\\|")
+            shown = " ".join(arguments).replace("|", "\\|")
+            rows.append(f"| `spectwin {shown}` | {result.exit_code} | {message} |")
+    out.write_text("\n".join(rows) + "\n")
+
+
+if __name__ == "__main__":
+    write_probe_table(Path(sys.argv[1] if len(sys.argv) > 1 else "cli_probes.md"))

@@ -1,0 +1,125 @@
+"""One-line errors of the ``spectwin`` command line.
+
+A user error (a bad option, an unknown name, a missing or wrong input file, a damaged store, a
+run that failed) never shows a Python traceback: the command prints one line
+``error: <what was wrong and what was expected>`` to stderr and exits with
+
+- 2 for usage errors: bad options, unknown names, missing or wrong input files
+  (:class:`recon.errors.SpectwinInputError`, :class:`hwbridge.errors.BridgeInputError`, the
+  option parser's own errors);
+- 1 for failed runs: data that turned out damaged (:class:`recon.errors.SpectwinDataError`),
+  devices that kept failing (:class:`hwbridge.errors.DeviceError`), a check that failed.
+
+:class:`SpectwinGroup` applies this to every command registered on the app; anything else is a
+bug and keeps its traceback.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, NoReturn
+
+import typer
+from typer.core import TyperGroup
+
+from hwbridge.errors import BridgeInputError, DeviceError
+from recon.errors import SpectwinDataError, SpectwinInputError
+
+__all__ = [
+    "RUN_FAILED",
+    "USAGE",
+    "SpectwinGroup",
+    "fail",
+    "one_line",
+    "require_output_file",
+    "require_output_folder",
+    "run_failed",
+]
+
+USAGE = 2
+RUN_FAILED = 1
+
+
+def one_line(message: object) -> str:
+    """``message`` on one line (newlines and runs of spaces become single spaces)."""
+    return " ".join(str(message).split())
+
+
+def fail(message: object, code: int = USAGE) -> NoReturn:
+    """Print ``error: message`` (one line) to stderr and exit with ``code``."""
+    typer.echo(f"error: {one_line(message)}", err=True)
+    raise typer.Exit(code)
+
+
+def run_failed(message: object) -> NoReturn:
+    """A run that failed (exit code 1)."""
+    fail(message, RUN_FAILED)
+
+
+def require_output_folder(path: Path, option: str = "--out") -> None:
+    """Refuse an output folder that names an existing file."""
+    if path.exists() and not path.is_dir():
+        fail(f"{option} {path}: is a file; expected a folder (new or existing)")
+    _require_folder_above(path, option)
+
+
+def _require_folder_above(path: Path, option: str) -> None:
+    for parent in path.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                fail(f"{option} {path}: {parent} is a file, not a folder")
+            return
+
+
+def require_output_file(path: Path, option: str = "--out") -> None:
+    """Refuse an output file that names a folder or lies below a file."""
+    if path.is_dir():
+        fail(f"{option} {path}: is a folder; expected a file name")
+    _require_folder_above(path, option)
+
+
+def _exit_code(error: BaseException) -> int | None:
+    """The exit code of a user error, ``None`` for anything else (a bug)."""
+    if isinstance(error, SpectwinInputError | BridgeInputError):
+        return USAGE
+    if isinstance(error, SpectwinDataError | DeviceError):
+        return RUN_FAILED
+    return None
+
+
+def _usage_error(error: typer.TyperException) -> NoReturn:
+    """The option parser's error (bad or missing option, out of range, unknown command)."""
+    message = error.format_message().replace("Value error, ", "")
+    context = getattr(error, "ctx", None)
+    if context is not None:
+        message += f" (see '{context.command_path} --help')"
+    fail(message, getattr(error, "exit_code", USAGE))
+
+
+class SpectwinGroup(TyperGroup):
+    """The command group of ``spectwin``: every error of the user is one line on stderr."""
+
+    def parse_args(self, ctx: Any, args: list[str]) -> list[str]:
+        try:
+            return super().parse_args(ctx, args)
+        except typer.TyperException as error:
+            if type(error).__name__ == "NoArgsIsHelpError":  # the help was shown: exit 2
+                raise
+            _usage_error(error)
+
+    def invoke(self, ctx: Any) -> Any:
+        try:
+            return super().invoke(ctx)
+        except typer.TyperException as error:
+            _usage_error(error)
+        except Exception as error:
+            code = _exit_code(error)
+            if code is None:
+                raise
+            fail(_message(error), code)
+
+
+def _message(error: BaseException) -> str:
+    if isinstance(error, DeviceError):
+        return f"a device kept failing ({error}); continue the capture with --resume"
+    return str(error)
