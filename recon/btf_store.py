@@ -43,7 +43,7 @@ from typing import Any
 import numpy as np
 import zarr
 
-from recon.errors import SpectwinInputError
+from recon.errors import SpectwinDataError, SpectwinInputError
 from recon.spectra import WavelengthGrid
 
 __all__ = ["BTF_FORMAT", "BTF_FORMAT_VERSION", "COMPRESSED_GROUP", "BTFStore", "write_btf"]
@@ -280,7 +280,13 @@ class BTFStore:
             raise SpectwinInputError(
                 f"{path}: not a BTF store made by spectwin process (not a Zarr v3 group: {error})"
             ) from None
-        return cls(group, path, writable=writable)
+        try:
+            return cls(group, path, writable=writable)
+        except json.JSONDecodeError as error:
+            raise SpectwinDataError(
+                f"{path}: damaged store: unreadable metadata of an array ({error}); process the "
+                "capture again"
+            ) from error
 
     # -- description ---------------------------------------------------------------------------
 
@@ -461,7 +467,7 @@ class BTFStore:
         An incomplete store raises unless ``allow_incomplete``; then unwritten pairs are NaN.
         """
         self._require_complete(allow_incomplete, "read")
-        return self._group["reflectance"][:]
+        return self._decoded(slice(None))
 
     def read_pair(self, pair: int, *, allow_incomplete: bool = False) -> np.ndarray:
         """The texture ``(H, W, K)`` of one pair (one chunk read).
@@ -473,7 +479,7 @@ class BTFStore:
         self._require_complete(allow_incomplete, f"read pair {pair} of")
         if not self._group["written"][pair]:
             raise SpectwinInputError(f"{self.path}: pair {pair} is not written yet")
-        return self._group["reflectance"][pair]
+        return self._decoded(pair)
 
     def iter_pairs(self, *, allow_incomplete: bool = False) -> Iterator[tuple[int, np.ndarray]]:
         """``(pair, texture)`` for every written pair, one chunk in memory at a time."""
@@ -539,6 +545,16 @@ class BTFStore:
                 f"pair: expected an index in 0..{self.n_pairs - 1}, got {pair}"
             )
         return int(pair)
+
+    def _decoded(self, pairs: int | slice) -> np.ndarray:
+        """Reflectance of ``pairs``; a chunk that cannot be decoded is a damaged store."""
+        try:
+            return self._group["reflectance"][pairs]
+        except RuntimeError as error:  # numcodecs' decompression errors
+            raise SpectwinDataError(
+                f"{self.path}: damaged store: a reflectance chunk cannot be decoded ({error}); "
+                "process the capture again"
+            ) from error
 
     def _require_writable(self) -> None:
         if not self.writable:

@@ -289,6 +289,15 @@ def calibrate_gonio(
     if not 0 < white_fill < 1:
         raise SpectwinInputError(f"white_fill: expected a fraction in (0, 1), got {white_fill}")
     camera = str(store.attrs["rig"].get("camera_id", "k4"))
+    if camera not in {step["camera"] for step in store.attrs["plan"]}:
+        raise SpectwinInputError(f"{store.path}: no frames of camera {camera!r}")
+    kinds = set(store.index(camera, ["kind"])["kind"].tolist())
+    missing = [kind for kind in ("dark", "oecf", "white") if kind not in kinds]
+    if missing:
+        raise SpectwinInputError(
+            f"{store.path}: no {', '.join(missing)} frames; expected a calibration capture "
+            "(spectwin capture --program gonio-calibration)"
+        )
     darks = dark_model(store, camera)
     curve = extend_curve(_response_series_curve(store, camera, bit_depth))
     bands, factors = store_white_factors(store, camera, darks, curve)

@@ -377,9 +377,8 @@ def compress(
     from recon.btf_store import BTFStore
 
     store = BTFStore.open(btf, writable=True)
-    reflectance_array = store.reflectance()
     with console.status("compressing"):
-        reflectance = np.asarray(reflectance_array)
+        reflectance = store.read()
         compressed = compress_btf(
             reflectance,
             store.grid,

@@ -1,5 +1,6 @@
 """Bad input to every ``spectwin`` command: one line ``error: ...`` on stderr, no traceback, exit
-2 for usage errors and 1 for failed runs, and nothing rendered or written before the refusal.
+2 for usage errors and 1 for failed runs (damaged data), and nothing rendered or written before
+the refusal.
 
 Each probe is ``(arguments, exit code, phrase of the message)``; ``@NAME`` in an argument is a
 path of the ``inputs`` fixture (small stores and files made by hand, in about a second).
@@ -103,6 +104,7 @@ PROBES: list[tuple[list[str], int, str]] = [
     (["calibrate", "@PLAIN"], 2, "is a file: expected a capture store"),
     (["calibrate", "@EMPTY"], 2, "is not a capture store"),
     (["calibrate", "@INCOMPLETE_CAPTURE"], 2, "the capture is incomplete"),
+    (["calibrate", "@CAPTURE"], 2, "no oecf, white frames; expected a calibration capture"),
     (["calibrate", "@CAPTURE", "--white-fill", "1.5"], 2, "'--white-fill'"),
     (["calibrate", "@CAPTURE", "--out", "@EMPTY"], 2, "is a folder; expected a file name"),
     # process
@@ -153,6 +155,8 @@ PROBES: list[tuple[list[str], int, str]] = [
     (["compress", "@PLAIN"], 2, "is a file: expected a BTF store"),
     (["compress", "@CAPTURE"], 2, "not a BTF store"),
     (["compress", "@INCOMPLETE_BTF"], 2, "finish it with spectwin process --resume"),
+    (["compress", "@DAMAGED_CHUNK_BTF"], 1, "damaged store: a reflectance chunk cannot be"),
+    (["compress", "@DAMAGED_METADATA_BTF"], 1, "damaged store: unreadable metadata"),
     (["compress", "@BTF", "--brightness", "0"], 2, "'--brightness'"),
     (["compress", "@BTF", "--layout", "nosuch"], 2, "'--layout'"),
     # evaluate
@@ -162,6 +166,7 @@ PROBES: list[tuple[list[str], int, str]] = [
     (["evaluate", "@BTF", "--spp", "0"], 2, "'--spp'"),
     (["evaluate", "@BTF", "--figure", "@EMPTY"], 2, "is a folder; expected a file name"),
     (["evaluate", "@BTF"], 2, "records no source capture"),
+    (["evaluate", "@DAMAGED_METADATA_BTF"], 1, "damaged store"),
     # validate
     (["validate", "@BTF", "--pixels", "8"], 2, "'--pixels'"),
     (["validate", "@BTF", "--spp", "0"], 2, "'--spp'"),
@@ -242,6 +247,8 @@ def make_inputs(root: Path) -> dict[str, Path]:
             "BTF": "cc.btf.zarr",
             "EMPTY_BTF": "empty.btf.zarr",
             "INCOMPLETE_BTF": "half.btf.zarr",
+            "DAMAGED_CHUNK_BTF": "damaged_chunk.btf.zarr",
+            "DAMAGED_METADATA_BTF": "damaged_metadata.btf.zarr",
             "BAD_CAMERA": "bad_camera.yaml",
             "BAD_RIG_CAMERA": "bad_rig_camera.yaml",
             "BAD_RIG_KIND": "bad_rig_kind.yaml",
@@ -264,6 +271,12 @@ def make_inputs(root: Path) -> dict[str, Path]:
     _btf(paths["BTF"], written=2)
     _btf(paths["EMPTY_BTF"], written=0)
     _btf(paths["INCOMPLETE_BTF"], written=1)
+    for name in ("DAMAGED_CHUNK_BTF", "DAMAGED_METADATA_BTF"):
+        _btf(paths[name], written=2)
+    (paths["DAMAGED_CHUNK_BTF"] / "reflectance" / "c" / "1" / "0" / "0" / "0").write_bytes(
+        b"\x28\xb5\x2f\xfd not zstd"
+    )
+    (paths["DAMAGED_METADATA_BTF"] / "reflectance" / "zarr.json").write_text('{"shape": [2,')
     camera = (SCENES / "cameras" / "coolsnap_k4.yaml").read_text()
     paths["BAD_CAMERA"].write_text(camera.replace("bit_depth: 12", "bit_depth: twelve"))
     rig = (SCENES / "rigs" / "gonio.yaml").read_text()
