@@ -78,13 +78,8 @@ def require_output_file(path: Path, option: str = "--out") -> None:
     _require_folder_above(path, option)
 
 
-def _exit_code(error: BaseException) -> int | None:
-    """The exit code of a user error, ``None`` for anything else (a bug)."""
-    if isinstance(error, SpectwinInputError | BridgeInputError):
-        return USAGE
-    if isinstance(error, SpectwinDataError | DeviceError):
-        return RUN_FAILED
-    return None
+_USAGE_ERRORS = (SpectwinInputError, BridgeInputError)
+_RUN_ERRORS = (SpectwinDataError, DeviceError)
 
 
 def _usage_error(error: typer.TyperException) -> NoReturn:
@@ -112,14 +107,9 @@ class SpectwinGroup(TyperGroup):
             return super().invoke(ctx)
         except typer.TyperException as error:
             _usage_error(error)
-        except Exception as error:
-            code = _exit_code(error)
-            if code is None:
-                raise
-            fail(_message(error), code)
-
-
-def _message(error: BaseException) -> str:
-    if isinstance(error, DeviceError):
-        return f"a device kept failing ({error}); continue the capture with --resume"
-    return str(error)
+        except _USAGE_ERRORS as error:
+            fail(error, USAGE)
+        except _RUN_ERRORS as error:
+            if isinstance(error, DeviceError):
+                fail(f"a device kept failing ({error}); continue with --resume", RUN_FAILED)
+            fail(error, RUN_FAILED)

@@ -287,7 +287,13 @@ def process(
     calibration: Annotated[Path, typer.Option(help="spectwin calibrate's JSON.")],
     out: Annotated[Path, typer.Option(help="BTF store to write (<name>.btf.zarr).")],
     texels: Annotated[
-        int, typer.Option(min=8, max=1024, help="Texture resolution per side.")
+        int,
+        typer.Option(
+            min=16,
+            max=1024,
+            help="Texture resolution per side (at least 16: evaluate and validate need texels "
+            "inside every chart field).",
+        ),
     ] = 128,
     manual_corners: Annotated[
         Path | None, typer.Option(help="Manual corner file for frames detection misses.")

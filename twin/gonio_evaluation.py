@@ -173,7 +173,7 @@ def evaluate_gonio(
         if not fields.masks.any(axis=(1, 2)).all():
             raise SpectwinInputError(
                 f"{btf_path}: at {texels} texels some chart fields have no interior texel to "
-                "compare; process the capture again with more --texels (at least 8)"
+                "compare; process the capture again with --texels 16 or more"
             )
     truth = truth_btf(
         material,

@@ -22,7 +22,7 @@ from twin.btf_bsdf import store_table
 from twin.figure46 import _field_interiors, render_figure46, write_figure46
 from twin.json_output import dumps
 from twin.materials import load_material
-from twin.spectrophotometer import compare_45_0, write_45_0_figure
+from twin.spectrophotometer import compare_45_0, field_spots, write_45_0_figure
 
 __all__ = ["MIN_PIXELS", "validate_btf"]
 
@@ -83,6 +83,11 @@ def validate_btf(
         raise SpectwinInputError(
             f"{btf_path}: no direction pair is written yet; finish the BTF with spectwin "
             "process --resume"
+        )
+    if not field_spots(material, btf.texels[0]).any(axis=(1, 2)).all():
+        raise SpectwinInputError(
+            f"{btf_path}: its {btf.texels[0]} texels leave chart fields without a texel in the "
+            "45/0 measuring spot; process the capture with --texels 16 or more"
         )
     field_pixels = _field_interiors(material, pixels).reshape(-1, pixels * pixels).sum(axis=1)
     if not field_pixels.all():

@@ -123,16 +123,14 @@ PROBES: list[tuple[list[str], int, str]] = [
         2,
         "not a readable calibration file",
     ),
-    (
-        ["process", "@CAPTURE", "--calibration", "@CAL", "--out", "@NEW_BTF", "--texels", "0"],
-        2,
-        "'--texels'",
-    ),
-    (
-        ["process", "@CAPTURE", "--calibration", "@CAL", "--out", "@NEW_BTF"]
-        + ["--texels", "100000000"],
-        2,
-        "'--texels'",
+    *(
+        (
+            ["process", "@CAPTURE", "--calibration", "@CAL", "--out", "@NEW_BTF"]
+            + ["--texels", texels],
+            2,
+            "'--texels'",
+        )
+        for texels in ("0", "8", "100000000")
     ),
     (
         ["process", "@CAPTURE", "--calibration", "@CAL", "--out", "@NEW_BTF"],
@@ -172,6 +170,7 @@ PROBES: list[tuple[list[str], int, str]] = [
     (["validate", "@BTF", "--spp", "0"], 2, "'--spp'"),
     (["validate", "@EMPTY_BTF", "--out", "@NEW_FOLDER"], 2, "no direction pair is written yet"),
     (["validate", "@BTF", "--out", "@PLAIN"], 2, "is a file; expected a folder"),
+    (["validate", "@SMALL_BTF", "--out", "@NEW_FOLDER"], 2, "without a texel in the 45/0"),
     (["validate", "@BTF", "--compressed", "--out", "@NEW_FOLDER"], 2, "no compressed form"),
     (["validate", "@EMPTY", "--out", "@NEW_FOLDER"], 2, "not a BTF store"),
     # camchar
@@ -212,19 +211,19 @@ def _capture(path: Path, *, complete: bool) -> None:
         store.mark_done(step)
 
 
-def _btf(path: Path, *, written: int) -> None:
-    """A 2-pair, 8-texel BTF of the colour checker, ``written`` pairs written."""
+def _btf(path: Path, *, written: int, texels: int = 16) -> None:
+    """A 2-pair BTF of the colour checker, ``written`` pairs written."""
     directions = np.array([[0.0, 0.0, 1.0], [0.5, 0.0, np.sqrt(0.75)]])
     store = BTFStore.create(
         path,
         light_dirs=directions,
         view_dirs=directions[::-1],
-        texels=8,
+        texels=texels,
         grid=DEFAULT_GRID,
         material="colorchecker16",
     )
     for pair in range(written):
-        store.write_pair(pair, np.full((8, 8, DEFAULT_GRID.size), 0.2, np.float32))
+        store.write_pair(pair, np.full((texels, texels, DEFAULT_GRID.size), 0.2, np.float32))
 
 
 def make_inputs(root: Path) -> dict[str, Path]:
@@ -247,6 +246,7 @@ def make_inputs(root: Path) -> dict[str, Path]:
             "BTF": "cc.btf.zarr",
             "EMPTY_BTF": "empty.btf.zarr",
             "INCOMPLETE_BTF": "half.btf.zarr",
+            "SMALL_BTF": "small.btf.zarr",
             "DAMAGED_CHUNK_BTF": "damaged_chunk.btf.zarr",
             "DAMAGED_METADATA_BTF": "damaged_metadata.btf.zarr",
             "BAD_CAMERA": "bad_camera.yaml",
@@ -271,6 +271,7 @@ def make_inputs(root: Path) -> dict[str, Path]:
     _btf(paths["BTF"], written=2)
     _btf(paths["EMPTY_BTF"], written=0)
     _btf(paths["INCOMPLETE_BTF"], written=1)
+    _btf(paths["SMALL_BTF"], written=2, texels=8)
     for name in ("DAMAGED_CHUNK_BTF", "DAMAGED_METADATA_BTF"):
         _btf(paths[name], written=2)
     (paths["DAMAGED_CHUNK_BTF"] / "reflectance" / "c" / "1" / "0" / "0" / "0").write_bytes(
