@@ -351,7 +351,14 @@ def write_probe_table(out: Path) -> None:
 
     with tempfile.TemporaryDirectory() as folder:
         paths = make_inputs(Path(folder))
-        rows = ["| command | exit code | message |", "|---|---|---|"]
+        rows = [
+            "`@NAME`: a file or store made by `make_inputs` (e.g. `@PLAIN` a plain text file, "
+            "`@EMPTY` an empty folder, `@CAPTURE` a complete capture store of two dark frames, "
+            "`@BTF` a complete 2-pair BTF store); `…`: its temporary folder.",
+            "",
+            "| command | exit code | message |",
+            "|---|---|---|",
+        ]
         for arguments, _, _ in PROBES:
             result = runner.invoke(app, _arguments(arguments, paths), prog_name="spectwin")
             message = result.stderr.strip().replace(folder, "…").replace("|", "\\|")
