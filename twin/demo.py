@@ -74,7 +74,7 @@ def _prepare(out: Path) -> None:
     if out.exists() and any(out.iterdir()):
         if not (out / _MARKER).exists():
             raise SpectwinInputError(
-                f"out: {out} is not empty and was not written by spectwin demo; choose another"
+                f"--out: {out} is not empty and was not written by spectwin demo; choose another"
             )
         shutil.rmtree(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -13,7 +13,8 @@
    exposures, converted as the study converts its captures (:func:`recon.dome_schedule
    .filter_sizes`, :math:`\\sigma` = size / 5);
 5. :math:`R_{cam}` on the 30 bands: the RGB camera's spectral response (what
-   ``recon.camera_char`` estimates; here the camera model's own) times the LED, normalized so the white reference reads 1.
+   ``recon.camera_char`` estimates; here the camera model's own) times the LED, normalized so
+   the white reference reads 1.
 
 The thesis gives no numbers for Figure 10.5, so the default longest band follows from its text:
 10 images at +61 % last 1.61 x 3.402 s = 5.48 s on average, and an image cannot be shorter than

@@ -42,7 +42,14 @@ from twin.spectral_envmap import SpectralMap, spectral_envmap
 from twin.surfaces import mitsuba_shape
 from twin.variant import activate
 
-__all__ = ["Figure46", "render_figure46", "room_entries", "room_lights", "write_figure46"]
+__all__ = [
+    "Figure46",
+    "field_interiors",
+    "render_figure46",
+    "room_entries",
+    "room_lights",
+    "write_figure46",
+]
 
 _OBSERVER = "CIE 1931 2 Degree Standard Observer"
 _CAMERA_POSITION_M = np.array([0.0, -0.22, 0.16])
@@ -252,7 +259,7 @@ def _lab(xyz: np.ndarray, white: np.ndarray) -> np.ndarray:
     return colour.XYZ_to_Lab(xyz / white[1], colour.XYZ_to_xyY(white / white[1])[:2])
 
 
-def _field_interiors(material: Material, pixels: int, interior: float = 0.5) -> np.ndarray:
+def field_interiors(material: Material, pixels: int, interior: float = 0.5) -> np.ndarray:
     """``(n_fields, H, W)`` image masks of the central ``interior`` of every chart field's top
     face (the comparison leaves out field edges, where the flat BTF square and the raised fields
     of the true material differ by parallax)."""
@@ -332,7 +339,7 @@ def render_figure46(
         * np.diff(environment.grid.wavelengths_nm)[0]
     )
     reference = _lab(photograph, white)
-    fields = _field_interiors(material, pixels)
+    fields = field_interiors(material, pixels)
     glossy = np.array(
         [p.roughness is not None for p in material.parts if p.name.startswith("field_")]
     )

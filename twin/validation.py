@@ -19,7 +19,7 @@ from pathlib import Path
 from recon.btf_store import BTFStore
 from recon.errors import SpectwinInputError
 from twin.btf_bsdf import store_table
-from twin.figure46 import _field_interiors, render_figure46, write_figure46
+from twin.figure46 import field_interiors, render_figure46, write_figure46
 from twin.json_output import dumps
 from twin.materials import load_material
 from twin.spectrophotometer import compare_45_0, field_spots, write_45_0_figure
@@ -89,7 +89,7 @@ def validate_btf(
             f"{btf_path}: its {btf.texels[0]} texels leave chart fields without a texel in the "
             "45/0 measuring spot; process the capture with --texels 16 or more"
         )
-    field_pixels = _field_interiors(material, pixels).reshape(-1, pixels * pixels).sum(axis=1)
+    field_pixels = field_interiors(material, pixels).reshape(-1, pixels * pixels).sum(axis=1)
     if not field_pixels.all():
         raise SpectwinInputError(
             f"pixels: {pixels} px leave chart fields of {btf.material!r} without an interior "
