@@ -17,7 +17,7 @@ import numpy as np
 
 from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra, band_integrals
-from twin.mitsuba_spectra import irregular_spectrum, specfilm
+from twin.mitsuba_spectra import irregular_spectrum, ldsampler, specfilm
 from twin.variant import activate
 
 __all__ = ["analytic_band_radiance", "flat_target_scene", "patch_means", "render_flat_target"]
@@ -118,7 +118,7 @@ def flat_target_scene(
             "to_world": transform.look_at(origin=[0, 0, 1], target=[0, 0, 0], up=[0, 1, 0])
             @ transform.scale([columns, columns, 1]),
             "film": specfilm(bands, columns * pixels_per_patch, chart_rows * pixels_per_patch),
-            "sampler": {"type": "ldsampler", "sample_count": int(spp)},
+            "sampler": ldsampler(spp),
         },
         "lamp": {
             "type": "directional",

@@ -1,4 +1,5 @@
-"""Hand spectwin spectra to Mitsuba: irregular spectra and the ``specfilm`` band film.
+"""Hand spectwin spectra to Mitsuba: irregular spectra, the ``specfilm`` band film and its
+low-discrepancy sampler.
 
 ``SampledSpectra`` become Mitsuba ``irregular`` spectra with explicit values (never a bare float,
 which Mitsuba would turn into a D65-shaped emitter: ARCHITECTURE.md, "Mitsuba notes").
@@ -13,7 +14,7 @@ import re
 from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra
 
-__all__ = ["channel_name", "irregular_spectrum", "specfilm"]
+__all__ = ["channel_name", "irregular_spectrum", "ldsampler", "rendered_spp", "specfilm"]
 
 
 def irregular_spectrum(spectrum: SampledSpectra) -> dict[str, str]:
@@ -33,6 +34,23 @@ def irregular_spectrum(spectrum: SampledSpectra) -> dict[str, str]:
 def channel_name(name: str) -> str:
     """A film channel name Mitsuba accepts: letters, digits and underscores."""
     return re.sub(r"[^A-Za-z0-9_]", "_", name)
+
+
+def rendered_spp(spp: int) -> int:
+    """The sample count Mitsuba's ``ldsampler`` renders for a request of ``spp``: the next power
+    of 4 (its low-discrepancy sequence needs a square power of two; 32 becomes 64)."""
+    if int(spp) < 1:
+        raise SpectwinInputError(f"spp: expected at least 1 sample per pixel, got {spp}")
+    count = 1
+    while count < int(spp):
+        count *= 4
+    return max(count, 4)
+
+
+def ldsampler(spp: int) -> dict[str, object]:
+    """A Mitsuba ``ldsampler`` dict for at least ``spp`` samples per pixel (:func:`rendered_spp`),
+    given as a count Mitsuba takes without rounding (and without a warning)."""
+    return {"type": "ldsampler", "sample_count": rendered_spp(spp)}
 
 
 def specfilm(responses: SampledSpectra, width: int, height: int) -> dict[str, object]:

@@ -18,7 +18,7 @@ from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra
 from twin.hemisphere import direction
 from twin.light_groups import lamp_weighted_channels
-from twin.mitsuba_spectra import irregular_spectrum, specfilm
+from twin.mitsuba_spectra import irregular_spectrum, ldsampler, specfilm
 from twin.surfaces import SurfacePart, mitsuba_shape, transformed
 from twin.variant import activate
 
@@ -95,7 +95,7 @@ class PinholeCamera:
                 origin=self.position_m.tolist(), target=[0.0, 0.0, 0.0], up=up.tolist()
             ),
             "film": film,
-            "sampler": {"type": "ldsampler", "sample_count": spp},
+            "sampler": ldsampler(spp),
         }
 
 

@@ -30,6 +30,7 @@ from twin.components import (  # noqa: E402
     irradiance_at,
 )
 from twin.flat_target import analytic_band_radiance, patch_means, render_flat_target  # noqa: E402
+from twin.mitsuba_spectra import rendered_spp  # noqa: E402
 from twin.variant import activate  # noqa: E402
 
 __all__ = ["SMOKE_TOLERANCE", "run_smoke"]
@@ -105,7 +106,7 @@ def run_smoke(
         "variant": report.as_dict(),
         "image_px": list(image.shape[:2]),
         "bands": int(image.shape[-1]),
-        "spp": spp,
+        "spp": rendered_spp(spp),
         "render_s": round(render_s, 3),
         "max_abs_relative_error": float(np.abs(relative_error).max()),
         "max_abs_relative_error_per_band": np.abs(relative_error).max(axis=0).round(5).tolist(),

@@ -16,7 +16,7 @@ from recon.errors import SpectwinInputError
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid
 from twin.components import FINE_GRID
 from twin.materials import Material
-from twin.mitsuba_spectra import irregular_spectrum, specfilm
+from twin.mitsuba_spectra import irregular_spectrum, ldsampler, specfilm
 from twin.surfaces import mitsuba_shape
 from twin.variant import activate
 
@@ -58,7 +58,7 @@ def _render(
             "type": "orthographic",
             "to_world": mi.ScalarTransform4f(to_world.tolist()),
             "film": specfilm(channels, texels, texels),
-            "sampler": {"type": "ldsampler", "sample_count": spp},
+            "sampler": ldsampler(spp),
         },
         "light": {
             "type": "directional",

@@ -1,6 +1,8 @@
 """The spectwin command line end to end: info and the smoke render."""
 
 import json
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -117,3 +119,18 @@ def test_capture_dry_run_then_capture_then_refuse_to_overwrite(tmp_path):
     assert json.loads(done.output)["complete"] is True
     again = runner.invoke(app, ["capture", str(store)])
     assert again.exit_code == 2 and "exists" in again.stderr and "--resume" in again.stderr
+
+
+def test_a_low_spp_render_prints_no_library_warning(tmp_path):
+    # Mitsuba's low-discrepancy sampler warns (in colour codes, on the process's stdout) when it
+    # rounds a sample count: spectwin asks it for counts it takes as they are.
+    result = subprocess.run(
+        [sys.executable, "-m", "twin.cli", "smoke", "--out", str(tmp_path)]
+        + ["--pixels-per-patch", "8", "--spp", "20", "--json"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+    )
+    output = result.stdout + result.stderr
+    assert "WARN" not in output and "Warning" not in output, output[-2000:]
+    assert json.loads(result.stdout)["spp"] == 64  # 20 rounded up to the next power of 4
