@@ -17,7 +17,8 @@ plan the spectral side:
    exposure is finished during one RGB image (one light source); an image lasts as long as the
    longer of the RGB exposure set and the band exposures assigned to it. Assigning bands to
    images so that the summed image time is smallest is a bin-packing problem, solved exactly
-   here as a mixed-integer linear program (:func:`schedule_bands`, :func:`fewest_images`).
+   here by a deterministic branch and bound search (:func:`schedule_bands`,
+   :func:`fewest_images`): the same bands give the same schedule on any machine.
    The thesis reports 30 bands in 8 RGB images at about +41 % total exposure time, and 10 RGB
    images with the noisiest bands taken twice at about +61 %.
 
@@ -26,25 +27,23 @@ References
 - The thesis, section 10.4 (exposure times :math:`t_\\lambda`, band scheduling by bin packing,
   the +41 % and +61 % figures) and Figure 10.5 (exposure times and filter sizes,
   :math:`\\sigma` = filter size / 5); Eq. 10.1 (the filtered band term).
-- Huangfu, Q., & Hall, J. A. J. (2018). Parallelizing the dual revised simplex method.
-  Mathematical Programming Computation, 10(1), 119-142. doi:10.1007/s12532-017-0130-5
-  (HiGHS, the MILP solver behind ``scipy.optimize.milp``).
 - Martello, S., & Toth, P. (1990). Knapsack Problems: Algorithms and Computer Implementations.
-  Wiley. Chapter 8 (bin packing).
+  Wiley. Chapter 8 (bin packing; the lower bound :math:`L_2`, section 8.3.1).
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy import optimize, sparse
 
 from recon.errors import SpectwinInputError
 
 __all__ = [
+    "DEFAULT_NODE_LIMIT",
     "FILTER_SIZE_PER_SIGMA",
     "THESIS_RGB_EXPOSURES_S",
     "BandSchedule",
@@ -57,6 +56,9 @@ __all__ = [
 
 THESIS_RGB_EXPOSURES_S = (0.05, 0.186, 0.666, 2.5)
 """HDR exposure set of the dome's RGB cameras (thesis section 10.4): 3.402 s per RGB image."""
+
+DEFAULT_NODE_LIMIT = 100_000
+"""Most nodes the band schedule's branch and bound search visits per call (about a second)."""
 
 FILTER_SIZE_PER_SIGMA = 5.0
 """Filter size over the Gaussian's standard deviation (thesis Figure 10.5: sigma = size / 5)."""
@@ -244,8 +246,8 @@ class BandSchedule:
     increase
         ``total_s / (n_images * rgb_s) - 1``: the extra time over RGB-only capture.
     optimal
-        Whether the solver proved ``total_s`` minimal (and, from :func:`fewest_images`, the
-        image count smallest); ``False`` when it stopped at its time limit.
+        Whether the search proved ``total_s`` minimal (and, from :func:`fewest_images`, the
+        image count smallest); ``False`` when it stopped at its node limit.
     """
 
     images: tuple[tuple[int, ...], ...]
@@ -339,7 +341,7 @@ def _balance(instance: _Instance, image_of_item: np.ndarray, n: int) -> np.ndarr
                     )
                     if (
                         shift > 0
-                        and loads[image] + shift < loads[longest]
+                        and loads[image] + shift < loads[longest] * (1 - 1e-9)
                         and change <= 1e-12
                         and bands[a] not in bands[inside[inside != c]]
                         and (
@@ -362,59 +364,264 @@ def _balance(instance: _Instance, image_of_item: np.ndarray, n: int) -> np.ndarr
             image_of_item[c] = longest
 
 
-def _solve(instance: _Instance, n: int, time_limit_s: float) -> tuple[BandSchedule | None, bool]:
-    """Minimum-total assignment of the instance's items to ``n`` images, and whether the solver
-    decided the problem (proved the optimum or that no assignment exists) within its time limit.
+def _bins_lower_bound(sizes: np.ndarray, capacity: float) -> int:
+    """Martello and Toth's bound :math:`L_2` on the number of bins of ``capacity`` that hold
+    ``sizes`` (Martello & Toth 1990, section 8.3.1).
 
-    Variables: :math:`x_{jb}` = 1 when item :math:`j` is exposed during image :math:`b`, and the
-    overflow :math:`o_b \\ge \\sum_j t_j x_{jb} - R`, :math:`o_b \\ge 0`; minimize
-    :math:`\\sum_b o_b` (the total is :math:`n R + \\sum_b o_b`). Each item goes to one image,
-    copies of one band to different images, and item :math:`j` (longest first) to one of the
-    first :math:`j + 1` images, which removes the images' interchangeability without losing
-    an optimum. The solution is then balanced by :func:`_balance`.
+    For each :math:`\\alpha \\le C / 2`, items larger than :math:`C - \\alpha` and items in
+    :math:`(C / 2, C - \\alpha]` each need a bin of their own; the items in
+    :math:`[\\alpha, C / 2]` can use only the room the latter leave and need
+    :math:`\\lceil \\cdot / C \\rceil` further bins for the rest.
+    """
+    tol = 1e-9 * capacity
+    half = capacity / 2.0
+    best = math.ceil(sizes.sum() / capacity - 1e-9)
+    for alpha in np.unique(np.concatenate([[0.0], sizes[sizes <= half + tol]])):
+        own = sizes > capacity - alpha + tol
+        large = (sizes > half + tol) & ~own
+        small = (sizes >= alpha - tol) & (sizes <= half + tol)
+        room = large.sum() * capacity - sizes[large].sum()
+        extra = math.ceil(max(0.0, sizes[small].sum() - room) / capacity - 1e-9)
+        best = max(best, int(own.sum() + large.sum() + extra))
+    return best
+
+
+def _root_bound(t: np.ndarray, rgb_s: float, n: int) -> float:
+    """Lower bound on the total of any schedule in ``n`` images.
+
+    Every image lasts at least :math:`R` (the RGB set) and together they hold all band time
+    :math:`T`. Bands longer than :math:`R` (:math:`k` of them, summing to :math:`B`) make their
+    image outlast the RGB set; relaxing the shorter bands to a divisible fluid, the best is one
+    long band per image and the fluid in the other images, so the total is at least
+    :math:`\\max(T, n R, B + (n - k) R)`.
+    """
+    long = t[t > rgb_s]
+    return max(float(t.sum()), n * rgb_s, float(long.sum()) + max(0, n - long.size) * rgb_s)
+
+
+class _NodeLimitReached(Exception):
+    pass
+
+
+class _OptimumReached(Exception):
+    pass
+
+
+def _search(
+    instance: _Instance, n: int, start: np.ndarray | None, lower: float, node_limit: int
+) -> tuple[np.ndarray | None, bool]:
+    """Depth-first branch and bound over the items (longest first), each put into one image.
+
+    The total is :math:`T + \\sum_b \\max(0, R - L_b)`: the band time plus the time images wait
+    for the RGB set beyond their bands (their gap). A node's bound lets the items still to place
+    close the gaps as a divisible fluid, except that a gap shorter than the shortest item
+    costs at least that item to close. Images with the same load and the same repeated bands
+    are interchangeable, so only one of them is tried; with an image limit, a node is dropped
+    when the room in the images that can still take an item is less than the items left.
+
+    Returns the best assignment found (``start`` if none is better, ``None`` if none exists)
+    and whether the search finished within ``node_limit`` nodes, which proves it optimal (or
+    proves that no assignment exists). Deterministic: no clock, no randomness.
+    """
+    t = instance.exposures_s.tolist()
+    bands = instance.bands.tolist()
+    rgb_s = instance.rgb_s
+    capacity = math.inf if instance.image_limit_s is None else instance.image_limit_s
+    m = len(t)
+    total = float(np.sum(t))
+    rest = np.concatenate([np.cumsum(instance.exposures_s[::-1])[::-1], [0.0]]).tolist()
+    shortest = t[-1]
+    tol = 1e-9 * max(total, n * rgb_s)
+    capacity_tol = 1e-9 * capacity if math.isfinite(capacity) else 0.0
+    repeated = {b for b in bands if bands.count(b) > 1}
+
+    loads = [0.0] * n
+    held: list[set[int]] = [set() for _ in range(n)]
+    image_of_item = [0] * m
+    best: list = [None, math.inf]
+    if start is not None:
+        best = [start.copy(), float(np.maximum(np.bincount(start, t, n), rgb_s).sum())]
+    nodes = 0
+
+    def bound(j: int) -> float:
+        fluid = rest[j]
+        under, live, dead = 0.0, 0.0, []
+        for load in loads:
+            gap = rgb_s - load
+            if gap <= 0:
+                continue
+            if j == m or capacity - load < shortest - capacity_tol:
+                under += gap  # no band fits any more: the gap stays
+            elif gap >= shortest:
+                live += gap
+            else:
+                dead.append(gap)
+        under += live + sum(dead) - min(fluid, live)
+        fluid -= min(fluid, live)
+        for gap in sorted(dead, reverse=True):
+            if fluid <= 0:
+                break
+            under -= gap * min(1.0, fluid / shortest)
+            fluid -= shortest
+        return total + under
+
+    def visit(j: int) -> None:
+        nonlocal nodes
+        nodes += 1
+        if nodes > node_limit:
+            raise _NodeLimitReached
+        if bound(j) >= best[1] - tol:
+            return
+        if j == m:
+            best[0], best[1] = np.array(image_of_item), bound(j)
+            if best[1] <= lower + tol:
+                raise _OptimumReached
+            return
+        if math.isfinite(capacity):
+            room = sum(
+                capacity - load for load in loads if capacity - load >= shortest - capacity_tol
+            )
+            if room < rest[j] - capacity_tol:
+                return
+        size, band = t[j], bands[j]
+        seen = set()
+        children = []
+        for image in range(n):
+            load = loads[image]
+            if load + size > capacity + capacity_tol or band in held[image]:
+                continue
+            key = (round(load, 9), frozenset(held[image]))
+            if key in seen:
+                continue
+            seen.add(key)
+            gap = rgb_s - load
+            if gap >= size - tol:
+                order = (0, gap)  # fits within the RGB set: best fit
+            elif gap > 0:
+                order = (1, size - gap)  # closes the gap: least overhang first
+            else:
+                order = (2, load)  # image already spectral-bound: least loaded first
+            children.append((order, image))
+        for _, image in sorted(children):
+            loads[image] += size
+            if band in repeated:
+                held[image].add(band)
+            image_of_item[j] = image
+            visit(j + 1)
+            loads[image] -= size
+            held[image].discard(band)
+
+    try:
+        visit(0)
+    except _NodeLimitReached:
+        return best[0], False
+    except _OptimumReached:
+        pass
+    return best[0], True
+
+
+def _greedy(instance: _Instance, n: int, fullest: bool) -> np.ndarray | None:
+    """Longest bands first, each into the least loaded image that can take it, or (``fullest``,
+    best fit) into the fullest; ``None`` if a band fits nowhere."""
+    t, bands = instance.exposures_s, instance.bands
+    capacity = math.inf if instance.image_limit_s is None else instance.image_limit_s
+    loads = np.zeros(n)
+    image_of_item = np.empty(t.size, dtype=np.int64)
+    for j in range(t.size):
+        fits = (loads + t[j] <= capacity * (1 + 1e-9)) & np.array(
+            [bands[j] not in bands[:j][image_of_item[:j] == b] for b in range(n)]
+        )
+        if not fits.any():
+            return None
+        candidates = np.flatnonzero(fits)
+        pick = np.argmax if fullest else np.argmin
+        image = int(candidates[pick(loads[fits])])
+        image_of_item[j] = image
+        loads[image] += t[j]
+    return image_of_item
+
+
+def _improve(instance: _Instance, image_of_item: np.ndarray, n: int) -> np.ndarray:
+    """Move one band to another image, or swap two bands between images, while that shortens
+    the total (the first such step in a fixed order, repeated)."""
+    t, bands, rgb_s = instance.exposures_s, instance.bands, instance.rgb_s
+    capacity = math.inf if instance.image_limit_s is None else instance.image_limit_s * (1 + 1e-9)
+    tol = 1e-9 * max(float(t.sum()), n * rgb_s)
+    items = np.arange(t.size)
+    image_of_item = image_of_item.copy()
+    loads = np.bincount(image_of_item, weights=t, minlength=n)
+
+    def gain(source: int, target: int, shift: float) -> float:
+        """Total saved by moving ``shift`` of band time from ``source`` to ``target``."""
+        return (
+            max(rgb_s, loads[source])
+            + max(rgb_s, loads[target])
+            - max(rgb_s, loads[source] - shift)
+            - max(rgb_s, loads[target] + shift)
+        )
+
+    def free_of(band: int, image: int, leaving: int) -> bool:
+        return band not in bands[(image_of_item == image) & (items != leaving)]
+
+    def step() -> bool:
+        for a in items:
+            source = image_of_item[a]
+            for target in range(n):
+                if target == source:
+                    continue
+                for c in (-1, *items[image_of_item == target]):
+                    shift = t[a] - (t[c] if c >= 0 else 0.0)
+                    if (
+                        gain(source, target, shift) > tol
+                        and loads[target] + shift <= capacity
+                        and loads[source] - shift <= capacity
+                        and free_of(bands[a], target, c)
+                        and (c < 0 or free_of(bands[c], source, a))
+                    ):
+                        image_of_item[a] = target
+                        if c >= 0:
+                            image_of_item[c] = source
+                        loads[source] -= shift
+                        loads[target] += shift
+                        return True
+        return False
+
+    while step():
+        pass
+    return image_of_item
+
+
+def _solve(instance: _Instance, n: int, node_limit: int) -> tuple[BandSchedule | None, bool]:
+    """Minimum-total assignment of the instance's items to ``n`` images, and whether the search
+    decided the problem (proved the optimum or that no assignment exists) within its node limit.
+
+    A longest-first greedy schedule is kept when it reaches :func:`_root_bound`; with an image
+    limit, :func:`_bins_lower_bound` rules out too few images at once; otherwise
+    :func:`_search` improves on the greedy schedule until it proves the optimum. The solution
+    is then balanced by :func:`_balance`.
     """
     t, rgb_s = instance.exposures_s, instance.rgb_s
-    m = t.size
-    item_to_image = sparse.kron(t[None, :], sparse.eye_array(n), format="csr")
-    rows = [
-        sparse.hstack(
-            [sparse.kron(sparse.eye_array(m), np.ones((1, n))), sparse.csr_array((m, n))]
-        ),
-        sparse.hstack([item_to_image, -sparse.eye_array(n)]),
-    ]
-    lower = [np.ones(m), np.full(n, -np.inf)]
-    upper = [np.ones(m), np.full(n, rgb_s)]
-    if instance.image_limit_s is not None:
-        rows.append(sparse.hstack([item_to_image, sparse.csr_array((n, n))]))
-        lower.append(np.full(n, -np.inf))
-        upper.append(np.full(n, instance.image_limit_s))
-    for band in np.unique(instance.bands):
-        copies = np.flatnonzero(instance.bands == band)
-        if copies.size > 1:
-            selector = sparse.csr_array(
-                (np.ones(copies.size), (np.zeros(copies.size), copies)), shape=(1, m)
-            )
-            rows.append(
-                sparse.hstack(
-                    [sparse.kron(selector, sparse.eye_array(n)), sparse.csr_array((n, n))]
-                )
-            )
-            lower.append(np.full(n, -np.inf))
-            upper.append(np.ones(n))
-    allowed = (np.arange(n)[None, :] <= np.arange(m)[:, None]).ravel()
-    result = optimize.milp(
-        np.concatenate([np.zeros(m * n), np.ones(n)]),
-        constraints=optimize.LinearConstraint(
-            sparse.vstack(rows).tocsr(), np.concatenate(lower), np.concatenate(upper)
-        ),
-        integrality=np.concatenate([np.ones(m * n), np.zeros(n)]),
-        bounds=optimize.Bounds(0.0, np.concatenate([allowed, np.full(n, np.inf)])),
-        options={"time_limit": time_limit_s, "mip_rel_gap": 1e-6},
-    )
-    decided = result.status in (0, 2)  # optimal, infeasible; 1: time limit reached
-    if result.x is None:
+    if instance.image_limit_s is not None and _bins_lower_bound(t, instance.image_limit_s) > n:
+        return None, True
+
+    def total(image_of_item: np.ndarray) -> float:
+        return float(np.maximum(np.bincount(image_of_item, t, n), rgb_s).sum())
+
+    starts = [_greedy(instance, n, fullest) for fullest in (False, True)]
+    starts = [_improve(instance, start, n) for start in starts if start is not None]
+    image_of_item = min(starts, key=total) if starts else None
+    lower = _root_bound(t, rgb_s, n)
+    tol = 1e-9 * max(float(t.sum()), n * rgb_s)
+    if image_of_item is not None and total(image_of_item) <= lower + tol:
+        decided = True
+    else:
+        image_of_item, decided = _search(instance, n, image_of_item, lower, node_limit)
+        if image_of_item is not None and not decided:
+            image_of_item = _improve(instance, image_of_item, n)
+            decided = total(image_of_item) <= lower + tol
+    if image_of_item is None:
         return None, decided
-    image_of_item = _balance(instance, np.round(result.x[: m * n]).reshape(m, n).argmax(axis=1), n)
+    image_of_item = _balance(instance, image_of_item, n)
     spectral = np.bincount(image_of_item, weights=t, minlength=n)
     image_s = np.maximum(spectral, rgb_s)
     total = float(image_s.sum())
@@ -433,6 +640,23 @@ def _solve(instance: _Instance, n: int, time_limit_s: float) -> tuple[BandSchedu
     return schedule, decided
 
 
+def _node_limit(node_limit: object, time_limit_s: object) -> int:
+    if time_limit_s is not None:
+        warnings.warn(
+            "time_limit_s is ignored: the search is bounded by node_limit, so that its result "
+            "does not depend on the machine's speed or load",
+            DeprecationWarning,
+            stacklevel=3,
+        )
+    if (
+        isinstance(node_limit, bool)
+        or not isinstance(node_limit, (int, np.integer))
+        or node_limit < 1
+    ):
+        raise SpectwinInputError(f"node_limit: expected a positive integer, got {node_limit!r}")
+    return int(node_limit)
+
+
 def schedule_bands(
     band_exposures_s: np.ndarray,
     n_images: int,
@@ -440,20 +664,24 @@ def schedule_bands(
     rgb_exposures_s: Sequence[float] | np.ndarray = THESIS_RGB_EXPOSURES_S,
     repeat_bands: Sequence[int] = (),
     image_limit_s: float | None = None,
-    time_limit_s: float = 10.0,
+    node_limit: int = DEFAULT_NODE_LIMIT,
+    time_limit_s: float | None = None,
 ) -> BandSchedule:
     """Assign every band exposure to one of ``n_images`` RGB images, minimizing total time.
 
     The spectral camera exposes in parallel to the RGB cameras, and a band exposure is finished
     during one image (one light source); an image therefore lasts
     :math:`\\max(\\sum_i t_i, \\sum_{\\lambda \\in image} t_\\lambda)`. The assignment that
-    minimizes the sum of image durations is found exactly by mixed-integer linear programming
-    (HiGHS via ``scipy.optimize.milp``); bands with a wide spread of exposure times, as in the
-    thesis, solve in well under a second. Among equally short schedules the solver's pick can
-    be lopsided; bands are then moved or swapped out of the longest image while that shortens
-    it without lengthening the total. Proving the optimum is slowest when the band exposures
-    sum to about ``n_images`` RGB sets (a tight bin packing): there ``time_limit_s`` may end
-    the search.
+    minimizes the sum of image durations is a bin-packing problem, solved exactly: a
+    longest-first greedy schedule, improved by moving and swapping bands, is proven optimal by a
+    lower bound on the total, or else a branch and bound search over the bands improves it
+    until it proves the optimum. Bands with a wide spread of exposure times, as in the thesis,
+    are decided in milliseconds. Among equally short schedules the search's pick can be
+    lopsided; bands are then moved or swapped out of the longest image while that shortens it
+    without lengthening the total. Proving the optimum is hardest when the band exposures sum to
+    about ``n_images`` RGB sets (a tight bin packing): there ``node_limit`` may end the search.
+    The search is deterministic: the same input gives the same schedule on any machine, at any
+    load.
 
     Parameters
     ----------
@@ -469,9 +697,12 @@ def schedule_bands(
         noisiest bands).
     image_limit_s
         Longest allowed image duration, or ``None`` for no limit.
+    node_limit
+        Most nodes the branch and bound search visits (about a second of search); if it is
+        reached the best schedule found is returned with ``optimal=False``.
     time_limit_s
-        Solver time limit; if it is reached the best schedule found is returned with
-        ``optimal=False``.
+        Deprecated and ignored (a :class:`DeprecationWarning` says so): a limit on the
+        solver's wall-clock time made the result depend on the machine's load.
 
     Returns
     -------
@@ -496,7 +727,7 @@ def schedule_bands(
     """
     instance = _instance(band_exposures_s, rgb_exposures_s, repeat_bands, image_limit_s)
     n = _n_images(n_images, instance)
-    limit = _positive_scalar("time_limit_s", time_limit_s)
+    limit = _node_limit(node_limit, time_limit_s)
     schedule, decided = _solve(instance, n, limit)
     if schedule is None and decided:
         raise SpectwinInputError(
@@ -505,8 +736,8 @@ def schedule_bands(
         )
     if schedule is None:
         raise SpectwinInputError(
-            f"time_limit_s: the solver found no schedule of {instance.exposures_s.size} band "
-            f"exposures in {n} images within {limit:g} s; allow it more time"
+            f"node_limit: the search found no schedule of {instance.exposures_s.size} band "
+            f"exposures in {n} images within {limit} nodes; allow it more nodes"
         )
     return schedule
 
@@ -517,20 +748,21 @@ def fewest_images(
     rgb_exposures_s: Sequence[float] | np.ndarray = THESIS_RGB_EXPOSURES_S,
     repeat_bands: Sequence[int] = (),
     image_limit_s: float | None = None,
-    time_limit_s: float = 10.0,
+    node_limit: int = DEFAULT_NODE_LIMIT,
+    time_limit_s: float | None = None,
 ) -> BandSchedule:
     """The smallest number of RGB images that can hold every band exposure, and its schedule.
 
     An image may last up to ``image_limit_s``; by default that is the longer of the RGB
     exposure set and the longest band exposure, the shortest duration the image holding that
     band can have. The image count is then the optimum of classic bin packing with that
-    capacity; for it, the schedule of least total time is returned (see
-    :func:`schedule_bands`).
+    capacity (counts below Martello and Toth's bound :math:`L_2` are ruled out at once); for
+    it, the schedule of least total time is returned (see :func:`schedule_bands`).
 
     Parameters
     ----------
-    band_exposures_s, rgb_exposures_s, repeat_bands, time_limit_s
-        As for :func:`schedule_bands` (``time_limit_s`` per solver call).
+    band_exposures_s, rgb_exposures_s, repeat_bands, node_limit, time_limit_s
+        As for :func:`schedule_bands` (``node_limit`` per image count tried).
     image_limit_s
         Longest allowed image duration (default
         :math:`\\max(\\sum_i t_i, \\max_\\lambda t_\\lambda)`).
@@ -538,14 +770,14 @@ def fewest_images(
     Returns
     -------
     BandSchedule
-        The schedule in the fewest images; ``optimal`` is ``False`` if a solver call stopped at
-        its time limit (a smaller count was then not ruled out, or the total not proven
-        minimal).
+        The schedule in the fewest images; ``optimal`` is ``False`` if a search stopped at its
+        node limit (a smaller count was then not ruled out, or the total not proven minimal).
 
     References
     ----------
     The thesis, section 10.4 ("we would be able to acquire the 30 spectral images during the
-    acquisition of 8 RGB images").
+    acquisition of 8 RGB images"). Martello & Toth (1990), section 8.3.1 (the bound
+    :math:`L_2`).
 
     Examples
     --------
@@ -556,16 +788,16 @@ def fewest_images(
     rgb = _positive_vector("rgb_exposures_s", rgb_exposures_s)
     limit = max(rgb.sum(), exposures.max()) if image_limit_s is None else image_limit_s
     instance = _instance(exposures, rgb, repeat_bands, limit)
-    solver_limit = _positive_scalar("time_limit_s", time_limit_s)
+    nodes = _node_limit(node_limit, time_limit_s)
     copies = 2 if instance.bands.size > exposures.size else 1
-    first = max(copies, math.ceil(instance.exposures_s.sum() / instance.image_limit_s - 1e-9))
+    first = max(copies, _bins_lower_bound(instance.exposures_s, instance.image_limit_s))
     proven = True
     for n in range(first, instance.exposures_s.size + 1):
-        schedule, decided = _solve(instance, n, solver_limit)
+        schedule, decided = _solve(instance, n, nodes)
         if schedule is not None:
             return replace(schedule, optimal=proven and decided)
         proven = proven and decided
     raise SpectwinInputError(
-        f"time_limit_s: the solver found no schedule within {solver_limit:g} s per call, not "
-        "even one image per band exposure; allow it more time"
+        f"node_limit: the search found no schedule within {nodes} nodes per image count, not "
+        "even one image per band exposure; allow it more nodes"
     )

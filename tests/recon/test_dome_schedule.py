@@ -192,6 +192,45 @@ def test_repeated_bands_go_to_different_images():
         schedule_bands(exposures, 1, repeat_bands=[0])
 
 
+def test_images_of_equal_duration_are_not_swapped_forever():
+    # 0.2 + (0.9 - 0.2) < 0.9 in floating point: swapping the two bands looked like shortening
+    # the longer image, and balancing swapped them back and forth without end.
+    plan = schedule_bands([0.9, 0.2], 2, rgb_exposures_s=[0.1])
+    assert plan.images == ((0,), (1,))
+    assert plan.total_s == pytest.approx(1.1)
+
+
+def test_search_proves_what_the_greedy_schedule_misses_and_the_node_limit_is_deterministic():
+    # Nine bands summing to three RGB sets (5.73 s) cannot be split exactly: the optimum, 17.21 s,
+    # needs the branch and bound search; one node leaves the improved greedy schedule.
+    exposures = [1.78, 2.88, 0.86, 2.87, 1.28, 1.56, 2.57, 1.52, 1.87]
+    plan = schedule_bands(exposures, 3, rgb_exposures_s=[5.73])
+    assert plan.optimal
+    assert plan.total_s == pytest.approx(brute_force_total(np.array(exposures), 3, 5.73))
+    assert plan.total_s == pytest.approx(17.21)
+    cut = [schedule_bands(exposures, 3, rgb_exposures_s=[5.73], node_limit=1) for _ in range(2)]
+    assert not cut[0].optimal
+    assert cut[0].total_s > plan.total_s + 0.05
+    # The result depends on the node count only, never on the machine's speed or load.
+    assert cut[0].images == cut[1].images and cut[0].total_s == cut[1].total_s
+
+
+def test_time_limit_is_ignored_with_a_deprecation_warning():
+    exposures = [1.78, 2.88, 0.86, 2.87, 1.28, 1.56, 2.57, 1.52, 1.87]
+    with pytest.warns(DeprecationWarning, match="time_limit_s is ignored"):
+        plan = schedule_bands(exposures, 3, rgb_exposures_s=[5.73], time_limit_s=1e-9)
+    assert plan.optimal and plan.total_s == pytest.approx(17.21)
+    with pytest.warns(DeprecationWarning, match="time_limit_s is ignored"):
+        assert fewest_images(exposures, rgb_exposures_s=[5.73], time_limit_s=1e-9).optimal
+
+
+def test_fewest_images_skips_counts_the_bin_packing_bound_rules_out():
+    # Three bands longer than half the image limit need three images although they sum to less
+    # than two (Martello and Toth's bound L2).
+    plan = fewest_images([0.6, 0.6, 0.6], rgb_exposures_s=[1.0])
+    assert plan.n_images == 3 and plan.optimal
+
+
 def test_thesis_sized_instance_solves_to_proven_optimum():
     # 30 bands with the spread of a real plan (a few long blue/red bands, short green ones).
     rng = np.random.default_rng(11)
@@ -217,6 +256,8 @@ def test_thesis_sized_instance_solves_to_proven_optimum():
         (([1.0, 0.5], 2), {"repeat_bands": [0, 0]}, r"repeat_bands: expected distinct band"),
         (([1.0, 0.5], 2), {"image_limit_s": 0.8}, "image_limit_s: 0.8 s is shorter than"),
         (([1.0, 0.9, 0.8], 1), {"image_limit_s": 2.0}, "n_images: no schedule of 3 band exp"),
+        (([1.0, 0.5], 2), {"node_limit": 0}, "node_limit: expected a positive integer, got 0"),
+        (([1.0, 0.5], 2), {"node_limit": 1.5}, "node_limit: expected a positive integer"),
     ],
 )
 def test_schedule_input_errors_name_the_argument(arguments, keywords, message):
