@@ -1,4 +1,4 @@
-"""Timings of the foundation: smoke render and spectral resampling. Prints JSON.
+"""Timings of the foundation: smoke render, spectral resampling, Delta E94. Prints JSON.
 
 Run: .venv/bin/python -m benchmarks.foundation
 """
@@ -11,6 +11,7 @@ import time
 import numpy as np
 
 from benchmarks.common import machine_description
+from recon.metrics import delta_e94
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid, resample
 from twin.components import (
     FINE_GRID,
@@ -58,6 +59,12 @@ def main() -> None:
     for method in ("linear", "pchip", "box"):
         first, best = _timed(lambda method=method: resample(cube, DEFAULT_GRID, method=method), 2)
         results[f"resample_256x256_401_to_33_{method}_s"] = round(best, 3)
+
+    rng = np.random.default_rng(0)
+    truth = rng.uniform(0.05, 0.95, (250, 400, DEFAULT_GRID.size))
+    estimate = truth + 0.02 * rng.standard_normal(truth.shape)
+    _, best = _timed(lambda: delta_e94(estimate, truth, DEFAULT_GRID), 2)
+    results["delta_e94_250x400x33_s"] = round(best, 3)
     print(json.dumps(results, indent=2))
 
 

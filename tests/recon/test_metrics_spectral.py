@@ -1,6 +1,5 @@
 """Spectral error measures of recon.metrics: delta E 94 (thesis 6.2), RMSE and spectral angle."""
 
-import time
 import warnings
 
 import colour
@@ -99,15 +98,13 @@ def test_metamers_under_d65_differ_under_the_other_illuminants():
     assert averaged > 0.5
 
 
-def test_delta_e_keeps_the_leading_shape_and_is_fast(rng):
+def test_delta_e_keeps_the_leading_shape(rng):
+    # A 250 x 400 image at once (its time: benchmarks/foundation.py, delta_e94_250x400x33_s).
     truth = rng.uniform(0.05, 0.95, (250, 400, 33))
     estimate = truth + 0.02 * rng.standard_normal(truth.shape)
-    start = time.perf_counter()
     value = delta_e94(estimate, truth, DEFAULT_GRID)
-    elapsed = time.perf_counter() - start
     assert value.shape == (250, 400)
     assert np.all(value > 0) and np.all(np.isfinite(value))
-    assert elapsed < 5.0
 
 
 def test_delta_e_rejects_bad_input(checker_pairs):
