@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Idempotent set-up of a fresh Debian machine for spectwin:
 #   1. a virtual environment in .venv with spectwin and its dev extra installed (editable),
-#   2. a system LLVM >= 16 for Mitsuba's llvm_* variants (Dr.Jit 1.5 crashes with LLVM 14/15).
+#   2. a system LLVM >= 16 for Mitsuba's llvm_* variants (Dr.Jit 1.5 crashes with LLVM 14/15),
+#   3. Debian's chromium and chromium-driver for the browser check of the demo's report.
 # Where apt is unavailable the project falls back to the scalar_spectral variant (twin/variant.py)
 # and this script prints a warning instead of failing.
 set -euo pipefail
@@ -39,6 +40,17 @@ if [ "$major" -lt 16 ]; then
         apt-get update -qq
         apt-get install -y -qq libllvm19 >/dev/null
         major=$(llvm_major)
+    fi
+fi
+# Debian's Chromium and its driver, for the test that opens the demo's HTML report in a browser.
+if [ ! -x /usr/bin/chromium ] || [ ! -x /usr/bin/chromedriver ]; then
+    if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
+        echo "bootstrap: installing chromium and chromium-driver with apt"
+        export DEBIAN_FRONTEND=noninteractive
+        apt-get update -qq
+        apt-get install -y -qq chromium chromium-driver >/dev/null
+    else
+        echo "bootstrap: no chromium (needs apt as root): the browser check of the report is skipped"
     fi
 fi
 if [ "$major" -lt 16 ]; then
