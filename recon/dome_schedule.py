@@ -34,7 +34,6 @@ References
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
@@ -640,14 +639,7 @@ def _solve(instance: _Instance, n: int, node_limit: int) -> tuple[BandSchedule |
     return schedule, decided
 
 
-def _node_limit(node_limit: object, time_limit_s: object) -> int:
-    if time_limit_s is not None:
-        warnings.warn(
-            "time_limit_s is ignored: the search is bounded by node_limit, so that its result "
-            "does not depend on the machine's speed or load",
-            DeprecationWarning,
-            stacklevel=3,
-        )
+def _node_limit(node_limit: object) -> int:
     if (
         isinstance(node_limit, bool)
         or not isinstance(node_limit, (int, np.integer))
@@ -665,7 +657,6 @@ def schedule_bands(
     repeat_bands: Sequence[int] = (),
     image_limit_s: float | None = None,
     node_limit: int = DEFAULT_NODE_LIMIT,
-    time_limit_s: float | None = None,
 ) -> BandSchedule:
     """Assign every band exposure to one of ``n_images`` RGB images, minimizing total time.
 
@@ -700,9 +691,6 @@ def schedule_bands(
     node_limit
         Most nodes the branch and bound search visits (about a second of search); if it is
         reached the best schedule found is returned with ``optimal=False``.
-    time_limit_s
-        Deprecated and ignored (a :class:`DeprecationWarning` says so): a limit on the
-        solver's wall-clock time made the result depend on the machine's load.
 
     Returns
     -------
@@ -727,7 +715,7 @@ def schedule_bands(
     """
     instance = _instance(band_exposures_s, rgb_exposures_s, repeat_bands, image_limit_s)
     n = _n_images(n_images, instance)
-    limit = _node_limit(node_limit, time_limit_s)
+    limit = _node_limit(node_limit)
     schedule, decided = _solve(instance, n, limit)
     if schedule is None and decided:
         raise SpectwinInputError(
@@ -749,7 +737,6 @@ def fewest_images(
     repeat_bands: Sequence[int] = (),
     image_limit_s: float | None = None,
     node_limit: int = DEFAULT_NODE_LIMIT,
-    time_limit_s: float | None = None,
 ) -> BandSchedule:
     """The smallest number of RGB images that can hold every band exposure, and its schedule.
 
@@ -761,7 +748,7 @@ def fewest_images(
 
     Parameters
     ----------
-    band_exposures_s, rgb_exposures_s, repeat_bands, node_limit, time_limit_s
+    band_exposures_s, rgb_exposures_s, repeat_bands, node_limit
         As for :func:`schedule_bands` (``node_limit`` per image count tried).
     image_limit_s
         Longest allowed image duration (default
@@ -788,7 +775,7 @@ def fewest_images(
     rgb = _positive_vector("rgb_exposures_s", rgb_exposures_s)
     limit = max(rgb.sum(), exposures.max()) if image_limit_s is None else image_limit_s
     instance = _instance(exposures, rgb, repeat_bands, limit)
-    nodes = _node_limit(node_limit, time_limit_s)
+    nodes = _node_limit(node_limit)
     copies = 2 if instance.bands.size > exposures.size else 1
     first = max(copies, _bins_lower_bound(instance.exposures_s, instance.image_limit_s))
     proven = True

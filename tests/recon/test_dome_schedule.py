@@ -215,15 +215,6 @@ def test_search_proves_what_the_greedy_schedule_misses_and_the_node_limit_is_det
     assert cut[0].images == cut[1].images and cut[0].total_s == cut[1].total_s
 
 
-def test_time_limit_is_ignored_with_a_deprecation_warning():
-    exposures = [1.78, 2.88, 0.86, 2.87, 1.28, 1.56, 2.57, 1.52, 1.87]
-    with pytest.warns(DeprecationWarning, match="time_limit_s is ignored"):
-        plan = schedule_bands(exposures, 3, rgb_exposures_s=[5.73], time_limit_s=1e-9)
-    assert plan.optimal and plan.total_s == pytest.approx(17.21)
-    with pytest.warns(DeprecationWarning, match="time_limit_s is ignored"):
-        assert fewest_images(exposures, rgb_exposures_s=[5.73], time_limit_s=1e-9).optimal
-
-
 def test_fewest_images_skips_counts_the_bin_packing_bound_rules_out():
     # Three bands longer than half the image limit need three images although they sum to less
     # than two (Martello and Toth's bound L2).
