@@ -55,7 +55,28 @@ def test_study_writes_figures_and_numbers(tmp_path):
     summary = run_study(tmp_path, texels=32, materials=("wallpaper",), sweeps=False)
     assert set(summary["cases"]) == {"wallpaper", "llanos2019"}
     saved = json.loads((tmp_path / "study.json").read_text())
-    whisk = saved["cases"]["llanos2019"]["whisk_broom"]
-    assert whisk["spectralization"] < whisk["imai"]
+    # Measured mean relative errors (%), whisk broom; every method within 25 % of them.
+    measured = {
+        "llanos2019": {
+            "spectralization": 13.6,
+            "imai": 538.6,
+            "hardeberg": 10.3,
+            "murakami": 9.04,
+            "dong": 10.5,
+            "a_plus": 7.87,
+        },
+        "wallpaper": {
+            "spectralization": 1.38,
+            "imai": 45.6,
+            "hardeberg": 0.893,
+            "murakami": 1.12,
+            "dong": 1.51,
+            "a_plus": 2.39,
+        },
+    }
+    for case, errors in measured.items():
+        whisk = saved["cases"][case]["whisk_broom"]
+        for method, value in errors.items():
+            assert whisk[method] == pytest.approx(value, rel=0.25), (case, method)
     for name in ("wallpaper_errors", "wallpaper_maps", "llanos2019_spectra"):
         assert (tmp_path / f"{name}.png").stat().st_size > 10_000
