@@ -168,7 +168,7 @@ def test_reference_method_recovers_the_response_through_the_lctf():
     transmissions = LiquidCrystalTunableFilter.varispec("VS-10").transmission(fine).values
     band_rgb = transmissions @ (response * (white * light)[:, None])  # Eq. 9.16
     estimate = reference_response(band_rgb, transmissions, white, light, fine.wavelengths_nm)
-    assert _rmse(estimate, response).max() < 0.1
+    assert _rmse(estimate, response).max() < 0.05  # measured 0.020 (R), 0.014, 0.016
 
 
 def test_illuminant_from_colour_temperature_works_for_daylight():
@@ -176,7 +176,7 @@ def test_illuminant_from_colour_temperature_works_for_daylight():
     rgb = (CHART * daylight) @ response
     planck = illuminant_from_temperature(6504.0, WAVELENGTHS)
     estimate = estimate_response(rgb, CHART, planck, WAVELENGTHS, method="basic", alpha=1e-3)
-    assert _rmse(estimate, response).max() < 0.1
+    assert _rmse(estimate, response).max() < 0.08  # measured 0.016, 0.017, 0.043 (B)
     assert planck.mean() == pytest.approx(1.0)
 
 

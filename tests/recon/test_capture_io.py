@@ -2,20 +2,20 @@
 
 import numpy as np
 import pytest
+import tifffile
 
 from hwbridge.replay import ingest
 from recon.capture_io import select_frames
 from recon.errors import SpectwinInputError
 from recon.measured_data import data_path
+from twin.sensor import Sensor
 from twin.sim_session import run_demo_session
 
 
 @pytest.fixture(scope="module")
 def stores(tmp_path_factory):
     folder = tmp_path_factory.mktemp("stores")
-    replay = ingest(
-        data_path("real/llanos2019"), "llanos2019", folder / "llanos.capture.zarr"
-    )
+    replay = ingest(data_path("real/llanos2019"), "llanos2019", folder / "llanos.capture.zarr")
     simulated = run_demo_session(folder / "sim.capture.zarr", 4)
     return {"replay": (replay, "flea3", 0.1), "sim": (simulated, "k4", 0.1)}
 
@@ -30,6 +30,21 @@ def test_dark_frames_read_the_same_way_from_either_backend(stores, backend):
     # A mean dark frame, as the calibration averages them (thesis 3.3).
     mean_dark = darks.frames.mean(axis=0)
     assert mean_dark.shape == darks.frames.shape[1:] and np.isfinite(mean_dark).all()
+    if backend == "replay":
+        # The frames are the two 100 ms dark files, read with tifffile; the exposure comes from
+        # "_100ms_" in their names.
+        files = sorted((data_path("real/llanos2019") / "captured_images" / "dark_frames").glob("*"))
+        at_100_ms = [file for file in files if "_100ms_" in file.name]
+        assert len(at_100_ms) == 2 and np.all(darks.exposure_s == 0.1)
+        for frame, file in zip(darks.frames, at_100_ms, strict=True):
+            np.testing.assert_array_equal(frame, tifffile.imread(file).astype(np.float64))
+    else:
+        # The simulated camera's dark level: its ADC offset (100 DN) plus 0.0016 DN of dark
+        # current, with read noise 3 DN per pixel (measured mean 100.009, std 3.01).
+        config = Sensor("coolsnap_k4").config
+        assert len(darks.frames) == 3
+        assert darks.frames.mean() == pytest.approx(config.adc_offset_dn, abs=0.03)
+        assert darks.frames.std() == pytest.approx(config.read_noise_dn, rel=0.03)
 
 
 def test_band_selection_and_clear_errors(stores):

@@ -171,6 +171,20 @@ def test_hdr_merge_recovers_the_irradiance_within_its_shot_and_read_noise(series
     assert np.percentile(np.abs(z), 99.9) < 4.5
 
 
+def test_hdr_merge_of_a_noise_free_linear_camera_is_exact():
+    # A linear 8-bit camera, f(y) = y: pixel values are irradiance x time wherever below 255,
+    # so Eq. 10.3 must return the irradiance exactly, in absolute units, whatever the weights.
+    irradiance = np.array([3.0, 17.0, 40.0, 63.0, 100.0])
+    times = np.array([1.0, 2.0, 4.0])
+    frames = np.minimum(irradiance[None, :] * times[:, None], 255).astype(np.uint8)
+    curve = np.arange(256, dtype=float)
+    # The saturated sample (100 x 4 s) carries no weight: the 100 comes from 1 s and 2 s.
+    np.testing.assert_allclose(merge_hdr(frames, times, curve), irradiance, rtol=1e-12)
+    # A curve twice as steep doubles the irradiance; twice the exposure times halve it.
+    np.testing.assert_allclose(merge_hdr(frames, times, 2 * curve), 2 * irradiance, rtol=1e-12)
+    np.testing.assert_allclose(merge_hdr(frames, 2 * times, curve), irradiance / 2, rtol=1e-12)
+
+
 def test_merged_irradiance_predicts_the_frames_back(series):
     frames, irradiance, curve = series["frames"], series["irradiance"], series["curve"]
     predicted = predict_values(series["merged"], EXPOSURE_S, curve)

@@ -36,16 +36,31 @@ def test_six_spectra_with_one_percent_noise_spectralization_beats_the_baselines(
     assert errors["spectralization"] < errors["dong"]
     assert errors["spectralization"] < 2.0 and errors["hardeberg"] > 5.0
     assert errors["imai"] > 3 * errors["hardeberg"]
+    # Every method within 15 % of its measured error (seeded noise, deterministic).
+    measured = {
+        "spectralization": 1.04,
+        "spectralization p_dyn=1": 1.19,
+        "imai": 44.3,
+        "hardeberg": 12.6,
+        "murakami": 4.96,
+        "dong": 12.7,
+        "a_plus": 3.31,
+    }
+    for method, value in measured.items():
+        assert errors[method] == pytest.approx(value, rel=0.15), method
 
 
-def test_push_broom_misses_materials_and_does_worse_than_whisk_broom(six_spectra_case):
+def test_push_broom_lines_see_every_material_yet_do_worse_than_whisk_broom(six_spectra_case):
     _, image, labels, response = six_spectra_case
     mask = push_broom_mask(image.shape[:2])
     methods = ("spectralization", "hardeberg")
     push = run_protocol(image, response, mask, methods=methods).mean_errors
     whisk = run_protocol(image, response, whisk_broom_mask(image.shape[:2]), methods=methods)
-    assert push["spectralization"] > whisk.mean_errors["spectralization"]
-    assert len(np.unique(labels[mask])) <= 6
+    # The two lines cross all six materials, but yellow green in only 2 of their 128 pixels.
+    np.testing.assert_array_equal(np.bincount(labels[mask], minlength=6), [28, 33, 21, 29, 2, 15])
+    # Measured: push broom 4.59 %, whisk broom 1.04 % (spectralization).
+    assert push["spectralization"] == pytest.approx(4.59, rel=0.25)
+    assert push["spectralization"] > 2.5 * whisk.mean_errors["spectralization"]
 
 
 def test_more_spots_help_spectralization_and_noise_hurts_every_method(six_spectra_case):

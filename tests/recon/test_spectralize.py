@@ -201,7 +201,7 @@ def test_joint_reconstruction_spreads_spectra_to_an_image_without_data(mosaic):
     result = reconstruct(rgb, response, point_spectra=known, p_dyn=1.0, tol=1e-9)
     assert result.spectra.shape == slices.shape
     second = relative_error(result.spectra[1], slices[1]).mean()
-    assert second < 3.0, second
+    assert second < 5e-6, second  # measured 1.8e-6 % (3e-6 % on another machine)
 
 
 def test_noisy_band_images_with_filter_beat_the_raw_band_images(mosaic):

@@ -51,9 +51,15 @@ def test_qth_lamp_has_a_black_body_shape_and_the_requested_power():
 
 def test_qth_lamp_does_not_flicker():
     lamp = QTHLamp()
-    first = lamp.exposure_integral(DEFAULT_GRID, 0.0, 0.05).values
-    later = lamp.exposure_integral(DEFAULT_GRID, 0.0123, 0.05).values
-    np.testing.assert_array_equal(first, later)
+    power = lamp.intensity(DEFAULT_GRID).values
+    # Steady output: the integral over any window is the constant power times its length,
+    # whatever the window's start.
+    for t0, exposure in [(0.0, 0.05), (0.0123, 0.05), (3.7, 0.001), (0.5, 2.0)]:
+        np.testing.assert_allclose(
+            lamp.exposure_integral(DEFAULT_GRID, t0, exposure).values,
+            power * exposure,
+            rtol=1e-12,
+        )
 
 
 def test_hmi_spectrum_has_the_545_9_nm_peak_and_a_daylight_colour_temperature():
@@ -245,16 +251,29 @@ def test_bad_component_parameters_raise_clear_errors(make, message):
 
 
 @pytest.mark.parametrize("lamp", [HMILamp(), QTHLamp(), PhosphorWhiteLED()], ids=type)
-def test_every_lamp_is_the_sum_of_its_parts_over_an_exposure(lamp):
+@pytest.mark.parametrize(("t0", "exposure"), [(0.0123, 0.0517), (0.2, 0.004), (1.0, 0.5)])
+def test_every_lamp_is_the_sum_of_its_parts_over_an_exposure(lamp, t0, exposure):
+    # Independent of the parts: adaptive quadrature of the instantaneous output (flicker and
+    # drift included) over [t0, t0 + exposure].
+    numeric = integrate.quad_vec(
+        lambda t: lamp.intensity(DEFAULT_GRID, t).values, t0, t0 + exposure, epsrel=1e-10
+    )[0]
     parts = lamp.spectral_parts(DEFAULT_GRID)
-    weights = lamp.part_exposure_s(0.0123, 0.0517)
+    weights = lamp.part_exposure_s(t0, exposure)
     assert parts.values.shape == (weights.size, 33)
-    np.testing.assert_allclose(
-        lamp.exposure_integral(DEFAULT_GRID, 0.0123, 0.0517).values,
-        weights @ parts.values,
-        rtol=1e-12,
-    )
+    integral = lamp.exposure_integral(DEFAULT_GRID, t0, exposure).values
+    # The drift is taken at the window's middle: far below 1e-6 relative over half a second.
+    np.testing.assert_allclose(integral, numeric, rtol=1e-6)
+    np.testing.assert_allclose(integral, weights @ parts.values, rtol=1e-12)
     # At switch-on (no drift yet, flicker phase 0) the parts add up to the intensity.
     np.testing.assert_allclose(
         parts.values.sum(axis=0), lamp.intensity(DEFAULT_GRID, 0.0).values, rtol=1e-12
     )
+
+
+def test_exposure_integral_scales_with_exposure_time():
+    for lamp in (QTHLamp(), PhosphorWhiteLED(), HMILamp(drift_fraction=0.0)):
+        # Whole flicker periods (1/15 s) so that the HMI lines average out too.
+        short = lamp.exposure_integral(DEFAULT_GRID, 0.0, 1 / 15).values
+        long = lamp.exposure_integral(DEFAULT_GRID, 0.0, 20 / 15).values
+        np.testing.assert_allclose(long, 20 * short, rtol=1e-9)

@@ -42,19 +42,28 @@ def test_groups_render_what_spectral_emitters_render_with_less_band_noise():
     ratio = grouped[inside, inside].mean(axis=(0, 1)) / plain[inside, inside].mean(axis=(0, 1))
     np.testing.assert_allclose(ratio, 1.0, atol=0.03)
 
-    # Noise per pixel from two seeds, at the three fluorescent lines. Measured when written:
-    # 1.1-1.5 % with the lamps' own spectra, 0.6 % with the spectra in the film; measured on
-    # 2026-11-22 (same Mitsuba 3.9.1, cause of the change not found): 2.2/2.1/1.5 % against
-    # 1.0/1.0/1.0 %, a ratio of 0.48-0.69.
+    # Noise per pixel from two seeds, at the three fluorescent lines, over eight seed pairs.
+    # Measured over ten pairs (1, 2) ... (19, 20): plain 1.5-2.1 %, grouped 0.77-1.03 %; the
+    # ratio grouped / plain has mean 0.47, 90th percentile 0.52, range 0.40-0.66 (the pair
+    # (1, 2) alone gives 0.50/0.52/0.66, which is why one pair needed a bound of 0.8).
     def pixel_noise(render, again):
         difference = (render - again)[inside, inside]
         return np.std(difference, axis=(0, 1)) / np.mean(render[inside, inside], axis=(0, 1))
 
-    plain_noise = pixel_noise(
-        plain, render_lit(camera, film, {**entries, **with_spectra}, spp=128, seed=2)
-    )
-    grouped_noise = pixel_noise(grouped, render_lit(camera, film, entries, lights, spp=128, seed=2))
-    assert np.all(grouped_noise[:3] < 0.8 * plain_noise[:3])
+    ratios = []
+    for first in range(1, 16, 2):
+        if first == 1:
+            plain_first, grouped_first = plain, grouped
+        else:
+            plain_first = render_lit(camera, film, {**entries, **with_spectra}, spp=128, seed=first)
+            grouped_first = render_lit(camera, film, entries, lights, spp=128, seed=first)
+        plain_again = render_lit(camera, film, {**entries, **with_spectra}, spp=128, seed=first + 1)
+        grouped_again = render_lit(camera, film, entries, lights, spp=128, seed=first + 1)
+        plain_noise = pixel_noise(plain_first, plain_again)
+        grouped_noise = pixel_noise(grouped_first, grouped_again)
+        ratios.append(grouped_noise[:3] / plain_noise[:3])
+    assert np.mean(ratios) < 0.6
+    assert np.percentile(ratios, 90) < 0.7
 
 
 def test_lamp_weighted_channels_have_unit_area_and_refuse_another_grid():

@@ -50,9 +50,22 @@ def test_simulated_devices_follow_the_protocols_and_share_state():
 
 
 @pytest.mark.render
-def test_rendered_session_renders_each_view_once_and_completes(tmp_path):
+def test_rendered_session_renders_each_view_once_and_completes(tmp_path, monkeypatch):
+    from twin import rig_signals
+
+    rendered_poses = []
+    render = rig_signals.gonio_part_rates
+
+    def counting_render(config, pose, *args, **kwargs):
+        rendered_poses.append(pose)
+        return render(config, pose, *args, **kwargs)
+
+    monkeypatch.setattr(rig_signals, "gonio_part_rates", counting_render)
     store = run_demo_session(tmp_path / "rendered.capture.zarr", 1, rendered=True)
     assert store.complete
+    # Two direction pairs, every band of a view from one render: two renders, two poses.
+    assert len(rendered_poses) == 2
+    assert rendered_poses[0] != rendered_poses[1]
     frames, index = store.frames("k4")[:], store.index("k4")
     at_550 = np.flatnonzero(index["band_nm"] == 550.0)
     assert len(at_550) == 2

@@ -26,10 +26,19 @@ def test_twin_texture_removes_the_monte_carlo_band_noise_of_the_render():
         np.pi * truth_btf(load_material("lego"), _LIGHT, _VIEW, texels=32, spp=16, seed=s)[0]
         for s in (0, 1)
     ]
-    # The NNLS projection uses one seed's render only; compare two seeds' projections.
+    # The NNLS projection uses the seed-0 render.
     first = twin_texture("lego", texels=32, spp=16)
     raw_spread = relative_error(raw[0], raw[1]).mean()
-    assert raw_spread > 10.0  # per-band Monte Carlo noise of a spectral render
+    assert raw_spread > 100.0  # per-band Monte Carlo noise of a spectral render (measured 197 %)
+    # Independent expectation: a render of 16x the samples with another seed.
+    reference = (
+        np.pi * truth_btf(load_material("lego"), _LIGHT, _VIEW, texels=32, spp=256, seed=5)[0]
+    )
+    texture_error = relative_error(first, reference)
+    raw_error = relative_error(raw[1], reference).mean()
+    # Measured: texture 6.4 % mean, 15.2 % 95th percentile; a raw 16 spp render 58 %.
+    assert texture_error.mean() < 13.0 and np.percentile(texture_error, 95) < 30.0
+    assert raw_error > 4 * texture_error.mean()
     materials = load_material("lego")
     assert first.shape == (32, 32, 33) and np.all(first >= 0)
     # Every texel lies in the cone of the material's part spectra: rank <= number of parts.
@@ -46,7 +55,28 @@ def test_study_writes_figures_and_numbers(tmp_path):
     summary = run_study(tmp_path, texels=32, materials=("wallpaper",), sweeps=False)
     assert set(summary["cases"]) == {"wallpaper", "llanos2019"}
     saved = json.loads((tmp_path / "study.json").read_text())
-    whisk = saved["cases"]["llanos2019"]["whisk_broom"]
-    assert whisk["spectralization"] < whisk["imai"]
+    # Measured mean relative errors (%), whisk broom; every method within 25 % of them.
+    measured = {
+        "llanos2019": {
+            "spectralization": 13.6,
+            "imai": 538.6,
+            "hardeberg": 10.3,
+            "murakami": 9.04,
+            "dong": 10.5,
+            "a_plus": 7.87,
+        },
+        "wallpaper": {
+            "spectralization": 1.38,
+            "imai": 45.6,
+            "hardeberg": 0.893,
+            "murakami": 1.12,
+            "dong": 1.51,
+            "a_plus": 2.39,
+        },
+    }
+    for case, errors in measured.items():
+        whisk = saved["cases"][case]["whisk_broom"]
+        for method, value in errors.items():
+            assert whisk[method] == pytest.approx(value, rel=0.25), (case, method)
     for name in ("wallpaper_errors", "wallpaper_maps", "llanos2019_spectra"):
         assert (tmp_path / f"{name}.png").stat().st_size > 10_000
