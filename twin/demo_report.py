@@ -7,7 +7,6 @@ metrics, with links to the JSON.
 from __future__ import annotations
 
 import html
-import json
 from pathlib import Path
 
 import matplotlib
@@ -21,6 +20,7 @@ from recon.btf_store import BTFStore  # noqa: E402
 from recon.gonio_calibration import GonioCalibration  # noqa: E402
 from recon.preview import spectral_to_srgb  # noqa: E402
 from recon.spectra import DEFAULT_GRID  # noqa: E402
+from twin.cli_output import format_value  # noqa: E402
 from twin.components import FINE_GRID  # noqa: E402
 from twin.components.lamps import HMILamp, QTHLamp  # noqa: E402
 from twin.components.lctf import LiquidCrystalTunableFilter  # noqa: E402
@@ -168,7 +168,7 @@ _SECTIONS = (
 def write_report(out: Path, metrics: dict) -> Path:
     """``report.html`` in ``out``: the headline numbers, then every figure that exists."""
     rows = "".join(
-        f"<tr><td>{html.escape(str(key))}</td><td>{html.escape(_short(value))}</td></tr>"
+        f"<tr><td>{html.escape(str(key))}</td><td>{html.escape(format_value(value))}</td></tr>"
         for key, value in metrics["headline"].items()
     )
     sections = "".join(
@@ -191,8 +191,3 @@ def write_report(out: Path, metrics: dict) -> Path:
     path.write_text(page)
     return path
 
-
-def _short(value) -> str:
-    if isinstance(value, float):
-        return f"{value:.4g}"
-    return json.dumps(value) if isinstance(value, dict | list) else str(value)
