@@ -1,4 +1,5 @@
-"""Render time and memory of the BTF BSDF (twin.btf_bsdf): decoded table versus PCA factors.
+"""Render time and memory of the BTF BSDF (twin.render.plugins.btf_bsdf): decoded table versus PCA
+factors.
 
 A square with the BTF under a constant spectral map, XYZ film. The BTF is a store's (argument)
 or a synthetic one of the twin's gonio shape (13 x 13 directions, 156 pairs, 128^2 texels,
@@ -16,15 +17,15 @@ import time
 import numpy as np
 
 from benchmarks.common import machine_description, peak_rss_mib
-from recon.btf_compression import compress_btf
-from recon.btf_store import BTFStore
+from recon.btf.compression import compress_btf
+from recon.btf.store import BTFStore
 from recon.spectra import DEFAULT_GRID, WavelengthGrid
-from twin.btf_bsdf import btf_bsdf, compressed_product_table, product_table
-from twin.hemisphere import sattler_directions
-from twin.mitsuba_spectra import specfilm
-from twin.spectral_envmap import SpectralMap, spectral_envmap
-from twin.truth import band_passbands
-from twin.variant import activate
+from twin.render.plugins.btf_bsdf import btf_bsdf, compressed_product_table, product_table
+from twin.render.plugins.spectral_envmap import SpectralMap, spectral_envmap
+from twin.render.spectra import specfilm
+from twin.render.truth import band_passbands
+from twin.render.variant import activate
+from twin.rigs.hemisphere import sattler_directions
 
 _BANDS = WavelengthGrid(np.array([440.0, 550.0, 650.0]))
 

@@ -2,7 +2,7 @@
 
 The run of the demo's 20 direction pairs (``DEMO_RINGS``) at ``--pixels`` and ``--spp``, band
 exposures of 0.4 s (6 HMI flicker periods), captured in one process and on a ``LocalCluster`` of
-``--workers`` one-thread worker processes (:mod:`twin.cluster`); then processed both ways
+``--workers`` one-thread worker processes (:mod:`twin.devices.cluster`); then processed both ways
 into BTFs of ``--texels`` (a synthetic linear calibration: the timing does not depend on it).
 Reports wall times, frames per second, the speed-up, the CPU time of the capture (this process
 serially, the workers on the cluster) and the cores it kept busy on average, and whether the
@@ -25,16 +25,16 @@ import numpy as np
 
 from benchmarks.common import machine_description
 from hwbridge.store import CaptureStore
-from recon.gonio_calibration import GonioCalibration
-from recon.spectral_calibration import HMI_FLICKER_PERIOD_S
-from twin.cluster import dask_client, run_process
+from recon.calibration.gonio import GonioCalibration
+from recon.calibration.spectral import HMI_FLICKER_PERIOD_S
 from twin.components import LiquidCrystalTunableFilter
-from twin.demo import DEMO_RINGS
-from twin.gonio_capture import CAMERA_ID, actual_poses, gonio_pairs, run_gonio_measurement
-from twin.gonio_render import gonio_part_rates
+from twin.devices.cluster import dask_client, run_process
+from twin.gonio.capture import CAMERA_ID, actual_poses, gonio_pairs, run_gonio_measurement
+from twin.gonio.render import gonio_part_rates
 from twin.materials import load_material
-from twin.rig_config import load_rig
-from twin.variant import activate
+from twin.render.variant import activate
+from twin.rigs.rig_config import load_rig
+from twin.studies.demo import DEMO_RINGS
 
 
 def _timed(function):

@@ -20,8 +20,8 @@ from twin.components import (
     irradiance_at,
     zenith_white_reflectance,
 )
-from twin.flat_target import render_flat_target
-from twin.variant import activate
+from twin.render.flat_target import render_flat_target
+from twin.render.variant import activate
 
 
 def _timed(function, repeats: int = 3) -> tuple[float, float]:

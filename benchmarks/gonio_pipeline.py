@@ -18,12 +18,12 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks.common import machine_description, peak_rss_mib
-from recon.btf_compression import compress_btf
-from recon.gonio_calibration import calibrate_gonio
-from recon.gonio_processing import process_gonio
-from twin.demo import DEMO_RINGS
-from twin.gonio_capture import CAMERA_ID, run_gonio_calibration, run_gonio_measurement
-from twin.variant import activate
+from recon.btf.compression import compress_btf
+from recon.btf.processing import process_gonio
+from recon.calibration.gonio import calibrate_gonio
+from twin.gonio.capture import CAMERA_ID, run_gonio_calibration, run_gonio_measurement
+from twin.render.variant import activate
+from twin.studies.demo import DEMO_RINGS
 
 
 def _timed(function):

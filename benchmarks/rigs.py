@@ -9,13 +9,13 @@ import json
 import time
 
 from benchmarks.common import machine_description, peak_rss_mib
-from twin.dome_render import dome_rates
-from twin.gonio_kinematics import solve_pairs
-from twin.gonio_render import gonio_part_rates
-from twin.hemisphere import direction
+from twin.dome.render import dome_rates
+from twin.gonio.render import gonio_part_rates
 from twin.materials import load_material
-from twin.rig_config import load_rig
-from twin.variant import activate
+from twin.render.variant import activate
+from twin.rigs.gonio_kinematics import solve_pairs
+from twin.rigs.hemisphere import direction
+from twin.rigs.rig_config import load_rig
 
 
 def _best_of(function, repeats: int = 2) -> float:

@@ -12,7 +12,7 @@ import numpy as np
 
 from benchmarks.common import machine_description, peak_rss_mib
 from recon.spectra import DEFAULT_GRID
-from twin.sensor import Sensor
+from twin.sensor.model import Sensor
 
 
 def main() -> None:

@@ -16,11 +16,11 @@ import colour
 import numpy as np
 
 from benchmarks.common import machine_description, peak_rss_mib
+from recon.experiments.sampling import known_spectra_from_mask, whisk_broom_mask
+from recon.experiments.synthetic_images import material_mosaic
 from recon.metrics import relative_error
-from recon.sparse_sampling import known_spectra_from_mask, whisk_broom_mask
 from recon.spectra import DEFAULT_GRID
-from recon.spectralize import PointSpectra, reconstruct
-from recon.synthetic_images import material_mosaic
+from recon.spectralize.solve import PointSpectra, reconstruct
 
 
 def _scene(side: int, seed: int):

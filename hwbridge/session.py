@@ -16,7 +16,8 @@ retried with exponential backoff, disconnected devices are staged again, and bot
 in the frame's ``status``.
 
 :func:`run_session` does it all in one process. Its two halves serve a distributed capture
-(``twin.cluster``): :func:`open_session_store` creates (or reopens to resume) the store once,
+(``twin.devices.cluster``): :func:`open_session_store` creates (or reopens to resume) the store
+once,
 in the coordinator, and :func:`capture_steps` runs a subset of the steps into it, in a worker that
 owns those steps' chunks.
 """

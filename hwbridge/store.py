@@ -12,7 +12,7 @@ Layout of ``<name>.capture.zarr`` (ARCHITECTURE.md, "Stores"):
 
 Every per-frame array (frames, each index field, progress) has one chunk per frame, so writers
 that own disjoint sets of steps write disjoint chunks: the workers of a distributed capture
-(``twin.cluster``) write straight into one store, and the coordinator that created it sets
+(``twin.devices.cluster``) write straight into one store, and the coordinator that created it sets
 ``complete`` when they are done (:meth:`CaptureStore.refresh_complete`). Stores created before
 ``kind`` and ``status`` were chunked per frame hold them in one chunk per camera; they are read
 and resumed as before, by one writer (:attr:`CaptureStore.one_chunk_per_frame`).

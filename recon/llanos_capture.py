@@ -31,7 +31,7 @@ import tifffile
 from skimage import io as skimage_io
 
 from hwbridge.store import CaptureStore
-from recon.capture_io import select_frames
+from recon.calibration.capture_io import select_frames
 from recon.errors import SpectwinDataError, SpectwinInputError
 from recon.measured_data import data_path
 from recon.spectra import SampledSpectra, WavelengthGrid
@@ -183,9 +183,7 @@ def _assemble(
     source: str,
 ) -> Llanos2019ChartCapture:
     """Add the patch labels, check that everything fits together and freeze the arrays."""
-    label_path = (
-        data_path(_FOLDER) / "colorChecker_labels" / "d2_colorChecker30cm_550nm_labels.png"
-    )
+    label_path = data_path(_FOLDER) / "colorChecker_labels" / "d2_colorChecker30cm_550nm_labels.png"
     if not label_path.is_file():
         raise SpectwinDataError(f"Llanos 2019 patch labels {label_path} do not exist")
     labels = np.asarray(skimage_io.imread(label_path))
@@ -224,7 +222,7 @@ def chart_capture_from_store(
 ) -> Llanos2019ChartCapture:
     """The same series read from a capture store, e.g. the replay of ``hwbridge.replay.ingest``
     with the ``llanos2019`` mapping: calibration then reads real frames exactly as it reads
-    simulated ones (``recon.capture_io.select_frames``).
+    simulated ones (``recon.calibration.capture_io.select_frames``).
 
     Parameters
     ----------

@@ -24,6 +24,7 @@ __all__ = [
     "read_spectra_csv",
 ]
 
+
 def data_path(relative_path: str | Path = "") -> Path:
     """The path of a file or folder of spectwin's measured data (``recon/data``).
 

@@ -131,8 +131,8 @@ def test_the_installed_wheel_runs_from_another_folder_without_the_repository(whe
     )
     code = (
         "import json, twin, recon, scenes, hwbridge\n"
-        "from twin.rig_config import available_rigs, load_rig\n"
-        "from twin.camera_config import available_cameras, load_camera_config\n"
+        "from twin.rigs.rig_config import available_rigs, load_rig\n"
+        "from twin.rigs.camera_config import available_cameras, load_camera_config\n"
         "from twin.materials import available_materials, load_material\n"
         "from twin.components import RGB_CAMERA_RESPONSES, esser_reflectances\n"
         "from hwbridge.replay import load_mapping\n"
@@ -166,7 +166,7 @@ def test_the_installed_wheel_runs_from_another_folder_without_the_repository(whe
         ["colorchecker16", "lego", "red_fabric", "wallpaper"],
     ]
     command = subprocess.run(
-        [sys.executable, "-c", "from twin.cli import app; app()", "estimate", "dome", "--json"],
+        [sys.executable, "-c", "from twin.cli.app import app; app()", "estimate", "dome", "--json"],
         capture_output=True,
         text=True,
         cwd=tmp_path,

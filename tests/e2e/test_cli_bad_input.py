@@ -18,10 +18,10 @@ import pytest
 from typer.testing import CliRunner
 
 from hwbridge.store import CaptureStore, FrameRecord
-from recon.btf_store import BTFStore
-from recon.gonio_calibration import GonioCalibration
+from recon.btf.store import BTFStore
+from recon.calibration.gonio import GonioCalibration
 from recon.spectra import DEFAULT_GRID
-from twin.cli import app
+from twin.cli.app import app
 
 runner = CliRunner()
 SCENES = Path(__file__).resolve().parents[2] / "scenes"
@@ -327,7 +327,7 @@ def test_a_device_that_keeps_failing_stops_the_capture_with_exit_1(inputs, monke
     def failing_session(*args, **kwargs):
         raise DeviceTimeout("simulated timeout of k4.snap")
 
-    monkeypatch.setattr("twin.sim_session.run_demo_session", failing_session)
+    monkeypatch.setattr("twin.gonio.sim_session.run_demo_session", failing_session)
     result = runner.invoke(app, ["capture", str(inputs["NEW"]), "--workers", "0"])
     assert result.exit_code == 1, result.output
     assert result.stderr.count("\n") == 1 and "--resume" in result.stderr
@@ -335,10 +335,10 @@ def test_a_device_that_keeps_failing_stops_the_capture_with_exit_1(inputs, monke
 
 
 def test_the_option_choices_are_those_of_the_modules():
-    from twin.camchar_scenes import CHARTS, LIGHTS
-    from twin.cli_choices import Chart, DomeMaterial, Light, RGBCamera
+    from twin.cli.choices import Chart, DomeMaterial, Light, RGBCamera
     from twin.components import RGB_CAMERA_RESPONSES
-    from twin.dome_report import DOME_MATERIALS
+    from twin.studies.camchar_scenes import CHARTS, LIGHTS
+    from twin.studies.dome_report import DOME_MATERIALS
 
     assert sorted(RGBCamera) == sorted(RGB_CAMERA_RESPONSES)
     assert sorted(Chart) == sorted(CHARTS) and sorted(Light) == sorted(LIGHTS)

@@ -9,7 +9,7 @@ import pytest
 from typer.testing import CliRunner
 
 from recon.spectral_exr import read_spectral_exr
-from twin.cli import app
+from twin.cli.app import app
 
 runner = CliRunner()
 
@@ -125,7 +125,7 @@ def test_a_low_spp_render_prints_no_library_warning(tmp_path):
     # Mitsuba's low-discrepancy sampler warns (in colour codes, on the process's stdout) when it
     # rounds a sample count: spectwin asks it for counts it takes as they are.
     result = subprocess.run(
-        [sys.executable, "-m", "twin.cli", "smoke", "--out", str(tmp_path)]
+        [sys.executable, "-m", "twin.cli.app", "smoke", "--out", str(tmp_path)]
         + ["--pixels-per-patch", "8", "--spp", "20", "--json"],
         capture_output=True,
         text=True,

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from twin.cli import app
-from twin.demo import DemoSettings, run_demo
+from twin.cli.app import app
+from twin.studies.demo import DemoSettings, run_demo
 
 pytestmark = pytest.mark.render
 
@@ -129,4 +129,3 @@ def test_the_report_loads_in_a_real_browser_with_every_image_and_no_console_erro
     assert len(images) == 8 and all(loaded for _, loaded in images), images
     assert [entry for entry in console if entry["level"] == "SEVERE"] == []
     assert (out / "report.png").stat().st_size > 50_000
-

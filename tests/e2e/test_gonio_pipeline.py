@@ -12,15 +12,15 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from recon.btf_compression import load_compressed
-from recon.btf_store import BTFStore
-from recon.gonio_calibration import GonioCalibration
+from recon.btf.compression import load_compressed
+from recon.btf.store import BTFStore
+from recon.calibration.gonio import GonioCalibration
+from recon.calibration.spectral import HMI_FLICKER_PERIOD_S
 from recon.spectra import DEFAULT_GRID
-from recon.spectral_calibration import HMI_FLICKER_PERIOD_S
-from twin.cli import app
-from twin.gonio_capture import GonioPairs, run_gonio_measurement
-from twin.hemisphere import direction
-from twin.rig_config import load_rig
+from twin.cli.app import app
+from twin.gonio.capture import GonioPairs, run_gonio_measurement
+from twin.rigs.hemisphere import direction
+from twin.rigs.rig_config import load_rig
 
 pytestmark = pytest.mark.render
 runner = CliRunner()

@@ -4,7 +4,7 @@ import pytest
 
 from hwbridge.drivers.varispec import VariSpec
 from hwbridge.protocols import TunableFilter
-from twin.sim_devices import SimTunableFilter, VirtualRig
+from twin.devices.sim_devices import SimTunableFilter, VirtualRig
 
 
 @pytest.fixture(params=["simulated", "varispec-emulator"])
@@ -50,9 +50,9 @@ def camera(request):
         import numpy as np
 
         from twin.components import HMILamp
-        from twin.rig_signals import WhiteReferenceSignal
-        from twin.sensor import Sensor
-        from twin.sim_devices import SimCamera
+        from twin.devices.sim_devices import SimCamera
+        from twin.gonio.signals import WhiteReferenceSignal
+        from twin.sensor.model import Sensor
 
         rig = VirtualRig(band_nm=550.0)
         sensor = Sensor("coolsnap_k4", roi=(16, 16))

@@ -13,7 +13,7 @@ from hwbridge.errors import BridgeInputError
 from hwbridge.plans import dark_series, estimate_duration_s, gonio_sample_run
 from hwbridge.session import run_session
 from hwbridge.store import CaptureStore
-from twin.sim_session import demo_plan, run_demo_session
+from twin.gonio.sim_session import demo_plan, run_demo_session
 
 SEED = 2026
 
@@ -30,7 +30,7 @@ def test_sigkill_at_20_random_moments_then_resume_gives_the_uninterrupted_result
     reference_frames, reference_index = _frames_and_index(reference)
     path = tmp_path / "killed.capture.zarr"
     rng = np.random.default_rng(20)
-    command = [sys.executable, "-m", "twin.sim_session", str(path), str(SEED)]
+    command = [sys.executable, "-m", "twin.gonio.sim_session", str(path), str(SEED)]
     kills = 0
     while kills < 20:
         resume = ["--resume"] if path.exists() else []
@@ -118,9 +118,9 @@ def test_dome_white_and_chart_plans():
 def test_an_exposure_outside_the_camera_range_stops_the_session_cleanly(tmp_path):
     plan = dark_series("k4", [5000.0], 1)  # the K4 allows up to 600 s
     from twin.components import HMILamp
-    from twin.rig_signals import WhiteReferenceSignal
-    from twin.sensor import Sensor
-    from twin.sim_devices import SimCamera, VirtualRig
+    from twin.devices.sim_devices import SimCamera, VirtualRig
+    from twin.gonio.signals import WhiteReferenceSignal
+    from twin.sensor.model import Sensor
 
     sensor = Sensor("coolsnap_k4", roi=(8, 8))
     camera = SimCamera(

@@ -1,7 +1,7 @@
 """BTF compression (thesis 4.1.2): exact round trip, error vs components, sizes, storage.
 
 Compression ratios: raw float32 over stored float32 (means included), see
-``recon.btf_compression.predicted_ratio``. With the thesis's 250 brightness and 60 spectral
+``recon.btf.compression.predicted_ratio``. With the thesis's 250 brightness and 60 spectral
 components, 100x needs a large BTF: per band at least 6934 pairs at 800 x 800 texels (the
 thesis's own 6561 x 800^2 x 33 BTF gives 94.7x, and no texture size reaches 100x at 6561 pairs),
 joint at least about 1900 pairs at 116 x 116 texels (3.4 GB of float32). Rendering such a twin BTF
@@ -15,7 +15,7 @@ import time
 import numpy as np
 import pytest
 
-from recon.btf_compression import (
+from recon.btf.compression import (
     CompressedBTF,
     compress_btf,
     compressed_floats,
@@ -24,7 +24,7 @@ from recon.btf_compression import (
     predicted_ratio,
     save_compressed,
 )
-from recon.btf_store import COMPRESSED_GROUP, BTFStore, write_btf
+from recon.btf.store import COMPRESSED_GROUP, BTFStore, write_btf
 from recon.errors import SpectwinInputError
 from recon.spectra import DEFAULT_GRID, WavelengthGrid
 
@@ -250,7 +250,7 @@ def test_twin_btf_compression_ratio_and_error():
     one, the thesis's counts are capped at this size (no compression), and the error falls
     with the component counts."""
     from twin.materials import load_material
-    from twin.truth import truth_btf
+    from twin.render.truth import truth_btf
 
     rng = np.random.default_rng(11)
     light_dirs, view_dirs = _hemisphere(rng, 40), _hemisphere(rng, 40)
@@ -306,7 +306,7 @@ def test_thesis_counts_give_100x_on_a_large_twin_btf():
     """2025 pairs (45 x 45 directions) at 120 x 120 texels: the smallest kind of BTF on which
     250/60 components reach 100x (joint layout); per band they give about 26x."""
     from twin.materials import load_material
-    from twin.truth import truth_btf
+    from twin.render.truth import truth_btf
 
     rng = np.random.default_rng(5)
     directions = _hemisphere(rng, 45)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import zarr
 
-from recon.btf_store import BTFStore, write_btf
+from recon.btf.store import BTFStore, write_btf
 from recon.errors import SpectwinInputError
 from recon.spectra import DEFAULT_GRID, WavelengthGrid
 

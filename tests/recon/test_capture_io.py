@@ -5,11 +5,11 @@ import pytest
 import tifffile
 
 from hwbridge.replay import ingest
-from recon.capture_io import select_frames
+from recon.calibration.capture_io import select_frames
 from recon.errors import SpectwinInputError
 from recon.measured_data import data_path
-from twin.sensor import Sensor
-from twin.sim_session import run_demo_session
+from twin.gonio.sim_session import run_demo_session
+from twin.sensor.model import Sensor
 
 
 @pytest.fixture(scope="module")

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from recon.dark_frames import average_dark_frames, dark_frames_at, subtract_dark
 from recon.errors import SpectwinInputError
+from recon.radiometric.dark_frames import average_dark_frames, dark_frames_at, subtract_dark
 
 SHAPE = (128, 128)
 GAIN_DN_PER_E = 0.2  # CoolSNAP K4-like values (scenes/cameras/coolsnap_k4.yaml)

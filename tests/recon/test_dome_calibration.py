@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from colour_demosaicing import masks_CFA_Bayer
 
-from recon.demosaic import bin_quads
-from recon.dome_calibration import curve_linearity, texel_mean
+from recon.calibration.dome import curve_linearity, texel_mean
 from recon.errors import SpectwinInputError
+from recon.radiometric.demosaic import bin_quads
 
 
 @pytest.mark.parametrize("pattern", ["RGGB", "BGGR", "GRBG", "GBRG"])

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from recon.dome_schedule import (
+from recon.errors import SpectwinInputError
+from recon.scheduling.dome_schedule import (
     FILTER_SIZE_PER_SIGMA,
     THESIS_RGB_EXPOSURES_S,
     fewest_images,
@@ -17,7 +18,6 @@ from recon.dome_schedule import (
     schedule_bands,
     spectral_exposures,
 )
-from recon.errors import SpectwinInputError
 
 
 def brute_force_total(exposures, n_images, rgb_s, limit=None):
@@ -64,7 +64,7 @@ def test_exposure_input_errors_name_the_argument(arguments, keywords, message):
 # -- filter sizes -----------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("truncate", [4.0, 3.0])  # scipy's default; recon.energy_terms uses 3
+@pytest.mark.parametrize("truncate", [4.0, 3.0])  # scipy's default; recon.spectralize.energy uses 3
 @pytest.mark.parametrize("sigma_px", [0.8, 1.0, 2.0, 3.0])
 def test_noise_factor_matches_scipy_gaussian_filter_on_white_noise(sigma_px, truncate):
     noise = np.random.default_rng(7).standard_normal((1024, 1024))

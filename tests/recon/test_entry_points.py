@@ -6,7 +6,8 @@ import inspect
 
 import numpy as np
 
-from recon import baselines, metrics, radiometric, response_curve, spectralize
+from recon import baselines, metrics, radiometric, spectralize
+from recon.radiometric import response_curve
 
 
 def test_named_entry_points_exist_with_their_leading_arguments():

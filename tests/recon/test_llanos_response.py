@@ -16,7 +16,7 @@ one-scale-per-band comparison cannot remove; a planar illumination fit shows wha
 subtraction is done before the merge; the response is recovered from the raw values, because the
 averaged dark frames are 0.001-0.006 DN (the black level is at 0) and subtracting them would make
 a few hot pixels' values fractional, where the literal Eq. 10.8 lets those few samples decide half
-of a level's value (see recon.response_curve.robertson_filtered).
+of a level's value (see recon.radiometric.response_curve.robertson_filtered).
 """
 
 import numpy as np
@@ -24,8 +24,6 @@ import pytest
 from scipy import ndimage
 
 from hwbridge.replay import ingest
-from recon.dark_frames import average_dark_frames, dark_frames_at
-from recon.hdr import merge_hdr, predict_values
 from recon.llanos_capture import (
     LLANOS2019_PATCH_NAMES,
     chart_capture_from_store,
@@ -33,7 +31,9 @@ from recon.llanos_capture import (
     read_llanos2019_chart_spectra,
 )
 from recon.measured_data import data_path
-from recon.response_curve import robertson
+from recon.radiometric.dark_frames import average_dark_frames, dark_frames_at
+from recon.radiometric.hdr import merge_hdr, predict_values
+from recon.radiometric.response_curve import robertson
 from recon.spectra import band_integrals
 
 WHITE = LLANOS2019_PATCH_NAMES.index("white 9.5 (.05 D)")

@@ -5,9 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from recon.corner_refinement import TEXTURE_CORNERS_UV, fit_corner_model
 from recon.errors import SpectwinInputError
-from recon.registration import (
+from recon.registration.border import (
     MarksNotFoundError,
     detect_corners,
     extract_texture,
@@ -18,11 +17,16 @@ from recon.registration import (
     register_frame,
     texture_transform,
 )
-from twin.gonio_kinematics import solve_pairs
-from twin.gonio_render import gonio_camera, gonio_part_rates, pose_matrix
-from twin.hemisphere import direction
-from twin.rig_config import load_rig
-from twin.sample_holder import PRINT_INNER_HALF_M, PRINT_OUTER_HALF_M, registration_corners
+from recon.registration.corners import TEXTURE_CORNERS_UV, fit_corner_model
+from twin.gonio.render import gonio_camera, gonio_part_rates, pose_matrix
+from twin.materials.sample_holder import (
+    PRINT_INNER_HALF_M,
+    PRINT_OUTER_HALF_M,
+    registration_corners,
+)
+from twin.rigs.gonio_kinematics import solve_pairs
+from twin.rigs.hemisphere import direction
+from twin.rigs.rig_config import load_rig
 
 pytestmark = pytest.mark.render
 

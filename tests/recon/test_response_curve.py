@@ -17,16 +17,16 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from recon.dark_frames import average_dark_frames, dark_frames_at
 from recon.errors import SpectwinInputError
-from recon.hdr import (
+from recon.radiometric.dark_frames import average_dark_frames, dark_frames_at
+from recon.radiometric.hdr import (
     interpolate_curve,
     merge_hdr,
     predict_values,
     response_histogram,
     response_weights,
 )
-from recon.response_curve import (
+from recon.radiometric.response_curve import (
     clipped_after_filter,
     filter_frames,
     robertson,
@@ -42,7 +42,7 @@ SPAN_DN = LEVELS - 1 - ADC_OFFSET_DN
 # Values at or above this are saturated (full well, then read noise): 4095 - 7.5 sigma.
 SATURATION_DN = 4080
 # 8 exposure times over a factor 121 whose ratios are not powers of one ratio (see the module
-# description of recon.response_curve: the self-similar ambiguity).
+# description of recon.radiometric.response_curve: the self-similar ambiguity).
 EXPOSURE_S = np.array([1.0, 1.9, 4.2, 7.7, 16.5, 30.0, 67.0, 121.0]) * 1e-3
 # The 5-95 % part of the 12-bit value range.
 ASSESSED = np.arange(round(0.05 * (LEVELS - 1)), round(0.95 * (LEVELS - 1)) + 1)

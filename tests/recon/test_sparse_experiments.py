@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from recon.errors import SpectwinInputError
-from recon.sparse_experiments import noise_sweep, run_protocol, spot_count_sweep
-from recon.sparse_sampling import exclude_region, push_broom_mask, whisk_broom_mask
+from recon.experiments.sampling import exclude_region, push_broom_mask, whisk_broom_mask
+from recon.experiments.sparse import noise_sweep, run_protocol, spot_count_sweep
+from recon.experiments.synthetic_images import material_mosaic
 from recon.spectra import DEFAULT_GRID
-from recon.synthetic_images import material_mosaic
 
 SIX = ["dark skin", "blue sky", "orange", "purplish blue", "yellow green", "cyan"]
 

@@ -1,4 +1,5 @@
-"""Sparse sampling protocols of thesis chapter 7 (recon.sparse_sampling) and the real Llanos 2019
+"""Sparse sampling protocols of thesis chapter 7 (recon.experiments.sampling) and the real Llanos
+2019
 multispectral image (recon.measured_data.read_llanos2019_multispectral)."""
 
 from pathlib import Path
@@ -9,8 +10,7 @@ from scipy import io
 from skimage import measure
 
 from recon.errors import SpectwinDataError, SpectwinInputError
-from recon.measured_data import data_path, read_llanos2019_multispectral
-from recon.sparse_sampling import (
+from recon.experiments.sampling import (
     add_rgb_noise,
     exclude_region,
     grid_layout,
@@ -19,6 +19,7 @@ from recon.sparse_sampling import (
     spot_mean_spectra,
     whisk_broom_mask,
 )
+from recon.measured_data import data_path, read_llanos2019_multispectral
 
 TEST_DATA = Path(__file__).resolve().parents[1] / "data"
 

@@ -5,8 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from recon.errors import SpectwinInputError
-from recon.spectral_calibration import (
+from recon.calibration.spectral import (
     HMI_FLICKER_PERIOD_S,
     drift_factors,
     plan_exposures,
@@ -14,6 +13,7 @@ from recon.spectral_calibration import (
     run_white_factors,
     white_factors,
 )
+from recon.errors import SpectwinInputError
 
 BANDS = 33
 RNG = np.random.default_rng(0)

@@ -8,11 +8,16 @@ import pytest
 from scipy import sparse
 from scipy.spatial.distance import cdist
 
-from recon.appearance import appearance_neighbours, appearance_points, connect_components
 from recon.errors import SpectwinInputError
+from recon.experiments.synthetic_images import material_mosaic
 from recon.metrics import relative_error
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid
-from recon.spectralize import (
+from recon.spectralize.appearance import (
+    appearance_neighbours,
+    appearance_points,
+    connect_components,
+)
+from recon.spectralize.solve import (
     BandImage,
     DeviceIntegrals,
     EnergyWeights,
@@ -21,7 +26,6 @@ from recon.spectralize import (
     reconstruct,
     spectralize,
 )
-from recon.synthetic_images import material_mosaic
 
 WAVELENGTHS = DEFAULT_GRID.wavelengths_nm
 SIX = ["dark skin", "blue sky", "orange", "purplish blue", "yellow green", "cyan"]

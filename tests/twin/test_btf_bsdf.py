@@ -4,10 +4,11 @@ like roughplastic itself (thesis 4.2, Figure 4.6 validation)."""
 import numpy as np
 import pytest
 
-from recon.btf_compression import compress_btf
+from recon.btf.compression import compress_btf
 from recon.errors import SpectwinInputError
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid
-from twin.btf_bsdf import (
+from twin.components import FINE_GRID
+from twin.render.plugins.btf_bsdf import (
     BTFTable,
     barycentric,
     btf_bsdf,
@@ -16,12 +17,11 @@ from twin.btf_bsdf import (
     interpolate_table,
     product_table,
 )
-from twin.components import FINE_GRID
-from twin.hemisphere import sattler_directions
-from twin.mitsuba_spectra import irregular_spectrum, specfilm
-from twin.spectral_envmap import SpectralMap, spectral_envmap
-from twin.truth import band_passbands
-from twin.variant import activate
+from twin.render.plugins.spectral_envmap import SpectralMap, spectral_envmap
+from twin.render.spectra import irregular_spectrum, specfilm
+from twin.render.truth import band_passbands
+from twin.render.variant import activate
+from twin.rigs.hemisphere import sattler_directions
 
 CENTRES_NM = np.array([450.0, 550.0, 650.0])
 

@@ -1,4 +1,5 @@
-"""Capture and processing over a two-worker Dask LocalCluster (twin.cluster) give the results
+"""Capture and processing over a two-worker Dask LocalCluster (twin.devices.cluster) give the
+results
 of one process, bit for bit (timestamps are wall-clock time and differ)."""
 
 import json
@@ -10,21 +11,21 @@ from typer.testing import CliRunner
 from hwbridge.plans import plan_start_times_s
 from hwbridge.session import capture_steps, open_session_store
 from hwbridge.store import CaptureStore
-from recon.btf_store import BTFStore
+from recon.btf.processing import process_gonio
+from recon.btf.store import BTFStore
+from recon.calibration.gonio import GonioCalibration
+from recon.calibration.spectral import HMI_FLICKER_PERIOD_S
 from recon.errors import SpectwinInputError
-from recon.gonio_calibration import GonioCalibration
-from recon.gonio_processing import process_gonio
-from recon.spectral_calibration import HMI_FLICKER_PERIOD_S
-from twin.cli import app
-from twin.cluster import dask_client, view_tasks
+from twin.cli.app import app
 from twin.components import HMILamp, LiquidCrystalTunableFilter
-from twin.gonio_capture import CAMERA_ID, GonioPairs, run_gonio_measurement
-from twin.hemisphere import direction
-from twin.rig_config import load_rig
-from twin.rig_signals import WhiteReferenceSignal
-from twin.sensor import Sensor
-from twin.sim_devices import SimGonioDevices
-from twin.sim_session import demo_plan, run_demo_session
+from twin.devices.cluster import dask_client, view_tasks
+from twin.devices.sim_devices import SimGonioDevices
+from twin.gonio.capture import CAMERA_ID, GonioPairs, run_gonio_measurement
+from twin.gonio.signals import WhiteReferenceSignal
+from twin.gonio.sim_session import demo_plan, run_demo_session
+from twin.rigs.hemisphere import direction
+from twin.rigs.rig_config import load_rig
+from twin.sensor.model import Sensor
 
 runner = CliRunner()
 BANDS_NM = np.asarray(LiquidCrystalTunableFilter.varispec("VS-10").band_centres_nm, np.float64)
@@ -124,7 +125,7 @@ def test_process_on_two_workers_from_the_command_line_equals_the_serial_btf(capt
 
 
 def _demo_devices(seed: int) -> SimGonioDevices:
-    """The devices of :func:`twin.sim_session.run_demo_session` (white standard, 32 px)."""
+    """The devices of :func:`twin.gonio.sim_session.run_demo_session` (white standard, 32 px)."""
     sensor = Sensor("coolsnap_k4", roi=(32, 32))
     signal = WhiteReferenceSignal(sensor, HMILamp())
     plan = demo_plan()

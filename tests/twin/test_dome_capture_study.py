@@ -10,17 +10,18 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from recon.dome_calibration import DARK_VALUE_OFFSET, curve_linearity
-from recon.dome_schedule import THESIS_RGB_EXPOSURES_S
+from recon.calibration.dome import DARK_VALUE_OFFSET, curve_linearity
 from recon.errors import SpectwinInputError
-from twin.dome_capture_study import (
+from recon.scheduling.dome_schedule import THESIS_RGB_EXPOSURES_S
+from twin.dome.capture_study import (
     ReconstructionErrors,
     dome_light_directions,
     reconstruct_capture,
     simulate_capture,
 )
-from twin.dome_setup import SPECTRAL_VIEW, THESIS_LONGEST_BAND_S, dome_setup
-from twin.dome_study import (
+from twin.dome.setup import SPECTRAL_VIEW, THESIS_LONGEST_BAND_S, dome_setup
+from twin.render.texture_truth import texture_truth
+from twin.studies.dome import (
     cross_check,
     exposure_comparison,
     metamer_diagnosis,
@@ -28,7 +29,6 @@ from twin.dome_study import (
     schedules,
     single_image,
 )
-from twin.texture_truth import texture_truth
 
 TEXELS = 32
 LED = 40  # polar 26 degrees, away from the spectral camera's mirror direction
@@ -55,7 +55,7 @@ def test_sensitivity_is_the_white_rate_over_the_led(setup):
     the model's (electrons per unit LED intensity), up to the curve's unit."""
     _, white_rates = setup.cameras.white_rates()
     from twin.components.targets import zenith_white_reflectance
-    from twin.dome_setup import BAND_GRID
+    from twin.dome.setup import BAND_GRID
 
     model = white_rates / (setup.led_per_band * zenith_white_reflectance(BAND_GRID).values)
     ratio = setup.spectral.sensitivity / model
@@ -118,7 +118,7 @@ def test_capture_needs_a_band_list_per_image(setup):
         simulate_capture(setup, truth, light, [[0], [1]], np.random.default_rng(0))
 
 
-# -- the chapter 10 experiments (twin.dome_study) ------------------------------------------------
+# -- the chapter 10 experiments (twin.studies.dome) ------------------------------------------------
 
 
 def test_schedules_for_the_thesis_parameters(setup):

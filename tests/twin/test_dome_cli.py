@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from recon.dome_schedule import THESIS_RGB_EXPOSURES_S
-from twin.cli import app
+from recon.scheduling.dome_schedule import THESIS_RGB_EXPOSURES_S
+from twin.cli.app import app
 
 FIGURES = (
     "fig10_5_plan.png",

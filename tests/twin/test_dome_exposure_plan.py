@@ -11,7 +11,8 @@ The thesis gives no numbers for Figure 10.5, so :math:`t_{base}` is set from wha
 implies about the longest band: with 10 images at +61 % an image lasts 1.61 x 3.402 s = 5.48 s
 on average, and an image cannot be shorter than its longest band, while a packing whose images
 are bounded by the longest band (how 8 images come out as the fewest, see
-``recon.dome_schedule.fewest_images``) cannot average more. So the longest band is set to 5.48 s.
+``recon.scheduling.dome_schedule.fewest_images``) cannot average more. So the longest band is set
+to 5.48 s.
 """
 
 from __future__ import annotations
@@ -22,7 +23,8 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from recon.dome_schedule import (
+from recon.errors import SpectwinInputError
+from recon.scheduling.dome_schedule import (
     FILTER_SIZE_PER_SIGMA,
     THESIS_RGB_EXPOSURES_S,
     fewest_images,
@@ -30,12 +32,11 @@ from recon.dome_schedule import (
     schedule_bands,
     spectral_exposures,
 )
-from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra
 from twin.components import FINE_GRID, LiquidCrystalTunableFilter, PhosphorWhiteLED
-from twin.rig_config import load_rig
-from twin.sensor import Sensor
-from twin.white_reference import white_reference_rates
+from twin.rigs.rig_config import load_rig
+from twin.sensor.model import Sensor
+from twin.sensor.white_reference import white_reference_rates
 
 BAND_CENTRES_NM = np.arange(410.0, 701.0, 10.0)
 RGB_S = sum(THESIS_RGB_EXPOSURES_S)

@@ -5,10 +5,10 @@ import pytest
 
 from recon.errors import SpectwinInputError
 from recon.spectra import DEFAULT_GRID
-from twin.envmap_capture import capture_mirror_sphere, unwrap_mirror_sphere
-from twin.hemisphere import angle_between_deg, direction
-from twin.rig_scene import PinholeCamera
-from twin.spectral_envmap import SpectralMap, spectral_envmap
+from twin.render.plugins.spectral_envmap import SpectralMap, spectral_envmap
+from twin.render.scene import PinholeCamera
+from twin.rigs.hemisphere import angle_between_deg, direction
+from twin.validate.envmap_capture import capture_mirror_sphere, unwrap_mirror_sphere
 
 pytestmark = pytest.mark.render
 

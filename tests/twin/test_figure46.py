@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 
 from recon.spectra import DEFAULT_GRID
-from twin.btf_bsdf import product_table
-from twin.figure46 import render_figure46, write_figure46
-from twin.hemisphere import direction, sattler_directions
 from twin.materials import load_material
-from twin.truth import truth_btf
+from twin.render.plugins.btf_bsdf import product_table
+from twin.render.truth import truth_btf
+from twin.rigs.hemisphere import direction, sattler_directions
+from twin.validate.figure46 import render_figure46, write_figure46
 
 pytestmark = pytest.mark.render
 

@@ -13,8 +13,8 @@ from twin.components import (
     irradiance_at,
     zenith_white_reflectance,
 )
-from twin.flat_target import analytic_band_radiance, patch_means, render_flat_target
-from twin.variant import activate
+from twin.render.flat_target import analytic_band_radiance, patch_means, render_flat_target
+from twin.render.variant import activate
 
 pytestmark = pytest.mark.render
 

@@ -1,4 +1,5 @@
-"""Rendering per light group with the lamp spectrum in the film (twin.light_groups) gives the same
+"""Rendering per light group with the lamp spectrum in the film (twin.render.light_groups) gives
+the same
 image as emitters with their own spectra, with far less band noise under fluorescent lines."""
 
 import numpy as np
@@ -6,11 +7,11 @@ import pytest
 
 from recon.errors import SpectwinInputError
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid
-from twin.figure46 import room_entries, room_lights
-from twin.light_groups import lamp_weighted_channels, render_lit
-from twin.mitsuba_spectra import irregular_spectrum
-from twin.rig_scene import PinholeCamera
-from twin.truth import band_passbands
+from twin.render.light_groups import lamp_weighted_channels, render_lit
+from twin.render.scene import PinholeCamera
+from twin.render.spectra import irregular_spectrum
+from twin.render.truth import band_passbands
+from twin.validate.figure46 import room_entries, room_lights
 
 pytestmark = pytest.mark.render
 

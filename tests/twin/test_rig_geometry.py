@@ -5,11 +5,11 @@ import pytest
 import yaml
 
 from recon.errors import SpectwinInputError
-from twin.capture_time import band_exposures_s, estimate_gonio, move_seconds, order_pairs
-from twin.dome_geometry import dome_geometry, to_sample_frame
-from twin.gonio_kinematics import forward_directions, perturbed_pose, solve_pairs
-from twin.hemisphere import SATTLER_RINGS, angle_between_deg, sattler_directions, spherical_deg
-from twin.rig_config import RIG_DIR, load_rig
+from twin.gonio.capture_time import band_exposures_s, estimate_gonio, move_seconds, order_pairs
+from twin.rigs.dome_geometry import dome_geometry, to_sample_frame
+from twin.rigs.gonio_kinematics import forward_directions, perturbed_pose, solve_pairs
+from twin.rigs.hemisphere import SATTLER_RINGS, angle_between_deg, sattler_directions, spherical_deg
+from twin.rigs.rig_config import RIG_DIR, load_rig
 
 
 @pytest.fixture(scope="module")

@@ -7,9 +7,8 @@ import pytest
 
 from recon.metamers import camera_signal
 from recon.metrics import relative_error
-from recon.registration import register_frame
+from recon.registration.border import register_frame
 from recon.spectra import DEFAULT_GRID, resample
-from twin.calibration_targets import colorchecker_chart, esser_chart, zenith_white_target
 from twin.components import (
     FINE_GRID,
     LiquidCrystalTunableFilter,
@@ -17,16 +16,17 @@ from twin.components import (
     QTHLamp,
     zenith_white_reflectance,
 )
-from twin.gonio_kinematics import perturbed_pose, solve_pairs
-from twin.gonio_render import gonio_camera, gonio_part_rates, pose_matrix
-from twin.hemisphere import direction
+from twin.gonio.render import gonio_camera, gonio_part_rates, pose_matrix
 from twin.materials import MATERIAL_GRID, Material, load_material
+from twin.materials.calibration_targets import colorchecker_chart, esser_chart, zenith_white_target
 from twin.materials.geometry import box
-from twin.rig_config import load_rig
-from twin.sample_holder import registration_corners
-from twin.sensor import Sensor
-from twin.surfaces import SurfacePart
-from twin.truth import truth_btf, truth_camera_signal
+from twin.materials.sample_holder import registration_corners
+from twin.materials.surfaces import SurfacePart
+from twin.render.truth import truth_btf, truth_camera_signal
+from twin.rigs.gonio_kinematics import perturbed_pose, solve_pairs
+from twin.rigs.hemisphere import direction
+from twin.rigs.rig_config import load_rig
+from twin.sensor.model import Sensor
 
 pytestmark = pytest.mark.render
 

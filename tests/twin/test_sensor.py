@@ -1,4 +1,4 @@
-"""Sensor model (twin.sensor): EMVA 1288 photon transfer with the emva1288 package as peer,
+"""Sensor model (twin.sensor.model): EMVA 1288 photon transfer with the emva1288 package as peer,
 dark frames, lamp flicker, Bayer mosaic, OECF, determinism and bad input."""
 
 import math
@@ -10,13 +10,13 @@ from emva1288.process.results import Results1288
 from emva1288.process.routines import get_int_imgs
 from scipy import constants
 
-from recon.demosaic import demosaic
 from recon.errors import SpectwinInputError
+from recon.radiometric.demosaic import demosaic
 from recon.spectra import SampledSpectra, WavelengthGrid
-from twin.camera_config import load_camera_config
 from twin.components import FINE_GRID, HMILamp, LiquidCrystalTunableFilter
-from twin.sensor import Sensor, bayer_channel_index
-from twin.white_reference import white_reference_rates
+from twin.rigs.camera_config import load_camera_config
+from twin.sensor.model import Sensor, bayer_channel_index
+from twin.sensor.white_reference import white_reference_rates
 
 WAVELENGTH_NM = 550.0
 VS10_BANDS = LiquidCrystalTunableFilter.varispec("VS-10").transmission(FINE_GRID)

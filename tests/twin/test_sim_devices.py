@@ -1,4 +1,4 @@
-"""Simulated devices and their signals (twin.sim_devices, twin.rig_signals)."""
+"""Simulated devices and their signals (twin.devices.sim_devices, twin.gonio.signals)."""
 
 import numpy as np
 import pytest
@@ -6,10 +6,10 @@ import pytest
 from hwbridge.errors import BridgeInputError
 from hwbridge.protocols import Camera, Positioner, TunableFilter
 from twin.components import HMILamp, QTHLamp
-from twin.rig_signals import WhiteReferenceSignal
-from twin.sensor import Sensor
-from twin.sim_devices import SimCamera, SimPositioner, SimTunableFilter, VirtualRig
-from twin.sim_session import run_demo_session
+from twin.devices.sim_devices import SimCamera, SimPositioner, SimTunableFilter, VirtualRig
+from twin.gonio.signals import WhiteReferenceSignal
+from twin.gonio.sim_session import run_demo_session
+from twin.sensor.model import Sensor
 
 
 def test_white_reference_signal_carries_the_hmi_flicker():
@@ -51,7 +51,7 @@ def test_simulated_devices_follow_the_protocols_and_share_state():
 
 @pytest.mark.render
 def test_rendered_session_renders_each_view_once_and_completes(tmp_path, monkeypatch):
-    from twin import rig_signals
+    from twin.gonio import signals as rig_signals
 
     rendered_poses = []
     render = rig_signals.gonio_part_rates
@@ -76,7 +76,7 @@ def test_rendered_session_renders_each_view_once_and_completes(tmp_path, monkeyp
 def test_lamp_leds_and_monitor_follow_the_protocols(tmp_path):
     from hwbridge.protocols import Lamp, LedArray, Spectrometer
     from recon.spectra import DEFAULT_GRID
-    from twin.sim_devices import SimLamp, SimLedArray, SimSpectrometer
+    from twin.devices.sim_devices import SimLamp, SimLedArray, SimSpectrometer
 
     rig = VirtualRig()
     lamp, leds = SimLamp(rig), SimLedArray(rig, 198)
@@ -112,7 +112,7 @@ def test_sessions_record_the_lamp_monitor_with_lit_frames(tmp_path):
 def test_sessions_switch_the_step_led_on_alone(tmp_path):
     from hwbridge.plans import chart_photographs, plan_start_times_s
     from hwbridge.session import run_session
-    from twin.sim_devices import SimLedArray
+    from twin.devices.sim_devices import SimLedArray
 
     plan = chart_photographs("k4", [0.05], [3, 7, -2])
     rig = VirtualRig(band_nm=550.0)

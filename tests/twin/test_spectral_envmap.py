@@ -6,10 +6,10 @@ import pytest
 from recon.errors import SpectwinInputError
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid
 from twin.components import FINE_GRID
-from twin.mitsuba_spectra import irregular_spectrum, specfilm
-from twin.spectral_envmap import SpectralMap, spectral_envmap
-from twin.truth import band_passbands
-from twin.variant import activate
+from twin.render.plugins.spectral_envmap import SpectralMap, spectral_envmap
+from twin.render.spectra import irregular_spectrum, specfilm
+from twin.render.truth import band_passbands
+from twin.render.variant import activate
 
 pytestmark = pytest.mark.render
 ALBEDO = 0.5

@@ -9,14 +9,14 @@ import pytest
 
 from recon.metrics import relative_error
 from twin.materials import load_material
-from twin.spectralization_study import (
+from twin.render.truth import truth_btf
+from twin.studies.spectralization import (
     _LIGHT,
     _VIEW,
     run_study,
     study_response,
     twin_texture,
 )
-from twin.truth import truth_btf
 
 pytestmark = pytest.mark.render
 

@@ -3,14 +3,14 @@
 import numpy as np
 import pytest
 
-from recon.btf_store import BTFStore
+from recon.btf.store import BTFStore
 from recon.spectra import DEFAULT_GRID
-from twin.gonio_evaluation import instrument_passbands
-from twin.hemisphere import sattler_directions
 from twin.materials import load_material
-from twin.rig_config import load_rig
-from twin.spectrophotometer import compare_45_0, field_spots, write_45_0_figure
-from twin.truth import truth_btf
+from twin.render.truth import truth_btf
+from twin.rigs.hemisphere import sattler_directions
+from twin.rigs.rig_config import load_rig
+from twin.validate.gonio_evaluation import instrument_passbands
+from twin.validate.spectrophotometer import compare_45_0, field_spots, write_45_0_figure
 
 pytestmark = pytest.mark.render
 

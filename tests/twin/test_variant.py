@@ -1,9 +1,9 @@
-"""Choice of the Mitsuba variant (twin.variant) for the LLVM versions a machine may have."""
+"""Choice of the Mitsuba variant (twin.render.variant) for the LLVM versions a machine may have."""
 
 import pytest
 
 from recon.errors import SpectwinInputError
-from twin.variant import DEFAULT_VARIANT, FALLBACK_VARIANT, choose_variant, llvm_version
+from twin.render.variant import DEFAULT_VARIANT, FALLBACK_VARIANT, choose_variant, llvm_version
 
 
 @pytest.mark.parametrize(

@@ -15,8 +15,8 @@ from recon.spectra import SampledSpectra
 from twin.materials.builders import build_colorchecker16, build_fabric, build_lego, build_wallpaper
 from twin.materials.config import MaterialConfig
 from twin.materials.spectra import MATERIAL_GRID
-from twin.surfaces import SurfacePart
-from twin.yaml_config import (
+from twin.materials.surfaces import SurfacePart
+from twin.rigs.yaml_config import (
     read_yaml_mapping,
     resolve_scene_file,
     scene_folder,

@@ -16,7 +16,7 @@ from twin.materials.config import (
 )
 from twin.materials.geometry import box, height_field, tube
 from twin.materials.spectra import chart_colour, metamer_of, on_fine_grid
-from twin.surfaces import SurfacePart
+from twin.materials.surfaces import SurfacePart
 
 __all__ = ["build_colorchecker16", "build_fabric", "build_lego", "build_wallpaper"]
 

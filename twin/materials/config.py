@@ -6,7 +6,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from twin.yaml_config import Positive, StrictModel
+from twin.rigs.yaml_config import Positive, StrictModel
 
 __all__ = [
     "ColorChecker16Config",

@@ -11,7 +11,7 @@ import numpy as np
 from recon.metamers import design_metamer
 from recon.spectra import SampledSpectra, WavelengthGrid, resample
 from twin.components import FINE_GRID, PhosphorWhiteLED, colorchecker_reflectances
-from twin.sensor import Sensor
+from twin.sensor.model import Sensor
 
 __all__ = ["MATERIAL_GRID", "chart_colour", "dome_camera_and_light", "metamer_of", "on_fine_grid"]
 

@@ -1,0 +1,644 @@
+"""The BTF store: a spectral bidirectional texture function in Zarr v3, assembled pair by pair.
+
+A measured spectral BTF (thesis 4.1.2) is one registered, radiometrically and spectrally
+calibrated texture per direction pair: reflectance in 1/sr on a wavelength grid. Calibration
+produces the textures one direction pair at a time, so the store is created empty for a known
+shape, grid and set of directions and filled incrementally; a flag per pair records what has been
+written, and the store calls itself complete only when every pair is.
+
+Layout of ``<name>.btf.zarr`` (ARCHITECTURE.md, "Stores"):
+
+- attributes: ``format`` (``"spectwin.btf"``), ``format_version``, ``units`` (``"1/sr"``),
+  ``material``, ``source_capture`` (path of the capture store it was calibrated from, or null),
+  ``calibration`` (a JSON summary of the calibration), ``complete``;
+- ``reflectance``: float32 ``(n_pairs, H, W, K)``, one chunk per direction pair, band axis last,
+  texel ``(y, x)`` row-major; unwritten pairs hold NaN;
+- ``light_dirs``, ``view_dirs``: float64 ``(n_pairs, 3)`` unit vectors in the sample frame
+  (z = surface normal);
+- ``wavelengths``: float64 ``(K,)`` band centres in nm;
+- ``written``: bool ``(n_pairs,)``, one chunk per pair, set only after the pair's texture is
+  written;
+- ``pca/``: optional compressed form (thesis 4.1.2; written by :mod:`recon.btf.compression`),
+  with its own ``complete`` attribute set after all of its arrays.
+
+Conventions shared with the capture store (``hwbridge.store``): a store is never overwritten by
+:meth:`BTFStore.create`; data are written before the flag that declares them; one writer owns each
+chunk (a worker writes the pairs it owns, and the coordinator of a distributed run sets
+``complete`` when the workers are done: :meth:`BTFStore.refresh_complete`), and rewriting a pair
+first clears its flag, so an interrupted rewrite leaves the pair pending, never silently corrupt.
+
+References
+----------
+- The thesis, section 4.1.2 (texture extraction, Eq. 3.6, 6561 textures of 800 x 800 texels and
+  33 bands, 516 GB).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator, Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import zarr
+
+from recon.errors import SpectwinDataError, SpectwinInputError
+from recon.spectra import WavelengthGrid
+
+__all__ = ["BTF_FORMAT", "BTF_FORMAT_VERSION", "COMPRESSED_GROUP", "BTFStore", "write_btf"]
+
+BTF_FORMAT = "spectwin.btf"
+BTF_FORMAT_VERSION = 1
+COMPRESSED_GROUP = "pca"
+"""Name of the group that holds the compressed form (ARCHITECTURE.md: ``pca/``)."""
+
+_UNIT_TOLERANCE = 1e-6
+_ARRAYS = ("reflectance", "light_dirs", "view_dirs", "wavelengths", "written")
+
+
+def _check_directions(name: str, directions: np.ndarray, n_pairs: int | None) -> np.ndarray:
+    """``directions`` as float64 ``(n, 3)`` finite unit vectors in the upper hemisphere."""
+    directions = np.asarray(directions, dtype=np.float64)
+    if directions.ndim != 2 or directions.shape[1] != 3 or directions.shape[0] == 0:
+        raise SpectwinInputError(
+            f"{name}: expected an (n_pairs, 3) array of unit vectors, got shape {directions.shape}"
+        )
+    if n_pairs is not None and directions.shape[0] != n_pairs:
+        raise SpectwinInputError(
+            f"{name}: expected {n_pairs} directions (one per pair), got {directions.shape[0]}"
+        )
+    if not np.all(np.isfinite(directions)):
+        raise SpectwinInputError(f"{name}: expected finite unit vectors, found NaN or infinity")
+    norms = np.linalg.norm(directions, axis=1)
+    bad = np.flatnonzero(np.abs(norms - 1.0) > _UNIT_TOLERANCE)
+    if bad.size:
+        raise SpectwinInputError(
+            f"{name}: expected unit vectors (|d| = 1 within {_UNIT_TOLERANCE:g}), but pair "
+            f"{bad[0]} has |d| = {norms[bad[0]]:.9g} ({bad.size} such pairs)"
+        )
+    below = np.flatnonzero(directions[:, 2] < 0)
+    if below.size:
+        raise SpectwinInputError(
+            f"{name}: expected directions above the sample (z >= 0 in the sample frame), but "
+            f"pair {below[0]} has z = {directions[below[0], 2]:.6g}"
+        )
+    return directions
+
+
+def _texel_shape(texels: int | tuple[int, int]) -> tuple[int, int]:
+    shape = (texels, texels) if np.ndim(texels) == 0 else tuple(texels)
+    if len(shape) != 2 or not all(
+        isinstance(n, int | np.integer) and not isinstance(n, bool) and n > 0 for n in shape
+    ):
+        raise SpectwinInputError(
+            f"texels: expected a positive int or (height, width) of positive ints, got {texels!r}"
+        )
+    return int(shape[0]), int(shape[1])
+
+
+def _json_attr(name: str, value: Any) -> Any:
+    try:
+        return json.loads(json.dumps(value))
+    except (TypeError, ValueError) as error:
+        raise SpectwinInputError(
+            f"{name}: expected JSON-serialisable data (numbers, strings, lists, dicts), got "
+            f"{type(value).__name__}: {error}"
+        ) from None
+
+
+class BTFStore:
+    """A spectral BTF store on disk; create it with :meth:`create`, reopen it with :meth:`open`.
+
+    Opening reads only the small arrays (directions, wavelengths, flags); reflectance is read
+    lazily, one direction pair (one chunk) at a time or as a whole.
+
+    Examples
+    --------
+    >>> store = BTFStore.create(  # doctest: +SKIP
+    ...     "wallpaper.btf.zarr", light_dirs=lights, view_dirs=views, texels=64,
+    ...     grid=DEFAULT_GRID, material="wallpaper")
+    >>> for pair, texture in enumerate(textures):  # as calibration proceeds  # doctest: +SKIP
+    ...     store.write_pair(pair, texture, grid=DEFAULT_GRID)
+    >>> store.complete  # doctest: +SKIP
+    True
+    """
+
+    def __init__(self, group: zarr.Group, path: Path, *, writable: bool):
+        self._group = group
+        self.path = path
+        self.writable = writable
+        attrs = group.attrs
+        if attrs.get("format") != BTF_FORMAT:
+            raise SpectwinInputError(
+                f"{path}: not a BTF store (format attribute {attrs.get('format')!r}, expected "
+                f"{BTF_FORMAT!r})"
+            )
+        if attrs.get("format_version") != BTF_FORMAT_VERSION:
+            raise SpectwinInputError(
+                f"{path}: BTF store format version {attrs.get('format_version')!r} is not "
+                f"supported (expected {BTF_FORMAT_VERSION})"
+            )
+        missing = [name for name in _ARRAYS if name not in group]
+        if missing:
+            raise SpectwinInputError(
+                f"{path}: BTF store lacks arrays {missing} (its creation was interrupted?)"
+            )
+        self.grid = WavelengthGrid(group["wavelengths"][:])
+        self.light_dirs = group["light_dirs"][:]
+        self.view_dirs = group["view_dirs"][:]
+        for array in (self.light_dirs, self.view_dirs):
+            array.setflags(write=False)
+        # Flags known to be set (a cache, refreshed lazily: other processes may write pairs).
+        self._known_written = group["written"][:]
+        shape = group["reflectance"].shape
+        n_pairs = self.light_dirs.shape[0]
+        if (
+            len(shape) != 4
+            or shape[0] != n_pairs
+            or shape[3] != self.grid.size
+            or self.view_dirs.shape != (n_pairs, 3)
+            or group["written"].shape != (n_pairs,)
+        ):
+            raise SpectwinInputError(
+                f"{path}: inconsistent BTF store: reflectance {shape}, light_dirs "
+                f"{self.light_dirs.shape}, view_dirs {self.view_dirs.shape}, "
+                f"{self.grid.size} wavelengths, written {group['written'].shape}"
+            )
+
+    # -- creating and opening ----------------------------------------------------------------
+
+    @classmethod
+    def create(
+        cls,
+        path: str | Path,
+        *,
+        light_dirs: np.ndarray,
+        view_dirs: np.ndarray,
+        texels: int | tuple[int, int],
+        grid: WavelengthGrid,
+        material: str,
+        source_capture: str | Path | None = None,
+        calibration: Mapping[str, Any] | None = None,
+    ) -> BTFStore:
+        """A new, empty store (no pair written); never overwrites an existing path.
+
+        Parameters
+        ----------
+        path
+            Directory of the store, by convention ``<name>.btf.zarr``.
+        light_dirs, view_dirs
+            ``(n_pairs, 3)`` unit vectors in the sample frame, z >= 0; pair ``i`` is lit from
+            ``light_dirs[i]`` and seen from ``view_dirs[i]``.
+        texels
+            Texture size: ``n`` for ``n x n`` or ``(height, width)``.
+        grid
+            Band centres of the reflectance's last axis.
+        material
+            Name of the material sample.
+        source_capture
+            Path of the capture store the BTF is calibrated from (provenance), if any.
+        calibration
+            JSON-serialisable summary of the calibration (white reference, exposure plan, ...).
+        """
+        path = Path(path)
+        if path.exists():
+            raise SpectwinInputError(
+                f"{path} exists: continue it (spectwin process --resume) or choose another "
+                "name (nothing was overwritten)"
+            )
+        light_dirs = _check_directions("light_dirs", light_dirs, None)
+        view_dirs = _check_directions("view_dirs", view_dirs, light_dirs.shape[0])
+        height, width = _texel_shape(texels)
+        if not isinstance(grid, WavelengthGrid):
+            raise SpectwinInputError(f"grid: expected a WavelengthGrid, got {type(grid).__name__}")
+        if not isinstance(material, str) or not material.strip():
+            raise SpectwinInputError(f"material: expected a non-empty name, got {material!r}")
+        calibration = _json_attr("calibration", dict(calibration or {}))
+        n_pairs, n_bands = light_dirs.shape[0], grid.size
+
+        group = zarr.open_group(str(path), mode="w-", zarr_format=3)
+        group.attrs.update(
+            {
+                "format": BTF_FORMAT,
+                "format_version": BTF_FORMAT_VERSION,
+                "units": "1/sr",
+                "material": material,
+                "source_capture": None if source_capture is None else str(source_capture),
+                "calibration": calibration,
+                "complete": False,
+            }
+        )
+        group.create_array(
+            "reflectance",
+            shape=(n_pairs, height, width, n_bands),
+            chunks=(1, height, width, n_bands),
+            dtype="float32",
+            fill_value=np.nan,
+            attributes={"units": "1/sr", "axes": ["pair", "y", "x", "band"]},
+        )
+        for name, directions in (("light_dirs", light_dirs), ("view_dirs", view_dirs)):
+            array = group.create_array(
+                name, shape=(n_pairs, 3), chunks=(n_pairs, 3), dtype="float64"
+            )
+            array[:] = directions
+        wavelengths = group.create_array(
+            "wavelengths",
+            shape=(n_bands,),
+            chunks=(n_bands,),
+            dtype="float64",
+            attributes={"units": "nm"},
+        )
+        wavelengths[:] = grid.wavelengths_nm
+        group.create_array(
+            "corners_xy",
+            shape=(n_pairs, 4, 2),
+            chunks=(1, 4, 2),
+            dtype="float64",
+            fill_value=np.nan,
+            attributes={"units": "px", "meaning": "registered image corners of the texture square"},
+        )
+        # Created last: a store whose creation was interrupted lacks it and does not open.
+        group.create_array("written", shape=(n_pairs,), chunks=(1,), dtype="bool", fill_value=False)
+        return cls(group, path, writable=True)
+
+    @classmethod
+    def open(cls, path: str | Path, *, writable: bool = False) -> BTFStore:
+        """Open an existing store, read-only unless ``writable`` (to resume writing pairs)."""
+        path = Path(path)
+        if not path.exists():
+            raise SpectwinInputError(
+                f"{path} does not exist: expected a BTF store made by spectwin process"
+            )
+        if not path.is_dir():
+            raise SpectwinInputError(
+                f"{path} is a file: expected a BTF store (a folder made by spectwin process)"
+            )
+        try:
+            group = zarr.open_group(str(path), mode="r+" if writable else "r", zarr_format=3)
+        except (OSError, ValueError, TypeError) as error:
+            raise SpectwinInputError(
+                f"{path}: not a BTF store made by spectwin process (not a Zarr v3 group: {error})"
+            ) from None
+        try:
+            return cls(group, path, writable=writable)
+        except json.JSONDecodeError as error:
+            raise SpectwinDataError(
+                f"{path}: damaged store: unreadable metadata of an array ({error}); process the "
+                "capture again"
+            ) from error
+
+    # -- description ---------------------------------------------------------------------------
+
+    @property
+    def shape(self) -> tuple[int, int, int, int]:
+        """``(n_pairs, H, W, K)``."""
+        return tuple(self._group["reflectance"].shape)
+
+    @property
+    def n_pairs(self) -> int:
+        return self.shape[0]
+
+    @property
+    def texels(self) -> tuple[int, int]:
+        """``(H, W)``."""
+        return self.shape[1], self.shape[2]
+
+    @property
+    def material(self) -> str:
+        return str(self._group.attrs["material"])
+
+    @property
+    def attrs(self) -> dict[str, Any]:
+        """All attributes (provenance included) as a plain dict, as now on disk."""
+        return dict(self._fresh_attrs())
+
+    @property
+    def complete(self) -> bool:
+        """True once every pair is written (and not being rewritten), as now on disk."""
+        return bool(self._fresh_attrs()["complete"])
+
+    def written(self) -> np.ndarray:
+        """One bool per pair: its texture is written."""
+        self._known_written = self._group["written"][:]
+        return self._known_written.copy()
+
+    def pending_pairs(self) -> list[int]:
+        """Indices of the pairs not yet written, ascending."""
+        return np.flatnonzero(~self.written()).tolist()
+
+    def __repr__(self) -> str:
+        state = "complete" if self.complete else f"{len(self.pending_pairs())} pairs pending"
+        return (
+            f"BTFStore({str(self.path)!r}, material={self.material!r}, shape={self.shape}, "
+            f"grid={self.grid.describe()}, {state})"
+        )
+
+    # -- writing -------------------------------------------------------------------------------
+
+    def write_pair(
+        self,
+        pair: int,
+        reflectance: np.ndarray,
+        *,
+        grid: WavelengthGrid | None = None,
+        light_dir: np.ndarray | None = None,
+        view_dir: np.ndarray | None = None,
+        corners_xy: np.ndarray | None = None,
+        check_complete: bool = True,
+    ) -> None:
+        """Write the texture of direction ``pair``, then flag it written.
+
+        Idempotent for a redone pair. When the last pending pair is written the store is marked
+        complete. Rewriting a pair of a complete store first marks it incomplete, and drops a
+        compressed form (which no longer matches the reflectance).
+
+        Parameters
+        ----------
+        pair
+            Index in ``0 .. n_pairs - 1``.
+        reflectance
+            ``(H, W, K)`` finite reflectance in 1/sr (stored as float32).
+        grid
+            The grid of ``reflectance``'s band axis; when given it must equal the store's.
+        light_dir, view_dir
+            The pair's directions as the caller knows them; when given they must match the
+            store's (within 1e-6), a guard against writing a texture into the wrong slot.
+        corners_xy
+            ``(4, 2)`` image corners ``(x, y)`` of the texture square in the raw frames, when the
+            texture was registered (thesis 4.1.2); kept for checks, see :meth:`corners_xy`.
+        check_complete
+            ``False`` for a worker of a distributed run: it owns only its pairs' chunks and
+            leaves ``complete`` to the coordinator (:meth:`refresh_complete`).
+        """
+        self._require_writable()
+        pair = self._check_pair(pair)
+        if grid is not None and grid != self.grid:
+            raise SpectwinInputError(
+                f"grid: the texture is on {grid.describe()}, the store on {self.grid.describe()}; "
+                "resample explicitly (recon.spectra.resample)"
+            )
+        for name, given, stored in (
+            ("light_dir", light_dir, self.light_dirs),
+            ("view_dir", view_dir, self.view_dirs),
+        ):
+            if given is not None and not np.allclose(
+                np.asarray(given, np.float64), stored[pair], rtol=0, atol=_UNIT_TOLERANCE
+            ):
+                raise SpectwinInputError(
+                    f"{name}: pair {pair} of the store has {name} {stored[pair].tolist()}, got "
+                    f"{np.asarray(given).tolist()}"
+                )
+        values = np.asarray(reflectance)
+        expected = self.shape[1:]
+        if values.shape != expected:
+            raise SpectwinInputError(
+                f"reflectance: expected a texture of shape (H, W, K) = {expected}, got "
+                f"{values.shape}"
+            )
+        if not np.issubdtype(values.dtype, np.floating) and not np.issubdtype(
+            values.dtype, np.integer
+        ):
+            raise SpectwinInputError(f"reflectance: expected real numbers, got {values.dtype}")
+        with np.errstate(over="ignore"):
+            values = values.astype(np.float32)
+        if not np.all(np.isfinite(values)):
+            bad = np.argwhere(~np.isfinite(values))[0].tolist()
+            raise SpectwinInputError(
+                f"reflectance: expected finite values in 1/sr, found NaN or infinity (or a value "
+                f"beyond float32) at (y, x, band) = {tuple(bad)} of pair {pair}"
+            )
+        written = self._group["written"]
+        if written[pair]:
+            self._set_complete(False)
+            written[pair] = False
+            self._known_written[pair] = False
+        self._drop_compressed()
+        self._group["reflectance"][pair] = values
+        if corners_xy is not None:
+            corners = np.asarray(corners_xy, dtype=np.float64)
+            if corners.shape != (4, 2) or not np.all(np.isfinite(corners)):
+                raise SpectwinInputError(
+                    f"corners_xy: expected finite (4, 2) image corners, got shape {corners.shape}"
+                )
+            self._group["corners_xy"][pair] = corners
+        written[pair] = True
+        self._known_written[pair] = True
+        if check_complete and self._all_written():
+            self._set_complete(True)
+
+    def refresh_complete(self) -> bool:
+        """Set ``complete`` from the flags on disk (after the workers of a distributed run are
+        done) and return it."""
+        self._require_writable()
+        complete = not self.pending_pairs()
+        self._set_complete(complete)
+        return complete
+
+    def set_attribute(self, name: str, value: Any) -> None:
+        """Record a JSON-serialisable attribute (e.g. processing facts) on the store."""
+        self._require_writable()
+        self._group.attrs[name] = _json_attr(name, value)
+
+    def corners_xy(self) -> np.ndarray:
+        """``(n_pairs, 4, 2)`` registered image corners per pair (NaN where none were given)."""
+        if "corners_xy" not in self._group:
+            return np.full((self.n_pairs, 4, 2), np.nan)
+        return self._group["corners_xy"][:]
+
+    def mark_complete(self) -> None:
+        """Recompute the complete flag from the pair flags (after writers in other processes);
+        raise if any pair is still pending."""
+        self._require_writable()
+        pending = self.pending_pairs()
+        if pending:
+            self._set_complete(False)
+            raise SpectwinInputError(
+                f"{self.path}: cannot mark complete, {len(pending)} pairs pending "
+                f"(first {pending[:5]})"
+            )
+        self._set_complete(True)
+
+    # -- reading -------------------------------------------------------------------------------
+
+    def read(self, *, allow_incomplete: bool = False) -> np.ndarray:
+        """The whole reflectance ``(n_pairs, H, W, K)`` float32 in 1/sr.
+
+        An incomplete store raises unless ``allow_incomplete``; then unwritten pairs are NaN.
+        """
+        self._require_complete(allow_incomplete, "read")
+        return self._decoded(slice(None))
+
+    def read_pair(self, pair: int, *, allow_incomplete: bool = False) -> np.ndarray:
+        """The texture ``(H, W, K)`` of one pair (one chunk read).
+
+        A pair that is not written always raises; a written pair of an incomplete store is
+        returned only with ``allow_incomplete``.
+        """
+        pair = self._check_pair(pair)
+        self._require_complete(allow_incomplete, f"read pair {pair} of")
+        if not self._group["written"][pair]:
+            raise SpectwinInputError(f"{self.path}: pair {pair} is not written yet")
+        return self._decoded(pair)
+
+    def iter_pairs(self, *, allow_incomplete: bool = False) -> Iterator[tuple[int, np.ndarray]]:
+        """``(pair, texture)`` for every written pair, one chunk in memory at a time."""
+        self._require_complete(allow_incomplete, "iterate over")
+        for pair in np.flatnonzero(self.written()):
+            yield int(pair), self._group["reflectance"][int(pair)]
+
+    def reflectance(self, *, allow_incomplete: bool = False) -> zarr.Array:
+        """The lazy Zarr array ``(n_pairs, H, W, K)``: slicing it reads only the chunks needed
+        (e.g. ``store.reflectance()[:, y, x]`` is the BRDF of texel ``(y, x)``)."""
+        self._require_complete(allow_incomplete, "read")
+        return self._group["reflectance"]
+
+    # -- the compressed form (recon.btf.compression) -------------------------------------------
+
+    @property
+    def has_compressed(self) -> bool:
+        """True when a complete compressed form is stored."""
+        return (
+            COMPRESSED_GROUP in self._group
+            and self._group[COMPRESSED_GROUP].attrs.get("complete") is True
+        )
+
+    def write_compressed(self, arrays: Mapping[str, np.ndarray], attrs: Mapping[str, Any]) -> None:
+        """Replace the ``pca/`` group with ``arrays`` (names may contain ``/``) and ``attrs``.
+
+        The group's ``complete`` attribute turns true only after every array is written. The
+        store itself must be complete: a compressed form describes the finished BTF.
+        """
+        self._require_writable()
+        self._require_complete(False, "compress")
+        attrs = _json_attr("attrs", dict(attrs))
+        self._drop_compressed()
+        group = self._group.create_group(COMPRESSED_GROUP, attributes={"complete": False})
+        for name, values in arrays.items():
+            values = np.asarray(values)
+            array = group.create_array(
+                name, shape=values.shape, chunks=_compressed_chunks(values), dtype=values.dtype
+            )
+            array[...] = values
+        group.attrs.update({**attrs, "arrays": sorted(arrays), "complete": True})
+
+    def read_compressed(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """The arrays and attributes of the ``pca/`` group; raise if absent or incomplete."""
+        if COMPRESSED_GROUP not in self._group:
+            raise SpectwinInputError(f"{self.path}: no compressed form ({COMPRESSED_GROUP}/)")
+        group = self._group[COMPRESSED_GROUP]
+        attrs = dict(group.attrs)
+        if attrs.get("complete") is not True:
+            raise SpectwinInputError(
+                f"{self.path}: the compressed form ({COMPRESSED_GROUP}/) was not completely "
+                "written; compress again"
+            )
+        return {name: group[name][...] for name in attrs["arrays"]}, attrs
+
+    # -- helpers -------------------------------------------------------------------------------
+
+    def _check_pair(self, pair: int) -> int:
+        if isinstance(pair, bool) or not isinstance(pair, int | np.integer):
+            raise SpectwinInputError(f"pair: expected an integer index, got {pair!r}")
+        if not 0 <= pair < self.n_pairs:
+            raise SpectwinInputError(
+                f"pair: expected an index in 0..{self.n_pairs - 1}, got {pair}"
+            )
+        return int(pair)
+
+    def _decoded(self, pairs: int | slice) -> np.ndarray:
+        """Reflectance of ``pairs``; a chunk that cannot be decoded is a damaged store."""
+        try:
+            return self._group["reflectance"][pairs]
+        except RuntimeError as error:  # numcodecs' decompression errors
+            raise SpectwinDataError(
+                f"{self.path}: damaged store: a reflectance chunk cannot be decoded ({error}); "
+                "process the capture again"
+            ) from error
+
+    def _require_writable(self) -> None:
+        if not self.writable:
+            raise SpectwinInputError(
+                f"{self.path}: the store was opened read-only and cannot be written"
+            )
+
+    def _require_complete(self, allow_incomplete: bool, action: str) -> None:
+        if not allow_incomplete and not self.complete:
+            pending = self.pending_pairs()
+            raise SpectwinInputError(
+                f"{self.path}: cannot {action} an incomplete BTF store ({len(pending)} of "
+                f"{self.n_pairs} pairs pending, first {pending[:5]}); finish it with spectwin "
+                "process --resume"
+            )
+
+    def _all_written(self) -> bool:
+        """Whether every flag is set, reading only flags not known to be set and stopping at
+        the first unset one (cheap for a writer that goes in order, correct with several)."""
+        written = self._group["written"]
+        for pair in np.flatnonzero(~self._known_written):
+            if not written[int(pair)]:
+                return False
+            self._known_written[pair] = True
+        return True
+
+    def _fresh_attrs(self) -> Mapping[str, Any]:
+        """The group's attributes re-read from disk (another writer may have changed them)."""
+        return zarr.open_group(str(self.path), mode="r", zarr_format=3).attrs
+
+    def _set_complete(self, value: bool) -> None:
+        self._group.attrs["complete"] = bool(value)
+
+    def _drop_compressed(self) -> None:
+        if COMPRESSED_GROUP in self._group:
+            del self._group[COMPRESSED_GROUP]
+
+
+def _compressed_chunks(values: np.ndarray) -> tuple[int, ...]:
+    """Chunks of about 16 MiB along the first axis (whole array when small)."""
+    if values.ndim == 0:
+        return ()
+    row = max(1, int(np.prod(values.shape[1:], dtype=np.int64)) * values.dtype.itemsize)
+    rows = int(np.clip((16 << 20) // row, 1, max(1, values.shape[0])))
+    return (rows, *values.shape[1:])
+
+
+def write_btf(
+    path: str | Path,
+    reflectance: np.ndarray,
+    grid: WavelengthGrid,
+    *,
+    light_dirs: np.ndarray,
+    view_dirs: np.ndarray,
+    material: str,
+    source_capture: str | Path | None = None,
+    calibration: Mapping[str, Any] | None = None,
+) -> BTFStore:
+    """Create a store and write a whole ``(n_pairs, H, W, K)`` BTF into it, pair by pair."""
+    values = np.asarray(reflectance)
+    if values.ndim != 4:
+        raise SpectwinInputError(
+            f"reflectance: expected (n_pairs, H, W, K), got shape {values.shape}"
+        )
+    if values.shape[3] != getattr(grid, "size", None):
+        raise SpectwinInputError(
+            f"reflectance: its last axis ({values.shape[3]}) does not match the grid "
+            f"({grid.describe() if isinstance(grid, WavelengthGrid) else grid!r})"
+        )
+    if values.shape[0] != np.asarray(light_dirs).shape[0]:
+        raise SpectwinInputError(
+            f"reflectance: {values.shape[0]} pairs, but {np.asarray(light_dirs).shape[0]} "
+            "light directions"
+        )
+    store = BTFStore.create(
+        path,
+        light_dirs=light_dirs,
+        view_dirs=view_dirs,
+        texels=(values.shape[1], values.shape[2]),
+        grid=grid,
+        material=material,
+        source_capture=source_capture,
+        calibration=calibration,
+    )
+    for pair in range(values.shape[0]):
+        store.write_pair(pair, values[pair], grid=grid)
+    return store

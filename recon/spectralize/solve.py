@@ -1,0 +1,676 @@
+"""Spectralization: dense spectral images from dense RGB plus sparse or noisy spectral data.
+
+The unknown spectral image :math:`S` (``n`` pixels over one or several images, ``K`` bands)
+minimizes a linear least-squares energy (thesis Eq. 6.9, 10.1, 10.12)
+
+.. math::
+    E(S) = \\alpha\\, E_{data}(S) + \\beta \\sum_i \\lVert f_i S_i R_{cam} - f_i V_i \\rVert^2
+         + \\gamma \\sum_i \\sum_{j \\in N_i} \\lVert f_i S_i - f_j S_j \\rVert^2
+         + \\delta \\sum_i \\sum_{l<K} (f_i S_{i,l} - f_i S_{i,l+1})^2,
+
+solved for the scaled image :math:`X_i = f_i S_i` with :math:`f_i = (\\sum_c V_i^c)^{-p_{dyn}}`
+(Eq. 10.2; :math:`p_{dyn} = 0` gives Eq. 6.9/6.10). The data term is any mix of
+
+- point spectra (whisk-broom or push-broom pixels, Eq. 6.10): :class:`PointSpectra`;
+- noisy band images matched after a Gaussian filter (Eq. 10.1): :class:`BandImage`;
+- general device integrals :math:`\\sum_{i,l} w_{i,l,j} S_{i,l} = D_j` (Eq. 6.9):
+  :class:`DeviceIntegrals`.
+
+The neighbours :math:`N_i` come from :mod:`recon.spectralize.appearance`. The weights are
+normalized by
+the number of terms (Eq. 6.11, or Eq. 10.13 with the smoothness term), so the primed weights
+:class:`EnergyWeights` state the terms' relative importance (defaults
+:math:`\\alpha' = \\beta' = \\gamma' = 1`; :math:`\\delta' = 0.1` with band images, 0 otherwise).
+
+Solvers: ``"lsqr"`` and ``"lsmr"`` (scipy, matrix-free on the operator :math:`M_E` of Eq. 6.12,
+as in the thesis) for any energy; ``"multigrid"`` (:mod:`recon.spectralize.kronecker`) when the
+normal equations split as a Kronecker sum (point spectra, camera, prior and smoothness terms
+only), which is exact and far faster; ``"auto"`` picks ``"multigrid"`` where it applies.
+
+References
+----------
+- The thesis, chapter 6 (Eq. 6.3-6.12) and section 10.1 (Eq. 10.1, 10.2, 10.12, 10.13).
+- Paige, C. C., & Saunders, M. A. (1982). LSQR: An algorithm for sparse linear equations and
+  sparse least squares. ACM TOMS 8(1), 43-71.
+- Fong, D. C.-L., & Saunders, M. (2011). LSMR: An iterative algorithm for sparse least-squares
+  problems. SIAM J. Sci. Comput. 33(5), 2950-2971.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import sparse
+from scipy.sparse import linalg
+from threadpoolctl import threadpool_limits
+
+from recon.errors import SpectwinInputError
+from recon.progress import progress_steps
+from recon.spectra import SampledSpectra, WavelengthGrid
+from recon.spectralize.appearance import (
+    appearance_neighbours,
+    appearance_points,
+    connect_components,
+)
+from recon.spectralize.energy import (
+    AppearancePriorTerm,
+    CameraTerm,
+    DeviceIntegralTerm,
+    FilteredBandTerm,
+    PointSpectraTerm,
+    SpectralSmoothnessTerm,
+    gaussian_plane,
+)
+from recon.spectralize.kronecker import solve_kronecker_sum
+
+__all__ = [
+    "BandImage",
+    "DeviceIntegrals",
+    "EnergyWeights",
+    "PointSpectra",
+    "SpectralizationProblem",
+    "SpectralizationResult",
+    "build_problem",
+    "dynamic_scale",
+    "reconstruct",
+    "spectralize",
+]
+
+SOLVERS = ("auto", "multigrid", "lsqr", "lsmr")
+
+
+@dataclass(frozen=True)
+class PointSpectra:
+    """Spectra known at some pixels (Eq. 6.10): ``pixels`` are flat indices into the
+    ``(n_images, height, width)`` pixel grid (row-major), ``spectra`` is ``(m, K)``: an array,
+    or ``SampledSpectra`` whose grid must equal the response's."""
+
+    pixels: np.ndarray
+    spectra: np.ndarray | SampledSpectra
+
+
+@dataclass(frozen=True)
+class BandImage:
+    """A noisy image of one band (Eq. 10.1): ``values`` ``(height, width)`` of image
+    ``image`` in band index ``band``, matched to the reconstruction after a Gaussian filter of
+    standard deviation ``sigma_px`` pixels (0 matches pixel by pixel)."""
+
+    image: int
+    band: int
+    values: np.ndarray
+    sigma_px: float
+
+
+@dataclass(frozen=True)
+class DeviceIntegrals:
+    """General device readings (Eq. 6.9): ``weights`` ``(m, n_pixels * K)`` (sparse, over the
+    row-major flattened cube), ``values`` ``(m,)`` and optional per-reading ``alpha`` factors
+    :math:`\\alpha_j / \\alpha` (default 1)."""
+
+    weights: sparse.spmatrix
+    values: np.ndarray
+    alpha: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class EnergyWeights:
+    """Primed weights :math:`\\alpha', \\beta', \\gamma', \\delta'` of Eq. 6.11 / 10.13.
+
+    ``delta=None`` follows the thesis: :math:`\\delta' = 0.1` for the noisy band-image energy
+    of Eq. 10.12 (band images present), no smoothness term (Eq. 6.9/6.10) otherwise. With
+    sparse point spectra a smoothness term competes with the prior at every pixel and stops
+    the spectra measured at a few pixels from spreading along the neighbour graph.
+    """
+
+    alpha: float = 1.0
+    beta: float = 1.0
+    gamma: float = 1.0
+    delta: float | None = None
+
+    def smoothness(self, has_band_images: bool) -> float:
+        """:math:`\\delta'` in effect for an energy with or without band images."""
+        if self.delta is not None:
+            return float(self.delta)
+        return 0.1 if has_band_images else 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("alpha", "beta", "gamma", "delta"):
+            value = getattr(self, name)
+            if value is None:
+                continue
+            if not (np.isfinite(value) and value >= 0):
+                raise SpectwinInputError(
+                    f"weights.{name}: expected a finite value >= 0, got {value}"
+                )
+        if self.alpha == 0:
+            raise SpectwinInputError("weights.alpha: expected > 0; without data nothing is known")
+
+
+@dataclass
+class SpectralizationProblem:
+    """An assembled energy: its terms, absolute weights, scale factors :math:`f_i` and graph."""
+
+    terms: list
+    weights: list[float]
+    scale: np.ndarray  # f_i, (n_pixels,)
+    image_shape: tuple[int, int, int]  # (n_images, height, width)
+    n_bands: int
+    graph_links: int
+    graph_added: int
+    timings_s: dict = field(default_factory=dict)
+
+    @property
+    def n_pixels(self) -> int:
+        return int(self.scale.size)
+
+    def energy(self, scaled: np.ndarray) -> float:
+        """:math:`E` at the scaled image :math:`X = f S`, ``(n_pixels, K)``."""
+        return float(
+            sum(
+                w * np.sum((np.ravel(t.apply(scaled)) - np.ravel(t.target)) ** 2)
+                for t, w in zip(self.terms, self.weights, strict=True)
+            )
+        )
+
+    def operator(self) -> tuple[linalg.LinearOperator, np.ndarray]:
+        """:math:`M_E` and :math:`b_E` of Eq. 6.12 (each term's rows scaled by
+        :math:`\\sqrt{w}`), acting on the row-major flattened scaled image."""
+        shape = (self.n_pixels, self.n_bands)
+        roots = [np.sqrt(w) for w in self.weights]
+        sizes = [t.n_rows for t in self.terms]
+        offsets = np.concatenate([[0], np.cumsum(sizes)])
+
+        def matvec(vector: np.ndarray) -> np.ndarray:
+            x = vector.reshape(shape)
+            return np.concatenate(
+                [r * t.apply(x).ravel() for t, r in zip(self.terms, roots, strict=True)]
+            )
+
+        def rmatvec(vector: np.ndarray) -> np.ndarray:
+            out = np.zeros(shape)
+            for t, r, start, stop in zip(self.terms, roots, offsets[:-1], offsets[1:], strict=True):
+                t.adjoint(r * vector[start:stop].reshape(np.shape(t.target)), out)
+            return out.ravel()
+
+        rows = int(offsets[-1])
+        operator = linalg.LinearOperator(
+            (rows, shape[0] * shape[1]), matvec=matvec, rmatvec=rmatvec, dtype=np.float64
+        )
+        rhs = np.concatenate(
+            [r * np.ravel(t.target) for t, r in zip(self.terms, roots, strict=True)]
+        )
+        return operator, rhs
+
+    def kronecker_parts(self) -> tuple[sparse.csr_matrix, np.ndarray, np.ndarray] | None:
+        """:math:`A, B, C` of :mod:`recon.spectralize.kronecker`, or ``None`` where the energy has
+        terms that break the split (band images, device integrals)."""
+        n, bands = self.n_pixels, self.n_bands
+        spatial = sparse.csr_matrix((n, n))
+        spectral = np.zeros((bands, bands))
+        rhs = np.zeros((n, bands))
+        for term, weight in zip(self.terms, self.weights, strict=True):
+            if isinstance(term, PointSpectraTerm):
+                counts = np.bincount(term.pixels, minlength=n).astype(np.float64)
+                spatial = spatial + weight * sparse.diags(counts)
+                np.add.at(rhs, term.pixels, weight * term.target)
+            elif isinstance(term, CameraTerm):
+                spectral += weight * term.response @ term.response.T
+                rhs += weight * term.target @ term.response.T
+            elif isinstance(term, AppearancePriorTerm):
+                spatial = spatial + weight * (term.incidence.T @ term.incidence)
+            elif isinstance(term, SpectralSmoothnessTerm):
+                differences = term.difference_matrix()
+                spectral += weight * differences @ differences.T
+            else:
+                return None
+        return spatial.tocsr(), spectral, rhs
+
+
+@dataclass(frozen=True)
+class SpectralizationResult:
+    """Reconstructed spectra (leading shape of the RGB input, then ``K``) and solver facts."""
+
+    spectra: np.ndarray
+    solver: str
+    iterations: int
+    energy: float
+    converged: bool
+    graph_links: int
+    graph_added: int
+    timings_s: dict
+
+
+def _as_images(rgb: np.ndarray) -> np.ndarray:
+    rgb = np.asarray(rgb, dtype=np.float64)
+    if rgb.ndim == 3:
+        rgb = rgb[None]
+    if rgb.ndim != 4 or min(rgb.shape) < 1:
+        raise SpectwinInputError(
+            f"rgb: expected (height, width, channels) or (n_images, height, width, channels), "
+            f"got shape {rgb.shape}"
+        )
+    if not np.all(np.isfinite(rgb)):
+        raise SpectwinInputError("rgb: camera values must be finite (found NaN or inf)")
+    return rgb
+
+
+def _grid_and_values(
+    spectra: np.ndarray | SampledSpectra, grid: WavelengthGrid | None, what: str
+) -> tuple[np.ndarray, WavelengthGrid | None]:
+    """Unwrap ``SampledSpectra``; refuse spectra on a grid other than ``grid``."""
+    if not isinstance(spectra, SampledSpectra):
+        return np.asarray(spectra, dtype=np.float64), grid
+    if grid is not None and spectra.grid != grid:
+        raise SpectwinInputError(
+            f"{what}: sampled on {spectra.grid.describe()} but the response is on "
+            f"{grid.describe()}; resample one of them with recon.spectra.resample"
+        )
+    return spectra.values, spectra.grid
+
+
+def _checked_response(response: np.ndarray, channels: int) -> np.ndarray:
+    response = np.asarray(response, dtype=np.float64)
+    if response.ndim != 2 or response.shape[1] != channels or response.shape[0] < 2:
+        raise SpectwinInputError(
+            f"response: expected (K bands, {channels} channels) to match the rgb channels, got "
+            f"shape {response.shape}"
+        )
+    if not np.all(np.isfinite(response)):
+        raise SpectwinInputError("response: values must be finite (found NaN or inf)")
+    return response
+
+
+def dynamic_scale(images: np.ndarray, p_dyn: float) -> np.ndarray:
+    """:math:`f_i = (\\sum_c V_i^c)^{-p_{dyn}}` (Eq. 10.2). Sums below 0.1 % of the mean sum
+    (dark, noisy pixels; noise can make them negative) are raised to that floor."""
+    if not 0 <= p_dyn <= 1:
+        raise SpectwinInputError(f"p_dyn: expected a value in [0, 1], got {p_dyn}")
+    brightness = images.sum(axis=-1).ravel()
+    if p_dyn == 0:
+        return np.ones_like(brightness)
+    mean = float(np.mean(brightness))
+    if mean <= 0:
+        raise SpectwinInputError(
+            "rgb: dynamic-range compression (p_dyn > 0) needs a positive mean pixel sum"
+        )
+    return np.maximum(brightness, 1e-3 * mean) ** -p_dyn
+
+
+def _point_term(
+    data: PointSpectra, scale: np.ndarray, bands: int, grid: WavelengthGrid | None
+) -> PointSpectraTerm:
+    pixels = np.asarray(data.pixels)
+    spectra, _ = _grid_and_values(data.spectra, grid, "point_spectra.spectra")
+    if pixels.ndim != 1 or not np.issubdtype(pixels.dtype, np.integer):
+        raise SpectwinInputError(f"point_spectra.pixels: expected 1-D integers, got {pixels.dtype}")
+    if spectra.shape != (pixels.size, bands):
+        raise SpectwinInputError(
+            f"point_spectra.spectra: expected shape ({pixels.size}, {bands}) = (pixels, bands of "
+            f"the response), got {spectra.shape}"
+        )
+    if pixels.size and (pixels.min() < 0 or pixels.max() >= scale.size):
+        raise SpectwinInputError(
+            f"point_spectra.pixels: expected indices in [0, {scale.size}), got "
+            f"[{pixels.min()}, {pixels.max()}]"
+        )
+    if not np.all(np.isfinite(spectra)):
+        raise SpectwinInputError("point_spectra.spectra: values must be finite (found NaN or inf)")
+    return PointSpectraTerm(pixels.astype(np.intp), spectra * scale[pixels, None])
+
+
+def _band_term(
+    data: BandImage, scale: np.ndarray, image_shape: tuple[int, int, int], bands: int
+) -> FilteredBandTerm:
+    count, height, width = image_shape
+    values = np.asarray(data.values, dtype=np.float64)
+    if values.shape != (height, width):
+        raise SpectwinInputError(
+            f"band_images: image {data.image} band {data.band} has shape {values.shape}, "
+            f"expected ({height}, {width}) like the rgb images"
+        )
+    if not (0 <= data.image < count and 0 <= data.band < bands):
+        raise SpectwinInputError(
+            f"band_images: image {data.image} / band {data.band} out of range ({count} images, "
+            f"{bands} bands)"
+        )
+    if not (np.isfinite(data.sigma_px) and data.sigma_px >= 0):
+        raise SpectwinInputError(f"band_images: sigma_px must be >= 0, got {data.sigma_px}")
+    if not np.all(np.isfinite(values)):
+        raise SpectwinInputError(
+            f"band_images: image {data.image} band {data.band} has NaN or inf values"
+        )
+    size = height * width
+    plane = scale[data.image * size : (data.image + 1) * size].reshape(height, width) * values
+    target = gaussian_plane(plane, float(data.sigma_px))
+    return FilteredBandTerm(data.image, data.band, float(data.sigma_px), (height, width), target)
+
+
+def _device_term(data: DeviceIntegrals, scale: np.ndarray, bands: int) -> DeviceIntegralTerm:
+    weights = sparse.csr_matrix(data.weights, dtype=np.float64)
+    values = np.asarray(data.values, dtype=np.float64)
+    columns = scale.size * bands
+    if weights.shape != (values.size, columns):
+        raise SpectwinInputError(
+            f"device_integrals.weights: expected shape ({values.size}, {columns}) = (readings, "
+            f"pixels x bands), got {weights.shape}"
+        )
+    alpha = np.ones(values.size) if data.alpha is None else np.asarray(data.alpha, np.float64)
+    if alpha.shape != values.shape or np.any(alpha < 0) or not np.all(np.isfinite(values)):
+        raise SpectwinInputError(
+            "device_integrals: values must be finite and alpha non-negative, one per reading"
+        )
+    # Scaled unknowns X = f S: column (i, l) of the weights is divided by f_i.
+    weights = weights @ sparse.diags(np.repeat(1.0 / scale, bands))
+    root = np.sqrt(alpha)
+    return DeviceIntegralTerm(sparse.diags(root) @ weights, root * values)
+
+
+def build_problem(
+    rgb: np.ndarray,
+    response: np.ndarray,
+    *,
+    point_spectra: PointSpectra | None = None,
+    band_images: Sequence[BandImage] = (),
+    device_integrals: DeviceIntegrals | None = None,
+    weights: EnergyWeights = EnergyWeights(),
+    appearance: str = "rgb",
+    appearance_options: dict | None = None,
+    neighbours: int = 3,
+    p_dyn: float = 0.0,
+) -> SpectralizationProblem:
+    """Assemble the energy of the module docstring.
+
+    Parameters
+    ----------
+    rgb, response
+        As in :func:`spectralize`.
+    point_spectra, band_images, device_integrals
+        The spectral data (at least one): see :class:`PointSpectra`, :class:`BandImage`,
+        :class:`DeviceIntegrals`. Pixel indices run over ``(n_images, height, width)``.
+    weights
+        Primed weights (Eq. 6.11 / 10.13); see :class:`EnergyWeights` for the default
+        :math:`\\delta'`.
+    appearance, appearance_options
+        Appearance space ``"rgb"``, ``"rgbxy"`` or ``"patch"`` and its options
+        (:func:`recon.spectralize.appearance.appearance_points`).
+    neighbours
+        :math:`|N_i|`, default 3 (section 6.2).
+    p_dyn
+        Dynamic-range compression exponent of Eq. 10.2 (0: none; the thesis used 0.5-0.6 for
+        BTFs).
+
+    Returns
+    -------
+    SpectralizationProblem
+    """
+    images = _as_images(rgb)
+    response_values, grid = _grid_and_values(response, None, "response")
+    if isinstance(response, SampledSpectra):
+        response_values = response_values.T  # (channels, K) rows -> (K, channels)
+    response = _checked_response(response_values, images.shape[-1])
+    bands, channels = response.shape
+    image_shape = images.shape[:3]
+    scale = dynamic_scale(images, p_dyn)
+    scaled_rgb = images.reshape(-1, channels) * scale[:, None]
+
+    data_terms: list = []
+    if point_spectra is not None:
+        data_terms.append(_point_term(point_spectra, scale, bands, grid))
+    data_terms += [_band_term(b, scale, image_shape, bands) for b in band_images]
+    if device_integrals is not None:
+        data_terms.append(_device_term(device_integrals, scale, bands))
+    data_rows = sum(t.n_rows for t in data_terms)
+    if data_rows == 0:
+        raise SpectwinInputError(
+            "spectralize: no spectral data given; pass point_spectra, band_images or "
+            "device_integrals (an RGB image alone leaves the spectra undetermined)"
+        )
+    has_data = np.zeros(scale.size, dtype=bool)
+    for term in data_terms:
+        if isinstance(term, PointSpectraTerm):
+            has_data[term.pixels] = True
+        elif isinstance(term, FilteredBandTerm):
+            has_data[term.pixel_slice()] = True
+        else:
+            has_data[np.unique(term.weights.indices // bands)] = True
+
+    started = time.perf_counter()
+    points = appearance_points(
+        scaled_rgb.reshape(*image_shape, channels), appearance, **(appearance_options or {})
+    )
+    graph = appearance_neighbours(points, k=neighbours)
+    graph_s = time.perf_counter() - started
+    graph = connect_components(graph, points, has_data)
+    connect_s = time.perf_counter() - started - graph_s
+
+    n = scale.size
+    prior_rows = bands * graph.n_links
+    delta = weights.smoothness(has_band_images=bool(band_images))
+    smooth_rows = n * (bands - 1) if delta > 0 else 0
+    total = data_rows + channels * n + prior_rows + smooth_rows  # Eq. 6.11 / 10.13 numerator
+    data_mean = np.mean(np.concatenate([np.abs(np.ravel(t.target)) for t in data_terms]))
+    rgb_mean = float(np.mean(np.abs(scaled_rgb)))
+    if rgb_mean == 0 or data_mean == 0:
+        raise SpectwinInputError("spectralize: rgb and spectral data must not be all zero")
+    terms = [*data_terms, CameraTerm(response, scaled_rgb)]
+    absolute = [weights.alpha * total / data_rows] * len(data_terms)
+    absolute.append(weights.beta * (data_mean / rgb_mean) * total / (channels * n))
+    if graph.n_links:
+        terms.append(AppearancePriorTerm(graph.incidence(), bands))
+        absolute.append(weights.gamma * total / prior_rows)
+    if smooth_rows:
+        terms.append(SpectralSmoothnessTerm(n, bands))
+        absolute.append(delta * total / smooth_rows)
+    return SpectralizationProblem(
+        terms,
+        absolute,
+        scale,
+        image_shape,
+        bands,
+        graph.n_links,
+        graph.added,
+        {"neighbours": graph_s, "connect": connect_s},
+    )
+
+
+def _solve_least_squares(
+    problem: SpectralizationProblem,
+    method: str,
+    max_iterations: int,
+    tol: float,
+    initial: np.ndarray | None,
+    progress: bool,
+) -> tuple[np.ndarray, int, bool]:
+    operator, rhs = problem.operator()
+    with (
+        threadpool_limits(1, user_api="blas"),
+        progress_steps(f"spectralize: {method}", max_iterations, enabled=progress) as advance,
+    ):
+        counted = linalg.LinearOperator(
+            operator.shape,
+            matvec=lambda v: (advance(), operator.matvec(v))[1],
+            rmatvec=operator.rmatvec,
+            dtype=np.float64,
+        )
+        x0 = None if initial is None else initial.ravel()
+        if method == "lsqr":
+            out = linalg.lsqr(counted, rhs, atol=tol, btol=tol, iter_lim=max_iterations, x0=x0)
+        else:
+            out = linalg.lsmr(counted, rhs, atol=tol, btol=tol, maxiter=max_iterations, x0=x0)
+    iterations, status = int(out[2]), int(out[1])
+    return out[0].reshape(problem.n_pixels, problem.n_bands), iterations, status in (1, 2, 4, 5)
+
+
+def reconstruct(
+    rgb: np.ndarray,
+    response: np.ndarray,
+    *,
+    solver: str = "auto",
+    tol: float = 1e-6,
+    max_iterations: int = 500,
+    initial: np.ndarray | None = None,
+    progress: bool = False,
+    **energy,
+) -> SpectralizationResult:
+    """Reconstruct spectral images and report how (thesis chapters 6, 10); see
+    :func:`spectralize` for the plain entry point.
+
+    Parameters
+    ----------
+    rgb
+        ``(height, width, C)`` or, for a joint reconstruction of several images (BTF slices),
+        ``(n_images, height, width, C)`` linear camera values :math:`V`.
+    response
+        :math:`R_{cam}`, ``(K, C)``: camera sensitivity times light per band, so that
+        :math:`V_i \\approx S_i R_{cam}`; or ``SampledSpectra`` with one row per channel, whose
+        grid the point spectra must share.
+    **energy
+        The energy: ``point_spectra``, ``band_images``, ``device_integrals``, ``weights``,
+        ``appearance``, ``appearance_options``, ``neighbours``, ``p_dyn``; see
+        :func:`build_problem`.
+    solver
+        ``"auto"``, ``"multigrid"``, ``"lsqr"`` or ``"lsmr"``.
+    tol
+        Stopping tolerance: relative residual per column (multigrid) or LSQR/LSMR's
+        ``atol = btol``.
+    max_iterations
+        Iteration cap (per column for multigrid).
+    initial
+        Optional starting spectra (same shape as the result), e.g. the previous BTF slice.
+    progress
+        Show progress bars.
+
+    Returns
+    -------
+    SpectralizationResult
+        ``spectra`` with the leading shape of ``rgb`` and ``K`` bands, and solver facts.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> response = np.random.default_rng(0).random((8, 3))
+    >>> materials = np.random.default_rng(1).random((2, 8))
+    >>> truth = materials[np.repeat([0, 1], 15)].reshape(6, 5, 8)  # two halves
+    >>> known = PointSpectra(np.arange(30), truth.reshape(30, 8))
+    >>> result = reconstruct(truth @ response, response, point_spectra=known, tol=1e-10)
+    >>> bool(np.allclose(result.spectra, truth, atol=1e-5)), result.solver
+    (True, 'multigrid')
+    """
+    if solver not in SOLVERS:
+        raise SpectwinInputError(f"solver: expected one of {SOLVERS}, got {solver!r}")
+    if not (tol > 0 and max_iterations >= 1):
+        raise SpectwinInputError(
+            f"tol, max_iterations: expected tol > 0 and max_iterations >= 1, got {tol}, "
+            f"{max_iterations}"
+        )
+    problem = build_problem(rgb, response, **energy)
+    shape = (problem.n_pixels, problem.n_bands)
+    scaled_initial = None
+    if initial is not None:
+        initial = np.asarray(initial, dtype=np.float64)
+        if initial.size != shape[0] * shape[1] or not np.all(np.isfinite(initial)):
+            raise SpectwinInputError(
+                f"initial: expected finite spectra with {shape[0]} x {shape[1]} values, got "
+                f"shape {initial.shape}"
+            )
+        scaled_initial = initial.reshape(shape) * problem.scale[:, None]
+    parts = problem.kronecker_parts() if solver in ("auto", "multigrid") else None
+    if solver == "multigrid" and parts is None:
+        raise SpectwinInputError(
+            "solver='multigrid' needs an energy with point spectra, camera, prior and "
+            "smoothness terms only; use 'lsqr' or 'lsmr' with band images or device integrals"
+        )
+    started = time.perf_counter()
+    if parts is not None:
+        scaled, info = solve_kronecker_sum(
+            *parts,
+            rtol=tol,
+            max_iterations=max_iterations,
+            initial=scaled_initial,
+            progress=progress,
+        )
+        used, iterations, converged = "multigrid", int(info.iterations.max()), info.converged
+    else:
+        used = "lsmr" if solver == "auto" else solver
+        scaled, iterations, converged = _solve_least_squares(
+            problem, used, max_iterations, tol, scaled_initial, progress
+        )
+    timings = {**problem.timings_s, "solve": time.perf_counter() - started}
+    leading = np.shape(rgb)[:-1]
+    return SpectralizationResult(
+        spectra=(scaled / problem.scale[:, None]).reshape(*leading, problem.n_bands),
+        solver=used,
+        iterations=iterations,
+        energy=problem.energy(scaled),
+        converged=converged,
+        graph_links=problem.graph_links,
+        graph_added=problem.graph_added,
+        timings_s=timings,
+    )
+
+
+def spectralize(
+    rgb: np.ndarray,
+    response: np.ndarray,
+    *,
+    known_pixels: np.ndarray | None = None,
+    known_spectra: np.ndarray | SampledSpectra | None = None,
+    band_images: Sequence[BandImage] | None = None,
+    appearance: str = "rgb",
+    k: int = 3,
+    **options,
+) -> np.ndarray:
+    """Spectral image from RGB plus known spectra and/or noisy band images (the project's
+    stable entry point; thesis Eq. 6.10 and 10.12).
+
+    Parameters
+    ----------
+    rgb
+        ``(H, W, C)`` or ``(N, H, W, C)`` camera values.
+    response
+        ``(K, C)`` :math:`R_{cam}` on the cube's grid.
+    known_pixels, known_spectra
+        Flat indices into the ``(N,) H, W`` pixels and their ``(n, K)`` spectra (Eq. 6.10).
+    band_images
+        Noisy band images for Eq. 10.1/10.12 (:class:`BandImage`).
+    appearance, k
+        Appearance space (Eq. 6.4-6.6) and neighbours per pixel (section 6.2).
+    **options
+        Passed on to :func:`reconstruct` (``solver``, ``tol``, ``weights``, ``p_dyn``,
+        ``device_integrals``, ``appearance_options``, ``initial``, ``progress``, ...).
+
+    Returns
+    -------
+    numpy.ndarray
+        The cube: the leading shape of ``rgb``, then ``K`` bands.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> response = np.random.default_rng(0).random((8, 3))
+    >>> materials = np.random.default_rng(1).random((2, 8))
+    >>> truth = materials[np.repeat([0, 1], 15)].reshape(6, 5, 8)
+    >>> cube = spectralize(truth @ response, response, known_pixels=np.arange(30),
+    ...                    known_spectra=truth.reshape(30, 8), tol=1e-10)
+    >>> bool(np.allclose(cube, truth, atol=1e-5))
+    True
+    """
+    if (known_pixels is None) != (known_spectra is None):
+        raise SpectwinInputError(
+            "known_pixels, known_spectra: give both (indices and their spectra) or neither"
+        )
+    point_spectra = None
+    if known_pixels is not None:
+        point_spectra = PointSpectra(np.asarray(known_pixels), known_spectra)
+    return reconstruct(
+        rgb,
+        response,
+        point_spectra=point_spectra,
+        band_images=() if band_images is None else band_images,
+        appearance=appearance,
+        neighbours=k,
+        **options,
+    ).spectra

@@ -1,0 +1,86 @@
+"""``spectwin dome-study``: the thesis's chapter 10 experiments on the twin LED dome."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from twin.cli.choices import DomeMaterial
+from twin.cli.errors import fail, require_output_folder
+from twin.cli.gonio import JsonFlag
+from twin.cli.output import console, print_summary
+
+__all__ = ["register"]
+
+
+def dome_study(
+    out: Annotated[Path, typer.Option(help="Folder for dome_study.json and the PNGs.")] = Path(
+        "dome_study"
+    ),
+    texels: Annotated[
+        int,
+        typer.Option(min=8, max=256, help="Texture side in texels (a multiple of 4)."),
+    ] = 32,
+    materials: Annotated[
+        list[DomeMaterial] | None,
+        typer.Option("--material", help="A material to study (repeat); default: all four."),
+    ] = None,
+    seed: Annotated[int, typer.Option(min=0, help="Seed of the cameras' noise.")] = 0,
+    as_json: JsonFlag = False,
+) -> None:
+    """Exposure plan, band schedules, low-SNR calibration, virtual dome captures and their
+    spectralization (thesis 10.3-10.5): single and multi-image reconstruction, Dong 2016 and
+    Spectral A+, the exposure comparison of 10.5 and the Fig. 10.4 cross-check.
+
+    Example: spectwin dome-study --out out/dome --material lego --material red_fabric
+    """
+    from twin.studies.dome_report import DOME_MATERIALS, run_dome_study
+
+    if texels % 4:
+        fail(f"--texels {texels}: expected a multiple of 4")
+    require_output_folder(out)
+    chosen = tuple(dict.fromkeys(m.value for m in materials)) if materials else DOME_MATERIALS
+    with console.status("dome study") as status:
+        metrics = run_dome_study(
+            out,
+            texels=texels,
+            materials=chosen,
+            seed=seed,
+            step=lambda name: status.update(name),
+        )
+    if as_json:
+        print_summary(metrics, "", as_json)
+        return
+    summary: dict[str, object] = {"out": str(out)}
+    for name, plan in metrics["schedules"].items():
+        if isinstance(plan, dict):
+            summary[f"schedule {name}"] = (
+                f"{plan['n_images']} images, +{plan['increase_pct']:.1f} %"
+            )
+    for material, result in metrics["materials"].items():
+        single, multi = result["single_image"], result["multi_image"]
+        summary[f"{material} single image"] = (
+            f"{single['mean_relative_error_pct']:.2f} %, Delta E94 {single['mean_delta_e94']:.2f}"
+        )
+        summary[f"{material} 20 images with / without bands"] = (
+            f"{multi['with_spectral_data']['mean_relative_error_pct']:.2f} % / "
+            f"{multi['without_spectral_data']['mean_relative_error_pct']:.2f} %"
+        )
+    exposure = metrics["exposure_10_5"]
+    summary["10.5 reference spectral capture"] = (
+        f"{exposure['reference_total_s']:.0f} s, {exposure['reference_error_pct']:.2f} %"
+    )
+    for hybrid in exposure["hybrid"]:
+        summary[f"10.5 hybrid x{hybrid['scale']:.3g}"] = (
+            f"{hybrid['total_s']:.1f} s, {hybrid['error_pct']:.2f} %"
+        )
+    check = metrics["cross_check_10_4"]
+    summary["Fig. 10.4 field difference"] = f"{check['mean_abs_field_difference_pct']:.2f} % mean"
+    print_summary(summary, "dome study (thesis chapter 10)")
+
+
+def register(app: typer.Typer) -> None:
+    """Add the command to ``app``."""
+    app.command(name="dome-study")(dome_study)

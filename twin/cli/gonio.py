@@ -1,0 +1,497 @@
+"""``spectwin`` commands of the gonioreflectometer pipeline: capture, calibrate, process, compress,
+evaluate, validate.
+
+A full twin run at reduced sampling (thesis 3.3 and 4.1)::
+
+    spectwin capture out/cal.capture.zarr --program gonio-calibration
+    spectwin calibrate out/cal.capture.zarr --out out/cal.json
+    spectwin capture out/run.capture.zarr --program gonio-run --calibration out/cal.json
+    spectwin process out/run.capture.zarr --calibration out/cal.json --out out/cc.btf.zarr
+    spectwin compress out/cc.btf.zarr --layout joint
+    spectwin evaluate out/cc.btf.zarr --figure out/cc_vs_truth.png
+    spectwin validate out/cc.btf.zarr --out out/validation
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from enum import StrEnum
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+
+from twin.cli.errors import fail, require_output_file, require_output_folder, run_failed
+from twin.cli.output import console, print_summary
+
+__all__ = ["register"]
+
+JsonFlag = Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")]
+WorkersOption = Annotated[
+    int,
+    typer.Option(
+        min=0,
+        max=256,
+        help="Worker processes of a local Dask cluster (one thread each); 0 or 1: run in this "
+        "process. Same results either way.",
+    ),
+]
+SchedulerOption = Annotated[
+    str | None,
+    typer.Option(
+        envvar="DASK_SCHEDULER_ADDRESS",
+        help="Run on the Dask cluster of this scheduler (tcp://host:8786); its workers must "
+        "see the stores under the same paths.",
+    ),
+]
+SppOption = Annotated[int, typer.Option(min=1, max=65536, help="Samples per pixel of the renders.")]
+MAX_FAULT_RATE = 0.1
+"""Largest injected fault rate: each device call is retried 3 times, so at 0.1 a fault outlasts
+the retries about once in 10^4 calls (the demo session makes about 250); at 0.2 most sessions
+stop."""
+
+
+class Program(StrEnum):
+    demo = "demo"
+    gonio_calibration = "gonio-calibration"
+    gonio_run = "gonio-run"
+
+
+class Layout(StrEnum):
+    per_band = "per_band"
+    joint = "joint"
+
+
+# The capture options that only some programs use (the others refuse them).
+_PROGRAM_OPTIONS = {
+    "calibration": {Program.gonio_run},
+    "material": {Program.gonio_run},
+    "pixels": {Program.gonio_run},
+    "window": {Program.gonio_run},
+    "spp": {Program.gonio_run},
+    "fault_rate": {Program.demo},
+    "dry_run": {Program.demo},
+}
+# Options a --dry-run (which captures nothing) refuses.
+_CAPTURE_ONLY = ("seed", "resume", "fault_rate", "workers", "scheduler")
+
+
+def _given(ctx: typer.Context, name: str) -> bool:
+    """Whether option ``name`` was given on the command line."""
+    source = ctx.get_parameter_source(name)
+    return source is not None and source.name == "COMMANDLINE"
+
+
+def _option(ctx: typer.Context, name: str) -> str:
+    return next(p.opts[0] for p in ctx.command.params if p.name == name)
+
+
+def _refuse_unused(ctx: typer.Context, program: Program, dry_run: bool) -> None:
+    for name, programs in _PROGRAM_OPTIONS.items():
+        if program not in programs and _given(ctx, name):
+            used_by = ", ".join(sorted(p.value for p in programs))
+            fail(
+                f"{_option(ctx, name)} is not used by --program {program.value} "
+                f"(only by {used_by}); leave it out"
+            )
+    if dry_run:
+        for name in _CAPTURE_ONLY:
+            if _given(ctx, name):
+                fail(f"{_option(ctx, name)} is not used by --dry-run, which captures nothing")
+
+
+def _require_complete(capture, path: Path) -> None:
+    if not capture.complete:
+        fail(
+            f"{path}: the capture is incomplete ({len(capture.pending_steps())} of "
+            f"{len(capture.attrs['plan'])} steps pending); "
+            "finish it with spectwin capture --resume"
+        )
+
+
+def capture(
+    ctx: typer.Context,
+    store: Annotated[
+        Path, typer.Argument(help="Capture store to write, e.g. out/run.capture.zarr.")
+    ],
+    program: Annotated[
+        Program,
+        typer.Option(
+            help="demo: darks + 2 pairs x 33 bands of the white standard; gonio-calibration: "
+            "darks, response series, white standard; gonio-run: a measurement run "
+            "(needs --calibration)."
+        ),
+    ] = Program.demo,
+    calibration: Annotated[
+        Path | None,
+        typer.Option(help="gonio-run: spectwin calibrate's JSON, the band exposure plan."),
+    ] = None,
+    material: Annotated[
+        str, typer.Option(help="gonio-run: material on the holder (scenes/materials).")
+    ] = "colorchecker16",
+    pixels: Annotated[
+        int,
+        typer.Option(min=32, max=4096, help="gonio-run: pixels across the camera's 20 cm field."),
+    ] = 256,
+    window: Annotated[
+        int | None,
+        typer.Option(
+            min=16,
+            max=4096,
+            help="gonio-run: read out only the centred window of this many pixels (ROI; at "
+            "most --pixels).",
+        ),
+    ] = None,
+    spp: Annotated[
+        int, typer.Option(min=1, max=65536, help="gonio-run: samples per pixel of the renders.")
+    ] = 64,
+    seed: Annotated[int, typer.Option(min=0, help="Session seed (noise of every frame).")] = 0,
+    resume: Annotated[
+        bool, typer.Option("--resume", help="Continue an interrupted session.")
+    ] = False,
+    dry_run: Annotated[
+        bool, typer.Option("--dry-run", help="demo: print the plan and its duration.")
+    ] = False,
+    fault_rate: Annotated[
+        float,
+        typer.Option(
+            min=0.0,
+            max=MAX_FAULT_RATE,
+            help="demo: injected device faults per device call (each is retried 3 times).",
+        ),
+    ] = 0.0,
+    workers: WorkersOption = 1,
+    scheduler: SchedulerOption = None,
+    as_json: JsonFlag = False,
+) -> None:
+    """Capture a simulated gonioreflectometer session into a capture store (resumable).
+
+    With --workers N (a local cluster) or --scheduler ADDRESS the steps run as Dask tasks, view
+    by view; the frames are bit-identical to a capture in one process.
+
+    Example: spectwin capture out/run.capture.zarr --program gonio-run --calibration cal.json
+    """
+    from hwbridge.plans import estimate_duration_s
+
+    _refuse_unused(ctx, program, dry_run)
+    summary: dict[str, object] = {"store": str(store), "program": program.value}
+    if program is Program.demo:
+        from twin.gonio.sim_session import demo_plan
+
+        plan = demo_plan()
+        summary["estimated_duration_s"] = estimate_duration_s(plan)
+        if dry_run:
+            summary |= {"steps": len(plan), "kinds": dict(Counter(s["kind"] for s in plan))}
+            print_summary(summary, "capture (dry run)", as_json)
+            return
+    exposures = None
+    if program is Program.gonio_run:
+        from recon.calibration.gonio import GonioCalibration
+        from twin.materials import load_material
+
+        if calibration is None:
+            fail("--program gonio-run needs --calibration (the JSON of spectwin calibrate)")
+        if window is not None and window > pixels:
+            fail(f"--window {window} is larger than --pixels {pixels}; expected at most {pixels}")
+        exposures = GonioCalibration.load(calibration).planned_exposure_s
+        load_material(material)
+    if store.exists() and not resume:
+        fail(f"{store} exists: continue it with --resume or choose another store")
+    require_output_folder(store, "STORE")
+    from twin.devices.cluster import cluster_description, dask_client
+
+    with dask_client(workers, scheduler) as client:
+        summary["cluster"] = cluster_description(client)
+        if program is Program.demo:
+            from twin.gonio.sim_session import run_demo_session
+
+            result = run_demo_session(
+                store,
+                seed,
+                resume=resume,
+                fault_rate=fault_rate,
+                show_progress=not as_json,
+                client=client,
+            )
+        elif program is Program.gonio_calibration:
+            from twin.gonio.capture import run_gonio_calibration
+
+            result = run_gonio_calibration(
+                store, seed=seed, resume=resume, show_progress=not as_json, client=client
+            )
+        else:
+            from twin.gonio.capture import run_gonio_measurement
+
+            result = run_gonio_measurement(
+                store,
+                exposures,
+                material=material,
+                pixels=pixels,
+                window=window,
+                spp=spp,
+                seed=seed,
+                resume=resume,
+                show_progress=not as_json,
+                client=client,
+            )
+    index = result.index(result.attrs["plan"][0]["camera"])
+    summary |= {
+        "complete": result.complete,
+        "frames": dict(Counter(index["kind"].tolist())),
+        "frames_with_faults": int(sum(status != "ok" for status in index["status"])),
+    }
+    print_summary(summary, "capture (simulated backend)", as_json)
+
+
+def calibrate(
+    store: Annotated[Path, typer.Argument(help="A gonio-calibration capture store.")],
+    out: Annotated[Path, typer.Option(help="Calibration JSON to write.")] = Path("cal.json"),
+    white_fill: Annotated[
+        float,
+        typer.Option(
+            min=0.01, max=0.99, help="Fraction of the range the white standard should reach."
+        ),
+    ] = 0.7,
+    as_json: JsonFlag = False,
+) -> None:
+    """Response curve (Robertson), white factors F' (Eq. 3.3) and the exposure plan (Eq. 3.4,
+    multiples of 1/15 s for the HMI lamp) from a calibration capture.
+
+    Example: spectwin calibrate out/cal.capture.zarr --out out/cal.json
+    """
+    from hwbridge.store import CaptureStore
+    from recon.calibration.gonio import calibrate_gonio
+
+    require_output_file(out)
+    capture = CaptureStore.open(store)
+    _require_complete(capture, store)
+    with console.status("calibrating"):
+        result = calibrate_gonio(capture, white_fill=white_fill)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    result.save(out)
+    exposures = result.planned_exposure_s
+    summary = {
+        "calibration": str(out),
+        "bands": int(result.bands_nm.size),
+        "base_s": result.base_s,
+        "planned_exposure_s": exposures.tolist(),
+        "exposure_per_pair_s": float(exposures.sum()),
+        "all_multiples_of_1_15_s": bool(np.allclose(exposures * 15, np.round(exposures * 15))),
+    }
+    print_summary(summary, "gonio calibration", as_json)
+
+
+def process(
+    store: Annotated[Path, typer.Argument(help="A gonio-run capture store.")],
+    calibration: Annotated[Path, typer.Option(help="spectwin calibrate's JSON.")],
+    out: Annotated[Path, typer.Option(help="BTF store to write (<name>.btf.zarr).")],
+    texels: Annotated[
+        int,
+        typer.Option(
+            min=16,
+            max=1024,
+            help="Texture resolution per side (at least 16: evaluate and validate need texels "
+            "inside every chart field).",
+        ),
+    ] = 128,
+    manual_corners: Annotated[
+        Path | None, typer.Option(help="Manual corner file for frames detection misses.")
+    ] = None,
+    resume: Annotated[
+        bool, typer.Option("--resume", help="Continue an interrupted process.")
+    ] = False,
+    workers: WorkersOption = 1,
+    scheduler: SchedulerOption = None,
+    as_json: JsonFlag = False,
+) -> None:
+    """Calibrate and register a measurement run into a spectral BTF store (Eq. 3.6, 4.1.2).
+
+    With --workers N (a local cluster) or --scheduler ADDRESS the direction pairs are Dask
+    tasks; the BTF is the same as from one process.
+
+    Example: spectwin process out/run.capture.zarr --calibration out/cal.json --out out/cc.btf.zarr
+    """
+    from hwbridge.store import CaptureStore
+    from recon.calibration.gonio import GonioCalibration
+    from recon.registration.border import read_manual_corners
+    from twin.devices.cluster import cluster_description, dask_client, run_process
+
+    gonio_calibration = GonioCalibration.load(calibration)
+    corners = read_manual_corners(manual_corners) if manual_corners else None
+    capture = CaptureStore.open(store)
+    _require_complete(capture, store)
+    if out.exists() and not resume:
+        fail(f"--out {out} exists: continue it with --resume or choose another --out")
+    require_output_folder(out)
+    with dask_client(workers, scheduler) as client:
+        cluster = cluster_description(client)
+        btf = run_process(
+            capture,
+            gonio_calibration,
+            out,
+            texels=texels,
+            manual_corners=corners,
+            resume=resume,
+            show_progress=not as_json,
+            client=client,
+        )
+    summary = {
+        "btf": str(out),
+        "shape": list(btf.shape),
+        "complete": btf.complete,
+        "coarse_corner_pairs": btf.attrs["coarse_corner_pairs"],
+        "unregistered_pairs": btf.attrs["unregistered_pairs"],
+        "cluster": cluster,
+    }
+    print_summary(summary, "gonio processing", as_json)
+    if summary["unregistered_pairs"]:
+        run_failed(
+            f"pairs {summary['unregistered_pairs']} were not registered: give their corners in "
+            'a manual corner file (keys "pair<i>") and run again with --manual-corners FILE '
+            "--resume"
+        )
+
+
+def compress(
+    btf: Annotated[Path, typer.Argument(help="A complete BTF store (spectwin process).")],
+    brightness: Annotated[
+        int, typer.Option(min=1, max=100000, help="PCA components of the brightness.")
+    ] = 250,
+    spectral: Annotated[
+        int,
+        typer.Option(
+            min=1,
+            max=100000,
+            help="PCA components of the normalized spectra (per band or joint).",
+        ),
+    ] = 60,
+    layout: Annotated[
+        Layout,
+        typer.Option(
+            help="per_band: one PCA per band (the thesis); joint: one PCA over all bands."
+        ),
+    ] = Layout.per_band,
+    as_json: JsonFlag = False,
+) -> None:
+    """Compress a BTF by PCA of brightness and normalized spectra (thesis 4.1.2: 250 and 60
+    components) into the store's pca/ group; report size and Eq. 6.8 error against the store.
+
+    Example: spectwin compress out/cc.btf.zarr --layout joint --json
+    """
+    from recon.btf.compression import compress_btf, compression_report, save_compressed
+    from recon.btf.store import BTFStore
+
+    store = BTFStore.open(btf, writable=True)
+    with console.status("compressing"):
+        reflectance = store.read()
+        compressed = compress_btf(
+            reflectance,
+            store.grid,
+            n_brightness=brightness,
+            n_spectral=spectral,
+            layout=layout.value,
+        )
+        save_compressed(store, compressed)
+        report = compression_report(compressed, reflectance)
+    print_summary({"btf": str(btf), **report.as_dict()}, "BTF compression", as_json)
+
+
+def evaluate(
+    btf: Annotated[Path, typer.Argument(help="A BTF store made by spectwin process.")],
+    figure: Annotated[Path | None, typer.Option(help="PNG of errors and spectra.")] = None,
+    spp: Annotated[
+        int, typer.Option(min=1, max=65536, help="Samples per pixel of the truth renders.")
+    ] = 64,
+    as_json: JsonFlag = False,
+) -> None:
+    """Compare a processed BTF with the twin's true BTF: per-field Eq. 6.8, corner errors.
+
+    Example: spectwin evaluate out/cc.btf.zarr --figure out/cc_vs_truth.png --json
+    """
+    from recon.btf.store import BTFStore
+    from twin.validate.gonio_evaluation import evaluate_gonio
+    from twin.validate.gonio_figures import write_gonio_figure
+
+    if figure is not None:
+        require_output_file(figure, "--figure")
+    with console.status("rendering the truth and comparing"):
+        result = evaluate_gonio(btf, spp=spp)
+    summary = result.summary()
+    if figure is not None:
+        figure.parent.mkdir(parents=True, exist_ok=True)
+        summary["figure"] = str(write_gonio_figure(result, BTFStore.open(btf), figure))
+    print_summary(summary, "BTF vs the twin's truth", as_json)
+
+
+def validate(
+    btf: Annotated[Path, typer.Argument(help="A BTF store of the twin's colour checker.")],
+    out: Annotated[Path, typer.Option(help="Folder for the PNGs and metrics.json.")] = Path(
+        "validation"
+    ),
+    compressed: Annotated[
+        bool, typer.Option("--compressed", help="Render the store's PCA form (spectwin compress).")
+    ] = False,
+    pixels: Annotated[
+        int,
+        typer.Option(
+            min=23,
+            max=2048,
+            help="Image size of the three panels (at least 23: every chart field keeps an "
+            "interior pixel).",
+        ),
+    ] = 96,
+    spp: Annotated[
+        int,
+        typer.Option(
+            min=4, max=65536, help="Samples per pixel (the photograph's noise adds to Delta E)."
+        ),
+    ] = 256,
+    map_height: Annotated[
+        int,
+        typer.Option(
+            min=4, max=2048, help="Rows of the captured environment map (2x as many columns)."
+        ),
+    ] = 64,
+    as_json: JsonFlag = False,
+) -> None:
+    """Render the BTF back (thesis 4.2): Figure 4.6 (photograph, spectral and RGB renderings,
+    Delta E94 maps) and the 45/0 spectrophotometer comparison, with a metrics JSON.
+
+    Example: spectwin validate out/cc.btf.zarr --out out/validation --compressed
+    """
+    from twin.validate.render_back import validate_btf
+
+    require_output_folder(out)
+    with console.status("validating") as status:
+        metrics = validate_btf(
+            btf,
+            out,
+            compressed=compressed,
+            pixels=pixels,
+            spp=spp,
+            map_height=map_height,
+            step=lambda name: status.update(name),
+        )
+    if as_json:
+        print_summary(metrics, "", as_json)
+        return
+    figure46, forty_five = metrics["figure46"], metrics["spectrophotometer_45_0"]
+    summary = {
+        "out": str(out),
+        "form": metrics["form"],
+        "field_mean_delta_e94_spectral": figure46["field_mean_delta_e94_spectral"],
+        "field_mean_delta_e94_rgb": figure46["field_mean_delta_e94_rgb"],
+        "field_ratio_rgb_over_spectral": figure46["field_ratio_rgb_over_spectral"],
+        "mean_delta_e94_spectral": figure46["mean_delta_e94_spectral"],
+        "mean_delta_e94_rgb": figure46["mean_delta_e94_rgb"],
+        "45/0_mean_error_matte_fields_pct": forty_five["mean_error_matte_fields_pct"],
+        "45/0_max_error_matte_fields_pct": forty_five["max_error_matte_fields_pct"],
+    }
+    print_summary(summary, "BTF rendered back (Figure 4.6, 45/0)")
+
+
+def register(app: typer.Typer) -> None:
+    """Add the commands to ``app``."""
+    for command in (capture, calibrate, process, compress, evaluate, validate):
+        app.command()(command)

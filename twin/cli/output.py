@@ -1,0 +1,54 @@
+"""What the ``spectwin`` commands print: a table of rounded quantities, or full-precision JSON.
+
+Quantity names carry their unit as a suffix (``exposure_per_pair_s``); the table shows it
+with the value ("exposure per pair" | "63.6 s"), rounded by :mod:`twin.output_format`.
+``--json`` prints everything unrounded.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from twin.output_format import dumps, format_value, quantity
+
+__all__ = ["console", "print_summary"]
+
+console = Console()
+
+
+def print_summary(
+    summary: Mapping[str, object],
+    title: str,
+    as_json: bool = False,
+    *,
+    skip: Sequence[str] = (),
+    unit: str | None = None,
+) -> None:
+    """``summary`` as JSON (full precision) or as a table of rounded quantities with units.
+
+    With ``unit`` the keys are names (e.g. of methods), shown as they are, and every value is
+    in ``unit``."""
+    if as_json:
+        typer.echo(dumps(summary))
+        return
+    rows: dict[str, str] = {}
+    for key, value in summary.items():
+        if key in skip:
+            continue
+        name, suffix = (str(key), unit) if unit is not None else quantity(str(key))
+        text = format_value(value)
+        if suffix and isinstance(value, int | float | np.number) and not isinstance(value, bool):
+            text = f"{text} {suffix}"
+        elif suffix:
+            name = f"{name} ({suffix})"
+        # One quantity in several units (total_s, total_h): one row, "475862 s = 132.2 h".
+        rows[name] = f"{rows[name]} = {text}" if name in rows else text
+    table = Table("quantity", "value", title=title)
+    for name, text in rows.items():
+        table.add_row(name, text)
+    console.print(table)

@@ -1,0 +1,330 @@
+"""Capture and processing over a Dask cluster (ARCHITECTURE.md, "Scale").
+
+``spectwin capture`` and ``spectwin process`` run in one process unless told otherwise: with
+``--workers N`` they start a ``LocalCluster`` of ``N`` worker processes of one thread each, with
+``--scheduler ADDRESS`` (or ``DASK_SCHEDULER_ADDRESS``) they use a running cluster, whose workers
+must reach the stores under the same path (a shared filesystem). :func:`dask_client` opens either.
+
+Capture (:func:`run_capture`): the coordinator creates the capture store, or reopens it to
+resume, splits the pending steps into tasks of consecutive steps that share a view
+(:func:`view_tasks`) and submits them. A worker builds the devices from their recipe
+(:class:`twin.devices.sim_devices.SimGonioDevices`), so it renders a view once for all the frames
+of a
+task, and writes its steps' frames, index and progress flags: one chunk per frame, so no chunk has
+two writers. A frame's noise is drawn from ``(seed, step)``, its exposure starts at the time the
+plan gives the step (:func:`hwbridge.plans.plan_start_times_s`: lamp flicker and drift stay
+modelled) and renders are deterministic whatever the thread count, so the frames and every index
+field but the wall-clock ``timestamp`` are bit-identical to a serial capture's. Every worker sets
+its own Mitsuba variant and gives Dr.Jit as many threads as it runs tasks (:class:`RendererSetup`),
+so ``N`` one-thread workers do not oversubscribe ``N`` cores.
+
+Processing (:func:`run_process`): the coordinator prepares the run once (dark model, white
+factors, drift reference: :func:`recon.btf.processing.prepare_gonio_run`), creates the BTF store
+and submits one task per pending direction pair; a worker registers its pair and writes the
+pair's chunks. Workers return metadata only (steps done, pairs registered coarsely or not at all);
+the coordinator alone writes the stores' attributes (``complete``, the outcome lists).
+
+Examples
+--------
+>>> with dask_client(workers=2) as client:  # doctest: +SKIP
+...     run_gonio_measurement("run.capture.zarr", exposures_s, client=client)
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from distributed import Client, Future, LocalCluster, WorkerPlugin, as_completed
+
+from hwbridge.errors import BridgeInputError
+from hwbridge.session import SessionDevices, capture_steps, open_session_store, run_session
+from hwbridge.store import CaptureStore
+from recon.btf.processing import (
+    GonioRun,
+    PairOutcomes,
+    open_btf_store,
+    prepare_gonio_run,
+    process_gonio,
+    process_pairs,
+    record_outcomes,
+)
+from recon.btf.store import BTFStore
+from recon.calibration.gonio import GonioCalibration
+from recon.errors import SpectwinInputError
+from recon.progress import progress_steps
+
+__all__ = [
+    "RendererSetup",
+    "cluster_description",
+    "dask_client",
+    "run_capture",
+    "run_process",
+    "view_tasks",
+]
+
+MAX_TASK_STEPS = 64
+"""Most steps per capture task: a gonio pair's 33 bands stay in one task (one render), the
+calibration's 750 response-series frames of one view spread over several."""
+
+
+@contextmanager
+def dask_client(
+    workers: int = 1, scheduler: str | None = None, *, connect_timeout_s: float = 10.0
+) -> Iterator[Client | None]:
+    """A Dask client for the duration of the ``with`` block, or ``None`` to run serially.
+
+    Parameters
+    ----------
+    workers
+        Worker processes of a ``LocalCluster`` on this machine, one thread each; 0 or 1 (and no
+        ``scheduler``) run serially.
+    scheduler
+        Address of a running scheduler (``tcp://host:8786``); its workers are used.
+    connect_timeout_s
+        How long to try reaching ``scheduler``.
+
+    Yields
+    ------
+    Client or None
+        Connected to the cluster, which a ``LocalCluster`` outlives no longer than the block.
+    """
+    if workers < 0:
+        raise SpectwinInputError(f"workers: expected 0 or more worker processes, got {workers}")
+    if scheduler and workers > 1:
+        raise SpectwinInputError(
+            f"workers: {workers} local workers and the scheduler {scheduler!r} were both given; "
+            "a scheduler's cluster brings its own workers"
+        )
+    if scheduler:
+        try:
+            client = Client(scheduler, timeout=connect_timeout_s)
+        except (OSError, TimeoutError, ValueError) as error:
+            raise SpectwinInputError(
+                f"scheduler {scheduler!r}: no Dask scheduler answered within "
+                f"{connect_timeout_s:g} s ({error}); start one (dask scheduler), or unset "
+                "--scheduler and DASK_SCHEDULER_ADDRESS to run without it"
+            ) from None
+        with client:
+            yield client
+        return
+    if workers <= 1:
+        yield None
+        return
+    cluster = LocalCluster(
+        n_workers=workers,
+        threads_per_worker=1,
+        processes=True,
+        dashboard_address=None,
+        # No dashboard; the scheduler's health page on a free port, so that clusters of
+        # concurrent runs do not compete for port 8787.
+        scheduler_kwargs={"dashboard_address": ":0"},
+        silence_logs=logging.ERROR,
+    )
+    with cluster, Client(cluster) as client:
+        yield client
+
+
+def cluster_description(client: Client | None) -> str:
+    """``"serial"`` or the scheduler's address and its number of workers."""
+    if client is None:
+        return "serial"
+    return f"{client.scheduler.address} ({len(client.nthreads())} workers)"
+
+
+class RendererSetup(WorkerPlugin):
+    """Run on every worker process as it joins: Dr.Jit gets as many threads as the worker runs
+    tasks (unless ``SPECTWIN_THREADS`` says otherwise) and the Mitsuba variant is set
+    (:func:`twin.render.variant.activate`, once per process)."""
+
+    name = "spectwin-renderer"
+
+    def setup(self, worker: Any) -> None:
+        from twin.render.variant import activate
+
+        os.environ.setdefault("SPECTWIN_THREADS", str(worker.state.nthreads))
+        activate()
+
+
+def view_tasks(
+    plan: list[dict], steps: list[int], max_steps: int = MAX_TASK_STEPS
+) -> list[list[int]]:
+    """Split ``steps`` (ascending) into tasks of consecutive steps with one view each, at most
+    ``max_steps`` long: a worker renders the view once per task and owns its steps' chunks.
+
+    Examples
+    --------
+    >>> plan = [{"view_id": v} for v in (-1, -1, 0, 0, 0, 1)]
+    >>> view_tasks(plan, [0, 1, 2, 3, 4, 5], max_steps=2)
+    [[0, 1], [2, 3], [4], [5]]
+    """
+    if max_steps < 1:
+        raise SpectwinInputError(f"max_steps: expected at least 1, got {max_steps}")
+    tasks: list[list[int]] = []
+    for step in steps:
+        view = plan[step].get("view_id", -1)
+        last = tasks[-1] if tasks else None
+        if (
+            last is not None
+            and len(last) < max_steps
+            and last[-1] == step - 1
+            and plan[last[-1]].get("view_id", -1) == view
+        ):
+            last.append(step)
+        else:
+            tasks.append([step])
+    return tasks
+
+
+def _gather(futures: list[Future], description: str, total: int, show_progress: bool) -> list:
+    """The metadata of tasks that return ``(steps done, metadata)``, in the order they finish,
+    advancing a bar of ``total`` steps; on an error the remaining tasks are cancelled and the
+    error raised (a capture or process cut short resumes with ``resume``)."""
+    results = []
+    try:
+        with progress_steps(description, total, enabled=show_progress) as advance:
+            for _, result in as_completed(futures, with_results=True):
+                advance(result[0])
+                results.append(result[1])
+    except BaseException:
+        for future in futures:
+            future.cancel()
+        raise
+    return results
+
+
+def _capture_task(
+    store_path: str, devices: Callable[[], SessionDevices], seed: int, steps: list[int]
+) -> tuple[int, None]:
+    capture_steps(CaptureStore.open(store_path), steps, devices(), seed=seed, check_complete=False)
+    return len(steps), None
+
+
+def run_capture(
+    store: str | Path,
+    plan: list[dict],
+    devices: Callable[[], SessionDevices],
+    *,
+    rig: dict[str, Any],
+    seed: int,
+    backend: str = "sim",
+    resume: bool = False,
+    show_progress: bool = False,
+    client: Client | None = None,
+    max_steps: int = MAX_TASK_STEPS,
+) -> CaptureStore:
+    """Capture ``plan`` into ``store`` in this process, or over ``client``'s cluster.
+
+    Parameters
+    ----------
+    store
+        The capture store, ``<name>.capture.zarr``.
+    plan
+        One dict per step (:mod:`hwbridge.plans`).
+    devices
+        Builds the session's devices when called; it must pickle to run on a cluster
+        (e.g. :class:`twin.devices.sim_devices.SimGonioDevices`).
+    rig, seed, backend
+        Stored with the plan (:func:`hwbridge.session.open_session_store`).
+    resume
+        Continue an interrupted capture (serial or distributed, either way).
+    show_progress
+        A progress bar over the steps.
+    client
+        ``None`` for :func:`hwbridge.session.run_session`, else a Dask client
+        (:func:`dask_client`).
+    max_steps
+        Most steps per task (:func:`view_tasks`).
+
+    Returns
+    -------
+    CaptureStore
+        The complete store.
+    """
+    if client is None:
+        return run_session(
+            store,
+            plan,
+            **devices(),
+            rig=rig,
+            backend=backend,
+            seed=seed,
+            resume=resume,
+            show_progress=show_progress,
+        )
+    session = open_session_store(
+        store, plan, devices(), rig=rig, backend=backend, seed=seed, resume=resume
+    )
+    if not session.one_chunk_per_frame:
+        raise BridgeInputError(
+            f"{session.path}: this store keeps kind and status in one chunk per camera (an "
+            "older spectwin made it), so only one writer may fill it: resume it without "
+            "--workers or --scheduler"
+        )
+    pending = session.pending_steps()
+    client.register_plugin(RendererSetup(), name=RendererSetup.name)
+    [recipe] = client.scatter([devices], broadcast=True, hash=False)
+    path = str(session.path.resolve())
+    futures = [
+        client.submit(_capture_task, path, recipe, seed, steps, pure=False)
+        for steps in view_tasks(plan, pending, max_steps)
+    ]
+    _gather(futures, "capture", len(pending), show_progress)
+    session.refresh_complete()
+    return session
+
+
+def _process_task(
+    run: GonioRun, btf_path: str, pair: int, manual_corners: dict[str, np.ndarray] | None
+) -> tuple[int, PairOutcomes]:
+    btf = BTFStore.open(btf_path, writable=True)
+    return 1, process_pairs(run, btf, [pair], manual_corners=manual_corners, check_complete=False)
+
+
+def run_process(
+    capture: str | Path,
+    calibration: GonioCalibration,
+    out: str | Path,
+    *,
+    texels: int = 128,
+    manual_corners: dict[str, np.ndarray] | None = None,
+    resume: bool = False,
+    show_progress: bool = False,
+    client: Client | None = None,
+) -> BTFStore:
+    """Turn a measurement run into a BTF store in this process
+    (:func:`recon.btf.processing.process_gonio`) or over ``client``'s cluster, one task per
+    direction pair; the parameters are ``process_gonio``'s.
+
+    Returns
+    -------
+    BTFStore
+        The store, complete unless some pairs were not registered (``unregistered_pairs``).
+    """
+    if client is None:
+        return process_gonio(
+            capture,
+            calibration,
+            out,
+            texels=texels,
+            manual_corners=manual_corners,
+            resume=resume,
+            show_progress=show_progress,
+        )
+    run = prepare_gonio_run(capture, calibration)
+    btf = open_btf_store(run, out, texels=texels, resume=resume)
+    pending = btf.pending_pairs()
+    [context] = client.scatter([run], broadcast=True, hash=False)
+    path = str(btf.path.resolve())
+    futures = [
+        client.submit(_process_task, context, path, pair, manual_corners, pure=False)
+        for pair in pending
+    ]
+    record_outcomes(btf, _gather(futures, "process", len(pending), show_progress))
+    btf.refresh_complete()
+    return btf

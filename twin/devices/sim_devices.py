@@ -1,0 +1,333 @@
+"""Simulated devices implementing the ``hwbridge.protocols`` interfaces over one virtual rig.
+
+The tunable filter, the positioner and the camera share a :class:`VirtualRig` state: the camera's
+frame depends on the band the filter is tuned to and the view the positioner has set. Frames come
+from the sensor model (``twin.sensor.model``) fed by a *signal*: the mean photo-electrons of the
+current
+state over the exposure window (the lamp's flicker included, see ``twin.gonio.signals``). Step
+``k`` of a session with seed ``s`` draws its noise from ``numpy.random.default_rng([s, k])``
+and starts its exposure at the plan's start time for that step, so a resumed session reproduces
+an uninterrupted one, and a capture split over Dask workers a serial one. Optional fault injection
+raises timeouts and disconnects.
+
+:class:`SimGonioDevices` is the recipe of the gonioreflectometer's devices: plain data that builds
+them over a fresh :class:`VirtualRig` when called, in the process that runs the steps.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from hwbridge.errors import BridgeInputError, DeviceDisconnected, DeviceTimeout
+from hwbridge.protocols import description, reading
+from hwbridge.session import SessionDevices
+from recon.spectra import DEFAULT_GRID
+from twin.components import HMILamp
+from twin.sensor.model import Sensor
+
+__all__ = [
+    "Signal",
+    "SimCamera",
+    "SimGonioDevices",
+    "SimLamp",
+    "SimLedArray",
+    "SimPositioner",
+    "SimSpectrometer",
+    "SimTunableFilter",
+    "VirtualRig",
+]
+
+
+@dataclass
+class VirtualRig:
+    """State shared by the simulated devices of one rig."""
+
+    band_nm: float | None = None
+    view_id: int = -1
+    lamp_on: bool = True
+    led_pattern: np.ndarray | None = None
+    clock_s: float = 0.0  # start of the current exposure (set by the camera for each step)
+    fault_rate: float = 0.0
+    fault_rng: np.random.Generator | None = None
+
+    def maybe_fail(self, what: str) -> None:
+        """With probability ``fault_rate``, a timeout or (as often) a disconnect."""
+        if not self.fault_rate or self.fault_rng is None:
+            return
+        if self.fault_rng.random() >= self.fault_rate:
+            return
+        if self.fault_rng.random() < 0.5:
+            raise DeviceTimeout(f"simulated timeout of {what}")
+        raise DeviceDisconnected(f"simulated disconnect of {what}")
+
+
+class SimTunableFilter:
+    """A VariSpec-like filter: tuning sets the rig's band."""
+
+    def __init__(
+        self, rig: VirtualRig, *, name: str = "lctf", range_nm: tuple[float, float] = (400.0, 720.0)
+    ):
+        self.name, self._rig, self._range = name, rig, range_nm
+
+    @property
+    def range_nm(self) -> tuple[float, float]:
+        return self._range
+
+    def stage(self) -> None:
+        """Nothing to open."""
+
+    def unstage(self) -> None:
+        """Nothing to close."""
+
+    def set(self, wavelength_nm: float) -> None:
+        low, high = self._range
+        if not low <= wavelength_nm <= high:
+            raise BridgeInputError(f"{self.name}: {wavelength_nm} nm is outside {low}-{high} nm")
+        self._rig.maybe_fail(f"{self.name}.set")
+        self._rig.band_nm = float(wavelength_nm)
+
+    def read(self) -> dict[str, dict[str, Any]]:
+        return reading(f"{self.name}_wavelength_nm", self._rig.band_nm)
+
+    def describe(self) -> dict[str, dict[str, Any]]:
+        return description(
+            f"{self.name}_wavelength_nm", source="simulated", dtype="number", shape=[], units="nm"
+        )
+
+
+class SimLamp:
+    """The gonioreflectometer's lamp: on or off (the camera sees nothing when it is off)."""
+
+    def __init__(self, rig: VirtualRig, *, name: str = "lamp"):
+        self.name, self._rig = name, rig
+
+    def set(self, on: bool) -> None:
+        self._rig.maybe_fail(f"{self.name}.set")
+        self._rig.lamp_on = bool(on)
+
+    def read(self) -> dict[str, dict[str, Any]]:
+        return reading(f"{self.name}_on", self._rig.lamp_on)
+
+    def describe(self) -> dict[str, dict[str, Any]]:
+        return description(
+            f"{self.name}_on", source="simulated", dtype="boolean", shape=[], units=""
+        )
+
+
+class SimLedArray:
+    """The dome's LEDs: any on/off pattern over ``count`` LEDs."""
+
+    def __init__(self, rig: VirtualRig, count: int, *, name: str = "leds"):
+        self.name, self._rig, self._count = name, rig, count
+
+    def set(self, pattern: np.ndarray) -> None:
+        pattern = np.asarray(pattern, dtype=bool)
+        if pattern.shape != (self._count,):
+            raise BridgeInputError(
+                f"{self.name}: expected a pattern of {self._count} LEDs, got {pattern.shape}"
+            )
+        self._rig.maybe_fail(f"{self.name}.set")
+        self._rig.led_pattern = pattern
+
+    def read(self) -> dict[str, dict[str, Any]]:
+        return reading(f"{self.name}_pattern", self._rig.led_pattern)
+
+    def describe(self) -> dict[str, dict[str, Any]]:
+        return description(
+            f"{self.name}_pattern", source="simulated", dtype="array", shape=[self._count], units=""
+        )
+
+
+class SimSpectrometer:
+    """The lamp monitor (thesis 3.3): the lamp's spectrum integrated over the current exposure,
+    drift included, through a fixed collection efficiency."""
+
+    def __init__(
+        self,
+        rig: VirtualRig,
+        lamp: Any,
+        grid: Any,
+        *,
+        efficiency: float = 1e-3,
+        name: str = "monitor",
+    ):
+        self.name, self._rig, self._lamp, self._grid, self._efficiency = (
+            name,
+            rig,
+            lamp,
+            grid,
+            efficiency,
+        )
+        self._last: np.ndarray | None = None
+
+    @property
+    def samples(self) -> int:
+        return self._grid.size
+
+    def trigger(self) -> None:
+        self._rig.maybe_fail(f"{self.name}.trigger")
+        spectrum = self._lamp.exposure_integral(self._grid, self._rig.clock_s, 1.0).values
+        self._last = self._efficiency * spectrum * (1.0 if self._rig.lamp_on else 0.0)
+
+    def read(self) -> dict[str, dict[str, Any]]:
+        if self._last is None:
+            raise BridgeInputError(f"{self.name}: no spectrum yet; call trigger() first")
+        return reading(f"{self.name}_counts", self._last)
+
+    def describe(self) -> dict[str, dict[str, Any]]:
+        return description(
+            f"{self.name}_counts",
+            source="simulated",
+            dtype="array",
+            shape=[self.samples],
+            units="counts",
+        )
+
+
+class SimPositioner:
+    """The gonioreflectometer's robot and rail, addressed by view (direction pair) index."""
+
+    def __init__(self, rig: VirtualRig, views: int, *, name: str = "goniometer"):
+        self.name, self._rig, self._views = name, rig, views
+
+    def set(self, target: dict[str, float]) -> None:
+        view = int(target["view_id"])
+        if not 0 <= view < self._views:
+            raise BridgeInputError(f"{self.name}: view_id {view} is not in 0..{self._views - 1}")
+        self._rig.maybe_fail(f"{self.name}.set")
+        self._rig.view_id = view
+
+    def read(self) -> dict[str, dict[str, Any]]:
+        return reading(f"{self.name}_view_id", self._rig.view_id)
+
+    def describe(self) -> dict[str, dict[str, Any]]:
+        return description(
+            f"{self.name}_view_id", source="simulated", dtype="integer", shape=[], units=""
+        )
+
+
+Signal = Callable[[VirtualRig, float, float], np.ndarray]
+"""(rig state, exposure start in s, exposure in s) -> mean photo-electrons per pixel."""
+
+
+class SimCamera:
+    """A camera of the twin: the signal of the rig's state -> the sensor model -> raw frames.
+
+    ``start_times_s[k]`` is when the exposure of plan step ``k`` starts (``hwbridge.plans.
+    plan_start_times_s``): it sets the lamp's flicker phase for that frame.
+    """
+
+    def __init__(
+        self,
+        rig: VirtualRig,
+        sensor: Sensor,
+        signal: Signal,
+        start_times_s: np.ndarray,
+        *,
+        name: str = "camera",
+    ):
+        self.name, self._rig, self._sensor, self._signal = name, rig, sensor, signal
+        self._start_times_s = np.asarray(start_times_s, dtype=np.float64)
+        self._exposure_s = sensor.config.exposure_range_s[0]
+        self._rng = np.random.default_rng()
+        self._start_s = 0.0
+        self._shutter_open = True
+
+    @property
+    def frame_shape(self) -> tuple[int, int]:
+        return (self._sensor.height, self._sensor.width)
+
+    def stage(self) -> None:
+        """Nothing to open."""
+
+    def unstage(self) -> None:
+        """Nothing to close."""
+
+    def set_exposure(self, exposure_s: float) -> None:
+        self._sensor.mean_dark_electrons(exposure_s)  # validates against the camera's range
+        self._exposure_s = float(exposure_s)
+
+    def set_shutter(self, open_: bool) -> None:
+        """Closed for dark frames: only dark signal reaches the sensor."""
+        self._shutter_open = bool(open_)
+
+    def set_step(self, seed: int, step: int) -> None:
+        """Derive the noise and the exposure start of the next frame from the plan step."""
+        self._rng = np.random.default_rng([seed, step])
+        self._start_s = float(self._start_times_s[step])
+        self._rig.clock_s = self._start_s
+
+    def snap(self) -> tuple[np.ndarray, dict[str, Any]]:
+        self._rig.maybe_fail(f"{self.name}.snap")
+        if self._shutter_open and self._rig.lamp_on:
+            electrons = np.asarray(
+                self._signal(self._rig, self._start_s, self._exposure_s), np.float32
+            )
+        else:
+            electrons = np.zeros(self.frame_shape, np.float32)
+        frame = self._sensor.capture(electrons, self._exposure_s, self._rng)
+        return frame, {"timestamp": time.time(), "exposure_s": self._exposure_s}
+
+    def read(self) -> dict[str, dict[str, Any]]:
+        return reading(f"{self.name}_exposure_s", self._exposure_s)
+
+    def describe(self) -> dict[str, dict[str, Any]]:
+        return description(
+            f"{self.name}_image",
+            source=f"simulated {self._sensor.config.name}",
+            dtype="array",
+            shape=list(self.frame_shape),
+            units="DN",
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class SimGonioDevices:
+    """The simulated gonioreflectometer's devices for one plan, as a recipe.
+
+    Calling it builds, over a fresh :class:`VirtualRig`, the camera ``camera_id`` (``sensor`` fed
+    by ``signal``, exposure ``k`` starting at ``start_times_s[k]``), the LCTF, the positioner
+    over ``views`` views and the HMI lamp monitor. It holds plain data, so it pickles: each Dask
+    worker of a distributed capture builds its own devices from it (:mod:`twin.devices.cluster`).
+
+    Attributes
+    ----------
+    camera_id
+        The camera's id in the plan.
+    sensor
+        Sensor model of the camera (its window is the frame shape).
+    signal
+        Mean photo-electrons of the rig's state (:mod:`twin.gonio.signals`).
+    start_times_s
+        Exposure start of every plan step (:func:`hwbridge.plans.plan_start_times_s`).
+    views
+        Number of views (direction pairs) the positioner knows.
+    fault_rate, fault_seed
+        Injected device faults per call and the seed of their draws (``[fault_seed, 99]``);
+        each build starts the draws afresh.
+    """
+
+    camera_id: str
+    sensor: Sensor
+    signal: Signal
+    start_times_s: np.ndarray
+    views: int
+    fault_rate: float = 0.0
+    fault_seed: int = 0
+
+    def __call__(self) -> SessionDevices:
+        rig = VirtualRig(
+            fault_rate=self.fault_rate, fault_rng=np.random.default_rng([self.fault_seed, 99])
+        )
+        camera = SimCamera(rig, self.sensor, self.signal, self.start_times_s, name=self.camera_id)
+        return SessionDevices(
+            cameras={self.camera_id: camera},
+            tunable_filter=SimTunableFilter(rig),
+            positioner=SimPositioner(rig, self.views),
+            monitor=SimSpectrometer(rig, HMILamp(), DEFAULT_GRID),
+        )

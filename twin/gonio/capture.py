@@ -1,0 +1,335 @@
+"""Capture programs of the simulated gonioreflectometer (thesis 3.3 and 4.1.1).
+
+Two sessions, as on the real rig:
+
+1. ``calibration``: the Zenith white standard on the sample holder facing the HMI lamp; dark
+   frames, an exposure series at 550 nm for the response curve (Robertson), and one photograph
+   per VariSpec band at one exposure time, for the factors :math:`F_\\lambda` of Eq. 3.3 and the
+   exposure plan of Eq. 3.4 (``spectwin calibrate``).
+2. ``run``: one measurement run with the planned band exposures: dark frames spanning them, the
+   white standard through every band (:math:`F'_\\lambda` of the run, Eq. 3.6), then per
+   direction pair the material on its holder through every band. The lamp monitor records the
+   lamp with every lit frame (:math:`F_{i,long}`).
+
+The material is rendered by Mitsuba for the pose the robot actually reaches
+(:func:`actual_poses`: the nominal pose off by the robot's repeatability), so every frame needs
+registration. The store's ``rig`` attribute carries what real processing knows about the rig:
+the nominal directions, the approximate image corners of the registration marks from the nominal
+kinematics, the sample's size relative to the marks and the white standard's data sheet.
+Exposure times are multiples of 1/15 s (HMI flicker, thesis 3.2.2).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from hwbridge.plans import (
+    dark_series,
+    gonio_sample_run,
+    plan_start_times_s,
+    response_curve_series,
+    white_reference_run,
+)
+from hwbridge.store import CaptureStore
+from recon.calibration.spectral import HMI_FLICKER_PERIOD_S
+from recon.errors import SpectwinInputError
+from recon.spectra import DEFAULT_GRID
+from twin.components import HMILamp, LiquidCrystalTunableFilter, zenith_white_reflectance
+from twin.devices.cluster import run_capture
+from twin.devices.sim_devices import SimGonioDevices, VirtualRig
+from twin.gonio.render import gonio_camera, pose_matrix
+from twin.gonio.signals import RenderedGonioSignal, WhiteReferenceSignal
+from twin.materials import load_material
+from twin.materials.sample_holder import PRINT_OUTER_HALF_M, registration_corners
+from twin.rigs.gonio_kinematics import GonioPose, perturbed_pose, solve_pairs
+from twin.rigs.hemisphere import direction, sattler_directions
+from twin.rigs.rig_config import GonioConfig, load_rig
+from twin.sensor.model import Sensor
+
+if TYPE_CHECKING:
+    from distributed import Client
+
+__all__ = [
+    "CAMERA_ID",
+    "REDUCED_RINGS",
+    "GonioPairs",
+    "actual_poses",
+    "gonio_pairs",
+    "run_gonio_calibration",
+    "run_gonio_measurement",
+    "texture_corners_world",
+]
+
+CAMERA_ID = "k4"
+REDUCED_RINGS = ((0.0, 1), (30.0, 4), (60.0, 8))
+"""13 directions (rings of polar angle 0, 30, 60 degrees): the reduced sampling of the twin's
+end-to-end check, 13 x 13 light x view combinations."""
+_OECF_BANDS_NM = (420.0, 450.0, 550.0, 650.0, 700.0)
+_OECF_EXPOSURES = 200  # per band; thesis 3.3: 200 exposures for the response curve
+_DARK_FRAMES = 8
+
+
+class GonioPairs:
+    """The reachable direction pairs of a sampling and their nominal robot poses."""
+
+    def __init__(self, config: GonioConfig, light_dirs: np.ndarray, view_dirs: np.ndarray):
+        solution = solve_pairs(config, light_dirs, view_dirs)
+        keep = np.flatnonzero(solution.exact)
+        if keep.size == 0:
+            raise SpectwinInputError("directions: the rig reaches none of the direction pairs")
+        self.light_dirs = np.asarray(light_dirs, np.float64)[keep]
+        self.view_dirs = np.asarray(view_dirs, np.float64)[keep]
+        self.poses: list[GonioPose] = [solution.poses[i] for i in keep]
+        self.skipped = int(len(solution.poses) - keep.size)
+
+
+def gonio_pairs(
+    config: GonioConfig, rings: tuple[tuple[float, int], ...] = REDUCED_RINGS
+) -> GonioPairs:
+    """Every light x view combination of a ring sampling that the rig reaches exactly."""
+    directions = sattler_directions(rings)
+    return GonioPairs(
+        config,
+        np.repeat(directions, len(directions), axis=0),
+        np.tile(directions, (len(directions), 1)),
+    )
+
+
+def actual_poses(config: GonioConfig, nominal: list[GonioPose], seed: int) -> list[GonioPose]:
+    """The poses the robot reaches in session ``seed`` (repeatability, one draw per pair)."""
+    return [
+        perturbed_pose(pose, config, np.random.default_rng([seed, 7, index]))
+        for index, pose in enumerate(nominal)
+    ]
+
+
+def texture_corners_world(pose: GonioPose) -> np.ndarray:
+    """World points ``(4, 3)`` of the registration marks' corners in texture order (texture
+    ``(0,0), (1,0), (1,1), (0,1)`` = sample ``(-h, +h), (+h, +h), (+h, -h), (-h, -h)``), the
+    orientation of the twin's truth textures (:mod:`twin.render.truth`)."""
+    corners = registration_corners()[[1, 0, 3, 2]]
+    matrix = pose_matrix(pose)
+    return corners @ matrix[:3, :3].T + matrix[:3, 3]
+
+
+def _flicker_multiples(times_s: np.ndarray) -> np.ndarray:
+    """Times rounded up to whole HMI flicker periods (at least one)."""
+    periods = np.maximum(np.ceil(np.asarray(times_s) / HMI_FLICKER_PERIOD_S - 1e-9), 1)
+    return np.unique(periods) * HMI_FLICKER_PERIOD_S
+
+
+def _white_signal(config: GonioConfig, sensor: Sensor) -> WhiteReferenceSignal:
+    return WhiteReferenceSignal(sensor, HMILamp(), distance_m=config.lamps[0].distance_m)
+
+
+def _rig_attrs(config: GonioConfig, pixels: int, program: str) -> dict[str, object]:
+    white = zenith_white_reflectance(DEFAULT_GRID)
+    return {
+        "rig": "gonioreflectometer",
+        "program": program,
+        "camera": config.camera.definition,
+        "camera_id": CAMERA_ID,
+        "window_px": pixels,
+        "lamp": "hmi",
+        "white_reflectance": {
+            "wavelengths_nm": white.wavelengths_nm.tolist(),
+            "values": white.values.tolist(),
+        },
+    }
+
+
+class _GonioSignal:
+    """The white standard at view ``white_view``, the rendered material at every other view."""
+
+    def __init__(self, white: WhiteReferenceSignal, white_view: int, material=None):
+        self._white, self._white_view, self._material = white, white_view, material
+
+    def __call__(self, rig: VirtualRig, start_s: float, exposure_s: float) -> np.ndarray:
+        if rig.view_id == self._white_view:
+            return self._white(rig, start_s, exposure_s)
+        return self._material(rig, start_s, exposure_s)
+
+
+def _capture(
+    store: Path,
+    plan: list[dict],
+    signal,
+    views: int,
+    pixels: int,
+    rig_attrs: dict,
+    seed: int,
+    resume: bool,
+    show_progress: bool,
+    client: Client | None,
+) -> CaptureStore:
+    devices = SimGonioDevices(
+        CAMERA_ID,
+        Sensor(str(rig_attrs["camera"]), roi=(pixels, pixels)),
+        signal,
+        plan_start_times_s(plan),
+        views,
+    )
+    return run_capture(
+        store,
+        plan,
+        devices,
+        rig=rig_attrs,
+        seed=seed,
+        resume=resume,
+        show_progress=show_progress,
+        client=client,
+    )
+
+
+def _with_view(steps: list[dict], view: int) -> list[dict]:
+    return [{**step, "view_id": view} for step in steps]
+
+
+def run_gonio_calibration(
+    store: str | Path,
+    *,
+    pixels: int = 64,
+    spp: int = 64,
+    seed: int = 0,
+    white_fill: float = 0.6,
+    resume: bool = False,
+    show_progress: bool = False,
+    client: Client | None = None,
+) -> CaptureStore:
+    """The calibration session (see the module docstring) into ``store``.
+
+    The response series photographs the colour checker on its holder (view 1, seen frontally,
+    lit from 30 degrees: its fields, card and print give the spread of radiances Robertson's
+    method needs, a uniform target gives one value per exposure) at 1/15 s to 20 s in
+    five bands (420-700 nm: five scenes for Robertson's method, the weak blue band fills the low
+    levels),
+    about 150 distinct whole numbers of flicker periods (thesis 3.3: 200 exposures). The white
+    photographs (view 0) share one exposure time, the longest whole number of flicker periods
+    that keeps the brightest band below ``white_fill`` of saturation (the operator's test shots).
+    With a Dask ``client`` the session runs over its cluster (:mod:`twin.devices.cluster`).
+    """
+    config = load_rig("gonio")
+    sensor = Sensor(config.camera.definition, roi=(pixels, pixels))
+    lctf = LiquidCrystalTunableFilter.varispec(config.camera.filter)
+    white = _white_signal(config, sensor)
+    bands = np.asarray(lctf.band_centres_nm, np.float64)
+    saturation_s = sensor.saturation_capacity_e / white.rates_e_per_s()
+    white_s = max(np.floor(white_fill * saturation_s.min() / HMI_FLICKER_PERIOD_S), 1)
+    white_s *= HMI_FLICKER_PERIOD_S
+    oecf_s = _flicker_multiples(np.geomspace(HMI_FLICKER_PERIOD_S, 20.0, _OECF_EXPOSURES))
+    plan = dark_series(CAMERA_ID, [white_s], _DARK_FRAMES)
+    oecf = response_curve_series(CAMERA_ID, oecf_s)
+    for band in _OECF_BANDS_NM:
+        plan += _with_view([{**step, "band_nm": band} for step in oecf], 1)
+    plan += _with_view(white_reference_run(CAMERA_ID, bands, np.full(bands.size, white_s)), 0)
+    (chart_pose,) = GonioPairs(config, direction(30.0, 0.0)[None], direction(0.0, 0.0)[None]).poses
+    chart = RenderedGonioSignal(
+        config, load_material("colorchecker16"), {1: chart_pose}, pixels=pixels, spp=spp
+    )
+    attrs = _rig_attrs(config, pixels, "gonio-calibration")
+    return _capture(
+        Path(store),
+        plan,
+        _GonioSignal(white, 0, chart),
+        2,
+        pixels,
+        attrs,
+        seed,
+        resume,
+        show_progress,
+        client,
+    )
+
+
+def run_gonio_measurement(
+    store: str | Path,
+    exposures_s: np.ndarray,
+    *,
+    material: str = "colorchecker16",
+    rings: tuple[tuple[float, int], ...] = REDUCED_RINGS,
+    pairs: GonioPairs | None = None,
+    pixels: int = 256,
+    window: int | None = None,
+    spp: int = 64,
+    seed: int = 0,
+    resume: bool = False,
+    show_progress: bool = False,
+    client: Client | None = None,
+) -> CaptureStore:
+    """One measurement run (see the module docstring) with the band exposures of the plan.
+
+    Parameters
+    ----------
+    store
+        Capture store to write.
+    exposures_s
+        ``(33,)`` band exposure times from the calibration (Eq. 3.4), multiples of 1/15 s.
+    material
+        Material on the holder (``scenes/materials``).
+    rings, pairs
+        The direction sampling: every reachable light x view combination of ``rings``, or the
+        given pairs.
+    pixels, window, spp
+        Pixels per side over the camera's 20 cm field, the centred window of them read out
+        (default all; the K4's region of interest) and samples per pixel.
+    seed, resume, show_progress
+        Session seed (noise, robot repeatability), resume an interrupted run, progress bar.
+    client
+        A Dask client to capture over its cluster (:mod:`twin.devices.cluster`), ``None`` to capture
+        in this process; the frames are the same.
+    """
+    config = load_rig("gonio")
+    lctf = LiquidCrystalTunableFilter.varispec(config.camera.filter)
+    bands = np.asarray(lctf.band_centres_nm, np.float64)
+    exposures = np.asarray(exposures_s, np.float64)
+    if exposures.shape != bands.shape or not np.all(np.isfinite(exposures) & (exposures > 0)):
+        raise SpectwinInputError(
+            f"exposures_s: expected {bands.size} positive band exposure times, got "
+            f"shape {exposures.shape}"
+        )
+    periods = exposures / HMI_FLICKER_PERIOD_S
+    if not np.allclose(periods, np.round(periods), rtol=0, atol=1e-6):
+        raise SpectwinInputError(
+            "exposures_s: with the HMI lamp every band exposure must be a multiple of 1/15 s "
+            "(thesis 3.2.2); plan them with spectwin calibrate"
+        )
+    pairs = pairs or gonio_pairs(config, rings)
+    n_pairs = len(pairs.poses)
+    side = window or pixels
+    sensor = Sensor(config.camera.definition, roi=(side, side))
+    dark_s = _flicker_multiples(np.linspace(exposures.min(), exposures.max(), 4))
+    plan = dark_series(CAMERA_ID, dark_s, _DARK_FRAMES)
+    plan += _with_view(white_reference_run(CAMERA_ID, bands, exposures), n_pairs)
+    plan += gonio_sample_run(CAMERA_ID, range(n_pairs), bands, exposures)
+    rendered = RenderedGonioSignal(
+        config,
+        load_material(material),
+        actual_poses(config, pairs.poses, seed),
+        pixels=pixels,
+        spp=spp,
+        window=window,
+    )
+    signal = _GonioSignal(_white_signal(config, sensor), n_pairs, rendered)
+    expected = np.stack(
+        [
+            gonio_camera(config, pose.rail_deg, pixels, window).project(texture_corners_world(pose))
+            for pose in pairs.poses
+        ]
+    )
+    attrs = _rig_attrs(config, side, "gonio-run") | {
+        "sensor_px": pixels,
+        "material": material,
+        "spp": spp,
+        "white_view_id": n_pairs,
+        "light_dirs": pairs.light_dirs.tolist(),
+        "view_dirs": pairs.view_dirs.tolist(),
+        "skipped_pairs": pairs.skipped,
+        "expected_corners_xy": expected.tolist(),
+        "sample_fraction": load_material(material).size_m / (2 * PRINT_OUTER_HALF_M),
+    }
+    return _capture(
+        Path(store), plan, signal, n_pairs + 1, side, attrs, seed, resume, show_progress, client
+    )

@@ -1,0 +1,96 @@
+"""Signals for the simulated cameras: mean photo-electrons of a frame from the rig's state.
+
+Lamps are sums of fixed spectral parts with time-varying weights (``twin.components.Lamp``), so
+a signal stores photo-electron *rates* per part and band and weights them by
+``Lamp.part_exposure_s(start, exposure)``: HMI frames whose exposure is not a multiple of 1/15 s
+then vary with the flicker phase, as on the real rig (thesis 3.2.2).
+
+- :class:`WhiteReferenceSignal`: the Zenith white standard facing the lamp (analytic, uniform).
+- :class:`RenderedGonioSignal`: the material on its holder rendered by Mitsuba for the view the
+  positioner has set; the renders of the current view are kept (one per lamp part, all bands at
+  once), so a plan that goes view by view renders each view once.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from twin.components import FINE_GRID, Lamp, LiquidCrystalTunableFilter
+from twin.devices.sim_devices import VirtualRig
+from twin.gonio.render import gonio_lamp, gonio_part_rates
+from twin.materials import Material
+from twin.rigs.gonio_kinematics import GonioPose
+from twin.rigs.rig_config import GonioConfig
+from twin.sensor.model import Sensor
+from twin.sensor.white_reference import white_reference_rates
+
+__all__ = ["RenderedGonioSignal", "WhiteReferenceSignal"]
+
+
+def _band_index(bands_nm: np.ndarray, band_nm: float | None) -> int:
+    if band_nm is None:
+        raise ValueError("the filter has not been tuned yet")
+    return int(np.argmin(np.abs(bands_nm - band_nm)))
+
+
+class WhiteReferenceSignal:
+    """The white standard at ``distance_m`` from ``lamp``, through the VS-10 bands, uniform."""
+
+    def __init__(self, sensor: Sensor, lamp: Lamp, *, distance_m: float = 2.0):
+        lctf = LiquidCrystalTunableFilter.varispec("VS-10")
+        self._bands_nm = np.asarray(lctf.band_centres_nm)
+        self._rates = white_reference_rates(
+            sensor, lamp, lctf.transmission(FINE_GRID), distance_m=distance_m
+        )
+        self._lamp, self._shape = lamp, (sensor.height, sensor.width)
+
+    def rates_e_per_s(self) -> np.ndarray:
+        """Mean photo-electrons per second and pixel in each band ``(n_bands,)``, averaged over
+        whole flicker periods."""
+        return self._lamp.part_exposure_s(0.0, 1.0) @ self._rates
+
+    def __call__(self, rig: VirtualRig, start_s: float, exposure_s: float) -> np.ndarray:
+        weights = self._lamp.part_exposure_s(start_s, exposure_s)
+        electrons = weights @ self._rates[:, _band_index(self._bands_nm, rig.band_nm)]
+        return np.full(self._shape, electrons, np.float32)
+
+
+class RenderedGonioSignal:
+    """Renders of ``material`` on the gonioreflectometer for the poses of the plan's views."""
+
+    def __init__(
+        self,
+        config: GonioConfig,
+        material: Material | None,
+        poses: list[GonioPose],
+        *,
+        pixels: int,
+        spp: int = 16,
+        window: int | None = None,
+    ):
+        self._config, self._material, self._poses = config, material, poses
+        self._pixels, self._spp, self._window = pixels, spp, window
+        self._bands_nm = np.asarray(
+            LiquidCrystalTunableFilter.varispec(config.camera.filter).band_centres_nm
+        )
+        self._cache: dict[int, np.ndarray] = {}
+
+    def rates(self, view_id: int) -> np.ndarray:
+        """Photo-electron rates ``(n_parts, H, W, n_bands)`` of a view (the last view's kept)."""
+        if view_id not in self._cache:
+            self._cache.clear()
+            self._cache[view_id] = gonio_part_rates(
+                self._config,
+                self._poses[view_id],
+                self._material,
+                pixels=self._pixels,
+                spp=self._spp,
+                window=self._window,
+            )
+        return self._cache[view_id]
+
+    def __call__(self, rig: VirtualRig, start_s: float, exposure_s: float) -> np.ndarray:
+        lamp, _ = gonio_lamp(self._config, self._poses[rig.view_id].lamp_id)
+        weights = lamp.part_exposure_s(start_s, exposure_s)
+        rates = self.rates(rig.view_id)[..., _band_index(self._bands_nm, rig.band_nm)]
+        return np.tensordot(weights, rates, axes=1)

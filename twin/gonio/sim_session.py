@@ -1,0 +1,106 @@
+"""A small simulated gonioreflectometer session: dark frames, then two direction pairs through all
+33 VariSpec bands, on a 32x32 window of the CoolSNAP K4. By default the camera sees the white
+standard under the HMI lamp (analytic); with ``rendered=True`` it sees the colour checker on its
+holder, rendered by Mitsuba for each direction pair. Used by the resume and fault tests and as an
+example of driving ``hwbridge`` with the twin.
+Run as ``python -m twin.gonio.sim_session STORE SEED [--resume] [--fault-rate F] [--rendered]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from hwbridge.plans import dark_series, gonio_sample_run, plan_start_times_s
+from hwbridge.store import CaptureStore
+from twin.components import HMILamp, LiquidCrystalTunableFilter
+from twin.devices.cluster import run_capture
+from twin.devices.sim_devices import SimGonioDevices
+from twin.gonio.signals import RenderedGonioSignal, WhiteReferenceSignal
+from twin.materials import load_material
+from twin.rigs.gonio_kinematics import solve_pairs
+from twin.rigs.hemisphere import direction
+from twin.rigs.rig_config import load_rig
+from twin.sensor.model import Sensor
+
+if TYPE_CHECKING:
+    from distributed import Client
+
+__all__ = ["demo_plan", "run_demo_session"]
+
+_PIXELS = 32
+
+
+def demo_plan() -> list[dict]:
+    """6 dark frames and 2 x 33 band frames (exposures in multiples of 1/15 s)."""
+    lctf = LiquidCrystalTunableFilter.varispec("VS-10")
+    exposures = np.full(len(lctf.band_centres_nm), 2 / 15)
+    return dark_series("k4", [0.1, 1.0], frames_per_exposure=3) + gonio_sample_run(
+        "k4", [0, 1], lctf.band_centres_nm, exposures
+    )
+
+
+_VIEWS = ((30.0, 0.0, 15.0, 180.0), (45.0, 90.0, 30.0, 250.0))  # light, view: (theta, phi)
+
+
+def run_demo_session(
+    store: Path,
+    seed: int,
+    *,
+    resume: bool = False,
+    fault_rate: float = 0.0,
+    rendered: bool = False,
+    show_progress: bool = False,
+    client: Client | None = None,
+) -> CaptureStore:
+    """Run (or resume) the session into ``store``; see the module docstring. With a Dask
+    ``client`` it runs over its cluster (:mod:`twin.devices.cluster`): the frames are the same, the
+    injected faults (drawn afresh in every task) fall on other steps."""
+    sensor = Sensor("coolsnap_k4", roi=(_PIXELS, _PIXELS))
+    plan = demo_plan()
+    if rendered:
+        config = load_rig("gonio")
+        light = direction(np.array([v[0] for v in _VIEWS]), np.array([v[1] for v in _VIEWS]))
+        view = direction(np.array([v[2] for v in _VIEWS]), np.array([v[3] for v in _VIEWS]))
+        poses = list(solve_pairs(config, light, view).poses)
+        signal = RenderedGonioSignal(config, load_material("colorchecker16"), poses, pixels=_PIXELS)
+    else:
+        signal = WhiteReferenceSignal(sensor, HMILamp())
+    devices = SimGonioDevices(
+        "k4",
+        sensor,
+        signal,
+        plan_start_times_s(plan),
+        len(_VIEWS),
+        fault_rate=fault_rate,
+        fault_seed=seed,
+    )
+    return run_capture(
+        store,
+        plan,
+        devices,
+        rig={"rig": "gonioreflectometer", "camera": "coolsnap_k4", "window_px": _PIXELS},
+        seed=seed,
+        resume=resume,
+        show_progress=show_progress,
+        client=client,
+    )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("store", type=Path)
+    parser.add_argument("seed", type=int)
+    parser.add_argument("--resume", action="store_true")
+    parser.add_argument("--fault-rate", type=float, default=0.0)
+    arguments = parser.parse_args()
+    run_demo_session(
+        arguments.store, arguments.seed, resume=arguments.resume, fault_rate=arguments.fault_rate
+    )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,103 @@
+"""Rendering scenes lit by lamps of a few spectral types, one type at a time.
+
+Light transport is linear in the emitted spectrum, wavelength by wavelength: a camera channel of
+response :math:`c(\\lambda)` looking at emitters of spectrum :math:`S(\\lambda)` records
+:math:`\\int c(\\lambda) S(\\lambda) T(\\lambda) d\\lambda`, with :math:`T` the transport of a
+flat unit emitter. The same expectation comes from emitters of flat unit spectrum seen through
+the channel :math:`c S`, and then Mitsuba samples wavelengths in proportion to :math:`c S`
+instead of :math:`c` alone. For spiky lamps (HMI and fluorescent emission lines) this removes
+most of the per-band Monte Carlo noise (thesis 4.2's room: the band noise of a 10 nm band
+under office fluorescent tubes drops from several percent to well below one).
+
+A scene with several lamp types (halogen spots and fluorescent tubes) is rendered once per
+:class:`LightGroup` (the emitters that share one spectrum), the other groups' lamps present as
+dark shapes, and the renders are summed. Each
+channel is normalized to unit area for the render and scaled back, so that every channel gets an
+equal share of the wavelength samples.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from recon.errors import SpectwinInputError
+from recon.spectra import SampledSpectra
+from twin.render.variant import activate
+
+__all__ = ["LightGroup", "lamp_weighted_channels", "render_lit"]
+
+
+@dataclass(frozen=True)
+class LightGroup:
+    """Emitters sharing one emission spectrum.
+
+    ``entries`` are Mitsuba scene entries whose emitters emit a flat spectrum (their own scale
+    only); ``spectrum`` is the spectrum all of them share, on the channels' grid.
+    """
+
+    name: str
+    entries: dict[str, Any]
+    spectrum: SampledSpectra
+
+
+def lamp_weighted_channels(
+    channels: SampledSpectra, spectrum: SampledSpectra
+) -> tuple[SampledSpectra, np.ndarray]:
+    """Channel responses times ``spectrum``, each normalized to unit area, and the areas
+    ``(n_channels,)`` to multiply a render with (module docstring)."""
+    if spectrum.grid != channels.grid:
+        raise SpectwinInputError(
+            f"spectrum: expected the channels' grid ({channels.grid.describe()}), got "
+            f"{spectrum.grid.describe()}"
+        )
+    weighted = np.atleast_2d(channels.values * np.ravel(spectrum.values))
+    areas = np.trapezoid(weighted, channels.grid.wavelengths_nm, axis=-1)
+    areas = np.where(areas > 0, areas, 1.0)
+    return SampledSpectra(channels.grid, weighted / areas[:, None], channels.names), areas
+
+
+def render_lit(
+    camera,
+    channels: SampledSpectra,
+    entries: dict[str, Any],
+    groups: Sequence[LightGroup] = (),
+    *,
+    spp: int = 64,
+    seed: int = 0,
+    max_depth: int = 4,
+) -> np.ndarray:
+    """Render ``entries`` with ``camera`` (anything with ``mitsuba_sensor(channels, spp)``) lit
+    by ``groups``, one render per group (the others' lamps dark) summed; ``(H, W, n_channels)``.
+
+    Without groups, ``entries`` must hold their own emitters, and are rendered once as they are.
+    """
+    activate()
+    import mitsuba as mi
+
+    def render(group_entries: dict[str, Any], film: SampledSpectra) -> np.ndarray:
+        scene = {
+            "type": "scene",
+            "integrator": {"type": "path", "max_depth": max_depth},
+            "sensor": camera.mitsuba_sensor(film, spp),
+            **entries,
+            **group_entries,
+        }
+        return np.array(mi.render(mi.load_dict(scene), seed=seed), dtype=np.float64)
+
+    if not groups:
+        return render({}, channels)
+    total = 0.0
+    for group in groups:
+        film, areas = lamp_weighted_channels(channels, group.spectrum)
+        dark = {
+            name: {key: value for key, value in entry.items() if key != "emitter"}
+            for other in groups
+            if other is not group
+            for name, entry in other.entries.items()
+        }
+        total = total + render({**dark, **group.entries}, film) * areas
+    return total

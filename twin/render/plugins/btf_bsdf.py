@@ -1,0 +1,489 @@
+"""A measured spectral BTF as a Mitsuba BSDF (Python plugin ``spectral_btf``), thesis 4.2.
+
+A BTF measured on a light x view product set of directions (Sattler's 81 x 81, or the twin's
+reduced 13 x 13) is rendered by interpolating, per shading point:
+
+- in direction: barycentric interpolation on the hemisphere, separately for the light and the
+  view direction (Delaunay triangulation of the directions' orthographic projections onto the
+  unit disk, precomputed on a ``resolution x resolution`` lookup grid; outside the measured
+  directions' hull the nearest direction is used), i.e. 3 x 3 measured pairs per lookup;
+- in space: bilinear between texels (texture coordinates ``uv`` of the shape, texel ``(i, j)``
+  at ``u = (j + 0.5) / W``, ``v = 1 - (i + 0.5) / H``: rows run from the sample's +y edge down,
+  as in the BTF store);
+- in wavelength: linear between bands, constant beyond the first and last band.
+
+Pairs the rig could not measure (light and view too close) are filled from the nearest measured
+view of the same light. Directions use the shading frame (x = dp/du), as the BTF uses the
+sample frame. The BSDF samples the cosine-weighted hemisphere. A BTF sampled from a known BRDF
+renders like the BRDF itself (``tests/twin/test_btf_bsdf.py``).
+
+The BTF is either decoded (:class:`BTFTable`, ``4 L V H W K`` bytes) or PCA-compressed
+(:class:`CompressedTable`, :mod:`recon.btf.compression`, thesis 4.1.2). A compressed BTF stays
+compressed on the renderer's side: every lookup decodes its texels from the factors,
+:math:`R = (\\mu_b + A_b[p] C_b)(\\mu_s + A_s[p, k] C_s)`, in two Dr.Jit loops over the components
+(``c_b + c_s`` steps per measured pair and texel), so memory is the factors' size.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import Delaunay
+
+from recon.btf.compression import CompressedBTF, load_compressed
+from recon.btf.store import BTFStore
+from recon.errors import SpectwinInputError
+from recon.spectra import WavelengthGrid
+from twin.render.plugins.registry import PluginData, register_once
+
+__all__ = [
+    "BTFTable",
+    "CompressedTable",
+    "compressed_product_table",
+    "store_table",
+    "barycentric",
+    "btf_bsdf",
+    "hemisphere_lookup",
+    "interpolate_table",
+    "product_table",
+    "written_table",
+]
+
+_TABLES = PluginData("btf")
+
+
+@dataclass(frozen=True)
+class BTFTable:
+    """A BTF on a product set: ``values`` ``(n_lights, n_views, H, W, K)`` in 1/sr."""
+
+    light_dirs: np.ndarray
+    view_dirs: np.ndarray
+    values: np.ndarray
+    grid: WavelengthGrid
+
+    def __post_init__(self) -> None:
+        shape = self.values.shape
+        if (
+            len(shape) != 5
+            or shape[:2] != (len(self.light_dirs), len(self.view_dirs))
+            or shape[4] != self.grid.size
+        ):
+            raise SpectwinInputError(
+                f"values: expected (n_lights, n_views, H, W, K) = ({len(self.light_dirs)}, "
+                f"{len(self.view_dirs)}, H, W, {self.grid.size}), got {shape}"
+            )
+        if not np.all(np.isfinite(self.values)):
+            raise SpectwinInputError("values: expected finite reflectance")
+        _check_regular(self.grid)
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes the renderer holds for the reflectance (float32)."""
+        return 4 * self.values.size
+
+    def texture(self, light: int, view: int) -> np.ndarray:
+        """The texture ``(H, W, K)`` of the product set's ``(light, view)`` combination."""
+        return self.values[light, view]
+
+
+@dataclass(frozen=True)
+class CompressedTable:
+    """A PCA-compressed BTF on a product set: combination ``(light, view)`` reads the
+    compressed BTF's pair ``pairs[light, view]``."""
+
+    light_dirs: np.ndarray
+    view_dirs: np.ndarray
+    pairs: np.ndarray
+    compressed: CompressedBTF
+
+    def __post_init__(self) -> None:
+        want = (len(self.light_dirs), len(self.view_dirs))
+        if self.pairs.shape != want:
+            raise SpectwinInputError(f"pairs: expected shape {want}, got {self.pairs.shape}")
+        n_pairs = self.compressed.shape[0]
+        if self.pairs.min() < 0 or self.pairs.max() >= n_pairs:
+            raise SpectwinInputError(
+                f"pairs: expected indices of the compressed BTF's {n_pairs} pairs"
+            )
+        _check_regular(self.compressed.grid)
+
+    @property
+    def grid(self) -> WavelengthGrid:
+        return self.compressed.grid
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes the renderer holds for the reflectance: the factors (float32)."""
+        return self.compressed.nbytes
+
+    def texture(self, light: int, view: int) -> np.ndarray:
+        """The decoded texture ``(H, W, K)`` of the combination ``(light, view)``."""
+        return self.compressed.decode_pair(int(self.pairs[light, view]))
+
+
+def _check_regular(grid: WavelengthGrid) -> None:
+    steps = np.diff(grid.wavelengths_nm)
+    if steps.size and not np.allclose(steps, steps[0]):
+        raise SpectwinInputError("grid: expected a regular wavelength grid (resample first)")
+
+
+def _unique_directions(directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    rounded = np.round(np.asarray(directions, np.float64), 9)
+    unique, inverse = np.unique(rounded, axis=0, return_inverse=True)
+    return unique / np.linalg.norm(unique, axis=1, keepdims=True), inverse.ravel()
+
+
+def _product_set(
+    light_dirs: np.ndarray, view_dirs: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The distinct lights and views of pairs given by their directions, and for every light x
+    view combination the pair it reads: its own, or the nearest measured view of its light."""
+    lights, light_index = _unique_directions(light_dirs)
+    views, view_index = _unique_directions(view_dirs)
+    pairs = np.full((len(lights), len(views)), -1, np.int64)
+    pairs[light_index, view_index] = np.arange(len(light_index))
+    for light in range(len(lights)):
+        have = np.flatnonzero(pairs[light] >= 0)
+        if have.size == 0:
+            raise SpectwinInputError(f"light direction {lights[light].tolist()} has no views")
+        for view in np.flatnonzero(pairs[light] < 0):
+            pairs[light, view] = pairs[light, have[np.argmax(views[have] @ views[view])]]
+    return lights, views, pairs
+
+
+def product_table(
+    light_dirs: np.ndarray, view_dirs: np.ndarray, reflectance: np.ndarray, grid: WavelengthGrid
+) -> BTFTable:
+    """Arrange pairs ``(n_pairs, H, W, K)`` (e.g. a BTF store's) on their light x view product
+    set; a missing combination takes the nearest measured view of the same light."""
+    lights, views, pairs = _product_set(light_dirs, view_dirs)
+    return BTFTable(lights, views, np.asarray(reflectance, np.float32)[pairs], grid)
+
+
+def compressed_product_table(
+    light_dirs: np.ndarray, view_dirs: np.ndarray, compressed: CompressedBTF
+) -> CompressedTable:
+    """The compressed BTF's pairs (directions in its pair order) on their product set, filled
+    like :func:`product_table`."""
+    if len(light_dirs) != compressed.shape[0] or len(view_dirs) != compressed.shape[0]:
+        raise SpectwinInputError(
+            f"light_dirs, view_dirs: expected one per compressed pair ({compressed.shape[0]}), "
+            f"got {len(light_dirs)} and {len(view_dirs)}"
+        )
+    lights, views, pairs = _product_set(light_dirs, view_dirs)
+    return CompressedTable(lights, views, pairs, compressed)
+
+
+def written_table(btf: BTFStore) -> BTFTable:
+    """The written pairs of a BTF store on their product set (:func:`product_table`)."""
+    written = np.flatnonzero(btf.written())
+    values = np.stack([btf.read_pair(pair, allow_incomplete=True) for pair in written])
+    return product_table(btf.light_dirs[written], btf.view_dirs[written], values, btf.grid)
+
+
+def store_table(btf: BTFStore, *, compressed: bool = False) -> BTFTable | CompressedTable:
+    """A BTF store as the plugin's table: its written pairs decoded (:func:`written_table`), or
+    with ``compressed`` its ``pca/`` form (``spectwin compress``), left compressed."""
+    if not compressed:
+        return written_table(btf)
+    return compressed_product_table(btf.light_dirs, btf.view_dirs, load_compressed(btf))
+
+
+def barycentric(directions: np.ndarray, queries: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Indices and weights ``(n, 3)`` interpolating ``directions`` at ``queries`` ``(n, 3)`` (or
+    their ``(n, 2)`` disk projections): barycentric in the Delaunay triangulation of the
+    directions' orthographic projections, the nearest direction outside their hull (and
+    everywhere when the projections lie on one line: no triangle to interpolate in)."""
+    points = np.asarray(directions, np.float64)[:, :2]
+    queries = np.asarray(queries, np.float64)[:, :2]
+    indices = np.zeros((queries.shape[0], 3), np.int64)
+    weights = np.zeros((queries.shape[0], 3))
+    inside = np.zeros(queries.shape[0], bool)
+    if np.linalg.matrix_rank(points - points.mean(axis=0), tol=1e-9) == 2:
+        triangulation = Delaunay(points)
+        simplex = triangulation.find_simplex(queries)
+        inside = simplex >= 0
+        transform = triangulation.transform[simplex[inside]]
+        partial = np.einsum("nij,nj->ni", transform[:, :2], queries[inside] - transform[:, 2])
+        weights[inside] = np.column_stack([partial, 1 - partial.sum(axis=1)])
+        indices[inside] = triangulation.simplices[simplex[inside]]
+    nearest = np.argmin(((queries[~inside, None] - points[None]) ** 2).sum(axis=2), axis=1)
+    indices[~inside] = nearest[:, None]
+    weights[~inside] = [1.0, 0.0, 0.0]
+    return indices, np.clip(weights, 0, 1)
+
+
+def hemisphere_lookup(directions: np.ndarray, resolution: int = 128):
+    """Barycentric weights over ``directions`` (:func:`barycentric`) on a grid over the unit disk.
+
+    Returns ``(indices, weights)``, each ``(resolution, resolution, 3)``: grid cell ``(a, b)``
+    holds the point ``x = -1 + (b + 0.5) 2 / resolution``, ``y = -1 + (a + 0.5) 2 / resolution``
+    of the orthographic projection (a direction's ``(x, y)``).
+    """
+    centres = -1 + (np.arange(resolution) + 0.5) * 2 / resolution
+    x, y = np.meshgrid(centres, centres)
+    indices, weights = barycentric(directions, np.column_stack([x.ravel(), y.ravel()]))
+    shape = (resolution, resolution, 3)
+    return indices.reshape(shape), weights.reshape(shape)
+
+
+def interpolate_table(
+    table: BTFTable | CompressedTable, light: np.ndarray, view: np.ndarray
+) -> np.ndarray:
+    """The table's texture ``(H, W, K)`` at one (light, view) pair, interpolated like the plugin
+    does (without its lookup grid)."""
+    light_indices, light_weights = barycentric(table.light_dirs, np.atleast_2d(light))
+    view_indices, view_weights = barycentric(table.view_dirs, np.atleast_2d(view))
+    texture = 0.0
+    for i, wi in zip(light_indices[0], light_weights[0], strict=True):
+        for j, wj in zip(view_indices[0], view_weights[0], strict=True):
+            if wi * wj > 0:
+                texture = texture + wi * wj * table.texture(i, j).astype(np.float64)
+    return texture
+
+
+def btf_bsdf(table: BTFTable | CompressedTable, *, resolution: int = 128) -> dict[str, object]:
+    """Scene-dict entry of the BSDF for ``table`` (registers the plugin)."""
+    register_once("bsdf", "spectral_btf", _plugin_class)
+    return {"type": "spectral_btf", "btf": _TABLES.keep(table), "resolution": resolution}
+
+
+class _DecodedSpectra:
+    """Texel spectra of a :class:`BTFTable`, gathered from its values (Dr.Jit side)."""
+
+    def __init__(self, table: BTFTable):
+        import mitsuba as mi
+
+        _, self.n_views, self.height, self.width, self.bands = table.values.shape
+        self._values = mi.Float(table.values.astype(np.float32).ravel())
+
+    def __call__(self, combination, texel, lows, fractions, mask):
+        """Reflectance of ``texel`` at the product set's ``combination`` (light * n_views +
+        view), one value per wavelength channel, linear between the bands ``lows`` and
+        ``lows + 1``."""
+        import drjit as dr
+        import mitsuba as mi
+
+        base = (combination * (self.height * self.width) + texel) * self.bands
+        channels = []
+        for low, fraction in zip(lows, fractions, strict=True):
+            first = dr.gather(mi.Float, self._values, base + low, mask)
+            second = dr.gather(
+                mi.Float, self._values, base + dr.minimum(low + 1, self.bands - 1), mask
+            )
+            channels.append(first + fraction * (second - first))
+        return channels
+
+
+class _CompressedSpectra:
+    """Texel spectra of a :class:`CompressedTable`, decoded from the PCA factors per lookup."""
+
+    def __init__(self, table: CompressedTable):
+        import mitsuba as mi
+
+        compressed = table.compressed
+        _, self.height, self.width, self.bands = compressed.shape
+        self.n_views = len(table.view_dirs)
+        self._texels = self.height * self.width
+        self._per_band = compressed.layout == "per_band"
+        self._n_brightness, self._n_spectral = compressed.n_brightness, compressed.n_spectral
+        self._pairs = mi.UInt32(table.pairs.ravel().astype(np.uint32))
+        self._factors = {
+            name: mi.Float(np.asarray(getattr(compressed, name), np.float32).ravel())
+            for name in (
+                "brightness_mean",
+                "brightness_scores",
+                "brightness_components",
+                "spectral_mean",
+                "spectral_scores",
+                "spectral_components",
+            )
+        }
+
+    def _gather(self, name, index, mask):
+        import drjit as dr
+        import mitsuba as mi
+
+        return dr.gather(mi.Float, self._factors[name], index, mask)
+
+    @staticmethod
+    def _sum_over_components(count, terms, width):
+        """``sum_{c < count} terms(c)`` for every entry of the list ``terms`` returns, as a
+        symbolic Dr.Jit loop (one compiled loop, not ``count`` unrolled steps)."""
+        import drjit as dr
+        import mitsuba as mi
+
+        n_terms = len(terms(dr.zeros(mi.UInt32, width)))
+        state = (dr.zeros(mi.UInt32, width), *[dr.zeros(mi.Float, width) for _ in range(n_terms)])
+
+        def body(component, *sums):
+            return (component + 1, *[s + t for s, t in zip(sums, terms(component), strict=True)])
+
+        return dr.while_loop(state, lambda component, *_: component < count, body)[1:]
+
+    def __call__(self, combination, texel, lows, fractions, mask):
+        """As :meth:`_DecodedSpectra.__call__`, decoding b and s at the texel (module docstring)."""
+        import drjit as dr
+        import mitsuba as mi
+
+        width = dr.width(texel)
+        pair = dr.gather(mi.UInt32, self._pairs, combination, mask)
+        c_b, c_s, n_texels = self._n_brightness, self._n_spectral, self._texels
+
+        (brightness,) = self._sum_over_components(
+            c_b,
+            lambda c: [
+                self._gather("brightness_scores", pair * c_b + c, mask)
+                * self._gather("brightness_components", c * n_texels + texel, mask)
+            ],
+            width,
+        )
+        brightness += self._gather("brightness_mean", texel, mask)
+        highs = [dr.minimum(low + 1, self.bands - 1) for low in lows]
+        groups = [
+            (low, high) if self._per_band else (mi.UInt32(0), mi.UInt32(0))
+            for low, high in zip(lows, highs, strict=True)
+        ]
+
+        def spectral_terms(c):
+            terms = []
+            for low, high, fraction, (g_low, g_high) in zip(
+                lows, highs, fractions, groups, strict=True
+            ):
+                score_low = self._gather(
+                    "spectral_scores", (pair * self.bands + low) * c_s + c, mask
+                )
+                score_high = self._gather(
+                    "spectral_scores", (pair * self.bands + high) * c_s + c, mask
+                )
+                component_low = self._gather(
+                    "spectral_components", (g_low * c_s + c) * n_texels + texel, mask
+                )
+                component_high = self._gather(
+                    "spectral_components", (g_high * c_s + c) * n_texels + texel, mask
+                )
+                terms.append(
+                    (1 - fraction) * score_low * component_low
+                    + fraction * score_high * component_high
+                )
+            return terms
+
+        spectra = self._sum_over_components(c_s, spectral_terms, width)
+        channels = []
+        for spectrum, fraction, (g_low, g_high) in zip(spectra, fractions, groups, strict=True):
+            mean_low = self._gather("spectral_mean", g_low * n_texels + texel, mask)
+            mean_high = self._gather("spectral_mean", g_high * n_texels + texel, mask)
+            channels.append(brightness * (spectrum + mean_low + fraction * (mean_high - mean_low)))
+        return channels
+
+
+def _plugin_class():
+    """The plugin class, built once the Mitsuba variant is set."""
+    import drjit as dr
+    import mitsuba as mi
+
+    class SpectralBTF(mi.BSDF):
+        def __init__(self, props):
+            super().__init__(props)
+            table = _TABLES[props["btf"]]
+            self._resolution = int(props.get("resolution", 128))
+            if isinstance(table, CompressedTable):
+                self._spectra = _CompressedSpectra(table)
+            else:
+                self._spectra = _DecodedSpectra(table)
+            self._lookups = []
+            for directions in (table.light_dirs, table.view_dirs):
+                indices, weights = hemisphere_lookup(directions, self._resolution)
+                self._lookups.append(
+                    (mi.UInt32(indices.ravel().astype(np.uint32)), mi.Float(weights.ravel()))
+                )
+            wavelengths = table.grid.wavelengths_nm
+            self._first_nm = float(wavelengths[0])
+            self._step_nm = float(wavelengths[1] - wavelengths[0]) if len(wavelengths) > 1 else 1.0
+            flags = (
+                mi.BSDFFlags.DiffuseReflection
+                | mi.BSDFFlags.FrontSide
+                | mi.BSDFFlags.SpatiallyVarying
+            )
+            self.m_components = [flags]
+            self.m_flags = flags
+
+        def _corners(self, which, direction):
+            """Three (direction index, weight) of the lookup grid cell of ``direction``."""
+            indices, weights = self._lookups[which]
+            scale = self._resolution / 2
+            column = dr.clip(mi.Int32(dr.floor((direction.x + 1) * scale)), 0, self._resolution - 1)
+            row = dr.clip(mi.Int32(dr.floor((direction.y + 1) * scale)), 0, self._resolution - 1)
+            cell = mi.UInt32(row * self._resolution + column) * 3
+            return [
+                (dr.gather(mi.UInt32, indices, cell + k), dr.gather(mi.Float, weights, cell + k))
+                for k in range(3)
+            ]
+
+        def _texels(self, uv):
+            """Four (texel offset, weight) of the bilinear footprint of ``uv``."""
+            height, width = self._spectra.height, self._spectra.width
+            x = dr.clip(uv.x * width - 0.5, 0.0, width - 1.0)
+            y = dr.clip((1 - uv.y) * height - 0.5, 0.0, height - 1.0)
+            x0 = dr.minimum(mi.UInt32(x), max(width - 2, 0))
+            y0 = dr.minimum(mi.UInt32(y), max(height - 2, 0))
+            fx, fy = dr.clip(x - mi.Float(x0), 0, 1), dr.clip(y - mi.Float(y0), 0, 1)
+            x1, y1 = dr.minimum(x0 + 1, width - 1), dr.minimum(y0 + 1, height - 1)
+            return [
+                (y0 * width + x0, (1 - fx) * (1 - fy)),
+                (y0 * width + x1, fx * (1 - fy)),
+                (y1 * width + x0, (1 - fx) * fy),
+                (y1 * width + x1, fx * fy),
+            ]
+
+        def _reflectance(self, si, light, view, active):
+            bands = self._spectra.bands
+            value = mi.UnpolarizedSpectrum(0.0)
+            lows, fractions = [], []
+            for channel in range(4):
+                position = (si.wavelengths[channel] - self._first_nm) / self._step_nm
+                low = dr.minimum(mi.UInt32(dr.maximum(position, 0.0)), max(bands - 2, 0))
+                lows.append(low)
+                fractions.append(dr.clip(position - mi.Float(low), 0.0, 1.0))
+            texels = self._texels(si.uv)
+            for light_index, light_weight in self._corners(0, light):
+                for view_index, view_weight in self._corners(1, view):
+                    combination = light_index * self._spectra.n_views + view_index
+                    for texel, texel_weight in texels:
+                        weight = light_weight * view_weight * texel_weight
+                        mask = active & (weight > 0)
+                        samples = self._spectra(combination, texel, lows, fractions, mask)
+                        for channel, sample in enumerate(samples):
+                            value[channel] += dr.select(mask, weight * sample, 0.0)
+            return value
+
+        def sample(self, ctx, si, sample1, sample2, active=True):
+            cos_view = mi.Frame3f.cos_theta(si.wi)
+            bs = dr.zeros(mi.BSDFSample3f)
+            bs.wo = mi.warp.square_to_cosine_hemisphere(sample2)
+            bs.pdf = mi.warp.square_to_cosine_hemisphere_pdf(bs.wo)
+            bs.eta = 1.0
+            bs.sampled_type = mi.UInt32(+mi.BSDFFlags.DiffuseReflection)
+            bs.sampled_component = mi.UInt32(0)
+            active = active & (cos_view > 0) & (bs.pdf > 0)
+            value = self._reflectance(si, bs.wo, si.wi, active) * dr.pi
+            return bs, dr.select(active, value, 0.0)
+
+        def eval(self, ctx, si, wo, active=True):
+            cos_light = mi.Frame3f.cos_theta(wo)
+            active = active & (mi.Frame3f.cos_theta(si.wi) > 0) & (cos_light > 0)
+            return dr.select(active, self._reflectance(si, wo, si.wi, active) * cos_light, 0.0)
+
+        def pdf(self, ctx, si, wo, active=True):
+            active = active & (mi.Frame3f.cos_theta(si.wi) > 0)
+            return dr.select(active, mi.warp.square_to_cosine_hemisphere_pdf(wo), 0.0)
+
+        def eval_pdf(self, ctx, si, wo, active=True):
+            return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
+
+        def to_string(self):
+            spectra = self._spectra
+            return f"SpectralBTF[{type(spectra).__name__}, {spectra.height}x{spectra.width}]"
+
+    return SpectralBTF

@@ -1,0 +1,57 @@
+"""Surface parts (:mod:`twin.materials.surfaces`) as Mitsuba shapes, built in memory.
+
+Each part's reflectance goes to Mitsuba as an irregular spectrum, so renders and the noise-free
+truth use exactly the same spectra.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from twin.materials.surfaces import SurfacePart
+from twin.render.spectra import irregular_spectrum
+from twin.render.variant import activate
+
+__all__ = ["mitsuba_shape", "part_bsdf"]
+
+
+def part_bsdf(part: SurfacePart) -> dict[str, object]:
+    """The Mitsuba BSDF dict of ``part``: its diffuse reflectance, coating or conductor."""
+    if part.conductor is not None:
+        return {
+            "type": "roughconductor",
+            "material": part.conductor,
+            "alpha": part.roughness or 0.05,
+        }
+    diffuse = irregular_spectrum(part.reflectance)
+    if part.roughness is None:
+        return {"type": "diffuse", "reflectance": diffuse}
+    return {
+        "type": "roughplastic",
+        "diffuse_reflectance": diffuse,
+        "alpha": part.roughness,
+        "int_ior": 1.5,
+        "nonlinear": False,
+    }
+
+
+def mitsuba_shape(part: SurfacePart):
+    """A Mitsuba mesh built in memory from ``part`` (no files), with its BSDF attached."""
+    activate()
+    import mitsuba as mi
+
+    properties = mi.Properties()
+    properties["bsdf"] = mi.load_dict(part_bsdf(part))
+    mesh = mi.Mesh(
+        part.name,
+        len(part.mesh.vertices),
+        len(part.mesh.faces),
+        props=properties,
+        has_vertex_normals=False,
+        has_vertex_texcoords=False,
+    )
+    parameters = mi.traverse(mesh)
+    parameters["vertex_positions"] = mi.Float(np.asarray(part.mesh.vertices, np.float32).ravel())
+    parameters["faces"] = mi.UInt32(np.asarray(part.mesh.faces, np.uint32).ravel())
+    parameters.update()
+    return mesh

@@ -1,0 +1,143 @@
+"""The noise-free truth of a material: spectral BTF and camera RGB, rectified to texels.
+
+For each light direction :math:`l` and view direction :math:`v` (sample frame), the material is
+lit by a distant light of spectrally flat unit irradiance on a plane facing it and seen by an
+orthographic camera whose rays run along :math:`-v` and whose pixels are the texels of the
+sample's square, so every image is rectified like a measured BTF. The reflectance BTF (1/sr) is
+:math:`L_o / (E \\cos\\theta_l)` averaged over each band's normalized passband; shadowing,
+masking and interreflection within the material are included, as in a measurement.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from recon.errors import SpectwinInputError
+from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid
+from twin.components import FINE_GRID
+from twin.materials import Material
+from twin.render.shapes import mitsuba_shape
+from twin.render.spectra import irregular_spectrum, ldsampler, specfilm
+from twin.render.variant import activate
+
+__all__ = ["band_passbands", "truth_btf", "truth_camera_signal"]
+
+
+def band_passbands(centres: WavelengthGrid = DEFAULT_GRID, fwhm_nm: float = 10.0) -> SampledSpectra:
+    """Gaussian passbands of unit area on ``FINE_GRID``: channel value = band-mean spectrum."""
+    sigma = fwhm_nm / (2 * np.sqrt(2 * np.log(2)))
+    wavelengths = FINE_GRID.wavelengths_nm
+    shapes = np.exp(-0.5 * ((wavelengths[None, :] - centres.wavelengths_nm[:, None]) / sigma) ** 2)
+    shapes /= np.trapezoid(shapes, wavelengths, axis=1)[:, None]
+    return SampledSpectra(FINE_GRID, shapes, tuple(f"band_{c:g}nm" for c in centres.wavelengths_nm))
+
+
+def _render(
+    material: Material,
+    light: np.ndarray,
+    view: np.ndarray,
+    channels: SampledSpectra,
+    irradiance: SampledSpectra,
+    texels: int,
+    spp: int,
+    seed: int,
+) -> np.ndarray:
+    activate()
+    import mitsuba as mi
+
+    half = material.size_m / 2
+    to_world = np.eye(4)
+    # Mitsuba's film x runs along the camera's -x: map it to the sample's +x so that texel
+    # (row, column) is (y from +half down, x from -half up).
+    to_world[:3, 0], to_world[:3, 1] = (-half, 0, 0), (0, half, 0)
+    to_world[:3, 2], to_world[:3, 3] = -view, 0.1 * view
+    scene = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": 4},
+        "sensor": {
+            "type": "orthographic",
+            "to_world": mi.ScalarTransform4f(to_world.tolist()),
+            "film": specfilm(channels, texels, texels),
+            "sampler": ldsampler(spp),
+        },
+        "light": {
+            "type": "directional",
+            "direction": (-light).tolist(),
+            "irradiance": irregular_spectrum(irradiance),
+        },
+    }
+    for part in material.parts:
+        scene[part.name] = mitsuba_shape(part)
+    return np.array(mi.render(mi.load_dict(scene), seed=seed), dtype=np.float64)
+
+
+def _check_directions(
+    light_dirs: np.ndarray, view_dirs: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    light_dirs, view_dirs = np.atleast_2d(light_dirs), np.atleast_2d(view_dirs)
+    if light_dirs.shape != view_dirs.shape or light_dirs.shape[1] != 3:
+        raise SpectwinInputError("light_dirs, view_dirs: expected matching (n, 3) unit vectors")
+    if not np.allclose(np.linalg.norm(light_dirs, axis=1), 1) or not np.allclose(
+        np.linalg.norm(view_dirs, axis=1), 1
+    ):
+        raise SpectwinInputError("light_dirs, view_dirs: expected unit vectors")
+    if np.any(light_dirs[:, 2] <= 0) or np.any(view_dirs[:, 2] <= 0):
+        raise SpectwinInputError(
+            "light_dirs, view_dirs: expected directions above the sample (z > 0)"
+        )
+    return light_dirs, view_dirs
+
+
+def truth_btf(
+    material: Material,
+    light_dirs: np.ndarray,
+    view_dirs: np.ndarray,
+    *,
+    texels: int = 64,
+    bands: WavelengthGrid = DEFAULT_GRID,
+    passbands: SampledSpectra | None = None,
+    spp: int = 64,
+    seed: int = 0,
+) -> np.ndarray:
+    """True reflectance BTF ``(n_pairs, texels, texels, n_bands)`` in 1/sr.
+
+    Each band is the reflectance averaged over its passband: by default Gaussians of 10 nm FWHM
+    at ``bands`` (:func:`band_passbands`); an instrument's own weighting (filter x sensor x
+    lamp, each row of unit area on ``FINE_GRID``) gives the values that instrument measures.
+    """
+    light_dirs, view_dirs = _check_directions(light_dirs, view_dirs)
+    flat = SampledSpectra(FINE_GRID, np.ones(FINE_GRID.size))
+    if passbands is None:
+        passbands = band_passbands(bands)
+    elif passbands.grid != FINE_GRID or passbands.values.ndim != 2:
+        raise SpectwinInputError(
+            f"passbands: expected (n_bands, K) rows on {FINE_GRID.describe()}, got "
+            f"{passbands.values.shape} on {passbands.grid.describe()}"
+        )
+    images = [
+        _render(material, light, view, passbands, flat, texels, spp, seed) / light[2]
+        for light, view in zip(light_dirs, view_dirs, strict=True)
+    ]
+    return np.stack(images).astype(np.float32)
+
+
+def truth_camera_signal(
+    material: Material,
+    light_dirs: np.ndarray,
+    view_dirs: np.ndarray,
+    response: SampledSpectra,
+    illuminant: SampledSpectra,
+    *,
+    texels: int = 64,
+    spp: int = 64,
+    seed: int = 0,
+) -> np.ndarray:
+    """True, noise-free camera values ``(n_pairs, texels, texels, n_channels)``:
+    :math:`\\int L_o R_c d\\lambda` under ``illuminant`` (irradiance on a plane facing the light),
+    both on ``FINE_GRID``."""
+    light_dirs, view_dirs = _check_directions(light_dirs, view_dirs)
+    images = [
+        _render(material, light, view, response, illuminant, texels, spp, seed)
+        for light, view in zip(light_dirs, view_dirs, strict=True)
+    ]
+    return np.stack(images)

@@ -1,0 +1,146 @@
+"""Camera definitions: the pydantic schema of ``scenes/cameras/*.yaml`` and its loader.
+
+A camera file names the sensor (size, pixel pitch, bit depth, temperature), its optics (f-number,
+transmission), its spectral response, and the EMVA 1288 parameters of its noise model (system
+gain, read noise, full well, dark current and its temperature law, fixed-pattern noise, OECF).
+Unknown keys, missing keys and out-of-range values are rejected with the offending field named.
+
+References
+----------
+- EMVA Standard 1288, Release 4.0 Linear (2021): the linear camera model and its parameters.
+- The thesis, section 3.2.2 (CoolSNAP K4), section 10.2.1 (SVS-Vistek 4022), section 10.3 (read
+  noise of 3 DN, dark frames, OECF).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Literal
+
+from pydantic import Field, model_validator
+
+from twin.rigs.yaml_config import (
+    NonNegative,
+    Positive,
+    StrictModel,
+    read_yaml_mapping,
+    resolve_scene_file,
+    scene_folder,
+    scene_names,
+    validate_document,
+)
+
+__all__ = ["CAMERA_DIR", "CameraConfig", "available_cameras", "load_camera_config"]
+
+CAMERA_DIR = scene_folder("cameras")
+
+
+class OpticsConfig(StrictModel):
+    """Lens in front of the sensor: :math:`E = \\pi \\tau L / (4 N^2)` (distant object)."""
+
+    f_number: Positive
+    transmission: Annotated[float, Field(gt=0, le=1)] = 1.0
+
+
+class CCDQuantumEfficiencyConfig(StrictModel):
+    """Monochrome CCD: the two-sided log-normal of ``twin.components.CCDQuantumEfficiency``."""
+
+    model: Literal["ccd"]
+    peak_qe: Annotated[float, Field(gt=0, le=1)]
+    peak_nm: Positive
+    log_width_blue: Positive
+    log_width_red: Positive
+
+
+class RGBQuantumEfficiencyConfig(StrictModel):
+    """Colour sensor: a measured relative RGB response scaled to a peak quantum efficiency."""
+
+    model: Literal["rgb_camera"]
+    camera: str
+    peak_qe: Annotated[float, Field(gt=0, le=1)]
+
+
+class DarkCurrentConfig(StrictModel):
+    """Dark current :math:`D(T) = D_{ref} 2^{(T - T_{ref}) / T_d}` in electrons per second."""
+
+    e_per_s_at_reference: NonNegative
+    reference_temperature_c: float = 25.0
+    doubling_temperature_c: Positive = 6.3
+
+
+class FixedPatternConfig(StrictModel):
+    """Fixed-pattern noise, drawn once per camera serial.
+
+    ``dsnu_sigma``: log-normal spread of the per-pixel dark current; ``prnu_sigma``: relative
+    spread of the per-pixel photo response; hot pixels have ``hot_pixel_factor`` times the dark
+    current; ``transfer_dark_e``: dark charge picked up during readout, growing linearly along the
+    CCD shift direction (rows) to this value at the last row (thesis Fig. 10.2d).
+    """
+
+    dsnu_sigma: NonNegative = 0.0
+    prnu_sigma: NonNegative = 0.0
+    hot_pixel_fraction: Annotated[float, Field(ge=0, lt=0.1)] = 0.0
+    hot_pixel_factor: Annotated[float, Field(ge=1)] = 1.0
+    transfer_dark_e: NonNegative = 0.0
+
+
+class OECFConfig(StrictModel):
+    """Opto-electronic conversion: ``linear``, or ``knee`` with
+    :math:`g(u) = (1 + s) u / (1 + s u)` on the signal normalized to the ADC range."""
+
+    model: Literal["linear", "knee"] = "linear"
+    strength: NonNegative = 0.0
+
+    @model_validator(mode="after")
+    def _strength_only_for_knee(self) -> OECFConfig:
+        if self.model == "linear" and self.strength != 0:
+            raise ValueError("strength applies to the 'knee' model only")
+        return self
+
+
+class CameraConfig(StrictModel):
+    """One camera of a rig (see the module docstring)."""
+
+    name: str
+    serial: str
+    mosaic: Literal["none", "RGGB"]
+    width: Annotated[int, Field(gt=0)]
+    height: Annotated[int, Field(gt=0)]
+    pixel_pitch_um: Positive
+    bit_depth: Annotated[int, Field(ge=8, le=16)]
+    sensor_temperature_c: float
+    exposure_range_s: tuple[Positive, Positive]
+    optics: OpticsConfig
+    quantum_efficiency: CCDQuantumEfficiencyConfig | RGBQuantumEfficiencyConfig = Field(
+        discriminator="model"
+    )
+    system_gain_dn_per_e: Positive
+    read_noise_dn: NonNegative
+    full_well_e: Positive
+    adc_offset_dn: NonNegative
+    dark_current: DarkCurrentConfig
+    fixed_pattern: FixedPatternConfig = FixedPatternConfig()
+    oecf: OECFConfig = OECFConfig()
+
+    @model_validator(mode="after")
+    def _consistent(self) -> CameraConfig:
+        low, high = self.exposure_range_s
+        if not low < high:
+            raise ValueError(f"exposure_range_s: expected [shortest, longest], got {low}, {high}")
+        if self.adc_offset_dn >= 2**self.bit_depth - 1:
+            raise ValueError("adc_offset_dn: expected an offset below the ADC's largest value")
+        colour_sensor = self.quantum_efficiency.model == "rgb_camera"
+        if colour_sensor != (self.mosaic != "none"):
+            raise ValueError("mosaic: an rgb_camera response needs a Bayer mosaic and vice versa")
+        return self
+
+
+def available_cameras() -> list[str]:
+    """Names of the camera files in ``scenes/cameras`` (without ``.yaml``)."""
+    return scene_names(CAMERA_DIR)
+
+
+def load_camera_config(name_or_path: str | Path) -> CameraConfig:
+    """Load a camera by file name in ``scenes/cameras`` (e.g. ``"coolsnap_k4"``) or by path."""
+    path = resolve_scene_file(name_or_path, CAMERA_DIR, "camera")
+    return validate_document(CameraConfig, read_yaml_mapping(path), path)

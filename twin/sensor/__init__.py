@@ -1,0 +1,13 @@
+"""The camera sensor model (EMVA 1288 physics, radiance to raw frames) and the white reference
+signal that sets band exposure times (thesis Eq. 3.3-3.4).
+"""
+
+import lazy_loader
+
+__getattr__, __dir__, __all__ = lazy_loader.attach(
+    __name__,
+    submod_attrs={
+        "model": ["Sensor", "bayer_channel_index"],
+        "white_reference": ["equalized_exposures_s", "white_reference_rates"],
+    },
+)

@@ -1,0 +1,370 @@
+"""Camera sensor model: radiance on the sensor to raw frames, with EMVA 1288 physics.
+
+Mitsuba gives radiance; real cameras give raw digital numbers. Between the two:
+
+1. Optics and photon conversion. A lens of f-number :math:`N` and transmission :math:`\\tau`
+   turns scene radiance :math:`L` into sensor irradiance :math:`E = \\pi \\tau L / (4 N^2)`
+   (distant object, on axis). A pixel of area :math:`A` collecting for :math:`t` seconds gets
+   :math:`\\mu_e = \\frac{\\pi \\tau A}{4 N^2} \\int H(\\lambda)\\, \\eta(\\lambda) T(\\lambda)
+   \\frac{\\lambda}{hc} d\\lambda` photo-electrons, with :math:`H = \\int_t L\\, dt` the radiant
+   exposure, :math:`\\eta` the quantum efficiency and :math:`T` a filter (e.g. an LCTF band).
+   Thesis Eq. 10.9 is the special case of this integral for the RGB cameras.
+2. Fixed patterns (drawn once per camera serial): photo-response non-uniformity (PRNU),
+   dark-signal non-uniformity (DSNU) with hot pixels, and dark charge picked up along the CCD
+   shift direction (thesis Fig. 10.2d).
+3. Temporal noise: Poisson shot noise of photo and dark electrons, with the dark current
+   following the doubling-temperature law (so the cooled K4 has almost none); full-well clip;
+   read noise (3 DN for the K4, thesis 10.3).
+4. Conversion: system gain K, a monotone OECF (thesis 3.3: :math:`p = f(tI) + d`, Eq. 3.1),
+   ADC offset, quantization to the bit depth and clamping to :math:`[0, 2^n - 1]`.
+5. For colour sensors, an RGGB Bayer mosaic picks one channel per pixel.
+
+Every stochastic call takes a ``numpy.random.Generator``: the same seed gives the same frame.
+
+References
+----------
+- EMVA Standard 1288, Release 4.0 Linear (2021), European Machine Vision Association:
+  :math:`\\mu_y = \\mu_{y.dark} + K \\eta \\mu_p`,
+  :math:`\\sigma_y^2 = K^2 \\sigma_d^2 + \\sigma_q^2 + K (\\mu_y - \\mu_{y.dark})`.
+- Janesick, J. R. (2007). Photon Transfer. SPIE Press. doi:10.1117/3.725073 (dark current
+  doubling temperature, fixed pattern noise).
+- The thesis: Eq. 3.1-3.2 (imaging model), section 3.2.2 (CoolSNAP K4), section 10.3 and
+  Fig. 10.2d (dark frames, read noise of 3 DN), Eq. 10.9 (RGB camera response).
+"""
+
+from __future__ import annotations
+
+import math
+import zlib
+from concurrent.futures import ThreadPoolExecutor
+from functools import cached_property
+
+import numpy as np
+from scipy import constants, stats
+
+from recon.errors import SpectwinInputError
+from recon.spectra import SampledSpectra, WavelengthGrid, band_integrals
+from twin.components import CCDQuantumEfficiency, rgb_camera_response
+from twin.rigs.camera_config import CameraConfig, load_camera_config
+
+__all__ = ["Sensor", "bayer_channel_index"]
+
+_ROW_BLOCKS = 8  # fixed, so the same seed gives the same frame whatever the thread count
+_BAYER_RGGB = np.array([[0, 1], [1, 2]])  # channel (R=0, G=1, B=2) at (row % 2, column % 2)
+
+
+def bayer_channel_index(height: int, width: int) -> np.ndarray:
+    """Channel index (0 = R, 1 = G, 2 = B) of every pixel of an RGGB mosaic, ``(H, W)``."""
+    return np.tile(_BAYER_RGGB, (height // 2 + 1, width // 2 + 1))[:height, :width]
+
+
+def _clipped_gaussian_variance(mean: np.ndarray, sigma: np.ndarray, clip: float) -> np.ndarray:
+    r"""Variance of :math:`\min(X, c)` for :math:`X \sim N(m, s^2)` (truncated moments)."""
+    alpha = (clip - mean) / sigma
+    below, density = stats.norm.cdf(alpha), stats.norm.pdf(alpha)
+    first = mean * below - sigma * density + clip * (1 - below)
+    second = (mean**2 + sigma**2) * below - sigma * (mean + clip) * density + clip**2 * (1 - below)
+    return second - first**2
+
+
+class Sensor:
+    """A camera's sensor, optionally read out over a region of interest.
+
+    Parameters
+    ----------
+    config
+        The camera definition, or the name of a file in ``scenes/cameras``.
+    roi
+        ``(height, width)`` of a window at the sensor's top-left corner (as cameras read out a
+        region of interest); the full sensor by default. Fixed patterns are those of the full
+        sensor, cropped.
+    """
+
+    def __init__(self, config: CameraConfig | str, *, roi: tuple[int, int] | None = None):
+        self.config = load_camera_config(config) if isinstance(config, str) else config
+        height, width = roi or (self.config.height, self.config.width)
+        if not (0 < height <= self.config.height and 0 < width <= self.config.width):
+            raise SpectwinInputError(
+                f"roi: expected 1..{self.config.height} rows and 1..{self.config.width} columns, "
+                f"got {height}x{width}"
+            )
+        self.height, self.width = int(height), int(width)
+
+    # -- derived constants -------------------------------------------------------------------
+
+    @property
+    def is_colour(self) -> bool:
+        return self.config.mosaic != "none"
+
+    @property
+    def channel_count(self) -> int:
+        return 3 if self.is_colour else 1
+
+    @property
+    def max_dn(self) -> int:
+        return 2**self.config.bit_depth - 1
+
+    @property
+    def pixel_area_m2(self) -> float:
+        return (self.config.pixel_pitch_um * 1e-6) ** 2
+
+    @property
+    def etendue_m2_sr(self) -> float:
+        """:math:`\\pi \\tau A / (4 N^2)`: radiance (W m^-2 sr^-1) to power on a pixel (W)."""
+        optics = self.config.optics
+        return math.pi * optics.transmission * self.pixel_area_m2 / (4 * optics.f_number**2)
+
+    @property
+    def dark_current_e_per_s(self) -> float:
+        """Mean dark current at the sensor temperature: :math:`D_{ref} 2^{(T - T_{ref})/T_d}`."""
+        dark = self.config.dark_current
+        doublings = (self.config.sensor_temperature_c - dark.reference_temperature_c) / (
+            dark.doubling_temperature_c
+        )
+        return dark.e_per_s_at_reference * 2.0**doublings
+
+    @property
+    def saturation_capacity_e(self) -> float:
+        """Electrons at which the output clips: full well, or the ADC top with a linear OECF."""
+        adc_top_e = (self.max_dn - self.config.adc_offset_dn) / self.config.system_gain_dn_per_e
+        return min(self.config.full_well_e, adc_top_e)
+
+    def emva_saturation_capacity_e(self) -> float:
+        """Saturation capacity by the EMVA 1288 definition, predicted from this model.
+
+        EMVA 1288 places saturation where the temporal variance of the output peaks, which for a
+        clipped signal lies a few noise widths below the hard clip (:attr:`saturation_capacity_e`).
+        The expected variance is that of a Gaussian clipped at the full well (before read noise)
+        or at the ADC's top (after it), averaged over the PRNU spread; its maximum is found on a
+        fine grid of mean photo-electrons. Only defined for a linear OECF (EMVA 1288 Linear).
+        """
+        if self.config.oecf.model != "linear":
+            raise SpectwinInputError(
+                "emva_saturation_capacity_e: EMVA 1288 Linear needs a linear OECF"
+            )
+        config = self.config
+        gain, read_dn = config.system_gain_dn_per_e, config.read_noise_dn
+        nodes, weights = np.polynomial.hermite_e.hermegauss(48)
+        weights = weights / weights.sum()
+        means_e = np.linspace(0.8, 1.05, 5001)[:, None] * self.saturation_capacity_e
+        pixel_means_e = means_e * (1 + config.fixed_pattern.prnu_sigma * nodes)
+        if config.full_well_e <= (self.max_dn - config.adc_offset_dn) / gain:
+            variance = (
+                gain**2
+                * _clipped_gaussian_variance(
+                    pixel_means_e, np.sqrt(pixel_means_e), config.full_well_e
+                )
+                + read_dn**2
+            )
+        else:
+            variance = _clipped_gaussian_variance(
+                gain * pixel_means_e,
+                np.sqrt(gain**2 * pixel_means_e + read_dn**2),
+                self.max_dn - config.adc_offset_dn,
+            )
+        return float(means_e[np.argmax(variance @ weights), 0])
+
+    # -- spectral response -------------------------------------------------------------------
+
+    def quantum_efficiency(self, grid: WavelengthGrid) -> SampledSpectra:
+        """:math:`\\eta(\\lambda)` per channel, values ``(1, K)`` or ``(3, K)`` (R, G, B)."""
+        qe = self.config.quantum_efficiency
+        if qe.model == "ccd":
+            curve = CCDQuantumEfficiency(
+                qe.peak_qe, qe.peak_nm, qe.log_width_blue, qe.log_width_red
+            )(grid)
+            return SampledSpectra(grid, curve.values[None, :], ("Y",))
+        relative = rgb_camera_response(qe.camera, grid, out_of_range="zero")
+        return relative * qe.peak_qe
+
+    def electron_responses(
+        self, grid: WavelengthGrid, filter_transmission: SampledSpectra | None = None
+    ) -> SampledSpectra:
+        """Electrons per unit spectral radiant exposure, per channel and filter band.
+
+        Values ``(n, K)`` in e- per (J m^-2 sr^-1 nm^-1) per nm: the integrand
+        :math:`\\frac{\\pi \\tau A}{4N^2} \\eta(\\lambda) T(\\lambda) \\lambda / (hc)`. With a
+        filter of ``n_bands`` rows (a monochrome camera behind an LCTF) there is one row per band;
+        a colour camera gives R, G, B rows (times the filter, which then must be a single row).
+        """
+        qe = self.quantum_efficiency(grid)
+        photons_per_joule = grid.wavelengths_nm * 1e-9 / (constants.h * constants.c)
+        per_channel = qe.values * photons_per_joule * self.etendue_m2_sr
+        if filter_transmission is None:
+            return SampledSpectra(grid, per_channel, qe.names)
+        filter_transmission.require_non_negative("filter_transmission")
+        if filter_transmission.grid != grid:
+            raise SpectwinInputError(
+                f"filter_transmission: expected the grid {grid.describe()}, got "
+                f"{filter_transmission.grid.describe()}"
+            )
+        rows = np.atleast_2d(filter_transmission.values)
+        if self.is_colour and rows.shape[0] != 1:
+            raise SpectwinInputError(
+                f"filter_transmission: a colour camera takes one filter, got {rows.shape[0]} bands"
+            )
+        names = filter_transmission.names if not self.is_colour else qe.names
+        return SampledSpectra(grid, rows * per_channel, names)
+
+    def mean_electrons(
+        self,
+        radiant_exposure: SampledSpectra,
+        filter_transmission: SampledSpectra | None = None,
+    ) -> np.ndarray:
+        """Mean photo-electrons ``(..., n)`` from spectral radiant exposure ``(..., K)``.
+
+        ``radiant_exposure`` is :math:`H(\\lambda) = \\int_t L(\\lambda, t) dt` in
+        J m^-2 sr^-1 nm^-1 on a grid that resolves the filter and lamp features.
+        """
+        radiant_exposure.require_non_negative("radiant_exposure")
+        responses = self.electron_responses(radiant_exposure.grid, filter_transmission)
+        return band_integrals(radiant_exposure, responses)
+
+    def electrons_from_monochromatic_irradiance(
+        self, irradiance_w_m2: np.ndarray, wavelength_nm: float, exposure_s: float
+    ) -> np.ndarray:
+        """Mean photo-electrons under monochromatic light on the sensor plane (EMVA 1288 set-up).
+
+        :math:`\\mu_e = \\eta(\\lambda) \\mu_p`, :math:`\\mu_p = E A t \\lambda / (hc)`. Returns
+        ``(H, W)`` for a monochrome sensor and ``(H, W, 3)`` for a colour one.
+        """
+        self._check_exposure(exposure_s)
+        irradiance = self._check_image(irradiance_w_m2, "irradiance_w_m2", channels=None)
+        photons = (
+            irradiance
+            * self.pixel_area_m2
+            * exposure_s
+            * wavelength_nm
+            * 1e-9
+            / (constants.h * constants.c)
+        )
+        eta = self.quantum_efficiency(WavelengthGrid(np.array([wavelength_nm, wavelength_nm + 1])))
+        eta_at = eta.values[:, 0]
+        return photons * eta_at[0] if not self.is_colour else photons[..., None] * eta_at
+
+    # -- fixed patterns ----------------------------------------------------------------------
+
+    @cached_property
+    def _fixed_pattern(self) -> dict[str, np.ndarray]:
+        """PRNU, DSNU (with hot pixels) and the transfer gradient of the full sensor, cropped.
+
+        Drawn from a generator seeded by the camera serial: the same serial always has the same
+        patterns, as a real camera does.
+        """
+        pattern = self.config.fixed_pattern
+        generator = np.random.default_rng(zlib.crc32(self.config.serial.encode()))
+        shape = (self.config.height, self.config.width)
+        photo_response = 1 + pattern.prnu_sigma * generator.standard_normal(shape, np.float32)
+        # Log-normal with unit mean: the mean dark current stays the configured one.
+        sigma = pattern.dsnu_sigma
+        dark_factor = np.exp(sigma * generator.standard_normal(shape, np.float32) - sigma**2 / 2)
+        hot = generator.random(shape, np.float32) < pattern.hot_pixel_fraction
+        dark_factor[hot] *= pattern.hot_pixel_factor
+        rows = np.arange(self.config.height, dtype=np.float32)[:, None]
+        transfer = pattern.transfer_dark_e * rows / max(self.config.height - 1, 1)
+        window = (slice(0, self.height), slice(0, self.width))
+        return {
+            "photo_response": np.clip(photo_response, 0, None)[window],
+            "dark_factor": dark_factor.astype(np.float32)[window],
+            "transfer_e": transfer[: self.height],
+        }
+
+    def mean_dark_electrons(self, exposure_s: float) -> np.ndarray:
+        """Expected dark electrons per pixel, ``(H, W)``: dark current x time x DSNU + transfer."""
+        self._check_exposure(exposure_s)
+        pattern = self._fixed_pattern
+        return (
+            self.dark_current_e_per_s * exposure_s * pattern["dark_factor"] + pattern["transfer_e"]
+        )
+
+    # -- capture -----------------------------------------------------------------------------
+
+    def capture(
+        self, photo_electrons: np.ndarray, exposure_s: float, rng: np.random.Generator
+    ) -> np.ndarray:
+        """One raw frame (uint16, ``(H, W)``; a Bayer mosaic for colour sensors).
+
+        Parameters
+        ----------
+        photo_electrons
+            Mean photo-electrons per pixel before PRNU: ``(H, W)`` for a monochrome sensor,
+            ``(H, W, 3)`` for a colour one (R, G, B at every pixel; the mosaic picks one).
+        exposure_s
+            Exposure time, within the camera's ``exposure_range_s``; it sets the dark signal.
+        rng
+            Source of the temporal noise.
+        """
+        if not isinstance(rng, np.random.Generator):
+            raise SpectwinInputError(f"rng: expected a numpy.random.Generator, got {type(rng)}")
+        electrons = self._check_image(
+            photo_electrons, "photo_electrons", channels=3 if self.is_colour else None
+        )
+        if self.is_colour:
+            channel = bayer_channel_index(self.height, self.width)
+            electrons = np.take_along_axis(electrons, channel[..., None], axis=-1)[..., 0]
+        mean = electrons.astype(np.float32) * self._fixed_pattern["photo_response"]
+        mean += self.mean_dark_electrons(exposure_s)
+        blocks = np.array_split(np.arange(self.height), _ROW_BLOCKS)
+        generators = rng.spawn(_ROW_BLOCKS)
+        frame = np.empty((self.height, self.width), dtype=np.uint16)
+
+        def convert(block: int) -> None:
+            rows = slice(blocks[block][0], blocks[block][-1] + 1) if blocks[block].size else None
+            if rows is not None:
+                frame[rows] = self._digitize(mean[rows], generators[block])
+
+        with ThreadPoolExecutor(max_workers=2) as pool:
+            list(pool.map(convert, range(_ROW_BLOCKS)))
+        return frame
+
+    def dark_frame(self, exposure_s: float, rng: np.random.Generator) -> np.ndarray:
+        """A raw frame with the shutter closed."""
+        shape = (self.height, self.width, 3) if self.is_colour else (self.height, self.width)
+        return self.capture(np.zeros(shape, np.float32), exposure_s, rng)
+
+    def oecf(self, linear_dn: np.ndarray) -> np.ndarray:
+        """Opto-electronic conversion of the linear signal above offset, in DN (Eq. 3.1's f)."""
+        if self.config.oecf.model == "linear":
+            return linear_dn
+        top = self.max_dn - self.config.adc_offset_dn
+        strength = self.config.oecf.strength
+        normalized = linear_dn / top
+        # Below the offset (negative read noise) the curve continues with its slope at zero, so
+        # dark frames stay unbiased (thesis Fig. 10.3: negative dark-subtracted values occur).
+        return top * (1 + strength) * normalized / (1 + strength * np.maximum(normalized, 0))
+
+    def _digitize(self, mean_electrons: np.ndarray, generator: np.random.Generator) -> np.ndarray:
+        config = self.config
+        electrons = generator.poisson(mean_electrons).astype(np.float32)
+        np.minimum(electrons, config.full_well_e, out=electrons)
+        signal_dn = electrons * config.system_gain_dn_per_e
+        signal_dn += config.read_noise_dn * generator.standard_normal(signal_dn.shape, np.float32)
+        digital = self.oecf(signal_dn) + config.adc_offset_dn
+        return np.clip(np.rint(digital), 0, self.max_dn).astype(np.uint16)
+
+    # -- validation --------------------------------------------------------------------------
+
+    def _check_exposure(self, exposure_s: float) -> None:
+        low, high = self.config.exposure_range_s
+        if not np.isfinite(exposure_s) or exposure_s <= 0:
+            raise SpectwinInputError(
+                f"exposure_s: expected a positive exposure time, got {exposure_s}"
+            )
+        if not low <= exposure_s <= high:
+            raise SpectwinInputError(
+                f"exposure_s: {exposure_s} s is outside the {self.config.name}'s range "
+                f"[{low}, {high}] s"
+            )
+
+    def _check_image(self, image: np.ndarray, what: str, channels: int | None) -> np.ndarray:
+        image = np.asarray(image)
+        expected = (self.height, self.width) + ((channels,) if channels else ())
+        if image.shape[:2] != expected[:2] or (channels and image.shape != expected):
+            raise SpectwinInputError(
+                f"{what}: expected shape {expected} for this sensor's readout, got {image.shape}"
+            )
+        if not np.all(np.isfinite(image)):
+            raise SpectwinInputError(f"{what}: expected finite values, found NaN or infinity")
+        if np.any(image < 0):
+            raise SpectwinInputError(f"{what}: expected non-negative values")
+        return image

@@ -1,0 +1,17 @@
+"""The thesis's studies on the twin (chapters 7, 9, 10), the camera bench, the rig gallery and
+``spectwin demo`` with its report.
+"""
+
+import lazy_loader
+
+__getattr__, __dir__, __all__ = lazy_loader.attach(
+    __name__,
+    submod_attrs={
+        "camchar": ["run_camchar"],
+        "camera_bench": ["run_camera_report"],
+        "demo": ["run_demo"],
+        "dome_report": ["run_dome_study"],
+        "gallery": ["run_gallery"],
+        "spectralization": ["run_study"],
+    },
+)

@@ -1,0 +1,206 @@
+"""A measured (virtual) BTF against the twin's truth: per-field spectra and registered corners.
+
+The twin's true BTF (:func:`twin.render.truth.truth_btf`) is rendered for the BTF store's direction
+pairs at its texel resolution, rectified to the sample plane like a measured texture. The
+comparison is made per chart field (the parts named ``field_*`` of the material): each field's
+interior (its top face shifted by the view's parallax, shrunk to ``interior`` of its width so
+that registration blur and the few tenths of a millimetre between the registration plane and
+the truth's plane stay outside) gives one mean spectrum per pair in the measurement and in the
+truth, and Eq. 6.8 compares the two. Glossy fields (a coating with a roughness) are reported
+apart: their highlights depend on sub-degree direction errors and saturate the camera.
+
+The registered corners stored with the BTF are compared with the projections of the marks'
+corners for the poses the robot actually reached in the capture session.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from hwbridge.errors import BridgeInputError
+from hwbridge.store import CaptureStore
+from recon.btf.store import BTFStore
+from recon.errors import SpectwinInputError
+from recon.metrics import relative_error
+from recon.spectra import SampledSpectra
+from twin.components import FINE_GRID, HMILamp, LiquidCrystalTunableFilter
+from twin.gonio.capture import GonioPairs, actual_poses, texture_corners_world
+from twin.gonio.render import gonio_camera
+from twin.materials import Material, load_material
+from twin.render.truth import truth_btf
+from twin.rigs.rig_config import GonioConfig, load_rig
+from twin.sensor.model import Sensor
+
+__all__ = [
+    "FieldMasks",
+    "GonioEvaluation",
+    "evaluate_gonio",
+    "field_masks",
+    "instrument_passbands",
+]
+
+
+@dataclass(frozen=True)
+class FieldMasks:
+    """Interior masks ``(n_fields, H, W)`` of a chart's fields for one view, and their names."""
+
+    names: tuple[str, ...]
+    glossy: np.ndarray
+    masks: np.ndarray
+
+
+def field_masks(
+    material: Material, view_dir: np.ndarray, texels: int, *, interior: float = 0.6
+) -> FieldMasks:
+    """Field interiors in texel space for a view (texel ``(i, j)`` = sample
+    ``x = -s/2 + (j + 0.5) s / n``, ``y = s/2 - (i + 0.5) s / n``, the truth's layout)."""
+    size, parts = material.size_m, [p for p in material.parts if p.name.startswith("field_")]
+    centres = (np.arange(texels) + 0.5) / texels * size - size / 2
+    x, y = np.meshgrid(centres, -centres)
+    masks = []
+    for part in parts:
+        (low, high) = part.mesh.bounds
+        shift = high[2] * np.asarray(view_dir[:2]) / view_dir[2]
+        middle = (low[:2] + high[:2]) / 2 - shift
+        half = interior * (high[:2] - low[:2]) / 2
+        masks.append((np.abs(x - middle[0]) < half[0]) & (np.abs(y - middle[1]) < half[1]))
+    return FieldMasks(
+        tuple(p.name for p in parts),
+        np.array([p.roughness is not None for p in parts]),
+        np.stack(masks),
+    )
+
+
+@dataclass(frozen=True)
+class GonioEvaluation:
+    """Per written pair and field: Eq. 6.8 of the field means, %; corner errors, px."""
+
+    field_names: tuple[str, ...]
+    glossy: np.ndarray
+    pairs: np.ndarray  # (n_pairs,) the BTF store's indices of the compared (written) pairs
+    field_error: np.ndarray  # (n_pairs, n_fields)
+    texel_error: np.ndarray  # (n_pairs, n_fields): mean over the interior of per-texel Eq. 6.8
+    corner_error_px: np.ndarray  # (n_pairs, 4)
+    measured_means: np.ndarray  # (n_pairs, n_fields, K)
+    truth_means: np.ndarray
+
+    def summary(self) -> dict[str, object]:
+        matte = ~self.glossy
+        return {
+            "pairs_compared": int(self.field_error.shape[0]),
+            "mean_relative_error_matte_fields_pct": float(self.field_error[:, matte].mean()),
+            "max_relative_error_matte_fields_pct": float(self.field_error[:, matte].max()),
+            "mean_relative_error_glossy_fields_pct": float(self.field_error[:, ~matte].mean()),
+            "per_texel_error_matte_fields_pct": float(self.texel_error[:, matte].mean()),
+            "max_corner_error_px": float(self.corner_error_px.max()),
+            "mean_corner_error_px": float(self.corner_error_px.mean()),
+            "per_field_pct": {
+                name: round(float(value), 3)
+                for name, value in zip(self.field_names, self.field_error.mean(axis=0), strict=True)
+            },
+        }
+
+
+def instrument_passbands(config: GonioConfig) -> SampledSpectra:
+    """The gonioreflectometer's band weighting: VariSpec transmission x K4 electron response x
+    the HMI lamp's mean spectrum, each band of unit area on ``FINE_GRID``. A measured band of a
+    white-referenced BTF is the reflectance averaged with these weights (Eq. 3.3-3.6)."""
+    lctf = LiquidCrystalTunableFilter.varispec(config.camera.filter)
+    sensor = Sensor(config.camera.definition)
+    responses = sensor.electron_responses(FINE_GRID, lctf.transmission(FINE_GRID))
+    lamp = HMILamp()
+    mean_lamp = lamp.part_exposure_s(0.0, 1.0) @ lamp.spectral_parts(FINE_GRID).values
+    weights = responses.values * mean_lamp
+    weights /= np.trapezoid(weights, FINE_GRID.wavelengths_nm, axis=1)[:, None]
+    return SampledSpectra(FINE_GRID, weights, responses.names)
+
+
+def _true_corners(capture: CaptureStore, btf: BTFStore) -> np.ndarray:
+    config = load_rig("gonio")
+    rig = capture.attrs["rig"]
+    pairs = GonioPairs(config, btf.light_dirs, btf.view_dirs)
+    poses = actual_poses(config, pairs.poses, int(capture.attrs["seed"]))
+    pixels, window = int(rig.get("sensor_px", rig["window_px"])), int(rig["window_px"])
+    return np.stack(
+        [
+            gonio_camera(config, pose.rail_deg, pixels, window).project(texture_corners_world(pose))
+            for pose in poses
+        ]
+    )
+
+
+def evaluate_gonio(
+    btf_path: str | Path,
+    *,
+    spp: int = 64,
+    interior: float = 0.6,
+    progress: bool = False,
+) -> GonioEvaluation:
+    """Compare a BTF store made by ``spectwin process`` with the twin's truth (module docstring).
+
+    The capture store named in the BTF's provenance supplies the session seed (the robot's
+    actual poses) and the rendered window. Pairs not written (unregistered) are left out and
+    counted in :meth:`GonioEvaluation.summary`.
+    """
+    if isinstance(spp, bool) or not isinstance(spp, int | np.integer) or spp < 1:
+        raise SpectwinInputError(f"spp: expected a positive number of samples, got {spp!r}")
+    btf = BTFStore.open(btf_path)
+    written = np.flatnonzero(btf.written())
+    if not written.size:
+        raise SpectwinInputError(
+            f"{btf_path}: no direction pair is written yet; finish the BTF with spectwin "
+            "process --resume"
+        )
+    source = btf.attrs.get("source_capture")
+    if not source:
+        raise SpectwinInputError(
+            f"{btf_path}: records no source capture; evaluate compares BTFs made by spectwin "
+            "process from a twin capture"
+        )
+    try:
+        capture = CaptureStore.open(source)
+    except BridgeInputError as error:
+        raise SpectwinInputError(
+            f"{btf_path}: the capture store it was processed from is needed: {error}"
+        ) from None
+    material = load_material(btf.material)
+    texels = btf.texels[0]
+    for pair in written:
+        fields = field_masks(material, btf.view_dirs[pair], texels, interior=interior)
+        if not fields.masks.any(axis=(1, 2)).all():
+            raise SpectwinInputError(
+                f"{btf_path}: at {texels} texels some chart fields have no interior texel to "
+                "compare; process the capture again with --texels 16 or more"
+            )
+    truth = truth_btf(
+        material,
+        btf.light_dirs[written],
+        btf.view_dirs[written],
+        texels=texels,
+        passbands=instrument_passbands(load_rig("gonio")),
+        spp=spp,
+    )
+    field_means, truth_means, texel_errors = [], [], []
+    for index, pair in enumerate(written):
+        measured = btf.read_pair(pair, allow_incomplete=True)
+        fields = field_masks(material, btf.view_dirs[pair], texels, interior=interior)
+        field_means.append([measured[mask].mean(axis=0) for mask in fields.masks])
+        truth_means.append([truth[index][mask].mean(axis=0) for mask in fields.masks])
+        per_texel = relative_error(measured, truth[index])
+        texel_errors.append([per_texel[mask].mean() for mask in fields.masks])
+    field_means, truth_means = np.array(field_means), np.array(truth_means)
+    corners = btf.corners_xy()[written]
+    error = np.linalg.norm(corners - _true_corners(capture, btf)[written], axis=2)
+    return GonioEvaluation(
+        fields.names,
+        fields.glossy,
+        written,
+        relative_error(field_means, truth_means),
+        np.array(texel_errors),
+        error,
+        field_means,
+        truth_means,
+    )
