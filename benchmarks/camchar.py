@@ -14,7 +14,8 @@ import numpy as np
 from benchmarks.common import machine_description
 from recon.camera_char import estimate_response
 from recon.spectra import DEFAULT_GRID, from_colour, resample
-from twin.components import esser_reflectances, rgb_camera_response
+from twin.components.detectors import rgb_camera_response
+from twin.components.targets import esser_reflectances
 
 
 def main() -> None:

@@ -27,7 +27,7 @@ from benchmarks.common import machine_description
 from hwbridge.store import CaptureStore
 from recon.calibration.gonio import GonioCalibration
 from recon.calibration.spectral import HMI_FLICKER_PERIOD_S
-from twin.components import LiquidCrystalTunableFilter
+from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.devices.cluster import dask_client, run_process
 from twin.gonio.capture import CAMERA_ID, actual_poses, gonio_pairs, run_gonio_measurement
 from twin.gonio.render import gonio_part_rates

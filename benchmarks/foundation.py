@@ -13,13 +13,9 @@ import numpy as np
 from benchmarks.common import machine_description
 from recon.metrics import delta_e94
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid, resample
-from twin.components import (
-    FINE_GRID,
-    LiquidCrystalTunableFilter,
-    QTHLamp,
-    irradiance_at,
-    zenith_white_reflectance,
-)
+from twin.components.lamps import FINE_GRID, QTHLamp, irradiance_at
+from twin.components.lctf import LiquidCrystalTunableFilter
+from twin.components.targets import zenith_white_reflectance
 from twin.render.flat_target import render_flat_target
 from twin.render.variant import activate
 

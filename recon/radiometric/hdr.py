@@ -37,6 +37,8 @@ from recon.radiometric.dark_frames import exposure_vector
 __all__ = [
     "WEIGHTINGS",
     "ResponseHistogram",
+    "exposure_times",
+    "frame_stack",
     "interpolate_curve",
     "merge_hdr",
     "predict_values",
@@ -51,7 +53,7 @@ WEIGHTINGS: tuple[str, ...] = ("gaussian", "hat", "uniform")
 # -- validation at the door ------------------------------------------------------------------
 
 
-def _exposures(exposure_s: object, count: int | None = None) -> np.ndarray:
+def exposure_times(exposure_s: object, count: int | None = None) -> np.ndarray:
     """Exposure times as a finite, positive float64 vector (``count`` entries when given)."""
     times = exposure_vector("exposure_s", exposure_s)
     if times.ndim != 1:
@@ -65,7 +67,7 @@ def _exposures(exposure_s: object, count: int | None = None) -> np.ndarray:
     return times
 
 
-def _frames(frames: object, name: str = "frames") -> np.ndarray:
+def frame_stack(frames: object, name: str = "frames") -> np.ndarray:
     """A stack ``(n_exposures, ...)`` of at least two frames of finite real numbers."""
     array = np.asarray(frames)
     if array.dtype.kind not in "iuf" or array.ndim < 2:
@@ -281,8 +283,8 @@ def merge_hdr(
     >>> merge_hdr(frames, [1.0, 2.0], curve).tolist()
     [10.0, 200.0]
     """
-    values = _frames(frames)
-    times = _exposures(exposure_s, values.shape[0])
+    values = frame_stack(frames)
+    times = exposure_times(exposure_s, values.shape[0])
     curve = _curve(inverse_response)
     mask = _valid_mask(valid, values.shape)
     table = response_weights(curve.size, weighting=weighting)
@@ -329,7 +331,7 @@ def predict_values(
     [[10.0, 200.0], [20.0, 255.0]]
     """
     x = np.asarray(irradiance, dtype=np.float64)
-    times = _exposures(exposure_s)
+    times = exposure_times(exposure_s)
     curve = _curve(inverse_response)
     defined = np.flatnonzero(np.isfinite(curve))
     monotone = np.maximum.accumulate(curve[defined])
@@ -440,8 +442,8 @@ def response_histogram(
     >>> hist.samples.tolist(), hist.mean.tolist()
     ([1, 2, 0, 1], [1.0, 2.0, nan, 4.0])
     """
-    values = _frames(frames)
-    times = _exposures(exposure_s, values.shape[0])
+    values = frame_stack(frames)
+    times = exposure_times(exposure_s, values.shape[0])
     x = np.asarray(irradiance, dtype=np.float64)
     if x.shape != values.shape[1:]:
         raise SpectwinInputError(

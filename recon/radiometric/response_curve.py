@@ -54,8 +54,8 @@ from scipy import ndimage
 
 from recon.errors import SpectwinInputError
 from recon.radiometric.hdr import (
-    _exposures,
-    _frames,
+    exposure_times,
+    frame_stack,
     interpolate_curve,
     response_weights,
 )
@@ -385,13 +385,13 @@ def robertson(
     >>> bool(np.std(ratio) / np.mean(ratio) < 0.02)
     True
     """
-    values = _frames(frames)
+    values = frame_stack(frames)
     if values.dtype.kind not in "iu":
         raise SpectwinInputError(
             f"frames: expected integer pixel values, got dtype {values.dtype}; use "
             "robertson_filtered for dark-subtracted or filtered (fractional) values"
         )
-    times = _exposures(exposure_s, values.shape[0])
+    times = exposure_times(exposure_s, values.shape[0])
     _check_distinct(times)
     bits = _bit_depth(bit_depth, values)
     levels = 2**bits
@@ -470,7 +470,7 @@ def filter_frames(
     >>> round(float(filtered[0].sum() - 30 * 25), 6)
     25.0
     """
-    values = _frames(frames).astype(np.float64)
+    values = frame_stack(frames).astype(np.float64)
     axes = _image_axes(values)
     sigma = _sigma(sigma_px)
     if not isinstance(offset, (int, float, np.number)) or not np.isfinite(offset):
@@ -530,7 +530,7 @@ def clipped_after_filter(
     >>> clipped_after_filter(frames, sigma_px=0.8, clip_limits=(0, 255))[0, 0].tolist()
     [True, True, True, False, False]
     """
-    values = _frames(frames)
+    values = frame_stack(frames)
     axes = _image_axes(values)
     sigma = _sigma(sigma_px)
     clipped = _clipped(values, _clip_limits(clip_limits, None))
@@ -633,9 +633,9 @@ def robertson_filtered(
     >>> bool(abs(curve[100] / curve[80] - 70 / 50) < 0.05)  # linear: f(m) = (m - 30) / 50
     True
     """
-    values = _frames(frames)
+    values = frame_stack(frames)
     _image_axes(values)
-    times = _exposures(exposure_s, values.shape[0])
+    times = exposure_times(exposure_s, values.shape[0])
     _check_distinct(times)
     bits = _bit_depth(bit_depth, values)
     iterations, tol = _iteration_options(max_iterations, tolerance)

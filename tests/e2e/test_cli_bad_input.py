@@ -336,9 +336,9 @@ def test_a_device_that_keeps_failing_stops_the_capture_with_exit_1(inputs, monke
 
 def test_the_option_choices_are_those_of_the_modules():
     from twin.cli.choices import Chart, DomeMaterial, Light, RGBCamera
-    from twin.components import RGB_CAMERA_RESPONSES
+    from twin.components.detectors import RGB_CAMERA_RESPONSES
     from twin.studies.camchar_scenes import CHARTS, LIGHTS
-    from twin.studies.dome_report import DOME_MATERIALS
+    from twin.studies.dome import DOME_MATERIALS
 
     assert sorted(RGBCamera) == sorted(RGB_CAMERA_RESPONSES)
     assert sorted(Chart) == sorted(CHARTS) and sorted(Light) == sorted(LIGHTS)

@@ -49,7 +49,7 @@ def camera(request):
     if request.param == "simulated":
         import numpy as np
 
-        from twin.components import HMILamp
+        from twin.components.lamps import HMILamp
         from twin.devices.sim_devices import SimCamera
         from twin.gonio.signals import WhiteReferenceSignal
         from twin.sensor.model import Sensor

@@ -117,7 +117,7 @@ def test_dome_white_and_chart_plans():
 
 def test_an_exposure_outside_the_camera_range_stops_the_session_cleanly(tmp_path):
     plan = dark_series("k4", [5000.0], 1)  # the K4 allows up to 600 s
-    from twin.components import HMILamp
+    from twin.components.lamps import HMILamp
     from twin.devices.sim_devices import SimCamera, VirtualRig
     from twin.gonio.signals import WhiteReferenceSignal
     from twin.sensor.model import Sensor

@@ -18,12 +18,9 @@ from recon.errors import SpectwinInputError
 from recon.measured_data import read_spectra_csv
 from recon.metrics import peak_relative_rmse
 from recon.spectra import DEFAULT_GRID, WavelengthGrid, from_colour, resample
-from twin.components import (
-    LiquidCrystalTunableFilter,
-    colorchecker_reflectances,
-    esser_reflectances,
-    rgb_camera_response,
-)
+from twin.components.detectors import rgb_camera_response
+from twin.components.lctf import LiquidCrystalTunableFilter
+from twin.components.targets import colorchecker_reflectances, esser_reflectances
 
 TEST_DATA = Path(__file__).resolve().parents[1] / "data"
 

@@ -7,7 +7,7 @@ import pytest
 from recon.btf.compression import compress_btf
 from recon.errors import SpectwinInputError
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid
-from twin.components import FINE_GRID
+from twin.components.lamps import FINE_GRID
 from twin.render.plugins.btf_bsdf import (
     BTFTable,
     barycentric,

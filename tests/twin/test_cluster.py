@@ -17,7 +17,8 @@ from recon.calibration.gonio import GonioCalibration
 from recon.calibration.spectral import HMI_FLICKER_PERIOD_S
 from recon.errors import SpectwinInputError
 from twin.cli.app import app
-from twin.components import HMILamp, LiquidCrystalTunableFilter
+from twin.components.lamps import HMILamp
+from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.devices.cluster import dask_client, view_tasks
 from twin.devices.sim_devices import SimGonioDevices
 from twin.gonio.capture import CAMERA_ID, GonioPairs, run_gonio_measurement

@@ -7,20 +7,18 @@ from scipy import integrate, special
 
 from recon.errors import SpectwinInputError
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid, band_integrals, to_colour
-from twin.components import (
+from twin.components.detectors import CCDQuantumEfficiency, rgb_camera_response
+from twin.components.lamps import (
     FINE_GRID,
-    CCDQuantumEfficiency,
     HMILamp,
-    LiquidCrystalTunableFilter,
     PhosphorWhiteLED,
     QTHLamp,
     cie_illuminant,
-    colorchecker_reflectances,
     irradiance_at,
     planck_spectral_radiance,
-    rgb_camera_response,
-    zenith_white_reflectance,
 )
+from twin.components.lctf import LiquidCrystalTunableFilter
+from twin.components.targets import colorchecker_reflectances, zenith_white_reflectance
 
 VISIBLE = WavelengthGrid.regular(360, 780, 1)
 

@@ -20,7 +20,7 @@ from twin.dome.capture_study import (
     simulate_capture,
 )
 from twin.dome.setup import SPECTRAL_VIEW, THESIS_LONGEST_BAND_S, dome_setup
-from twin.render.texture_truth import texture_truth
+from twin.render.truth import texture_truth
 from twin.studies.dome import (
     cross_check,
     exposure_comparison,

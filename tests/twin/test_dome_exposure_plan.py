@@ -33,7 +33,8 @@ from recon.scheduling.dome_schedule import (
     spectral_exposures,
 )
 from recon.spectra import SampledSpectra
-from twin.components import FINE_GRID, LiquidCrystalTunableFilter, PhosphorWhiteLED
+from twin.components.lamps import FINE_GRID, PhosphorWhiteLED
+from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.rigs.rig_config import load_rig
 from twin.sensor.model import Sensor
 from twin.sensor.white_reference import white_reference_rates

@@ -5,14 +5,9 @@ import pytest
 
 from recon.errors import SpectwinInputError
 from recon.spectra import DEFAULT_GRID, SampledSpectra
-from twin.components import (
-    FINE_GRID,
-    LiquidCrystalTunableFilter,
-    QTHLamp,
-    colorchecker_reflectances,
-    irradiance_at,
-    zenith_white_reflectance,
-)
+from twin.components.lamps import FINE_GRID, QTHLamp, irradiance_at
+from twin.components.lctf import LiquidCrystalTunableFilter
+from twin.components.targets import colorchecker_reflectances, zenith_white_reflectance
 from twin.render.flat_target import analytic_band_radiance, patch_means, render_flat_target
 from twin.render.variant import activate
 

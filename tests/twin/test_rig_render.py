@@ -9,13 +9,9 @@ from recon.metamers import camera_signal
 from recon.metrics import relative_error
 from recon.registration.border import register_frame
 from recon.spectra import DEFAULT_GRID, resample
-from twin.components import (
-    FINE_GRID,
-    LiquidCrystalTunableFilter,
-    PhosphorWhiteLED,
-    QTHLamp,
-    zenith_white_reflectance,
-)
+from twin.components.lamps import FINE_GRID, PhosphorWhiteLED, QTHLamp
+from twin.components.lctf import LiquidCrystalTunableFilter
+from twin.components.targets import zenith_white_reflectance
 from twin.gonio.render import gonio_camera, gonio_part_rates, pose_matrix
 from twin.materials import MATERIAL_GRID, Material, load_material
 from twin.materials.calibration_targets import colorchecker_chart, esser_chart, zenith_white_target

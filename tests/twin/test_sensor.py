@@ -13,7 +13,8 @@ from scipy import constants
 from recon.errors import SpectwinInputError
 from recon.radiometric.demosaic import demosaic
 from recon.spectra import SampledSpectra, WavelengthGrid
-from twin.components import FINE_GRID, HMILamp, LiquidCrystalTunableFilter
+from twin.components.lamps import FINE_GRID, HMILamp
+from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.rigs.camera_config import load_camera_config
 from twin.sensor.model import Sensor, bayer_channel_index
 from twin.sensor.white_reference import white_reference_rates

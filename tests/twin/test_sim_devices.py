@@ -5,7 +5,7 @@ import pytest
 
 from hwbridge.errors import BridgeInputError
 from hwbridge.protocols import Camera, Positioner, TunableFilter
-from twin.components import HMILamp, QTHLamp
+from twin.components.lamps import HMILamp, QTHLamp
 from twin.devices.sim_devices import SimCamera, SimPositioner, SimTunableFilter, VirtualRig
 from twin.gonio.signals import WhiteReferenceSignal
 from twin.gonio.sim_session import run_demo_session

@@ -5,7 +5,7 @@ import pytest
 
 from recon.errors import SpectwinInputError
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid
-from twin.components import FINE_GRID
+from twin.components.lamps import FINE_GRID
 from twin.render.plugins.spectral_envmap import SpectralMap, spectral_envmap
 from twin.render.spectra import irregular_spectrum, specfilm
 from twin.render.truth import band_passbands

@@ -11,8 +11,8 @@ from recon.metrics import relative_error
 from twin.materials import load_material
 from twin.render.truth import truth_btf
 from twin.studies.spectralization import (
-    _LIGHT,
-    _VIEW,
+    STUDY_LIGHT,
+    STUDY_VIEW,
     run_study,
     study_response,
     twin_texture,
@@ -23,7 +23,8 @@ pytestmark = pytest.mark.render
 
 def test_twin_texture_removes_the_monte_carlo_band_noise_of_the_render():
     raw = [
-        np.pi * truth_btf(load_material("lego"), _LIGHT, _VIEW, texels=32, spp=16, seed=s)[0]
+        np.pi
+        * truth_btf(load_material("lego"), STUDY_LIGHT, STUDY_VIEW, texels=32, spp=16, seed=s)[0]
         for s in (0, 1)
     ]
     # The NNLS projection uses the seed-0 render.
@@ -32,7 +33,8 @@ def test_twin_texture_removes_the_monte_carlo_band_noise_of_the_render():
     assert raw_spread > 100.0  # per-band Monte Carlo noise of a spectral render (measured 197 %)
     # Independent expectation: a render of 16x the samples with another seed.
     reference = (
-        np.pi * truth_btf(load_material("lego"), _LIGHT, _VIEW, texels=32, spp=256, seed=5)[0]
+        np.pi
+        * truth_btf(load_material("lego"), STUDY_LIGHT, STUDY_VIEW, texels=32, spp=256, seed=5)[0]
     )
     texture_error = relative_error(first, reference)
     raw_error = relative_error(raw[1], reference).mean()

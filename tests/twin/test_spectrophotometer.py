@@ -9,7 +9,7 @@ from twin.materials import load_material
 from twin.render.truth import truth_btf
 from twin.rigs.hemisphere import sattler_directions
 from twin.rigs.rig_config import load_rig
-from twin.validate.gonio_evaluation import instrument_passbands
+from twin.sensor.band_weights import instrument_passbands
 from twin.validate.spectrophotometer import compare_45_0, field_spots, write_45_0_figure
 
 pytestmark = pytest.mark.render

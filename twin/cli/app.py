@@ -15,7 +15,7 @@ from twin.cli.choices import Chart, Light, RGBCamera
 from twin.cli.dome import register as register_dome
 from twin.cli.errors import SpectwinGroup, require_output_folder, run_failed
 from twin.cli.gonio import register as register_gonio
-from twin.cli.output import console, print_summary
+from twin.cli.output import JsonFlag, console, print_summary
 
 app = typer.Typer(
     cls=SpectwinGroup,
@@ -24,7 +24,6 @@ app = typer.Typer(
     add_completion=False,
 )
 
-JsonFlag = Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")]
 SeedOption = Annotated[int, typer.Option(min=0, help="Seed of the simulated noise.")]
 
 

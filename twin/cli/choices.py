@@ -1,7 +1,7 @@
 """The closed sets of names the ``spectwin`` options accept, as enums (shown in ``--help``).
 
 The names repeat those of the modules that define them (``twin.components``,
-``twin.studies.camchar_scenes``, ``twin.studies.dome_report``) so that the command line starts
+``twin.studies.camchar_scenes``, ``twin.studies.dome``) so that the command line starts
 without importing
 the spectral data; ``tests/e2e/test_cli_bad_input.py`` checks that they agree.
 """
@@ -40,7 +40,7 @@ class Light(StrEnum):
 
 
 class DomeMaterial(StrEnum):
-    """Materials of ``twin.studies.dome_report.DOME_MATERIALS``."""
+    """Materials of ``twin.studies.dome.DOME_MATERIALS``."""
 
     lego = "lego"
     wallpaper = "wallpaper"

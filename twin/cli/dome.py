@@ -9,8 +9,7 @@ import typer
 
 from twin.cli.choices import DomeMaterial
 from twin.cli.errors import fail, require_output_folder
-from twin.cli.gonio import JsonFlag
-from twin.cli.output import console, print_summary
+from twin.cli.output import JsonFlag, console, print_summary
 
 __all__ = ["register"]
 
@@ -36,7 +35,7 @@ def dome_study(
 
     Example: spectwin dome-study --out out/dome --material lego --material red_fabric
     """
-    from twin.studies.dome_report import DOME_MATERIALS, run_dome_study
+    from twin.studies.dome import DOME_MATERIALS, run_dome_study
 
     if texels % 4:
         fail(f"--texels {texels}: expected a multiple of 4")

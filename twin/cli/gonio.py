@@ -23,11 +23,10 @@ import numpy as np
 import typer
 
 from twin.cli.errors import fail, require_output_file, require_output_folder, run_failed
-from twin.cli.output import console, print_summary
+from twin.cli.output import JsonFlag, console, print_summary
 
 __all__ = ["register"]
 
-JsonFlag = Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")]
 WorkersOption = Annotated[
     int,
     typer.Option(
@@ -410,8 +409,7 @@ def evaluate(
     Example: spectwin evaluate out/cc.btf.zarr --figure out/cc_vs_truth.png --json
     """
     from recon.btf.store import BTFStore
-    from twin.validate.gonio_evaluation import evaluate_gonio
-    from twin.validate.gonio_figures import write_gonio_figure
+    from twin.validate.gonio_evaluation import evaluate_gonio, write_gonio_figure
 
     if figure is not None:
         require_output_file(figure, "--figure")

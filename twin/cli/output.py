@@ -8,6 +8,7 @@ with the value ("exposure per pair" | "63.6 s"), rounded by :mod:`twin.output_fo
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import Annotated
 
 import numpy as np
 import typer
@@ -16,7 +17,9 @@ from rich.table import Table
 
 from twin.output_format import dumps, format_value, quantity
 
-__all__ = ["console", "print_summary"]
+__all__ = ["JsonFlag", "console", "print_summary"]
+
+JsonFlag = Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")]
 
 console = Console()
 

@@ -27,7 +27,7 @@ from hwbridge.errors import BridgeInputError, DeviceDisconnected, DeviceTimeout
 from hwbridge.protocols import description, reading
 from hwbridge.session import SessionDevices
 from recon.spectra import DEFAULT_GRID
-from twin.components import HMILamp
+from twin.components.lamps import HMILamp
 from twin.sensor.model import Sensor
 
 __all__ = [

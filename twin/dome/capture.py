@@ -4,7 +4,7 @@ The thesis simulates its RGB-spectral dome from spectral reference images :math:
 RGB cameras' exposure series :math:`M_{RGB}(C S_{ref}(p)\\,\\mathrm{diag}(L), t_i)` (Eq. 10.10)
 and one spectral-camera exposure per band :math:`M_{spectral}(S_{ref}(p)\\,\\mathrm{diag}(L),
 t_\\lambda)` (Eq. 10.11), with :math:`M` the camera model of Eq. 10.9. Here :math:`S_{ref}` is
-a :class:`twin.render.texture_truth.TextureTruth` (weights of part spectra per texel), :math:`L` the
+a :class:`twin.materials.textures.TextureTruth` (weights of part spectra per texel), :math:`L` the
 dome's phosphor-white LED at the dome radius, and :math:`M` the twin's sensor model
 (:class:`twin.sensor.model.Sensor`: shot and read noise, dark current and its non-uniformity, PRNU,
 the
@@ -30,9 +30,10 @@ import numpy as np
 from recon.errors import SpectwinInputError
 from recon.radiometric.dark_frames import average_dark_frames
 from recon.spectra import SampledSpectra
-from twin.components import FINE_GRID, LiquidCrystalTunableFilter, PhosphorWhiteLED
+from twin.components.lamps import FINE_GRID, PhosphorWhiteLED
+from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.components.targets import zenith_white_reflectance
-from twin.render.texture_truth import TextureTruth
+from twin.materials.textures import TextureTruth
 from twin.rigs.rig_config import DomeConfig, load_rig
 from twin.sensor.model import Sensor
 

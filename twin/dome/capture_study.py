@@ -1,7 +1,7 @@
 """Virtual dome captures and their spectralization (thesis 10.4.1-10.4.4).
 
 A capture (:func:`simulate_capture`) renders a twin material's images
-(:func:`twin.render.texture_truth.texture_truth`) under dome LEDs, takes the RGB camera's HDR
+(:func:`twin.render.truth.texture_truth`) under dome LEDs, takes the RGB camera's HDR
 exposure
 set of every image and the spectral camera's scheduled band exposures of some images (raw frames
 through :mod:`twin.dome.capture`), and converts them with the calibration of
@@ -25,7 +25,8 @@ from recon.metrics import delta_e94, relative_error
 from recon.scheduling.dome_schedule import THESIS_RGB_EXPOSURES_S
 from recon.spectralize.solve import BandImage, spectralize
 from twin.dome.setup import BAND_GRID, DomeSetup
-from twin.render.texture_truth import TextureTruth, texture_truth
+from twin.materials.textures import TextureTruth
+from twin.render.truth import texture_truth
 from twin.rigs.dome_geometry import dome_geometry
 
 __all__ = [

@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from twin.components import FINE_GRID, LiquidCrystalTunableFilter, PhosphorWhiteLED
+from twin.components.lamps import FINE_GRID, PhosphorWhiteLED
+from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.materials import Material
 from twin.materials.sample_holder import holder_parts
 from twin.render.scene import PinholeCamera, render_view

@@ -43,11 +43,11 @@ from recon.scheduling.dome_schedule import (
     spectral_exposures,
 )
 from recon.spectra import WavelengthGrid
-from twin.components import FINE_GRID
+from twin.components.lamps import FINE_GRID
 from twin.components.targets import zenith_white_reflectance
 from twin.dome.capture import THESIS_BANDS_NM, DomeCameras, dome_cameras
-from twin.render.texture_truth import TextureTruth, texture_truth
-from twin.render.truth import band_passbands
+from twin.materials.textures import TextureTruth
+from twin.render.truth import band_passbands, texture_truth
 from twin.rigs.hemisphere import direction
 
 __all__ = [

@@ -37,7 +37,9 @@ from hwbridge.store import CaptureStore
 from recon.calibration.spectral import HMI_FLICKER_PERIOD_S
 from recon.errors import SpectwinInputError
 from recon.spectra import DEFAULT_GRID
-from twin.components import HMILamp, LiquidCrystalTunableFilter, zenith_white_reflectance
+from twin.components.lamps import HMILamp
+from twin.components.lctf import LiquidCrystalTunableFilter
+from twin.components.targets import zenith_white_reflectance
 from twin.devices.cluster import run_capture
 from twin.devices.sim_devices import SimGonioDevices, VirtualRig
 from twin.gonio.render import gonio_camera, pose_matrix

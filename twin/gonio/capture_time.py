@@ -17,7 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from twin.components import FINE_GRID, HMILamp, LiquidCrystalTunableFilter, QTHLamp
+from twin.components.lamps import FINE_GRID, HMILamp, QTHLamp
+from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.rigs.gonio_kinematics import GonioPose, GonioSolution, solve_pairs
 from twin.rigs.rig_config import GonioConfig
 from twin.sensor.model import Sensor

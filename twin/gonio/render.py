@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from twin.components import FINE_GRID, HMILamp, Lamp, LiquidCrystalTunableFilter, QTHLamp
+from twin.components.lamps import FINE_GRID, HMILamp, Lamp, QTHLamp
+from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.materials import Material
 from twin.materials.sample_holder import holder_parts
 from twin.materials.surfaces import SurfacePart

@@ -15,7 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from twin.components import FINE_GRID, Lamp, LiquidCrystalTunableFilter
+from twin.components.lamps import FINE_GRID, Lamp
+from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.devices.sim_devices import VirtualRig
 from twin.gonio.render import gonio_lamp, gonio_part_rates
 from twin.materials import Material

@@ -16,7 +16,8 @@ import numpy as np
 
 from hwbridge.plans import dark_series, gonio_sample_run, plan_start_times_s
 from hwbridge.store import CaptureStore
-from twin.components import HMILamp, LiquidCrystalTunableFilter
+from twin.components.lamps import HMILamp
+from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.devices.cluster import run_capture
 from twin.devices.sim_devices import SimGonioDevices
 from twin.gonio.signals import RenderedGonioSignal, WhiteReferenceSignal

@@ -12,9 +12,14 @@ from pathlib import Path
 from pydantic import TypeAdapter
 
 from recon.spectra import SampledSpectra
-from twin.materials.builders import build_colorchecker16, build_fabric, build_lego, build_wallpaper
+from twin.materials.builders import (
+    MATERIAL_GRID,
+    build_colorchecker16,
+    build_fabric,
+    build_lego,
+    build_wallpaper,
+)
 from twin.materials.config import MaterialConfig
-from twin.materials.spectra import MATERIAL_GRID
 from twin.materials.surfaces import SurfacePart
 from twin.rigs.yaml_config import (
     read_yaml_mapping,

@@ -1,6 +1,10 @@
 """Builders of the four ground-truth materials (colour checker, red fabric, Lego,
 wallpaper). Each returns surface parts in the sample frame: z is the normal, the sample fills
 ``[-size/2, size/2]^2`` around the origin and rests on z = 0.
+
+Their spectral reflectances are designed on a 5 nm grid (``MATERIAL_GRID``). Colours come from
+the ColorChecker (``colour``); metamers are designed for the dome's RGB camera under the dome's
+white LEDs (``recon.metamers``). Renders use the same spectra on ``FINE_GRID``.
 """
 
 from __future__ import annotations
@@ -8,6 +12,10 @@ from __future__ import annotations
 import numpy as np
 import trimesh
 
+from recon.metamers import design_metamer
+from recon.spectra import SampledSpectra, WavelengthGrid, resample
+from twin.components.lamps import FINE_GRID, PhosphorWhiteLED
+from twin.components.targets import colorchecker_reflectances
 from twin.materials.config import (
     ColorChecker16Config,
     FabricConfig,
@@ -15,10 +23,52 @@ from twin.materials.config import (
     WallpaperConfig,
 )
 from twin.materials.geometry import box, height_field, tube
-from twin.materials.spectra import chart_colour, metamer_of, on_fine_grid
 from twin.materials.surfaces import SurfacePart
+from twin.rigs.camera_config import load_camera_config
 
-__all__ = ["build_colorchecker16", "build_fabric", "build_lego", "build_wallpaper"]
+__all__ = [
+    "MATERIAL_GRID",
+    "build_colorchecker16",
+    "build_fabric",
+    "build_lego",
+    "build_wallpaper",
+    "chart_colour",
+    "dome_camera_and_light",
+    "metamer_of",
+    "on_fine_grid",
+]
+
+MATERIAL_GRID = WavelengthGrid.regular(380.0, 780.0, 5.0)
+"""Grid the material spectra are designed on; they are linear between its samples."""
+
+
+def chart_colour(name: str, scale: float = 1.0) -> SampledSpectra:
+    """A ColorChecker patch reflectance (``ColorChecker N Ohta``), optionally scaled."""
+    return colorchecker_reflectances(MATERIAL_GRID).row(name) * scale
+
+
+def dome_camera_and_light() -> tuple[SampledSpectra, SampledSpectra]:
+    """The dome RGB camera's quantum efficiency (R, G, B) and the dome LED spectrum."""
+    response = load_camera_config("svs_vistek_4022").quantum_efficiency.curve(MATERIAL_GRID)
+    return response, PhosphorWhiteLED().intensity(MATERIAL_GRID)
+
+
+def metamer_of(reflectance: SampledSpectra, seed: int, percent: float = 20.0) -> SampledSpectra:
+    """A smooth metamer of ``reflectance`` for the dome camera under the dome LEDs."""
+    response, light = dome_camera_and_light()
+    return design_metamer(
+        reflectance,
+        response,
+        light,
+        np.random.default_rng(seed),
+        relative_difference_percent=percent,
+    )
+
+
+def on_fine_grid(reflectance: SampledSpectra) -> SampledSpectra:
+    """The design spectrum on the render grid (linear in between, held constant outside)."""
+    return resample(reflectance, FINE_GRID, out_of_range="clamp")
+
 
 _THICKNESS_M = 0.001
 

@@ -12,8 +12,8 @@ import math
 import numpy as np
 
 from recon.spectra import SampledSpectra
-from twin.components import (
-    FINE_GRID,
+from twin.components.lamps import FINE_GRID
+from twin.components.targets import (
     colorchecker_reflectances,
     esser_reflectances,
     zenith_white_reflectance,

@@ -12,7 +12,7 @@ import numpy as np
 import trimesh
 
 from recon.spectra import SampledSpectra
-from twin.components import FINE_GRID
+from twin.components.lamps import FINE_GRID
 from twin.materials.geometry import box
 from twin.materials.surfaces import SurfacePart
 

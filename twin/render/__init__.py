@@ -18,8 +18,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "scene": ["PinholeCamera", "lamp_position", "render_view"],
         "shapes": ["mitsuba_shape", "part_bsdf"],
         "spectra": ["channel_name", "irregular_spectrum", "ldsampler", "rendered_spp", "specfilm"],
-        "texture_truth": ["TextureTruth", "texture_truth"],
-        "truth": ["band_passbands", "truth_btf", "truth_camera_signal"],
+        "truth": ["band_passbands", "texture_truth", "truth_btf", "truth_camera_signal"],
         "variant": [
             "DEFAULT_VARIANT",
             "FALLBACK_VARIANT",

@@ -6,21 +6,37 @@ orthographic camera whose rays run along :math:`-v` and whose pixels are the tex
 sample's square, so every image is rectified like a measured BTF. The reflectance BTF (1/sr) is
 :math:`L_o / (E \\cos\\theta_l)` averaged over each band's normalized passband; shadowing,
 masking and interreflection within the material are included, as in a measurement.
+
+Texture truth. The thesis's chapter 10 simulation starts from spectral reference images
+:math:`S_{ref}` of a material under one light and view direction (Eq. 10.10, 10.11). The twin's
+are rendered by :func:`truth_btf` (Mitsuba, reflectance averaged over 10 nm passbands) and
+multiplied by :math:`\\pi`, so that a white Lambertian surface reads 1 (reflectance factors, as
+Eq. 6.8's :math:`\\epsilon = 10^{-3}` assumes).
+
+A spectral render samples wavelengths at random per path, so at 64 spp neighbouring bands of one
+texel differ by tens of percent of Monte Carlo noise (two seeds: 34 % mean relative error; 9 % at
+1024 spp), which no method could predict from RGB. Each texel is therefore replaced by its
+non-negative least-squares fit with the material's part reflectances plus a flat spectrum (the
+surface reflection of a dielectric, i.e. highlights): shading, shadowing, highlights and the
+mixing of parts within a texel stay, the noise goes. The weights also give the texel's spectrum
+on the fine grid, where the cameras integrate it (:mod:`twin.dome.capture`).
 """
 
 from __future__ import annotations
 
 import numpy as np
+from scipy import optimize
 
 from recon.errors import SpectwinInputError
-from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid
-from twin.components import FINE_GRID
-from twin.materials import Material
+from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid, resample
+from twin.components.lamps import FINE_GRID
+from twin.materials import Material, load_material
+from twin.materials.textures import TextureTruth
 from twin.render.shapes import mitsuba_shape
 from twin.render.spectra import irregular_spectrum, ldsampler, specfilm
 from twin.render.variant import activate
 
-__all__ = ["band_passbands", "truth_btf", "truth_camera_signal"]
+__all__ = ["band_passbands", "texture_truth", "truth_btf", "truth_camera_signal"]
 
 
 def band_passbands(centres: WavelengthGrid = DEFAULT_GRID, fwhm_nm: float = 10.0) -> SampledSpectra:
@@ -141,3 +157,49 @@ def truth_camera_signal(
         for light, view in zip(light_dirs, view_dirs, strict=True)
     ]
     return np.stack(images)
+
+
+def _basis(material: Material, surface: bool) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    spectra = [
+        resample(part.reflectance, FINE_GRID, method="linear").values for part in material.parts
+    ]
+    names = tuple(part.name for part in material.parts)
+    if surface:
+        spectra, names = spectra + [np.ones(FINE_GRID.size)], names + ("surface",)
+    fine = np.array(spectra)
+    passbands = band_passbands(DEFAULT_GRID)
+    return fine, fine @ (passbands.values * FINE_GRID.quadrature_weights()).T, names
+
+
+def texture_truth(
+    material: str | Material,
+    light_dirs: np.ndarray,
+    view_dirs: np.ndarray,
+    *,
+    texels: int = 48,
+    spp: int = 64,
+    surface: bool = True,
+) -> TextureTruth:
+    """Render ``material`` for each (light, view) pair and fit every texel with its basis.
+
+    Parameters
+    ----------
+    material
+        A twin material or its name (``scenes/materials``).
+    light_dirs, view_dirs
+        ``(n_images, 3)`` unit directions in the sample frame, z up.
+    texels
+        Texture side in texels.
+    spp
+        Samples per pixel of the renders.
+    surface
+        Include the flat spectrum (highlights) in the basis.
+    """
+    model = load_material(material) if isinstance(material, str) else material
+    if texels < 2:
+        raise SpectwinInputError(f"texels: expected at least 2, got {texels}")
+    btf = np.pi * truth_btf(model, light_dirs, view_dirs, texels=texels, spp=spp)
+    fine, bands, names = _basis(model, surface)
+    pixels = btf.reshape(-1, btf.shape[-1]).astype(np.float64)
+    weights = np.array([optimize.nnls(bands.T, pixel)[0] for pixel in pixels])
+    return TextureTruth(weights.reshape(*btf.shape[:-1], len(names)), fine, bands, names)

@@ -19,6 +19,8 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
+from recon.spectra import SampledSpectra, WavelengthGrid
+from twin.components.detectors import CCDQuantumEfficiency, rgb_camera_response
 from twin.rigs.yaml_config import (
     NonNegative,
     Positive,
@@ -51,6 +53,13 @@ class CCDQuantumEfficiencyConfig(StrictModel):
     log_width_blue: Positive
     log_width_red: Positive
 
+    def curve(self, grid: WavelengthGrid) -> SampledSpectra:
+        """:math:`\\eta(\\lambda)` on ``grid``, values ``(1, K)`` (channel ``"Y"``)."""
+        curve = CCDQuantumEfficiency(
+            self.peak_qe, self.peak_nm, self.log_width_blue, self.log_width_red
+        )(grid)
+        return SampledSpectra(grid, curve.values[None, :], ("Y",))
+
 
 class RGBQuantumEfficiencyConfig(StrictModel):
     """Colour sensor: a measured relative RGB response scaled to a peak quantum efficiency."""
@@ -58,6 +67,10 @@ class RGBQuantumEfficiencyConfig(StrictModel):
     model: Literal["rgb_camera"]
     camera: str
     peak_qe: Annotated[float, Field(gt=0, le=1)]
+
+    def curve(self, grid: WavelengthGrid) -> SampledSpectra:
+        """:math:`\\eta(\\lambda)` on ``grid``, values ``(3, K)`` (R, G, B); 0 outside the data."""
+        return rgb_camera_response(self.camera, grid, out_of_range="zero") * self.peak_qe
 
 
 class DarkCurrentConfig(StrictModel):

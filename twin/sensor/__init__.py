@@ -7,6 +7,7 @@ import lazy_loader
 __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
+        "band_weights": ["instrument_passbands"],
         "model": ["Sensor", "bayer_channel_index"],
         "white_reference": ["equalized_exposures_s", "white_reference_rates"],
     },

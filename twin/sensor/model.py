@@ -44,7 +44,6 @@ from scipy import constants, stats
 
 from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra, WavelengthGrid, band_integrals
-from twin.components import CCDQuantumEfficiency, rgb_camera_response
 from twin.rigs.camera_config import CameraConfig, load_camera_config
 
 __all__ = ["Sensor", "bayer_channel_index"]
@@ -168,14 +167,7 @@ class Sensor:
 
     def quantum_efficiency(self, grid: WavelengthGrid) -> SampledSpectra:
         """:math:`\\eta(\\lambda)` per channel, values ``(1, K)`` or ``(3, K)`` (R, G, B)."""
-        qe = self.config.quantum_efficiency
-        if qe.model == "ccd":
-            curve = CCDQuantumEfficiency(
-                qe.peak_qe, qe.peak_nm, qe.log_width_blue, qe.log_width_red
-            )(grid)
-            return SampledSpectra(grid, curve.values[None, :], ("Y",))
-        relative = rgb_camera_response(qe.camera, grid, out_of_range="zero")
-        return relative * qe.peak_qe
+        return self.config.quantum_efficiency.curve(grid)
 
     def electron_responses(
         self, grid: WavelengthGrid, filter_transmission: SampledSpectra | None = None

@@ -15,7 +15,8 @@ import numpy as np
 
 from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra
-from twin.components import FINE_GRID, Lamp, zenith_white_reflectance
+from twin.components.lamps import FINE_GRID, Lamp
+from twin.components.targets import zenith_white_reflectance
 from twin.sensor.model import Sensor
 
 __all__ = ["equalized_exposures_s", "white_reference_rates"]

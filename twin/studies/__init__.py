@@ -10,7 +10,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "camchar": ["run_camchar"],
         "camera_bench": ["run_camera_report"],
         "demo": ["run_demo"],
-        "dome_report": ["run_dome_study"],
+        "dome": ["run_dome_study"],
         "gallery": ["run_gallery"],
         "spectralization": ["run_study"],
     },

@@ -17,7 +17,8 @@ import trimesh
 
 from recon.errors import SpectwinInputError
 from recon.spectra import DEFAULT_GRID, SampledSpectra, from_colour, resample
-from twin.components import FINE_GRID, HMILamp, rgb_camera_response
+from twin.components.detectors import rgb_camera_response
+from twin.components.lamps import FINE_GRID, HMILamp
 from twin.materials.calibration_targets import colorchecker_chart, esser_chart
 from twin.materials.geometry import box
 from twin.materials.surfaces import SurfacePart

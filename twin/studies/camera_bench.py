@@ -18,7 +18,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from twin.components import FINE_GRID, HMILamp, LiquidCrystalTunableFilter  # noqa: E402
+from twin.components.lamps import FINE_GRID, HMILamp
+from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.sensor.model import Sensor  # noqa: E402
 from twin.sensor.white_reference import white_reference_rates  # noqa: E402
 

@@ -40,8 +40,7 @@ from twin.studies.demo_report import (
     write_report,
 )
 from twin.studies.demo_spectralization import band_image_spectralization
-from twin.validate.gonio_evaluation import evaluate_gonio
-from twin.validate.gonio_figures import write_gonio_figure
+from twin.validate.gonio_evaluation import evaluate_gonio, write_gonio_figure
 from twin.validate.render_back import validate_btf
 
 __all__ = ["DEMO_RINGS", "DemoSettings", "run_demo"]

@@ -20,8 +20,7 @@ from recon.btf.store import BTFStore  # noqa: E402
 from recon.calibration.gonio import GonioCalibration  # noqa: E402
 from recon.preview import spectral_to_srgb  # noqa: E402
 from recon.spectra import DEFAULT_GRID  # noqa: E402
-from twin.components import FINE_GRID  # noqa: E402
-from twin.components.lamps import HMILamp, QTHLamp  # noqa: E402
+from twin.components.lamps import FINE_GRID, HMILamp, QTHLamp  # noqa: E402
 from twin.components.lctf import LiquidCrystalTunableFilter  # noqa: E402
 from twin.output_format import format_value  # noqa: E402
 from twin.studies.demo_spectralization import BandSpectralization  # noqa: E402

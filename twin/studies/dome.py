@@ -14,12 +14,22 @@
   error (10.5: 7.5 s instead of 226 s).
 - :func:`cross_check`: Fig. 10.4, RGB predicted from a calibrated spectral image versus RGB
   measured, per colour-checker field.
+- :func:`run_dome_study`: all of them, written to ``dome_study.json`` with the figures of
+  :mod:`twin.studies.dome_figures`.
+
+Two imaging scales. The single-image, multi-image and comparison experiments image each
+material at its physical size (a 4 cm sample at 32 texels: 12 x 12 spectral-camera pixels per
+texel, averaged). The thesis evaluates camera pixels (10.5, Fig. 10.24: pixel spectra), so the
+single images are repeated, and the 10.5 exposure comparison run, at ``PER_PIXEL_TEXEL_PX``: one
+Bayer quad of the RGB camera and 2 x 2 spectral-camera pixels per texel, where a band's noise is
+a pixel's and the filters of Fig. 10.5 matter.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from scipy import ndimage
@@ -39,13 +49,25 @@ from twin.dome.capture_study import (
     simulate_capture,
     sphere_lit_spectra,
 )
-from twin.dome.setup import BAND_GRID, CALIBRATION_LIGHT, SPECTRAL_VIEW, THESIS_BANDS_NM, DomeSetup
-from twin.render.texture_truth import texture_truth
+from twin.dome.setup import (
+    BAND_GRID,
+    CALIBRATION_LIGHT,
+    SPECTRAL_VIEW,
+    THESIS_BANDS_NM,
+    DomeSetup,
+    dome_setup,
+)
+from twin.materials import load_material
+from twin.output_format import dumps
+from twin.render.truth import texture_truth
 from twin.rigs.dome_geometry import dome_geometry
 from twin.rigs.hemisphere import direction
 from twin.sensor.white_reference import equalized_exposures_s
+from twin.studies import dome_figures
 
 __all__ = [
+    "DOME_MATERIALS",
+    "PER_PIXEL_TEXEL_PX",
     "P_DYN",
     "SINGLE_IMAGE_LEDS",
     "SingleImage",
@@ -54,6 +76,7 @@ __all__ = [
     "exposure_comparison",
     "metamer_diagnosis",
     "multi_image",
+    "run_dome_study",
     "schedules",
     "single_image",
 ]
@@ -379,3 +402,113 @@ def _field_medians(image: np.ndarray, grid: int = 4) -> np.ndarray:
             for c in range(grid)
         ]
     )
+
+
+DOME_MATERIALS = ("lego", "wallpaper", "colorchecker16", "red_fabric")
+"""The thesis's four example materials (10.4)."""
+
+PER_PIXEL_TEXEL_PX = 2
+"""Camera pixels across a texel in the per-pixel regime (module description)."""
+
+
+def _errors_of(result: SingleImage) -> dict[str, np.ndarray]:
+    return {
+        "relative": np.concatenate([e.relative_pct[e.material] for e in result.errors]),
+        "delta_e": np.concatenate([e.delta_e94[e.material] for e in result.errors]),
+    }
+
+
+def run_dome_study(
+    out: str | Path,
+    *,
+    texels: int = 32,
+    materials: Sequence[str] = DOME_MATERIALS,
+    seed: int = 0,
+    step: Callable[[str], None] = lambda name: None,
+) -> dict:
+    """Run every experiment of :mod:`twin.studies.dome`, write the JSON and figures to ``out``."""
+    unknown = sorted(set(materials) - set(DOME_MATERIALS))
+    if unknown or not materials:
+        raise SpectwinInputError(
+            f"materials: expected some of {list(DOME_MATERIALS)}, got {list(materials)}"
+        )
+    if texels < 8 or texels % 4:
+        raise SpectwinInputError(f"texels: expected a multiple of 4, at least 8, got {texels}")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    rng = np.random.default_rng(seed)
+    setups: dict[float, DomeSetup] = {}
+
+    def setup_for(material: str) -> DomeSetup:
+        size = load_material(material).size_m
+        if size not in setups:
+            step(f"calibrating the dome for {size * 100:.2f} cm samples")
+            setups[size] = dome_setup(texels, sample_size_m=size, seed=seed)
+        return setups[size]
+
+    first = setup_for(materials[0])
+    step("calibrating the dome at one Bayer quad per texel")
+    per_pixel = dome_setup(texels, texel_px=PER_PIXEL_TEXEL_PX, seed=seed)
+    plans = schedules(first)
+    metrics: dict = {"texels": texels, "schedules": plans, "materials": {}}
+    singles, multis = {}, {}
+    for material in materials:
+        setup = setup_for(material)
+        step(f"{material}: single images")
+        singles[material] = single_image(setup, material, rng)
+        step(f"{material}: Dong 2016 and Spectral A+")
+        compared = comparison(setup, material, singles[material], rng)
+        step(f"{material}: 20 images")
+        _, errors, multi = multi_image(setup, material, rng)
+        multis[material] = errors
+        step(f"{material}: single images at one Bayer quad per texel")
+        per_pixel_single = single_image(per_pixel, material, rng)
+        metrics["materials"][material] = {
+            "pixels_per_texel": setup.cameras.pixels_per_texel,
+            "single_image": singles[material].summary(),
+            "comparison": compared,
+            "multi_image": multi,
+            "metamer_diagnosis": metamer_diagnosis(setup, singles[material].captures[0]),
+            "per_pixel": {
+                "pixels_per_texel": PER_PIXEL_TEXEL_PX,
+                "single_image": per_pixel_single.summary(),
+                "metamer_diagnosis": metamer_diagnosis(per_pixel, per_pixel_single.captures[0]),
+            },
+        }
+    step("exposure comparison (one Bayer quad per texel) and cross-check")
+    metrics["exposure_10_5"] = exposure_comparison(per_pixel, "colorchecker16", rng)
+    check = cross_check(setup_for("colorchecker16"), rng)
+    metrics["cross_check_10_4"] = {
+        key: value for key, value in check.items() if key not in ("measured", "predicted")
+    }
+    metrics["plan"] = {
+        "bands_nm": THESIS_BANDS_NM,
+        "exposures_s": first.exposures_s,
+        "filter_sigma_texels": first.filter_sigma(),
+        "grey_relative_noise": first.relative_noise,
+    }
+    step("figures")
+    dome_figures.write_plan(first, plans, out / "fig10_5_plan.png")
+    dome_figures.write_error_histograms(
+        {m: _errors_of(r) for m, r in singles.items()},
+        "single images (Eq. 10.12)",
+        out / "fig10_7_single_image_errors.png",
+    )
+    dome_figures.write_texel_spectra(singles, out / "fig10_9_spectra.png")
+    dome_figures.write_error_histograms(
+        {
+            f"{material} {label}": {
+                "relative": errors.relative_pct[part][errors.material[part]],
+                "delta_e": errors.delta_e94[part][errors.material[part]],
+            }
+            for material, errors in multis.items()
+            for label, part in (("with bands", slice(0, 10)), ("without", slice(10, 20)))
+        },
+        "20 images: 10 with spectral data at 45 degrees, 10 without",
+        out / "fig10_13_multi_image.png",
+    )
+    dome_figures.write_comparison(metrics, out / "fig10_23_comparison.png")
+    dome_figures.write_cross_check(check, out / "fig10_4_cross_check.png")
+    dome_figures.write_exposure_vs_error(metrics["exposure_10_5"], out / "exposure_vs_error.png")
+    (out / "dome_study.json").write_text(dumps(metrics))
+    return metrics

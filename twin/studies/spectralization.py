@@ -33,22 +33,23 @@ from recon.experiments.sparse import (  # noqa: E402
 )
 from recon.measured_data import read_llanos2019_multispectral  # noqa: E402
 from recon.spectra import DEFAULT_GRID  # noqa: E402
-from twin.components import cie_illuminant, rgb_camera_response  # noqa: E402
-from twin.render.texture_truth import texture_truth  # noqa: E402
+from twin.components.detectors import rgb_camera_response
+from twin.components.lamps import cie_illuminant
+from twin.render.truth import texture_truth  # noqa: E402
 
-__all__ = ["study_response", "run_study", "twin_texture"]
+__all__ = ["STUDY_LIGHT", "STUDY_VIEW", "run_study", "study_response", "twin_texture"]
 
 _SWEPT = ("spectralization", "spectralization p_dyn=1", "hardeberg", "dong", "murakami")
-_LIGHT = np.array([[np.sin(np.radians(15.0)), 0.0, np.cos(np.radians(15.0))]])
-_VIEW = np.array([[0.0, 0.0, 1.0]])
+STUDY_LIGHT = np.array([[np.sin(np.radians(15.0)), 0.0, np.cos(np.radians(15.0))]])
+STUDY_VIEW = np.array([[0.0, 0.0, 1.0]])
 
 
 def twin_texture(material: str, *, texels: int = 96, spp: int = 64) -> np.ndarray:
     """Reflectance factors ``(texels, texels, 33)`` of a twin material, lit 15 degrees off
     the normal and seen from above, each texel fitted with the material's part reflectances
-    (:func:`twin.render.texture_truth.texture_truth` without the flat surface spectrum: no highlight
+    (:func:`twin.render.truth.texture_truth` without the flat surface spectrum: no highlight
     reaches the view from this light)."""
-    truth = texture_truth(material, _LIGHT, _VIEW, texels=texels, spp=spp, surface=False)
+    truth = texture_truth(material, STUDY_LIGHT, STUDY_VIEW, texels=texels, spp=spp, surface=False)
     return truth.reflectance[0]
 
 

@@ -32,7 +32,7 @@ import numpy as np
 
 from recon.measured_data import read_spectra_csv
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid, resample
-from twin.components import FINE_GRID
+from twin.components.lamps import FINE_GRID
 from twin.materials import Material
 from twin.render.light_groups import LightGroup, render_lit
 from twin.render.plugins.btf_bsdf import BTFTable, CompressedTable, btf_bsdf

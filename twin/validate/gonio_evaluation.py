@@ -11,6 +11,7 @@ apart: their highlights depend on sub-degree direction errors and saturate the c
 
 The registered corners stored with the BTF are compared with the projections of the marks'
 corners for the poses the robot actually reached in the capture session.
+:func:`write_gonio_figure` draws the comparison (``spectwin evaluate``).
 """
 
 from __future__ import annotations
@@ -19,27 +20,28 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from matplotlib.figure import Figure
 
 from hwbridge.errors import BridgeInputError
 from hwbridge.store import CaptureStore
 from recon.btf.store import BTFStore
 from recon.errors import SpectwinInputError
 from recon.metrics import relative_error
-from recon.spectra import SampledSpectra
-from twin.components import FINE_GRID, HMILamp, LiquidCrystalTunableFilter
+from recon.preview import spectral_to_srgb
 from twin.gonio.capture import GonioPairs, actual_poses, texture_corners_world
 from twin.gonio.render import gonio_camera
 from twin.materials import Material, load_material
 from twin.render.truth import truth_btf
-from twin.rigs.rig_config import GonioConfig, load_rig
-from twin.sensor.model import Sensor
+from twin.rigs.hemisphere import spherical_deg
+from twin.rigs.rig_config import load_rig
+from twin.sensor.band_weights import instrument_passbands
 
 __all__ = [
     "FieldMasks",
     "GonioEvaluation",
     "evaluate_gonio",
     "field_masks",
-    "instrument_passbands",
+    "write_gonio_figure",
 ]
 
 
@@ -102,20 +104,6 @@ class GonioEvaluation:
                 for name, value in zip(self.field_names, self.field_error.mean(axis=0), strict=True)
             },
         }
-
-
-def instrument_passbands(config: GonioConfig) -> SampledSpectra:
-    """The gonioreflectometer's band weighting: VariSpec transmission x K4 electron response x
-    the HMI lamp's mean spectrum, each band of unit area on ``FINE_GRID``. A measured band of a
-    white-referenced BTF is the reflectance averaged with these weights (Eq. 3.3-3.6)."""
-    lctf = LiquidCrystalTunableFilter.varispec(config.camera.filter)
-    sensor = Sensor(config.camera.definition)
-    responses = sensor.electron_responses(FINE_GRID, lctf.transmission(FINE_GRID))
-    lamp = HMILamp()
-    mean_lamp = lamp.part_exposure_s(0.0, 1.0) @ lamp.spectral_parts(FINE_GRID).values
-    weights = responses.values * mean_lamp
-    weights /= np.trapezoid(weights, FINE_GRID.wavelengths_nm, axis=1)[:, None]
-    return SampledSpectra(FINE_GRID, weights, responses.names)
 
 
 def _true_corners(capture: CaptureStore, btf: BTFStore) -> np.ndarray:
@@ -204,3 +192,65 @@ def evaluate_gonio(
         field_means,
         truth_means,
     )
+
+
+def _pair_label(btf: BTFStore, pair: int) -> str:
+    (light_theta, light_phi), (view_theta, view_phi) = (
+        spherical_deg(btf.light_dirs[pair]),
+        spherical_deg(btf.view_dirs[pair]),
+    )
+    return (
+        f"light ({light_theta:.0f}, {light_phi:.0f}) deg, view ({view_theta:.0f}, {view_phi:.0f})"
+    )
+
+
+def write_gonio_figure(evaluation: GonioEvaluation, btf: BTFStore, path: str | Path) -> Path:
+    """Four panels: mean Eq. 6.8 error per field (matte and glossy), its distribution over the
+    pairs, measured versus true field spectra of the most oblique pair, and that pair's measured
+    texture next to a frontal one (sRGB previews of the reflectance under equal energy)."""
+    path = Path(path)
+    figure = Figure(figsize=(13, 9))
+    axes = figure.subplots(2, 2)
+    names = [name.replace("field_", "") for name in evaluation.field_names]
+    colours = np.where(evaluation.glossy, "tab:orange", "tab:blue")
+    axes[0, 0].bar(names, evaluation.field_error.mean(axis=0), color=colours)
+    axes[0, 0].axhline(3.0, color="k", linestyle="--", linewidth=1)
+    axes[0, 0].set(
+        xlabel="field (orange: glossy)",
+        ylabel="mean relative error (Eq. 6.8), %",
+        title=f"per field, mean over {evaluation.field_error.shape[0]} direction pairs",
+    )
+    matte = evaluation.field_error[:, ~evaluation.glossy].ravel()
+    axes[0, 1].hist(matte, bins=40, color="tab:blue")
+    axes[0, 1].set(
+        xlabel="relative error of a matte field's mean spectrum, %",
+        ylabel="field x pair count",
+        title=f"matte fields: mean {matte.mean():.2f} %, 95th percentile "
+        f"{np.percentile(matte, 95):.2f} %",
+    )
+    views = btf.view_dirs[evaluation.pairs]
+    oblique = int(np.argmax(np.arccos(views[:, 2])))
+    wavelengths = btf.grid.wavelengths_nm
+    for field in np.flatnonzero(~evaluation.glossy)[::3]:
+        (line,) = axes[1, 0].plot(
+            wavelengths, evaluation.truth_means[oblique, field], label=f"field {names[field]}"
+        )
+        axes[1, 0].plot(
+            wavelengths, evaluation.measured_means[oblique, field], "o", color=line.get_color()
+        )
+    axes[1, 0].set(
+        xlabel="wavelength, nm",
+        ylabel="BRDF, 1/sr",
+        title=f"lines: truth, dots: measured; {_pair_label(btf, evaluation.pairs[oblique])}",
+    )
+    axes[1, 0].legend(fontsize=8)
+    shown = [evaluation.pairs[int(np.argmin(np.arccos(views[:, 2])))], evaluation.pairs[oblique]]
+    previews = [
+        spectral_to_srgb(btf.read_pair(pair, allow_incomplete=True), btf.grid) for pair in shown
+    ]
+    axes[1, 1].imshow(np.concatenate(previews, axis=1))
+    axes[1, 1].set_title(f"measured textures: {_pair_label(btf, shown[0])} | oblique", fontsize=9)
+    axes[1, 1].axis("off")
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+    return path

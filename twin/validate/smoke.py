@@ -23,13 +23,9 @@ import numpy as np  # noqa: E402
 from recon.preview import spectral_to_srgb  # noqa: E402
 from recon.spectra import SampledSpectra, WavelengthGrid, band_integrals, resample  # noqa: E402
 from recon.spectral_exr import write_spectral_exr  # noqa: E402
-from twin.components import (  # noqa: E402
-    FINE_GRID,
-    LiquidCrystalTunableFilter,
-    QTHLamp,
-    colorchecker_reflectances,
-    irradiance_at,
-)
+from twin.components.lamps import FINE_GRID, QTHLamp, irradiance_at
+from twin.components.lctf import LiquidCrystalTunableFilter
+from twin.components.targets import colorchecker_reflectances
 from twin.render.flat_target import analytic_band_radiance, patch_means, render_flat_target  # noqa: E402
 from twin.render.spectra import rendered_spp  # noqa: E402
 from twin.render.variant import activate  # noqa: E402

@@ -11,7 +11,7 @@ integrated over the same ring by interpolating between its measured directions
 (:func:`twin.render.plugins.btf_bsdf.interpolate_table`); both are averaged over a circular spot in
 the middle
 of every chart field. The instrument's spectra are resolved to the BTF's bands with the
-gonioreflectometer's band weighting (:func:`twin.validate.gonio_evaluation.instrument_passbands`),
+gonioreflectometer's band weighting (:func:`twin.sensor.band_weights.instrument_passbands`),
 as a
 finely sampling laboratory spectrophotometer's readings would be before comparing them with the
 camera's bands, so that the comparison measures geometry and calibration, not band shapes.
@@ -30,7 +30,7 @@ from twin.render.plugins.btf_bsdf import BTFTable, CompressedTable, interpolate_
 from twin.render.truth import truth_btf
 from twin.rigs.hemisphere import direction
 from twin.rigs.rig_config import load_rig
-from twin.validate.gonio_evaluation import instrument_passbands
+from twin.sensor.band_weights import instrument_passbands
 
 __all__ = ["FortyFiveZero", "compare_45_0", "field_spots", "write_45_0_figure"]
 
