@@ -6,7 +6,7 @@ exposure
 set of every image and the spectral camera's scheduled band exposures of some images (raw frames
 through :mod:`twin.dome.capture`), and converts them with the calibration of
 :func:`twin.dome.setup.dome_setup` into white-balanced RGB :math:`V` and noisy band reflectance
-images, the inputs of Eq. 10.12 (:func:`recon.spectralize.solve.spectralize`).
+images, the inputs of Eq. 10.12 (:func:`recon.spectralize.spectralize`).
 
 The comparisons of 10.4.3 and 10.4.4 need the sphere-lit spectral image of Dong et al.: the
 sample under all LEDs at once (:func:`sphere_lit_spectra`), bright enough that short band
@@ -187,7 +187,7 @@ def simulate_capture(
 
 def reconstruct_capture(setup: DomeSetup, capture: DomeCapture, **options) -> np.ndarray:
     """Eq. 10.12 on a capture: the spectral cube ``(n, H, W, 30)``; ``options`` go to
-    :func:`recon.spectralize.solve.spectralize` (``p_dyn``, ``weights``, ``tol``, ...)."""
+    :func:`recon.spectralize.spectralize` (``p_dyn``, ``weights``, ``tol``, ...)."""
     return spectralize(capture.rgb, setup.response, band_images=capture.band_images, **options)
 
 

@@ -3,7 +3,7 @@
 The dome setting of the thesis in miniature: a twin material's texture
 (:func:`twin.studies.spectralization.twin_texture`) seen by an RGB camera (Nikon D70 response
 under D65, 1 % noise) and, at every ``band_step``-th band, by a spectral camera whose short
-exposures leave ``band_noise`` relative Gaussian noise. :func:`recon.spectralize.solve.spectralize`
+exposures leave ``band_noise`` relative Gaussian noise. :func:`recon.spectralize.spectralize`
 fuses them (Eq. 10.12, the band images matched after a Gaussian filter of ``sigma_px``); the
 error is Eq. 6.8 and Delta E94 against the texture. The noise is drawn here, not by the sensor
 model (the dome's own capture simulation is in ``twin.dome.capture``).
