@@ -72,18 +72,28 @@ def _spectralization(data: SparseInput, p_dyn: float = 0.0) -> np.ndarray:
 METHODS: dict[str, Callable[[SparseInput], np.ndarray]] = {
     "spectralization": _spectralization,
     "spectralization p_dyn=1": lambda d: _spectralization(d, p_dyn=1.0),
-    "imai": lambda d: baselines.imai(d.rgb, d.response),
-    "hardeberg": lambda d: baselines.hardeberg(d.rgb, d.spectra, d.pixels),
-    "murakami": lambda d: baselines.murakami_2007(d.rgb, d.response, d.spectra, d.pixels),
-    "dong": lambda d: baselines.dong_2016(d.rgb, d.response, d.spectra),
-    # A+ codes spectra with 8 atoms (its default); with fewer bands than 8, with all of them.
-    "a_plus": lambda d: baselines.spectral_a_plus(
-        d.rgb, d.spectra, known_pixels=d.pixels, sparsity=min(8, d.spectra.shape[1])
+    "imai": lambda d: baselines.recover(d.rgb, d.response, method="imai"),
+    "hardeberg": lambda d: baselines.recover(d.rgb, d.spectra, d.pixels, method="hardeberg"),
+    "murakami": lambda d: baselines.recover(
+        d.rgb, d.response, d.spectra, d.pixels, method="murakami"
+    ),
+    "dong": lambda d: baselines.recover(d.rgb, d.response, d.spectra, method="dong"),
+    # A+ estimates the response from the training pairs (response=None) and codes spectra with
+    # 8 atoms (its default); with fewer bands than 8, with all of them.
+    "a_plus": lambda d: baselines.recover(
+        d.rgb,
+        None,
+        d.spectra,
+        known_pixels=d.pixels,
+        sparsity=min(8, d.spectra.shape[1]),
+        method="aplus",
     ),
 }
-"""Reconstruction methods by name. Imai cannot use the known spectra (section 7); all others
-receive them. Smits 1999 and Jakob 2019 (``recon.baselines``) expect sRGB reflectance input, not
-camera values, and are left out of these camera-based protocols."""
+"""Reconstruction methods by name; the baselines are called through
+:func:`recon.baselines.recover` by their names in :data:`recon.baselines.RECOVERY_METHODS`.
+Imai cannot use the known spectra (section 7); all others receive them. Smits 1999 and Jakob
+2019 (``recon.baselines``) expect sRGB reflectance input, not camera values, and are left out of
+these camera-based protocols."""
 
 
 @dataclass(frozen=True)

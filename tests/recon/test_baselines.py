@@ -9,11 +9,14 @@ from scipy import linalg
 
 from recon import baselines
 from recon.baselines import (
+    RECOVERY_METHODS,
     dong_2016,
     hardeberg,
     imai,
     jakob_2019,
+    jakob_hanika2019,
     murakami_2007,
+    recover,
     smits_1999,
     spectral_a_plus,
 )
@@ -367,7 +370,7 @@ def test_jakob_lut_path_evaluates_colours_coefficients(monkeypatch):
         requested.append((size, start, end, interval))
         return FakeLUT()
 
-    monkeypatch.setattr(baselines, "_jakob_lut", fake_lut)
+    monkeypatch.setattr(jakob_hanika2019, "_jakob_lut", fake_lut)
     result = jakob_2019(np.array([[0.3, 0.4, 0.5]]), WL, lut_size=4)
     expected = colour.recovery.sd_Jakob2019([-1e-4, 0.1, -25.0], SHAPE).values
     np.testing.assert_allclose(result[0], expected, rtol=1e-12)
@@ -451,3 +454,72 @@ NAN_RGB[1, 2, 0] = np.nan
 def test_bad_input_is_rejected_with_a_helpful_message(call, message):
     with pytest.raises(SpectwinInputError, match=message):
         call()
+
+
+# ------------------------------------------------------------------------- registry and recover
+
+
+def registry_case(rng: np.random.Generator) -> dict[str, tuple[tuple, dict]]:
+    """Small positional (``rgb`` first) and keyword arguments for every registered method."""
+    response = rng.random((12, 3))
+    spectra = 0.05 + rng.random((40, 12))
+    camera = (spectra @ response).reshape(5, 8, 3)
+    known = np.arange(0, 40, 3)
+    srgb = rng.random((2, 3, 3))
+    wavelengths = WL[::4]
+    return {
+        "imai": ((camera, response), {}),
+        "hardeberg": ((camera, spectra[known], known), {}),
+        "murakami": ((camera, response, spectra[known], known), {"nugget": 0.1}),
+        "dong": ((camera, response, spectra[known]), {"max_iter": 200}),
+        "aplus": (
+            (camera, response, spectra[known]),
+            {"known_pixels": known, "n_atoms": 6, "sparsity": 4},
+        ),
+        "smits": ((srgb, wavelengths), {}),
+        "jakob2019": ((srgb, wavelengths), {}),
+    }
+
+
+def test_recover_by_name_equals_calling_the_method(rng):
+    cases = registry_case(rng)
+    assert set(cases) == set(RECOVERY_METHODS)  # a new method needs a case here
+    for name, function in RECOVERY_METHODS.items():
+        args, kwargs = cases[name]
+        direct = function(*args, **kwargs)
+        assert np.array_equal(recover(*args, method=name, **kwargs), direct), name
+        assert np.array_equal(recover(*args, method=name.upper(), **kwargs), direct), name
+
+
+@pytest.mark.parametrize("method", ["wiener", "", "imai 1999", None])
+def test_recover_rejects_an_unknown_method_naming_the_valid_ones(method):
+    with pytest.raises(
+        SpectwinInputError, match=r"^method: unknown spectral recovery method"
+    ) as info:
+        recover(GOOD_RGB, RESPONSE, method=method)
+    message = str(info.value)
+    assert repr(method) in message and "\n" not in message
+    for name in RECOVERY_METHODS:
+        assert name in message
+
+
+def test_short_names_are_the_registry_functions():
+    assert list(RECOVERY_METHODS) == [
+        "imai",
+        "hardeberg",
+        "murakami",
+        "dong",
+        "aplus",
+        "smits",
+        "jakob2019",
+    ]
+    for name, function in RECOVERY_METHODS.items():
+        assert getattr(baselines, name) is function, name
+        assert name in baselines.__all__
+    assert baselines.murakami_2007 is RECOVERY_METHODS["murakami"]
+    assert baselines.dong_2016 is RECOVERY_METHODS["dong"]
+    assert baselines.smits_1999 is RECOVERY_METHODS["smits"]
+    assert baselines.jakob_2019 is RECOVERY_METHODS["jakob2019"]
+    # Every public name is a function: no method module hides one of the same name.
+    for name in set(baselines.__all__) - {"RECOVERY_METHODS"}:
+        assert inspect.isfunction(getattr(baselines, name)), name
