@@ -7,16 +7,14 @@ import time
 from dataclasses import asdict
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.image import imsave
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from recon.camera_char import estimate_response  # noqa: E402
-from recon.metrics import peak_relative_rmse  # noqa: E402
-from recon.spectra import DEFAULT_GRID  # noqa: E402
-from twin.studies.camchar_scenes import ChartScenario, render_chart_photo  # noqa: E402
+from recon.camera_char import estimate_response
+from recon.metrics import peak_relative_rmse
+from recon.spectra import DEFAULT_GRID
+from twin.studies.camchar_scenes import ChartScenario, render_chart_photo
 
 __all__ = ["run_camchar"]
 
@@ -40,11 +38,12 @@ def run_camchar(scenario: ChartScenario, out_dir: Path, *, seed: int = 0) -> dic
         field_positions=photo.field_positions,
     )
     solve_s = time.perf_counter() - started
-    plt.imsave(
+    imsave(
         out_dir / "chart_photo.png",
         np.clip(photo.image / np.percentile(photo.image, 99.5), 0, 1) ** (1 / 2.2),
     )
-    figure, axes = plt.subplots(figsize=(8, 4.5))
+    figure = Figure(figsize=(8, 4.5))
+    axes = figure.subplots()
     for channel, colour_name in enumerate(("tab:red", "tab:green", "tab:blue")):
         truth = photo.true_response[:, channel]
         axes.plot(
@@ -63,7 +62,6 @@ def run_camchar(scenario: ChartScenario, out_dir: Path, *, seed: int = 0) -> dic
     axes.set_title(f"{scenario.camera}: truth (wide), basic (dotted), extended (solid)")
     figure.tight_layout()
     figure.savefig(out_dir / "responses.png", dpi=110)
-    plt.close(figure)
     summary = {
         "scenario": asdict(scenario),
         "fields": len(photo.field_rgb),

@@ -12,16 +12,13 @@ import json
 import math
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import numpy as np
+from matplotlib.figure import Figure
 
 from twin.components.lamps import FINE_GRID, HMILamp
 from twin.components.lctf import LiquidCrystalTunableFilter
-from twin.sensor.model import Sensor  # noqa: E402
-from twin.sensor.white_reference import white_reference_rates  # noqa: E402
+from twin.sensor.model import Sensor
+from twin.sensor.white_reference import white_reference_rates
 
 __all__ = ["run_camera_report"]
 
@@ -94,7 +91,8 @@ def run_camera_report(
     long_s = min(300.0, sensor.config.exposure_range_s[1])
     dark = Sensor(camera).mean_dark_electrons(long_s)
 
-    figure, axes = plt.subplots(1, 3 if not sensor.is_colour else 2, figsize=(15, 4.5))
+    figure = Figure(figsize=(15, 4.5))
+    axes = figure.subplots(1, 3 if not sensor.is_colour else 2)
     axes[0].plot(transfer["mean_dn"] - transfer["mean_dn"][0], transfer["variance_dn2"], ".")
     axes[0].set_xlabel("mean signal above dark [DN]")
     axes[0].set_ylabel("temporal variance [DN$^2$]")
@@ -137,6 +135,5 @@ def run_camera_report(
     figure.suptitle(f"{sensor.config.name} ({sensor.config.serial})")
     figure.tight_layout()
     figure.savefig(out_dir / "camera_report.png", dpi=110)
-    plt.close(figure)
     (out_dir / "summary.json").write_text(json.dumps(summary, indent=2))
     return summary

@@ -9,21 +9,18 @@ from __future__ import annotations
 import html
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from hwbridge.store import CaptureStore  # noqa: E402
-from recon.btf.store import BTFStore  # noqa: E402
-from recon.calibration.gonio import GonioCalibration  # noqa: E402
-from recon.preview import spectral_to_srgb  # noqa: E402
-from recon.spectra import DEFAULT_GRID  # noqa: E402
-from twin.components.lamps import FINE_GRID, HMILamp, QTHLamp  # noqa: E402
-from twin.components.lctf import LiquidCrystalTunableFilter  # noqa: E402
-from twin.output_format import format_value  # noqa: E402
-from twin.studies.demo_spectralization import BandSpectralization  # noqa: E402
+from hwbridge.store import CaptureStore
+from recon.btf.store import BTFStore
+from recon.calibration.gonio import GonioCalibration
+from recon.preview import spectral_to_srgb
+from recon.spectra import DEFAULT_GRID
+from twin.components.lamps import FINE_GRID, HMILamp, QTHLamp
+from twin.components.lctf import LiquidCrystalTunableFilter
+from twin.output_format import format_value
+from twin.studies.demo_spectralization import BandSpectralization
 
 __all__ = [
     "plot_exposure_plan",
@@ -35,17 +32,17 @@ __all__ = [
 ]
 
 
-def _save(figure, path: Path) -> Path:
+def _save(figure: Figure, path: Path) -> Path:
     figure.tight_layout()
     figure.savefig(path, dpi=100)
-    plt.close(figure)
     return path
 
 
 def plot_lamps_and_filter(path: Path) -> Path:
     """The HMI and QTH lamp spectra (relative) and the VS-10 LCTF's 33 passbands."""
     wavelengths = FINE_GRID.wavelengths_nm
-    figure, (lamps, bands) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
+    figure = Figure(figsize=(8, 5.5))
+    lamps, bands = figure.subplots(2, 1, sharex=True)
     for lamp, name in ((HMILamp(), "HMI (Broncolor F575)"), (QTHLamp(), "QTH (3000 K)")):
         spectrum = lamp.intensity(FINE_GRID).values
         lamps.plot(wavelengths, spectrum / spectrum.max(), lw=0.8, label=name)
@@ -63,7 +60,8 @@ def plot_lamps_and_filter(path: Path) -> Path:
 
 def plot_exposure_plan(calibration: GonioCalibration, path: Path) -> Path:
     """The Eq. 3.4 exposure plan per band and the recovered inverse response curve."""
-    figure, (plan, curve) = plt.subplots(1, 2, figsize=(11, 3.6))
+    figure = Figure(figsize=(11, 3.6))
+    plan, curve = figure.subplots(1, 2)
     plan.bar(calibration.bands_nm, calibration.planned_exposure_s, width=7)
     plan.set_xlabel("band, nm")
     plan.set_ylabel("exposure, s")
@@ -87,7 +85,8 @@ def plot_raw_frames(capture: CaptureStore, camera: str, path: Path, count: int =
     white = np.flatnonzero((index["kind"] == "white") & near_550)[:1]
     samples = np.flatnonzero((index["kind"] == "sample") & near_550)
     chosen = np.concatenate([white, samples[:: max(len(samples) // (count - 1), 1)]])[:count]
-    figure, axes = plt.subplots(1, len(chosen), figsize=(3.2 * len(chosen), 3.4))
+    figure = Figure(figsize=(3.2 * len(chosen), 3.4))
+    axes = figure.subplots(1, len(chosen))
     for axis, step in zip(np.atleast_1d(axes), chosen, strict=True):
         shown = axis.imshow(frames[step], cmap="gray")
         axis.set_title(
@@ -104,7 +103,8 @@ def plot_raw_frames(capture: CaptureStore, camera: str, path: Path, count: int =
 def plot_textures(btf: BTFStore, path: Path, count: int = 6) -> Path:
     """Registered textures of ``count`` pairs as sRGB under D65 (reflectance x pi)."""
     pairs = np.linspace(0, btf.shape[0] - 1, min(count, btf.shape[0])).astype(int)
-    figure, axes = plt.subplots(1, len(pairs), figsize=(2.6 * len(pairs), 2.9))
+    figure = Figure(figsize=(2.6 * len(pairs), 2.9))
+    axes = figure.subplots(1, len(pairs))
     for axis, pair in zip(np.atleast_1d(axes), pairs, strict=True):
         texture = np.pi * btf.read_pair(int(pair))
         axis.imshow(spectral_to_srgb(np.clip(texture, 0, None), btf.grid))
@@ -118,7 +118,8 @@ def plot_textures(btf: BTFStore, path: Path, count: int = 6) -> Path:
 def plot_spectralization(result: BandSpectralization, path: Path) -> Path:
     """Reconstructed versus true spectra at three texels, the error map and its histogram."""
     wavelengths = DEFAULT_GRID.wavelengths_nm
-    figure, (spectra, error_map, histogram) = plt.subplots(1, 3, figsize=(13, 3.6))
+    figure = Figure(figsize=(13, 3.6))
+    spectra, error_map, histogram = figure.subplots(1, 3)
     height, width = result.truth.shape[:2]
     for (y, x), colour in zip(
         ((height // 4, width // 4), (height // 2, width // 2), (3 * height // 4, width // 3)),

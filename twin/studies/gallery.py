@@ -11,20 +11,17 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib.image import imsave
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from recon.radiometric.demosaic import demosaic  # noqa: E402
-from twin.dome.render import dome_camera, dome_rates  # noqa: E402
-from twin.gonio.capture_time import band_exposures_s  # noqa: E402
-from twin.gonio.render import gonio_part_rates, simulate_band_frames  # noqa: E402
-from twin.materials import available_materials, load_material  # noqa: E402
-from twin.rigs.gonio_kinematics import solve_pairs  # noqa: E402
-from twin.rigs.hemisphere import direction  # noqa: E402
-from twin.rigs.rig_config import load_rig  # noqa: E402
+from recon.radiometric.demosaic import demosaic
+from twin.dome.render import dome_camera, dome_rates
+from twin.gonio.capture_time import band_exposures_s
+from twin.gonio.render import gonio_part_rates, simulate_band_frames
+from twin.materials import available_materials, load_material
+from twin.rigs.gonio_kinematics import solve_pairs
+from twin.rigs.hemisphere import direction
+from twin.rigs.rig_config import load_rig
 
 __all__ = ["run_gallery"]
 
@@ -50,7 +47,7 @@ def run_gallery(
         material = load_material(name)
         rates = gonio_part_rates(gonio, pose, material, pixels=pixels, spp=spp, seed=seed)
         frames = simulate_band_frames(gonio, pose, rates, exposures, rng)
-        plt.imsave(out_dir / f"gonio_{name}.png", frames[_BAND_550], cmap="gray")
+        imsave(out_dir / f"gonio_{name}.png", frames[_BAND_550], cmap="gray")
 
         view, sensor, _ = dome_camera(dome, 6, pixels)
         rgb_rates = dome_rates(
@@ -65,7 +62,7 @@ def run_gallery(
         column, row = view.project(np.array([[0.0, -0.028, 0.0]])).astype(int)[0]
         paper = rgb[row - 1 : row + 2, column - 3 : column + 4].reshape(-1, 3)
         balanced = rgb / np.maximum(np.median(paper, axis=0), 1e-9)
-        plt.imsave(
+        imsave(
             out_dir / f"dome_rgb_{name}.png",
             np.clip(balanced / np.percentile(balanced, 99), 0, 1) ** (1 / 2.2),
         )
@@ -84,7 +81,7 @@ def run_gallery(
         window = spectral_sensor.__class__(spectral_sensor.config, roi=(pixels, pixels))
         band = spectral_rates[..., _BAND_550]
         exposure = _exposure_for(band, window.saturation_capacity_e, window.config.exposure_range_s)
-        plt.imsave(
+        imsave(
             out_dir / f"dome_spectral_{name}.png",
             window.capture(band * exposure, exposure, rng),
             cmap="gray",

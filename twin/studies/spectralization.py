@@ -18,24 +18,21 @@ import json
 import time
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from recon.experiments.sampling import exclude_region, push_broom_mask, whisk_broom_mask  # noqa: E402
-from recon.experiments.sparse import (  # noqa: E402
+from recon.experiments.sampling import exclude_region, push_broom_mask, whisk_broom_mask
+from recon.experiments.sparse import (
     ProtocolResult,
     noise_sweep,
     run_protocol,
     spot_count_sweep,
 )
-from recon.measured_data import read_llanos2019_multispectral  # noqa: E402
-from recon.spectra import DEFAULT_GRID  # noqa: E402
+from recon.measured_data import read_llanos2019_multispectral
+from recon.spectra import DEFAULT_GRID
 from twin.components.detectors import rgb_camera_response
 from twin.components.lamps import cie_illuminant
-from twin.render.truth import texture_truth  # noqa: E402
+from twin.render.truth import texture_truth
 
 __all__ = ["STUDY_LIGHT", "STUDY_VIEW", "run_study", "study_response", "twin_texture"]
 
@@ -70,7 +67,8 @@ def _chroma_region(truth: np.ndarray, response: np.ndarray, percentile: float = 
 
 
 def _bars(results: dict[str, ProtocolResult], title: str, path: Path) -> None:
-    figure, axes = plt.subplots(figsize=(7, 3.5))
+    figure = Figure(figsize=(7, 3.5))
+    axes = figure.subplots()
     names = list(next(iter(results.values())).mean_errors)
     width = 0.8 / len(results)
     for index, (label, result) in enumerate(results.items()):
@@ -83,12 +81,12 @@ def _bars(results: dict[str, ProtocolResult], title: str, path: Path) -> None:
     axes.legend(fontsize=7)
     figure.tight_layout()
     figure.savefig(path, dpi=110)
-    plt.close(figure)
 
 
 def _maps(result: ProtocolResult, title: str, path: Path, limit: float = 20.0) -> None:
     names = list(result.error_maps)
-    figure, axes = plt.subplots(1, len(names), figsize=(2.3 * len(names), 2.6))
+    figure = Figure(figsize=(2.3 * len(names), 2.6))
+    axes = figure.subplots(1, len(names))
     for axis, name in zip(np.atleast_1d(axes), names, strict=True):
         image = axis.imshow(result.error_maps[name], vmin=0, vmax=limit, cmap="magma")
         axis.set_title(f"{name}\n{result.mean_errors[name]:.2f} %", fontsize=8)
@@ -96,7 +94,6 @@ def _maps(result: ProtocolResult, title: str, path: Path, limit: float = 20.0) -
     figure.colorbar(image, ax=axes, shrink=0.8, label="relative error, %")
     figure.suptitle(title, fontsize=9)
     figure.savefig(path, dpi=110)
-    plt.close(figure)
 
 
 def _spectra(
@@ -107,7 +104,8 @@ def _spectra(
     brightness = truth.mean(axis=-1)
     errors = np.where(brightness >= np.median(brightness), result.error_maps["hardeberg"], -1.0)
     worst = np.unravel_index(np.argmax(errors), truth.shape[:2])
-    figure, axes = plt.subplots(figsize=(5, 3.2))
+    figure = Figure(figsize=(5, 3.2))
+    axes = figure.subplots()
     axes.plot(wavelengths, truth[worst], "k", lw=2.5, label="truth")
     for name, estimate in result.estimates.items():
         axes.plot(wavelengths, estimate[worst], lw=1, label=name)
@@ -117,11 +115,11 @@ def _spectra(
     axes.legend(fontsize=7)
     figure.tight_layout()
     figure.savefig(path, dpi=110)
-    plt.close(figure)
 
 
 def _sweep(curves: dict, x: list, xlabel: str, title: str, path: Path) -> None:
-    figure, axes = plt.subplots(figsize=(5, 3.2))
+    figure = Figure(figsize=(5, 3.2))
+    axes = figure.subplots()
     for name, values in curves.items():
         axes.plot(x, values, "o-", label=name)
     axes.set_xlabel(xlabel)
@@ -130,7 +128,6 @@ def _sweep(curves: dict, x: list, xlabel: str, title: str, path: Path) -> None:
     axes.legend(fontsize=7)
     figure.tight_layout()
     figure.savefig(path, dpi=110)
-    plt.close(figure)
 
 
 def _study_case(

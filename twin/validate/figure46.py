@@ -370,10 +370,7 @@ def _cmfs_on(grid: WavelengthGrid) -> np.ndarray:
 def write_figure46(figure: Figure46, path: str | Path) -> Path:
     """Three panels (one white balance, one tone curve) and the two Delta E94 maps (matte field
     interiors)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     path = Path(path)
     white = figure.white_xyz / figure.white_xyz[1]
@@ -387,7 +384,8 @@ def write_figure46(figure: Figure46, path: str | Path) -> Path:
             transform="CAT02",
         )
         panels.append(np.clip(colour.XYZ_to_sRGB(adapted * 1.6, apply_cctf_encoding=True), 0, 1))
-    plot, axes = plt.subplots(1, 5, figsize=(20, 4.5))
+    plot = Figure(figsize=(20, 4.5))
+    axes = plot.subplots(1, 5)
     titles = ("(a) photograph", "(b) spectral rendering", "(c) RGB rendering")
     for axis, panel, title in zip(axes[:3], panels, titles, strict=True):
         axis.imshow(panel)
@@ -409,5 +407,4 @@ def write_figure46(figure: Figure46, path: str | Path) -> Path:
         plot.colorbar(shown, ax=axis, fraction=0.046)
     plot.tight_layout()
     plot.savefig(path, dpi=100)
-    plt.close(plot)
     return path

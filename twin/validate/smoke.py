@@ -14,21 +14,19 @@ import json
 import time
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.image import imsave
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from recon.preview import spectral_to_srgb  # noqa: E402
-from recon.spectra import SampledSpectra, WavelengthGrid, band_integrals, resample  # noqa: E402
-from recon.spectral_exr import write_spectral_exr  # noqa: E402
+from recon.preview import spectral_to_srgb
+from recon.spectra import SampledSpectra, WavelengthGrid, band_integrals, resample
+from recon.spectral_exr import write_spectral_exr
 from twin.components.lamps import FINE_GRID, QTHLamp, irradiance_at
 from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.components.targets import colorchecker_reflectances
-from twin.render.flat_target import analytic_band_radiance, patch_means, render_flat_target  # noqa: E402
-from twin.render.spectra import rendered_spp  # noqa: E402
-from twin.render.variant import activate  # noqa: E402
+from twin.render.flat_target import analytic_band_radiance, patch_means, render_flat_target
+from twin.render.spectra import rendered_spp
+from twin.render.variant import activate
 
 __all__ = ["SMOKE_TOLERANCE", "run_smoke"]
 
@@ -92,7 +90,7 @@ def run_smoke(
         attributes={"spectwin": "smoke render: ColorChecker, QTH lamp, VariSpec VS-10 bands"},
     )
     white = resample(irradiance, band_grid, method="box")
-    plt.imsave(
+    imsave(
         out_dir / "colorchecker_qth.png", spectral_to_srgb(spectral_image, band_grid, white=white)
     )
     _plot_bands(
@@ -122,7 +120,8 @@ def _plot_bands(
     measured: np.ndarray,
     expected: np.ndarray,
 ) -> None:
-    figure, (radiance_axes, error_axes) = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
+    figure = Figure(figsize=(8, 7))
+    radiance_axes, error_axes = figure.subplots(2, 1, sharex=True)
     for name in PLOTTED_PATCHES:
         index = names.index(name)
         (line,) = radiance_axes.plot(centres_nm, expected[index], label=f"{name} (analytic)")
@@ -135,4 +134,3 @@ def _plot_bands(
     error_axes.set_ylabel("relative error [%] (24 patches)")
     figure.tight_layout()
     figure.savefig(path, dpi=120)
-    plt.close(figure)

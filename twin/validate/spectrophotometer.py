@@ -110,15 +110,13 @@ def compare_45_0(
 
 def write_45_0_figure(result: FortyFiveZero, wavelengths_nm: np.ndarray, path) -> None:
     """One panel per field: the instrument's and the BTF's reflectance factors (Fig. 4.3/4.4)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     count = len(result.field_names)
     columns = int(np.ceil(np.sqrt(count)))
     rows = int(np.ceil(count / columns))
-    figure, axes = plt.subplots(rows, columns, figsize=(3 * columns, 2.4 * rows), sharex=True)
+    figure = Figure(figsize=(3 * columns, 2.4 * rows))
+    axes = figure.subplots(rows, columns, sharex=True)
     for index, axis in enumerate(np.ravel(axes)):
         if index >= count:
             axis.axis("off")
@@ -135,4 +133,3 @@ def write_45_0_figure(result: FortyFiveZero, wavelengths_nm: np.ndarray, path) -
     figure.supylabel("reflectance factor")
     figure.tight_layout()
     figure.savefig(path, dpi=100)
-    plt.close(figure)
