@@ -22,6 +22,7 @@ from recon.btf.store import BTFStore
 from recon.spectra import DEFAULT_GRID, WavelengthGrid
 from twin.render.plugins.btf_bsdf import btf_bsdf, compressed_product_table, product_table
 from twin.render.plugins.spectral_envmap import SpectralMap, spectral_envmap
+from twin.render.render import render_scene
 from twin.render.spectra import specfilm
 from twin.render.truth import band_passbands
 from twin.render.variant import activate
@@ -66,9 +67,9 @@ def _render_seconds(table, pixels: int, spp: int) -> float:
             "sample": {"type": "rectangle", "bsdf": btf_bsdf(table)},
         }
     )
-    mi.render(scene, seed=0)  # kernel compilation
+    render_scene(scene, seed=0)  # kernel compilation
     started = time.perf_counter()
-    mi.render(scene, seed=1)
+    render_scene(scene, seed=1)
     return time.perf_counter() - started
 
 

@@ -18,6 +18,7 @@ from twin.render.plugins.btf_bsdf import (
     product_table,
 )
 from twin.render.plugins.spectral_envmap import SpectralMap, spectral_envmap
+from twin.render.render import render_scene
 from twin.render.spectra import irregular_spectrum, specfilm
 from twin.render.truth import band_passbands
 from twin.render.variant import activate
@@ -123,7 +124,7 @@ def test_btf_sampled_from_roughplastic_renders_within_2_percent_of_roughplastic(
         }
         if bsdf is not None:
             scene["sphere"] = {"type": "sphere", "bsdf": bsdf}
-        return np.array(mi.render(mi.load_dict(scene), seed=seed))
+        return render_scene(scene, seed)
 
     analytic = _roughplastic()
     reference = render(analytic, 1)

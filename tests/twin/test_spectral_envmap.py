@@ -6,7 +6,9 @@ import pytest
 from recon.errors import SpectwinInputError
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid
 from twin.components.lamps import FINE_GRID
+from twin.render.plugins.registry import register_once
 from twin.render.plugins.spectral_envmap import SpectralMap, spectral_envmap
+from twin.render.render import render_scene
 from twin.render.spectra import irregular_spectrum, specfilm
 from twin.render.truth import band_passbands
 from twin.render.variant import activate
@@ -44,7 +46,7 @@ def _plane_under(spectral_map: SpectralMap, *, importance: bool, spp: int) -> np
             },
         },
     }
-    return np.array(mi.render(mi.load_dict(scene), seed=1))
+    return render_scene(scene, seed=1)
 
 
 def _cosine_integrals(height: int, width: int) -> np.ndarray:
@@ -91,3 +93,15 @@ def test_solid_angles_cover_the_sphere_and_bad_maps_are_refused():
     irregular = WavelengthGrid(np.array([400.0, 410.0, 430.0]))
     with pytest.raises(SpectwinInputError, match="regular wavelength grid"):
         SpectralMap(np.ones((4, 8, 3)), irregular)
+
+
+def test_plugins_are_registered_at_import_and_only_once():
+    registered = []
+
+    def register(name, plugin):
+        registered.append(name)
+
+    assert not register_once("spectral_envmap", register, lambda props: None)
+    assert register_once("test_only_plugin", register, lambda props: None)
+    assert not register_once("test_only_plugin", register, lambda props: None)
+    assert registered == ["test_only_plugin"]

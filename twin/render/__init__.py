@@ -1,5 +1,6 @@
-"""Mitsuba rendering: the variant, spectra handed to Mitsuba, shapes, lamp groups, rig scenes,
-the analytic flat-target scene and the noise-free truth of a material.
+"""Mitsuba rendering: the variant, spectra handed to Mitsuba, shapes, rendering a scene to an
+image, lamp groups, rig scenes, the analytic flat-target scene and the noise-free truth of a
+material.
 """
 
 import lazy_loader
@@ -15,6 +16,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
             "render_flat_target",
         ],
         "light_groups": ["LightGroup", "lamp_weighted_channels", "render_lit"],
+        "render": ["render_scene"],
         "scene": ["PinholeCamera", "lamp_position", "render_view"],
         "shapes": ["mitsuba_shape", "part_bsdf"],
         "spectra": ["channel_name", "irregular_spectrum", "ldsampler", "rendered_spp", "specfilm"],

@@ -17,6 +17,7 @@ import numpy as np
 
 from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra, band_integrals
+from twin.render.render import render_scene
 from twin.render.spectra import irregular_spectrum, ldsampler, specfilm
 from twin.render.variant import activate
 
@@ -156,11 +157,7 @@ def render_flat_target(
     **layout: object,
 ) -> np.ndarray:
     """Render the chart of :func:`flat_target_scene`: band radiance image ``(H, W, n_bands)``."""
-    activate()
-    import mitsuba as mi
-
-    scene = mi.load_dict(flat_target_scene(reflectances, irradiance, bands, **layout))
-    return np.array(mi.render(scene, seed=seed), dtype=np.float64)
+    return render_scene(flat_target_scene(reflectances, irradiance, bands, **layout), seed)
 
 
 def patch_means(

@@ -26,7 +26,7 @@ import numpy as np
 
 from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra
-from twin.render.variant import activate
+from twin.render.render import render_scene
 
 __all__ = ["LightGroup", "lamp_weighted_channels", "render_lit"]
 
@@ -75,8 +75,6 @@ def render_lit(
 
     Without groups, ``entries`` must hold their own emitters, and are rendered once as they are.
     """
-    activate()
-    import mitsuba as mi
 
     def render(group_entries: dict[str, Any], film: SampledSpectra) -> np.ndarray:
         scene = {
@@ -86,7 +84,7 @@ def render_lit(
             **entries,
             **group_entries,
         }
-        return np.array(mi.render(mi.load_dict(scene), seed=seed), dtype=np.float64)
+        return render_scene(scene, seed)
 
     if not groups:
         return render({}, channels)

@@ -18,6 +18,7 @@ from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra
 from twin.materials.surfaces import SurfacePart, transformed
 from twin.render.light_groups import lamp_weighted_channels
+from twin.render.render import render_scene
 from twin.render.shapes import mitsuba_shape
 from twin.render.spectra import irregular_spectrum, ldsampler, specfilm
 from twin.render.variant import activate
@@ -122,9 +123,6 @@ def render_view(
     bands their share of wavelength samples (the K4's blue bands under the HMI lamp: 30 % noise
     at 400 nm, 64 spp, before).
     """
-    activate()
-    import mitsuba as mi
-
     normalized, areas = lamp_weighted_channels(channels, light_intensity)
     flat = SampledSpectra(channels.grid, np.ones(channels.grid.size))
     scene: dict[str, object] = {
@@ -139,7 +137,7 @@ def render_view(
     }
     for part in parts:
         scene[part.name] = mitsuba_shape(transformed(part, sample_to_world))
-    return np.array(mi.render(mi.load_dict(scene), seed=seed), dtype=np.float64) * areas
+    return render_scene(scene, seed) * areas
 
 
 def lamp_position(azimuth_deg: float, elevation_deg: float, distance_m: float) -> np.ndarray:

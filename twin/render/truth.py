@@ -32,6 +32,7 @@ from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid, resample
 from twin.components.lamps import FINE_GRID
 from twin.materials import Material, load_material
 from twin.materials.textures import TextureTruth
+from twin.render.render import render_scene
 from twin.render.shapes import mitsuba_shape
 from twin.render.spectra import irregular_spectrum, ldsampler, specfilm
 from twin.render.variant import activate
@@ -84,7 +85,7 @@ def _render(
     }
     for part in material.parts:
         scene[part.name] = mitsuba_shape(part)
-    return np.array(mi.render(mi.load_dict(scene), seed=seed), dtype=np.float64)
+    return render_scene(scene, seed)
 
 
 def _check_directions(

@@ -22,6 +22,7 @@ from twin.components.lamps import FINE_GRID, HMILamp
 from twin.materials.calibration_targets import colorchecker_chart, esser_chart
 from twin.materials.geometry import box
 from twin.materials.surfaces import SurfacePart
+from twin.render.render import render_scene
 from twin.render.scene import PinholeCamera
 from twin.render.shapes import mitsuba_shape
 from twin.render.spectra import irregular_spectrum
@@ -140,7 +141,7 @@ def render_chart_photo(scenario: ChartScenario, *, seed: int = 0) -> ChartPhoto:
         ]
     for part in parts:
         scene[part.name] = mitsuba_shape(part)
-    image = np.array(mi.render(mi.load_dict(scene), seed=seed), dtype=np.float64)
+    image = render_scene(scene, seed)
 
     patches = [part for part in parts if part.name.startswith("patch_")]
     centres = np.array([part.mesh.centroid for part in patches])

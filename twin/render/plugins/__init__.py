@@ -1,5 +1,8 @@
 """spectwin's Python plugins for Mitsuba: the measured spectral BTF as a BSDF and the spectral
 environment map emitter.
+
+Each plugin module activates the Mitsuba variant when imported and defines its plugin class at
+module level (:mod:`twin.render.plugins.registry`).
 """
 
 import lazy_loader
@@ -10,6 +13,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "btf_bsdf": [
             "BTFTable",
             "CompressedTable",
+            "SpectralBTF",
             "barycentric",
             "btf_bsdf",
             "compressed_product_table",
@@ -20,6 +24,11 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
             "written_table",
         ],
         "registry": ["PluginData", "register_once"],
-        "spectral_envmap": ["SpectralMap", "register_map", "spectral_envmap"],
+        "spectral_envmap": [
+            "SpectralEnvmapEmitter",
+            "SpectralMap",
+            "register_map",
+            "spectral_envmap",
+        ],
     },
 )

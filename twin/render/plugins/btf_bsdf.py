@@ -22,12 +22,18 @@ The BTF is either decoded (:class:`BTFTable`, ``4 L V H W K`` bytes) or PCA-comp
 compressed on the renderer's side: every lookup decodes its texels from the factors,
 :math:`R = (\\mu_b + A_b[p] C_b)(\\mu_s + A_s[p, k] C_s)`, in two Dr.Jit loops over the components
 (``c_b + c_s`` steps per measured pair and texel), so memory is the factors' size.
+
+Importing this module activates the Mitsuba variant (:func:`twin.render.variant.activate`):
+:class:`SpectralBTF` derives from the variant's ``mi.BSDF`` and is registered with Mitsuba at
+import (:mod:`twin.render.plugins.registry`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import drjit as dr
+import mitsuba as mi
 import numpy as np
 from scipy.spatial import Delaunay
 
@@ -36,10 +42,12 @@ from recon.btf.store import BTFStore
 from recon.errors import SpectwinInputError
 from recon.spectra import WavelengthGrid
 from twin.render.plugins.registry import PluginData, register_once
+from twin.render.variant import activate
 
 __all__ = [
     "BTFTable",
     "CompressedTable",
+    "SpectralBTF",
     "compressed_product_table",
     "store_table",
     "barycentric",
@@ -49,6 +57,9 @@ __all__ = [
     "product_table",
     "written_table",
 ]
+
+# mi.BSDF below is the active variant's class: choose the variant before defining the plugin.
+activate()
 
 _TABLES = PluginData("btf")
 
@@ -244,8 +255,20 @@ def interpolate_table(
 
 
 def btf_bsdf(table: BTFTable | CompressedTable, *, resolution: int = 128) -> dict[str, object]:
-    """Scene-dict entry of the BSDF for ``table`` (registers the plugin)."""
-    register_once("bsdf", "spectral_btf", _plugin_class)
+    """Scene-dict entry of the BSDF for ``table``.
+
+    Parameters
+    ----------
+    table : BTFTable or CompressedTable
+        The BTF on its light x view product set.
+    resolution : int, optional
+        Cells per side of the hemisphere lookup grids (:func:`hemisphere_lookup`).
+
+    Returns
+    -------
+    dict
+        The ``spectral_btf`` entry for ``mi.load_dict``; the table is kept for the plugin by key.
+    """
     return {"type": "spectral_btf", "btf": _TABLES.keep(table), "resolution": resolution}
 
 
@@ -253,8 +276,6 @@ class _DecodedSpectra:
     """Texel spectra of a :class:`BTFTable`, gathered from its values (Dr.Jit side)."""
 
     def __init__(self, table: BTFTable):
-        import mitsuba as mi
-
         _, self.n_views, self.height, self.width, self.bands = table.values.shape
         self._values = mi.Float(table.values.astype(np.float32).ravel())
 
@@ -262,9 +283,6 @@ class _DecodedSpectra:
         """Reflectance of ``texel`` at the product set's ``combination`` (light * n_views +
         view), one value per wavelength channel, linear between the bands ``lows`` and
         ``lows + 1``."""
-        import drjit as dr
-        import mitsuba as mi
-
         base = (combination * (self.height * self.width) + texel) * self.bands
         channels = []
         for low, fraction in zip(lows, fractions, strict=True):
@@ -280,8 +298,6 @@ class _CompressedSpectra:
     """Texel spectra of a :class:`CompressedTable`, decoded from the PCA factors per lookup."""
 
     def __init__(self, table: CompressedTable):
-        import mitsuba as mi
-
         compressed = table.compressed
         _, self.height, self.width, self.bands = compressed.shape
         self.n_views = len(table.view_dirs)
@@ -302,18 +318,12 @@ class _CompressedSpectra:
         }
 
     def _gather(self, name, index, mask):
-        import drjit as dr
-        import mitsuba as mi
-
         return dr.gather(mi.Float, self._factors[name], index, mask)
 
     @staticmethod
     def _sum_over_components(count, terms, width):
         """``sum_{c < count} terms(c)`` for every entry of the list ``terms`` returns, as a
         symbolic Dr.Jit loop (one compiled loop, not ``count`` unrolled steps)."""
-        import drjit as dr
-        import mitsuba as mi
-
         n_terms = len(terms(dr.zeros(mi.UInt32, width)))
         state = (dr.zeros(mi.UInt32, width), *[dr.zeros(mi.Float, width) for _ in range(n_terms)])
 
@@ -324,9 +334,6 @@ class _CompressedSpectra:
 
     def __call__(self, combination, texel, lows, fractions, mask):
         """As :meth:`_DecodedSpectra.__call__`, decoding b and s at the texel (module docstring)."""
-        import drjit as dr
-        import mitsuba as mi
-
         width = dr.width(texel)
         pair = dr.gather(mi.UInt32, self._pairs, combination, mask)
         c_b, c_s, n_texels = self._n_brightness, self._n_spectral, self._texels
@@ -378,112 +385,115 @@ class _CompressedSpectra:
         return channels
 
 
-def _plugin_class():
-    """The plugin class, built once the Mitsuba variant is set."""
-    import drjit as dr
-    import mitsuba as mi
+class SpectralBTF(mi.BSDF):
+    """The ``spectral_btf`` BSDF: a BTF table interpolated per shading point (module docstring).
 
-    class SpectralBTF(mi.BSDF):
-        def __init__(self, props):
-            super().__init__(props)
-            table = _TABLES[props["btf"]]
-            self._resolution = int(props.get("resolution", 128))
-            if isinstance(table, CompressedTable):
-                self._spectra = _CompressedSpectra(table)
-            else:
-                self._spectra = _DecodedSpectra(table)
-            self._lookups = []
-            for directions in (table.light_dirs, table.view_dirs):
-                indices, weights = hemisphere_lookup(directions, self._resolution)
-                self._lookups.append(
-                    (mi.UInt32(indices.ravel().astype(np.uint32)), mi.Float(weights.ravel()))
-                )
-            wavelengths = table.grid.wavelengths_nm
-            self._first_nm = float(wavelengths[0])
-            self._step_nm = float(wavelengths[1] - wavelengths[0]) if len(wavelengths) > 1 else 1.0
-            flags = (
-                mi.BSDFFlags.DiffuseReflection
-                | mi.BSDFFlags.FrontSide
-                | mi.BSDFFlags.SpatiallyVarying
+    Parameters
+    ----------
+    props : mitsuba.Properties
+        ``btf``: the key of the table (:func:`btf_bsdf`); ``resolution``: cells per side of the
+        hemisphere lookup grids (default 128).
+    """
+
+    def __init__(self, props):
+        super().__init__(props)
+        table = _TABLES[props["btf"]]
+        self._resolution = int(props.get("resolution", 128))
+        if isinstance(table, CompressedTable):
+            self._spectra = _CompressedSpectra(table)
+        else:
+            self._spectra = _DecodedSpectra(table)
+        self._lookups = []
+        for directions in (table.light_dirs, table.view_dirs):
+            indices, weights = hemisphere_lookup(directions, self._resolution)
+            self._lookups.append(
+                (mi.UInt32(indices.ravel().astype(np.uint32)), mi.Float(weights.ravel()))
             )
-            self.m_components = [flags]
-            self.m_flags = flags
+        wavelengths = table.grid.wavelengths_nm
+        self._first_nm = float(wavelengths[0])
+        self._step_nm = float(wavelengths[1] - wavelengths[0]) if len(wavelengths) > 1 else 1.0
+        flags = (
+            mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide | mi.BSDFFlags.SpatiallyVarying
+        )
+        self.m_components = [flags]
+        self.m_flags = flags
 
-        def _corners(self, which, direction):
-            """Three (direction index, weight) of the lookup grid cell of ``direction``."""
-            indices, weights = self._lookups[which]
-            scale = self._resolution / 2
-            column = dr.clip(mi.Int32(dr.floor((direction.x + 1) * scale)), 0, self._resolution - 1)
-            row = dr.clip(mi.Int32(dr.floor((direction.y + 1) * scale)), 0, self._resolution - 1)
-            cell = mi.UInt32(row * self._resolution + column) * 3
-            return [
-                (dr.gather(mi.UInt32, indices, cell + k), dr.gather(mi.Float, weights, cell + k))
-                for k in range(3)
-            ]
+    def _corners(self, which, direction):
+        """Three (direction index, weight) of the lookup grid cell of ``direction``."""
+        indices, weights = self._lookups[which]
+        scale = self._resolution / 2
+        column = dr.clip(mi.Int32(dr.floor((direction.x + 1) * scale)), 0, self._resolution - 1)
+        row = dr.clip(mi.Int32(dr.floor((direction.y + 1) * scale)), 0, self._resolution - 1)
+        cell = mi.UInt32(row * self._resolution + column) * 3
+        return [
+            (dr.gather(mi.UInt32, indices, cell + k), dr.gather(mi.Float, weights, cell + k))
+            for k in range(3)
+        ]
 
-        def _texels(self, uv):
-            """Four (texel offset, weight) of the bilinear footprint of ``uv``."""
-            height, width = self._spectra.height, self._spectra.width
-            x = dr.clip(uv.x * width - 0.5, 0.0, width - 1.0)
-            y = dr.clip((1 - uv.y) * height - 0.5, 0.0, height - 1.0)
-            x0 = dr.minimum(mi.UInt32(x), max(width - 2, 0))
-            y0 = dr.minimum(mi.UInt32(y), max(height - 2, 0))
-            fx, fy = dr.clip(x - mi.Float(x0), 0, 1), dr.clip(y - mi.Float(y0), 0, 1)
-            x1, y1 = dr.minimum(x0 + 1, width - 1), dr.minimum(y0 + 1, height - 1)
-            return [
-                (y0 * width + x0, (1 - fx) * (1 - fy)),
-                (y0 * width + x1, fx * (1 - fy)),
-                (y1 * width + x0, (1 - fx) * fy),
-                (y1 * width + x1, fx * fy),
-            ]
+    def _texels(self, uv):
+        """Four (texel offset, weight) of the bilinear footprint of ``uv``."""
+        height, width = self._spectra.height, self._spectra.width
+        x = dr.clip(uv.x * width - 0.5, 0.0, width - 1.0)
+        y = dr.clip((1 - uv.y) * height - 0.5, 0.0, height - 1.0)
+        x0 = dr.minimum(mi.UInt32(x), max(width - 2, 0))
+        y0 = dr.minimum(mi.UInt32(y), max(height - 2, 0))
+        fx, fy = dr.clip(x - mi.Float(x0), 0, 1), dr.clip(y - mi.Float(y0), 0, 1)
+        x1, y1 = dr.minimum(x0 + 1, width - 1), dr.minimum(y0 + 1, height - 1)
+        return [
+            (y0 * width + x0, (1 - fx) * (1 - fy)),
+            (y0 * width + x1, fx * (1 - fy)),
+            (y1 * width + x0, (1 - fx) * fy),
+            (y1 * width + x1, fx * fy),
+        ]
 
-        def _reflectance(self, si, light, view, active):
-            bands = self._spectra.bands
-            value = mi.UnpolarizedSpectrum(0.0)
-            lows, fractions = [], []
-            for channel in range(4):
-                position = (si.wavelengths[channel] - self._first_nm) / self._step_nm
-                low = dr.minimum(mi.UInt32(dr.maximum(position, 0.0)), max(bands - 2, 0))
-                lows.append(low)
-                fractions.append(dr.clip(position - mi.Float(low), 0.0, 1.0))
-            texels = self._texels(si.uv)
-            for light_index, light_weight in self._corners(0, light):
-                for view_index, view_weight in self._corners(1, view):
-                    combination = light_index * self._spectra.n_views + view_index
-                    for texel, texel_weight in texels:
-                        weight = light_weight * view_weight * texel_weight
-                        mask = active & (weight > 0)
-                        samples = self._spectra(combination, texel, lows, fractions, mask)
-                        for channel, sample in enumerate(samples):
-                            value[channel] += dr.select(mask, weight * sample, 0.0)
-            return value
+    def _reflectance(self, si, light, view, active):
+        bands = self._spectra.bands
+        value = mi.UnpolarizedSpectrum(0.0)
+        lows, fractions = [], []
+        for channel in range(4):
+            position = (si.wavelengths[channel] - self._first_nm) / self._step_nm
+            low = dr.minimum(mi.UInt32(dr.maximum(position, 0.0)), max(bands - 2, 0))
+            lows.append(low)
+            fractions.append(dr.clip(position - mi.Float(low), 0.0, 1.0))
+        texels = self._texels(si.uv)
+        for light_index, light_weight in self._corners(0, light):
+            for view_index, view_weight in self._corners(1, view):
+                combination = light_index * self._spectra.n_views + view_index
+                for texel, texel_weight in texels:
+                    weight = light_weight * view_weight * texel_weight
+                    mask = active & (weight > 0)
+                    samples = self._spectra(combination, texel, lows, fractions, mask)
+                    for channel, sample in enumerate(samples):
+                        value[channel] += dr.select(mask, weight * sample, 0.0)
+        return value
 
-        def sample(self, ctx, si, sample1, sample2, active=True):
-            cos_view = mi.Frame3f.cos_theta(si.wi)
-            bs = dr.zeros(mi.BSDFSample3f)
-            bs.wo = mi.warp.square_to_cosine_hemisphere(sample2)
-            bs.pdf = mi.warp.square_to_cosine_hemisphere_pdf(bs.wo)
-            bs.eta = 1.0
-            bs.sampled_type = mi.UInt32(+mi.BSDFFlags.DiffuseReflection)
-            bs.sampled_component = mi.UInt32(0)
-            active = active & (cos_view > 0) & (bs.pdf > 0)
-            value = self._reflectance(si, bs.wo, si.wi, active) * dr.pi
-            return bs, dr.select(active, value, 0.0)
+    def sample(self, ctx, si, sample1, sample2, active=True):
+        cos_view = mi.Frame3f.cos_theta(si.wi)
+        bs = dr.zeros(mi.BSDFSample3f)
+        bs.wo = mi.warp.square_to_cosine_hemisphere(sample2)
+        bs.pdf = mi.warp.square_to_cosine_hemisphere_pdf(bs.wo)
+        bs.eta = 1.0
+        bs.sampled_type = mi.UInt32(+mi.BSDFFlags.DiffuseReflection)
+        bs.sampled_component = mi.UInt32(0)
+        active = active & (cos_view > 0) & (bs.pdf > 0)
+        value = self._reflectance(si, bs.wo, si.wi, active) * dr.pi
+        return bs, dr.select(active, value, 0.0)
 
-        def eval(self, ctx, si, wo, active=True):
-            cos_light = mi.Frame3f.cos_theta(wo)
-            active = active & (mi.Frame3f.cos_theta(si.wi) > 0) & (cos_light > 0)
-            return dr.select(active, self._reflectance(si, wo, si.wi, active) * cos_light, 0.0)
+    def eval(self, ctx, si, wo, active=True):
+        cos_light = mi.Frame3f.cos_theta(wo)
+        active = active & (mi.Frame3f.cos_theta(si.wi) > 0) & (cos_light > 0)
+        return dr.select(active, self._reflectance(si, wo, si.wi, active) * cos_light, 0.0)
 
-        def pdf(self, ctx, si, wo, active=True):
-            active = active & (mi.Frame3f.cos_theta(si.wi) > 0)
-            return dr.select(active, mi.warp.square_to_cosine_hemisphere_pdf(wo), 0.0)
+    def pdf(self, ctx, si, wo, active=True):
+        active = active & (mi.Frame3f.cos_theta(si.wi) > 0)
+        return dr.select(active, mi.warp.square_to_cosine_hemisphere_pdf(wo), 0.0)
 
-        def eval_pdf(self, ctx, si, wo, active=True):
-            return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
+    def eval_pdf(self, ctx, si, wo, active=True):
+        return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
 
-        def to_string(self):
-            spectra = self._spectra
-            return f"SpectralBTF[{type(spectra).__name__}, {spectra.height}x{spectra.width}]"
+    def to_string(self):
+        spectra = self._spectra
+        return f"SpectralBTF[{type(spectra).__name__}, {spectra.height}x{spectra.width}]"
 
-    return SpectralBTF
+
+register_once("spectral_btf", mi.register_bsdf, lambda props: SpectralBTF(props))

@@ -1,9 +1,13 @@
 """Registration of spectwin's Python plugins with Mitsuba, and the data they are handed.
 
 Plugin properties cannot carry arrays, so a scene dict names its data by a key
-(:func:`PluginData.keep`) that the plugin's constructor looks up. Plugin classes derive from
-Mitsuba's base classes, which exist only once the variant is set: they are built and registered
-on first use (:func:`register_once`).
+(:func:`PluginData.keep`) that the plugin's constructor looks up.
+
+Plugin classes derive from Mitsuba's base classes (``mi.BSDF``, ``mi.Emitter``), which resolve to
+the classes of the active variant. Each plugin module therefore activates the variant
+(:func:`twin.render.variant.activate`, the one place that chooses it) when it is imported, then
+defines its class at module level and registers it like Mitsuba's own Python plugins
+(``mi.register_bsdf(name, lambda props: Cls(props))``) through :func:`register_once`.
 """
 
 from __future__ import annotations
@@ -12,21 +16,36 @@ import itertools
 from collections.abc import Callable
 from typing import Any
 
-from twin.render.variant import activate
-
 __all__ = ["PluginData", "register_once"]
 
 _REGISTERED: set[str] = set()
 
 
 class PluginData:
-    """Data handed to plugin instances by key."""
+    """Data handed to plugin instances by key.
+
+    Parameters
+    ----------
+    prefix : str
+        Start of every key, naming the kind of data (``"btf"``, ``"map"``).
+    """
 
     def __init__(self, prefix: str):
         self._prefix, self._items, self._keys = prefix, {}, itertools.count()
 
     def keep(self, item: Any) -> str:
-        """Keep ``item`` and return the key to put in the scene dict."""
+        """Keep ``item`` and return the key to put in the scene dict.
+
+        Parameters
+        ----------
+        item : Any
+            The data a plugin instance reads in its constructor.
+
+        Returns
+        -------
+        str
+            A key unique within this store.
+        """
         key = f"{self._prefix}{next(self._keys)}"
         self._items[key] = item
         return key
@@ -35,13 +54,30 @@ class PluginData:
         return self._items[key]
 
 
-def register_once(kind: str, name: str, build_class: Callable[[], type]) -> None:
-    """Register the plugin ``name`` of ``kind`` (``"bsdf"``, ``"emitter"``) on first call."""
-    if name in _REGISTERED:
-        return
-    activate()
-    import mitsuba as mi
+def register_once(
+    name: str, register: Callable[[str, Callable[[Any], Any]], None], plugin: Callable[[Any], Any]
+) -> bool:
+    """Register the plugin ``name`` with Mitsuba unless it is registered already.
 
-    plugin = build_class()
-    getattr(mi, f"register_{kind}")(name, lambda props: plugin(props))
+    Parameters
+    ----------
+    name : str
+        The plugin name a scene dict's ``"type"`` gives.
+    register : callable
+        Mitsuba's registration function for the plugin's kind (``mi.register_bsdf``,
+        ``mi.register_emitter``).
+    plugin : callable
+        The factory Mitsuba calls with the plugin's ``mi.Properties``, e.g.
+        ``lambda props: SpectralBTF(props)``.
+
+    Returns
+    -------
+    bool
+        Whether this call registered the plugin (``False``: it was registered before, e.g. when
+        the plugin's module is imported a second time).
+    """
+    if name in _REGISTERED:
+        return False
+    register(name, plugin)
     _REGISTERED.add(name)
+    return True

@@ -14,19 +14,29 @@ direction uniformly in solid angle within it, so the density is
 :math:`p(\\omega) = P(p) / \\Omega_p`; with ``importance=False`` directions are uniform on the
 sphere (for comparison). Maps are handed to Mitsuba by key (:func:`register_map`), because plugin
 properties cannot carry arrays.
+
+Importing this module activates the Mitsuba variant (:func:`twin.render.variant.activate`):
+:class:`SpectralEnvmapEmitter` derives from the variant's ``mi.Emitter`` and is registered with
+Mitsuba at import (:mod:`twin.render.plugins.registry`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import drjit as dr
+import mitsuba as mi
 import numpy as np
 
 from recon.errors import SpectwinInputError
 from recon.spectra import WavelengthGrid
 from twin.render.plugins.registry import PluginData, register_once
+from twin.render.variant import activate
 
-__all__ = ["SpectralMap", "register_map", "spectral_envmap"]
+__all__ = ["SpectralEnvmapEmitter", "SpectralMap", "register_map", "spectral_envmap"]
+
+# mi.Emitter below is the active variant's class: choose the variant before defining the plugin.
+activate()
 
 _MAPS = PluginData("map")
 
@@ -63,111 +73,128 @@ def register_map(spectral_map: SpectralMap) -> str:
 
 
 def spectral_envmap(spectral_map: SpectralMap, *, importance: bool = True) -> dict[str, object]:
-    """Scene-dict entry of the emitter for ``spectral_map`` (registers the plugin)."""
-    register_once("emitter", "spectral_envmap", _plugin_class)
+    """Scene-dict entry of the emitter for ``spectral_map``.
+
+    Parameters
+    ----------
+    spectral_map : SpectralMap
+        The lat-long radiance map.
+    importance : bool, optional
+        Sample directions in proportion to the map's radiance (default) or uniformly.
+
+    Returns
+    -------
+    dict
+        The ``spectral_envmap`` entry for ``mi.load_dict``; the map is kept for the plugin by key.
+    """
     return {"type": "spectral_envmap", "map": register_map(spectral_map), "importance": importance}
 
 
-def _plugin_class():
-    """The plugin class, built once the Mitsuba variant is set."""
-    import drjit as dr
-    import mitsuba as mi
+class SpectralEnvmapEmitter(mi.Emitter):
+    """The ``spectral_envmap`` emitter: a lat-long spectral radiance map (module docstring).
 
-    class SpectralEnvmapEmitter(mi.Emitter):
-        def __init__(self, props):
-            super().__init__(props)
-            spectral_map = _MAPS[props["map"]]
-            self.m_flags = mi.EmitterFlags.Infinite | mi.EmitterFlags.SpatiallyVarying
-            height, width, bands = spectral_map.radiance.shape
-            self._height, self._width, self._bands = height, width, bands
-            wavelengths = spectral_map.grid.wavelengths_nm
-            self._first_nm = float(wavelengths[0])
-            self._step_nm = float(wavelengths[1] - wavelengths[0]) if bands > 1 else 1.0
-            self._radiance = mi.Float(spectral_map.radiance.astype(np.float32).ravel())
-            weights = spectral_map.radiance.mean(axis=2) * spectral_map.solid_angles()
-            if not weights.sum() > 0:
-                raise SpectwinInputError("radiance: the map emits nothing")
-            self._distribution = mi.DiscreteDistribution(mi.Float(weights.ravel()))
-            self._importance = bool(props.get("importance", True))
-            self._radius = 1e4
+    Parameters
+    ----------
+    props : mitsuba.Properties
+        ``map``: the key of the map (:func:`register_map`); ``importance``: sample directions in
+        proportion to radiance (default ``True``).
+    """
 
-        def set_scene(self, scene):
-            sphere = scene.bbox().bounding_sphere()
-            self._radius = max(float(dr.max(sphere.radius)), 1e-3) * 2.0
+    def __init__(self, props):
+        super().__init__(props)
+        spectral_map = _MAPS[props["map"]]
+        self.m_flags = mi.EmitterFlags.Infinite | mi.EmitterFlags.SpatiallyVarying
+        height, width, bands = spectral_map.radiance.shape
+        self._height, self._width, self._bands = height, width, bands
+        wavelengths = spectral_map.grid.wavelengths_nm
+        self._first_nm = float(wavelengths[0])
+        self._step_nm = float(wavelengths[1] - wavelengths[0]) if bands > 1 else 1.0
+        self._radiance = mi.Float(spectral_map.radiance.astype(np.float32).ravel())
+        weights = spectral_map.radiance.mean(axis=2) * spectral_map.solid_angles()
+        if not weights.sum() > 0:
+            raise SpectwinInputError("radiance: the map emits nothing")
+        self._distribution = mi.DiscreteDistribution(mi.Float(weights.ravel()))
+        self._importance = bool(props.get("importance", True))
+        self._radius = 1e4
 
-        def _pixel(self, direction):
-            theta = dr.acos(dr.clip(direction.z, -1.0, 1.0))
-            phi = dr.atan2(direction.y, direction.x)
-            phi = dr.select(phi < 0, phi + 2 * dr.pi, phi)
-            row = dr.minimum(mi.UInt32(theta * (self._height / dr.pi)), self._height - 1)
-            column = dr.minimum(mi.UInt32(phi * (self._width / (2 * dr.pi))), self._width - 1)
-            return row, column
+    def set_scene(self, scene):
+        sphere = scene.bbox().bounding_sphere()
+        self._radius = max(float(dr.max(sphere.radius)), 1e-3) * 2.0
 
-        def _radiance_at(self, direction, wavelengths, active):
-            row, column = self._pixel(direction)
-            base = (row * self._width + column) * self._bands
-            value = mi.UnpolarizedSpectrum(0.0)
-            for channel in range(4):
-                position = (wavelengths[channel] - self._first_nm) / self._step_nm
-                low = dr.minimum(mi.UInt32(dr.maximum(position, 0.0)), max(self._bands - 2, 0))
-                high = dr.minimum(low + 1, self._bands - 1)
-                t = dr.clip(position - mi.Float(low), 0.0, 1.0)
-                first = dr.gather(mi.Float, self._radiance, base + low, active)
-                second = dr.gather(mi.Float, self._radiance, base + high, active)
-                value[channel] = dr.select(active, first + t * (second - first), 0.0)
-            return value
+    def _pixel(self, direction):
+        theta = dr.acos(dr.clip(direction.z, -1.0, 1.0))
+        phi = dr.atan2(direction.y, direction.x)
+        phi = dr.select(phi < 0, phi + 2 * dr.pi, phi)
+        row = dr.minimum(mi.UInt32(theta * (self._height / dr.pi)), self._height - 1)
+        column = dr.minimum(mi.UInt32(phi * (self._width / (2 * dr.pi))), self._width - 1)
+        return row, column
 
-        def _pdf(self, direction):
-            if not self._importance:
-                return mi.Float(1 / (4 * dr.pi))
-            row, column = self._pixel(direction)
-            pmf = self._distribution.eval_pmf_normalized(row * self._width + column)
+    def _radiance_at(self, direction, wavelengths, active):
+        row, column = self._pixel(direction)
+        base = (row * self._width + column) * self._bands
+        value = mi.UnpolarizedSpectrum(0.0)
+        for channel in range(4):
+            position = (wavelengths[channel] - self._first_nm) / self._step_nm
+            low = dr.minimum(mi.UInt32(dr.maximum(position, 0.0)), max(self._bands - 2, 0))
+            high = dr.minimum(low + 1, self._bands - 1)
+            t = dr.clip(position - mi.Float(low), 0.0, 1.0)
+            first = dr.gather(mi.Float, self._radiance, base + low, active)
+            second = dr.gather(mi.Float, self._radiance, base + high, active)
+            value[channel] = dr.select(active, first + t * (second - first), 0.0)
+        return value
+
+    def _pdf(self, direction):
+        if not self._importance:
+            return mi.Float(1 / (4 * dr.pi))
+        row, column = self._pixel(direction)
+        pmf = self._distribution.eval_pmf_normalized(row * self._width + column)
+        top = dr.cos(mi.Float(row) * (dr.pi / self._height))
+        bottom = dr.cos(mi.Float(row + 1) * (dr.pi / self._height))
+        return pmf / ((top - bottom) * (2 * dr.pi / self._width))
+
+    def eval(self, si, active=True):
+        return self._radiance_at(-si.wi, si.wavelengths, active)
+
+    def eval_direction(self, it, ds, active=True):
+        return self._radiance_at(ds.d, it.wavelengths, active)
+
+    def sample_direction(self, it, sample, active=True):
+        if self._importance:
+            index, reused = self._distribution.sample_reuse(sample.x, active)
+            row, column = index // self._width, index % self._width
             top = dr.cos(mi.Float(row) * (dr.pi / self._height))
             bottom = dr.cos(mi.Float(row + 1) * (dr.pi / self._height))
-            return pmf / ((top - bottom) * (2 * dr.pi / self._width))
+            cos_theta = top + reused * (bottom - top)
+            phi = (mi.Float(column) + sample.y) * (2 * dr.pi / self._width)
+            sin_theta = dr.safe_sqrt(1 - cos_theta * cos_theta)
+            direction = mi.Vector3f(sin_theta * dr.cos(phi), sin_theta * dr.sin(phi), cos_theta)
+        else:
+            direction = mi.warp.square_to_uniform_sphere(sample)
+        ds = dr.zeros(mi.DirectionSample3f)
+        ds.d = direction
+        ds.pdf = self._pdf(direction)
+        ds.dist = self._radius
+        ds.p = it.p + direction * self._radius
+        ds.n = -direction
+        ds.time = it.time
+        ds.delta = False
+        ds.emitter = mi.EmitterPtr(self)
+        radiance = self._radiance_at(direction, it.wavelengths, active)
+        return ds, dr.select(ds.pdf > 0, radiance / ds.pdf, 0.0)
 
-        def eval(self, si, active=True):
-            return self._radiance_at(-si.wi, si.wavelengths, active)
+    def pdf_direction(self, it, ds, active=True):
+        return self._pdf(ds.d)
 
-        def eval_direction(self, it, ds, active=True):
-            return self._radiance_at(ds.d, it.wavelengths, active)
+    def sample_wavelengths(self, si, sample, active=True):
+        span = self._step_nm * max(self._bands - 1, 1)
+        wavelengths = self._first_nm + span * mi.sample_shifted(sample)
+        return wavelengths, self._radiance_at(-si.wi, wavelengths, active) * span
 
-        def sample_direction(self, it, sample, active=True):
-            if self._importance:
-                index, reused = self._distribution.sample_reuse(sample.x, active)
-                row, column = index // self._width, index % self._width
-                top = dr.cos(mi.Float(row) * (dr.pi / self._height))
-                bottom = dr.cos(mi.Float(row + 1) * (dr.pi / self._height))
-                cos_theta = top + reused * (bottom - top)
-                phi = (mi.Float(column) + sample.y) * (2 * dr.pi / self._width)
-                sin_theta = dr.safe_sqrt(1 - cos_theta * cos_theta)
-                direction = mi.Vector3f(sin_theta * dr.cos(phi), sin_theta * dr.sin(phi), cos_theta)
-            else:
-                direction = mi.warp.square_to_uniform_sphere(sample)
-            ds = dr.zeros(mi.DirectionSample3f)
-            ds.d = direction
-            ds.pdf = self._pdf(direction)
-            ds.dist = self._radius
-            ds.p = it.p + direction * self._radius
-            ds.n = -direction
-            ds.time = it.time
-            ds.delta = False
-            ds.emitter = mi.EmitterPtr(self)
-            radiance = self._radiance_at(direction, it.wavelengths, active)
-            return ds, dr.select(ds.pdf > 0, radiance / ds.pdf, 0.0)
+    def bbox(self):
+        return mi.ScalarBoundingBox3f()
 
-        def pdf_direction(self, it, ds, active=True):
-            return self._pdf(ds.d)
+    def to_string(self):
+        return f"SpectralEnvmapEmitter[{self._height} x {self._width} x {self._bands}]"
 
-        def sample_wavelengths(self, si, sample, active=True):
-            span = self._step_nm * max(self._bands - 1, 1)
-            wavelengths = self._first_nm + span * mi.sample_shifted(sample)
-            return wavelengths, self._radiance_at(-si.wi, wavelengths, active) * span
 
-        def bbox(self):
-            return mi.ScalarBoundingBox3f()
-
-        def to_string(self):
-            return f"SpectralEnvmapEmitter[{self._height} x {self._width} x {self._bands}]"
-
-    return SpectralEnvmapEmitter
+register_once("spectral_envmap", mi.register_emitter, lambda props: SpectralEnvmapEmitter(props))
