@@ -132,3 +132,24 @@ def test_renderer_free_rooms_of_twin_load_no_renderer(package):
         [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True
     )
     assert result.stdout.strip() == "[]"
+
+
+def _top_level_imports(path: Path) -> set[str]:
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+        if isinstance(node, ast.Import):
+            names.update(alias.name.split(".")[0] for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            names.add(node.module.split(".")[0])
+    return names
+
+
+def test_tests_of_recon_and_hwbridge_run_without_a_renderer():
+    """Tests that need Mitsuba or the twin live in tests/integration, not beside recon's."""
+    offenders = {
+        str(path.relative_to(ROOT)): sorted(_top_level_imports(path) & FORBIDDEN)
+        for package in RENDERER_FREE
+        for path in (ROOT / "tests" / package).rglob("*.py")
+    }
+    assert {path: names for path, names in offenders.items() if names} == {}
+    assert len(offenders) >= 20

@@ -2,7 +2,9 @@
 environment map emitter.
 
 Each plugin module activates the Mitsuba variant when imported and defines its plugin class at
-module level (:mod:`twin.render.plugins.registry`).
+module level (:mod:`twin.render.plugins.registry`). The functions that build a scene entry,
+``btf_bsdf.btf_bsdf`` and ``spectral_envmap.spectral_envmap``, are imported from their modules:
+the package re-exports no name that would hide a module.
 """
 
 import lazy_loader
@@ -15,7 +17,6 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
             "CompressedTable",
             "SpectralBTF",
             "barycentric",
-            "btf_bsdf",
             "compressed_product_table",
             "hemisphere_lookup",
             "interpolate_table",
@@ -28,7 +29,6 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
             "SpectralEnvmapEmitter",
             "SpectralMap",
             "register_map",
-            "spectral_envmap",
         ],
     },
 )

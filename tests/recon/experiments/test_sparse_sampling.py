@@ -21,7 +21,7 @@ from recon.experiments.sampling import (
 )
 from recon.measured_data import data_path, read_llanos2019_multispectral
 
-TEST_DATA = Path(__file__).resolve().parents[1] / "data"
+TEST_DATA = Path(__file__).resolve().parents[2] / "data"
 
 
 def _regular_spacing(values: np.ndarray) -> np.ndarray:
