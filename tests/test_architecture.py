@@ -153,3 +153,24 @@ def test_tests_of_recon_and_hwbridge_run_without_a_renderer():
     }
     assert {path: names for path, names in offenders.items() if names} == {}
     assert len(offenders) >= 20
+
+
+def test_every_name_a_package_re_exports_resolves():
+    """Lazy re-exports fail only when used: import every package and read its ``__all__``."""
+    code = (
+        "import importlib, pkgutil\n"
+        "missing = []\n"
+        f"for root in {PACKAGES!r}:\n"
+        "    package = importlib.import_module(root)\n"
+        "    for info in pkgutil.walk_packages(package.__path__, root + '.'):\n"
+        "        if not info.ispkg: continue\n"
+        "        module = importlib.import_module(info.name)\n"
+        "        for name in getattr(module, '__all__', []):\n"
+        "            try: getattr(module, name)\n"
+        "            except (AttributeError, ImportError): missing.append(info.name + '.' + name)\n"
+        "print(missing)\n"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True
+    )
+    assert result.stdout.strip() == "[]"

@@ -7,29 +7,8 @@ import lazy_loader
 __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
-        "compression": [
-            "CompressedBTF",
-            "CompressionReport",
-            "LAYOUTS",
-            "Layout",
-            "SvdMethod",
-            "compress_btf",
-            "compressed_floats",
-            "compression_report",
-            "load_compressed",
-            "predicted_ratio",
-            "save_compressed",
-        ],
-        "processing": [
-            "GonioRun",
-            "PairOutcomes",
-            "inset_corners",
-            "open_btf_store",
-            "prepare_gonio_run",
-            "process_gonio",
-            "process_pairs",
-            "record_outcomes",
-        ],
-        "store": ["BTFStore", "BTF_FORMAT", "BTF_FORMAT_VERSION", "COMPRESSED_GROUP", "write_btf"],
+        "compression": ["CompressedBTF", "compress_btf", "load_compressed", "save_compressed"],
+        "processing": ["process_gonio"],
+        "store": ["BTFStore", "write_btf"],
     },
 )

@@ -7,27 +7,7 @@ import lazy_loader
 __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
-        "border": [
-            "CornerDetection",
-            "MarksNotFoundError",
-            "detect_corners",
-            "extract_texture",
-            "local_pca_lines",
-            "order_corners",
-            "parse_manual_corners",
-            "read_manual_corners",
-            "register_frame",
-        ],
-        "corners": [
-            "TEXTURE_CORNERS_UV",
-            "corner_pieces",
-            "fit_corner_model",
-            "frame_intensity",
-            "refine_corners",
-            "texture_transform",
-            "validate_corners",
-            "validate_frame",
-            "validate_marks",
-        ],
+        "border": ["detect_corners", "extract_texture", "register_frame"],
+        "corners": ["refine_corners", "texture_transform"],
     },
 )

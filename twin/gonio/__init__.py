@@ -7,31 +7,9 @@ import lazy_loader
 __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
-        "capture": [
-            "CAMERA_ID",
-            "GonioPairs",
-            "REDUCED_RINGS",
-            "actual_poses",
-            "gonio_pairs",
-            "run_gonio_calibration",
-            "run_gonio_measurement",
-            "texture_corners_world",
-        ],
-        "capture_time": [
-            "GonioEstimate",
-            "band_exposures_s",
-            "estimate_gonio",
-            "move_seconds",
-            "order_pairs",
-        ],
-        "render": [
-            "gonio_camera",
-            "gonio_lamp",
-            "gonio_part_rates",
-            "pose_matrix",
-            "simulate_band_frames",
-        ],
-        "signals": ["RenderedGonioSignal", "WhiteReferenceSignal"],
-        "sim_session": ["demo_plan", "run_demo_session"],
+        "capture": ["run_gonio_calibration", "run_gonio_measurement"],
+        "capture_time": ["estimate_gonio"],
+        "render": ["simulate_band_frames"],
+        "sim_session": ["run_demo_session"],
     },
 )

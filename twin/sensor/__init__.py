@@ -8,7 +8,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
         "band_weights": ["instrument_passbands"],
-        "model": ["Sensor", "bayer_channel_index"],
-        "white_reference": ["equalized_exposures_s", "white_reference_rates"],
+        "model": ["Sensor"],
+        "white_reference": ["equalized_exposures_s"],
     },
 )
