@@ -15,3 +15,23 @@ class DeviceTimeout(DeviceError):
 
 class DeviceDisconnected(DeviceError):
     """A device dropped off the bus; it may come back after staging it again."""
+
+
+class StoreBusy(RuntimeError):
+    """Another writer holds the store's lock (:mod:`hwbridge.lock`); the message names it."""
+
+
+class SessionInterrupted(Exception):
+    """A capture stopped on SIGINT or SIGTERM between two frames (:mod:`hwbridge.session`).
+
+    Attributes
+    ----------
+    store
+        The store's path.
+    done, total
+        Plan steps in the store (written and flagged done) and in the plan.
+    """
+
+    def __init__(self, store: object, done: int, total: int):
+        super().__init__(f"{store}: interrupted after {done} of {total} frames")
+        self.store, self.done, self.total = store, done, total
