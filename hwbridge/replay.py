@@ -17,6 +17,7 @@ import tifffile
 import yaml
 
 from hwbridge.errors import BridgeInputError
+from hwbridge.lock import StoreLock
 from hwbridge.store import FRAME_KINDS, CaptureStore, FrameRecord
 
 __all__ = ["MAPPING_DIR", "ingest", "load_mapping"]
@@ -81,26 +82,30 @@ def ingest(source: str | Path, mapping: str | Path, store_path: str | Path) -> C
                 **({"band_nm": float(groups["band_nm"])} if "band_nm" in groups else {}),
             }
         )
-    store = CaptureStore.create(
-        store_path,
-        rig=spec.get("rig", {}),
-        backend="replay",
-        seed=0,
-        plan=plan,
-        cameras={camera: first.shape},
-    )
-    for step, ((relative, entry, _), settings) in enumerate(zip(matched, plan, strict=True)):
-        frame = tifffile.imread(source / relative)
-        if frame.shape != first.shape:
-            raise BridgeInputError(f"{relative}: shape {frame.shape} differs from {first.shape}")
-        record = FrameRecord(
-            kind=settings["kind"],
-            exposure_s=settings["exposure_s"],
-            timestamp=(source / relative).stat().st_mtime,
-            light_id=int(entry.get("light_id", -1)),
-            view_id=int(entry.get("view_id", -1)),
-            band_nm=settings.get("band_nm", float("nan")),
+    with StoreLock.reserve(store_path) as lock:  # one writer per store (hwbridge.lock)
+        store = CaptureStore.create(
+            store_path,
+            rig=spec.get("rig", {}),
+            backend="replay",
+            seed=0,
+            plan=plan,
+            cameras={camera: first.shape},
         )
-        store.write_frame(step, np.asarray(frame).astype(np.uint16), record)
-        store.mark_done(step)
+        lock.move_into()
+        for step, ((relative, entry, _), settings) in enumerate(zip(matched, plan, strict=True)):
+            frame = tifffile.imread(source / relative)
+            if frame.shape != first.shape:
+                raise BridgeInputError(
+                    f"{relative}: shape {frame.shape} differs from {first.shape}"
+                )
+            record = FrameRecord(
+                kind=settings["kind"],
+                exposure_s=settings["exposure_s"],
+                timestamp=(source / relative).stat().st_mtime,
+                light_id=int(entry.get("light_id", -1)),
+                view_id=int(entry.get("view_id", -1)),
+                band_nm=settings.get("band_nm", float("nan")),
+            )
+            store.write_frame(step, np.asarray(frame).astype(np.uint16), record)
+            store.mark_done(step)
     return store

@@ -20,22 +20,111 @@ in the frame's ``status``.
 once,
 in the coordinator, and :func:`capture_steps` runs a subset of the steps into it, in a worker that
 owns those steps' chunks.
+
+One writer per store: :func:`locked_session_store` holds the store's writer lock
+(:mod:`hwbridge.lock`) from before the store is created (or reopened) until the session ends; a
+second session on the same store is refused with :class:`~hwbridge.errors.StoreBusy`. The
+workers of a distributed capture write inside their coordinator's lock.
+
+Stopping: :class:`SignalStop` turns SIGINT (Ctrl-C) and SIGTERM into a request to stop after the
+frame being taken; a second signal abandons that frame (never one being written). A frame is
+flagged done only after its frame and index are written, so the store holds exactly the steps
+flagged done, and :func:`run_session` raises :class:`~hwbridge.errors.SessionInterrupted`
+naming how many. ``resume=True`` continues it.
 """
 
 from __future__ import annotations
 
+import signal
+import threading
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Required, TypedDict
 
 import numpy as np
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
-from hwbridge.errors import BridgeInputError, DeviceDisconnected, DeviceTimeout
+from hwbridge.errors import (
+    BridgeInputError,
+    DeviceDisconnected,
+    DeviceTimeout,
+    SessionInterrupted,
+)
+from hwbridge.lock import StoreLock
 from hwbridge.store import CaptureStore, FrameRecord
 
-__all__ = ["SessionDevices", "capture_steps", "open_session_store", "run_session"]
+__all__ = [
+    "SessionDevices",
+    "SignalStop",
+    "StopRequest",
+    "capture_steps",
+    "locked_session_store",
+    "open_session_store",
+    "raise_if_interrupted",
+    "run_session",
+]
+
+
+class StopRequest:
+    """Whether a capture should stop before its next frame: never, unless a subclass says so
+    (:class:`SignalStop`; a Dask event in :mod:`twin.devices.cluster`)."""
+
+    def __call__(self) -> bool:
+        return False
+
+    @contextmanager
+    def writing(self) -> Iterator[None]:
+        """Around the writing of a frame, its index and its progress flag."""
+        yield
+
+
+class SignalStop(StopRequest):
+    """SIGINT (Ctrl-C) and SIGTERM as requests to stop, for the duration of a ``with`` block.
+
+    The first signal asks the capture to stop after the frame it is taking (true from then
+    on); a second one abandons that frame at once (``KeyboardInterrupt``), unless the frame is
+    being written, which always finishes. Outside the main thread, where Python cannot handle
+    signals, it never asks to stop; a signal the process ignores stays ignored.
+    """
+
+    _SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self) -> None:
+        self.received: list[int] = []
+        self._writing = False
+        self._previous: dict[int, Any] = {}
+
+    def __call__(self) -> bool:
+        return bool(self.received)
+
+    def _handle(self, signum: int, frame: object) -> None:
+        self.received.append(signum)
+        if len(self.received) > 1 and not self._writing:
+            raise KeyboardInterrupt
+
+    @contextmanager
+    def writing(self) -> Iterator[None]:
+        self._writing = True
+        try:
+            yield
+        finally:
+            self._writing = False
+
+    def __enter__(self) -> SignalStop:
+        if threading.current_thread() is threading.main_thread():
+            for number in self._SIGNALS:
+                previous = signal.getsignal(number)
+                if previous is not signal.SIG_IGN:
+                    self._previous[number] = previous
+                    signal.signal(number, self._handle)
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        for number, previous in self._previous.items():
+            signal.signal(number, previous if previous is not None else signal.SIG_DFL)
+        self._previous.clear()
 
 
 def _with_retries(action, device: Any, retries: int, backoff_s: float) -> tuple[Any, list[str]]:
@@ -115,9 +204,13 @@ def open_session_store(
     path = Path(store_path)
     if resume:
         store = CaptureStore.open(path)
-        if store.attrs["plan"] != plan or store.attrs["seed"] != seed:
+        stored = store.attrs
+        if stored["plan"] != plan or stored["seed"] != seed:
+            differ = "seed" if stored["plan"] == plan else "plan"
             raise BridgeInputError(
-                f"{path}: resume needs the same plan and seed as the stored session"
+                f"{path}: resume needs the same plan and seed as the stored session (the "
+                f"{differ} differs; the store's seed is {stored['seed']}, its plan "
+                f"{len(stored['plan'])} steps; this session's seed {seed}, plan {len(plan)} steps)"
             )
         return store
     monitor = devices.get("monitor")
@@ -132,6 +225,43 @@ def open_session_store(
     )
 
 
+@contextmanager
+def locked_session_store(
+    store_path: str | Path,
+    plan: list[dict],
+    devices: SessionDevices,
+    *,
+    rig: dict[str, Any],
+    backend: str,
+    seed: int,
+    resume: bool = False,
+) -> Iterator[CaptureStore]:
+    """:func:`open_session_store` under the store's writer lock, held until the block ends.
+
+    A new store's name is reserved before it is created and the lock moves into it once it
+    exists (:class:`hwbridge.lock.StoreLock`); a store to resume is checked to be a capture store
+    before its folder gets a lock file.
+
+    Raises
+    ------
+    StoreBusy
+        Another writer holds the store (or is creating it).
+    """
+    path = Path(store_path)
+    if resume:
+        if path.exists():
+            CaptureStore.open(path)  # a capture store, before its folder gets a lock file
+        lock = StoreLock.acquire(path)
+    else:
+        lock = StoreLock.reserve(path)
+    with lock:
+        store = open_session_store(
+            path, plan, devices, rig=rig, backend=backend, seed=seed, resume=resume
+        )
+        lock.move_into()
+        yield store
+
+
 def capture_steps(
     store: CaptureStore,
     steps: Iterable[int],
@@ -142,7 +272,8 @@ def capture_steps(
     backoff_s: float = 0.01,
     check_complete: bool = True,
     advance: Callable[[], None] = lambda: None,
-) -> None:
+    stop: StopRequest | None = None,
+) -> int:
     """Capture ``steps`` of the store's plan into their slots and flag each one done.
 
     Parameters
@@ -163,6 +294,14 @@ def capture_steps(
         capture, see :meth:`hwbridge.store.CaptureStore.mark_done`).
     advance
         Called after each step (a progress bar).
+    stop
+        Asked before each step whether to stop there (:class:`SignalStop`); its ``writing()``
+        surrounds the writing of each frame.
+
+    Returns
+    -------
+    int
+        The number of steps taken (fewer than ``steps`` when ``stop`` said so).
     """
     plan = store.attrs["plan"]
     cameras = devices["cameras"]
@@ -171,7 +310,11 @@ def capture_steps(
     monitor = devices.get("monitor")
     leds = devices.get("leds")
     led_count = devices.get("led_count", 0)
+    stop = stop or StopRequest()
+    taken = 0
     for step in steps:
+        if stop():
+            break
         settings = plan[step]
         camera = cameras[settings["camera"]]
         faults: list[str] = []
@@ -219,9 +362,12 @@ def capture_steps(
             lamp_monitor=spectrum,
             status="ok" if not faults else "ok after " + ", ".join(faults),
         )
-        store.write_frame(step, frame, record)
-        store.mark_done(step, check_complete=check_complete)
+        with stop.writing():
+            store.write_frame(step, frame, record)
+            store.mark_done(step, check_complete=check_complete)
+        taken += 1
         advance()
+    return taken
 
 
 def run_session(
@@ -242,7 +388,18 @@ def run_session(
     backoff_s: float = 0.01,
     show_progress: bool = True,
 ) -> CaptureStore:
-    """Capture every pending step of ``plan``; returns the (complete) store."""
+    """Capture every pending step of ``plan``; returns the (complete) store.
+
+    The store's writer lock is held throughout (:func:`locked_session_store`), and SIGINT or
+    SIGTERM stop the session between frames (:class:`SignalStop`).
+
+    Raises
+    ------
+    StoreBusy
+        Another writer holds the store.
+    SessionInterrupted
+        A signal stopped the session before its last step; ``resume=True`` continues it.
+    """
     devices = SessionDevices(
         cameras=cameras,
         tunable_filter=tunable_filter,
@@ -251,25 +408,44 @@ def run_session(
         leds=leds,
         led_count=led_count,
     )
-    store = open_session_store(
-        store_path, plan, devices, rig=rig, backend=backend, seed=seed, resume=resume
-    )
-    pending = store.pending_steps()
     columns = (
         TextColumn("capture"),
         BarColumn(),
         TextColumn("{task.completed}/{task.total}"),
         TimeRemainingColumn(),
     )
-    with Progress(*columns, disable=not show_progress) as progress:
-        task = progress.add_task("capture", total=len(plan), completed=len(plan) - len(pending))
-        capture_steps(
-            store,
-            pending,
-            devices,
-            seed=seed,
-            retries=retries,
-            backoff_s=backoff_s,
-            advance=lambda: progress.advance(task),
-        )
+    with (
+        SignalStop() as stop,
+        locked_session_store(
+            store_path, plan, devices, rig=rig, backend=backend, seed=seed, resume=resume
+        ) as store,
+    ):
+        pending = store.pending_steps()
+        with Progress(*columns, disable=not show_progress) as progress:
+            task = progress.add_task("capture", total=len(plan), completed=len(plan) - len(pending))
+            try:
+                capture_steps(
+                    store,
+                    pending,
+                    devices,
+                    seed=seed,
+                    retries=retries,
+                    backoff_s=backoff_s,
+                    advance=lambda: progress.advance(task),
+                    stop=stop,
+                )
+            except KeyboardInterrupt:
+                if not stop():
+                    raise  # not a signal of this session's
+        raise_if_interrupted(store, stop)
     return store
+
+
+def raise_if_interrupted(store: CaptureStore, stop: StopRequest) -> None:
+    """Raise :class:`~hwbridge.errors.SessionInterrupted` when ``stop`` asked to stop before
+    every step of ``store`` was done."""
+    if stop():
+        pending = len(store.pending_steps())
+        if pending:
+            total = len(store.attrs["plan"])
+            raise SessionInterrupted(store.path, total - pending, total)

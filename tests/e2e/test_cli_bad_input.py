@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from hwbridge.lock import StoreLock
 from hwbridge.store import CaptureStore, FrameRecord
 from recon.btf.store import BTFStore
 from recon.calibration.gonio import GonioCalibration
@@ -25,6 +26,7 @@ from twin.cli.app import app
 
 runner = CliRunner()
 SCENES = Path(__file__).resolve().parents[2] / "scenes"
+_HELD: list[StoreLock] = []  # the writer locks of the @LOCKED_ stores, held by this process
 
 PROBES: list[tuple[list[str], int, str]] = [
     # info
@@ -75,11 +77,44 @@ PROBES: list[tuple[list[str], int, str]] = [
         "--fault-rate is not used by --program gonio-calibration",
     ),
     (
-        ["capture", "@NEW", "--program", "gonio-run", "--calibration", "@CAL", "--dry-run"],
+        ["capture", "@NEW", "--program", "gonio-run", "--dry-run"]
+        + ["--window", "64", "--pixels", "32"],
         2,
-        "--dry-run is not used by --program gonio-run",
+        "--window 64 is larger than --pixels 32",
+    ),
+    (
+        ["capture", "@NEW", "--program", "gonio-run", "--calibration", "@CAL"]
+        + ["--pixels", "4096", "--window", "512"],
+        2,
+        "pixels: expected 1..2048 pixels across the field of the Photometrics CoolSNAP K4",
+    ),
+    (
+        ["capture", "@NEW", "--program", "gonio-run", "--calibration", "@CAL", "--pixels", "4096"],
+        2,
+        "pixels: expected 1..2048",
     ),
     (["capture", "@NEW", "--dry-run", "--seed", "3"], 2, "--seed is not used by --dry-run"),
+    (["capture", "@NEW", "--dry-run", "--resume"], 2, "--resume is not used by --dry-run"),
+    (["capture", "@NEW", "--resume"], 2, "does not exist: start the capture without --resume"),
+    (
+        ["capture", "@INCOMPLETE_CAPTURE", "--resume", "--seed", "3"],
+        2,
+        "was captured with --seed 0, not 3: leave --seed out to resume it",
+    ),
+    (
+        ["capture", "@INCOMPLETE_CAPTURE", "--resume", "--program", "gonio-calibration"],
+        2,
+        "was captured with --program demo, not gonio-calibration",
+    ),
+    (
+        ["capture", "@INCOMPLETE_CAPTURE", "--resume", "--pixels", "64"],
+        2,
+        "--pixels is not used by --program demo",
+    ),
+    (["capture", "@LOCKED_CAPTURE", "--resume"], 1, "is being written by PID"),
+    (["capture", "@LOCKED_CAPTURE"], 1, "is being written by PID"),
+    (["capture", "@LOCKED_NEW"], 1, "is being created by PID"),
+    (["capture", "@LOCKED_NEW", "--resume"], 1, "is being created by PID"),
     (["capture", "@NEW", "--program", "gonio-run"], 2, "needs --calibration"),
     (["capture", "@NEW", "--program", "nosuch"], 2, "'--program'"),
     (["capture", "@CAPTURE"], 2, "exists: continue it with --resume"),
@@ -149,6 +184,17 @@ PROBES: list[tuple[list[str], int, str]] = [
         "cannot read manual corner file",
     ),
     (["process", "@CAPTURE", "--out", "@NEW_BTF"], 2, "Missing option '--calibration'"),
+    (
+        ["process", "@CAPTURE", "--calibration", "@CAL", "--out", "@LOCKED_BTF", "--resume"],
+        1,
+        "is being written by PID",
+    ),
+    (
+        ["process", "@CAPTURE", "--calibration", "@CAL", "--out", "@LOCKED_BTF"],
+        1,
+        "is being written by PID",
+    ),
+    (["compress", "@LOCKED_BTF"], 1, "is being written by PID"),
     # compress
     (["compress", "@PLAIN"], 2, "is a file: expected a BTF store"),
     (["compress", "@CAPTURE"], 2, "not a BTF store"),
@@ -254,6 +300,9 @@ def make_inputs(root: Path) -> dict[str, Path]:
             "BAD_RIG_KIND": "bad_rig_kind.yaml",
             "MALFORMED_YAML": "malformed.yaml",
             "LIST_YAML": "list.yaml",
+            "LOCKED_CAPTURE": "locked.capture.zarr",
+            "LOCKED_NEW": "locked_new.capture.zarr",
+            "LOCKED_BTF": "locked.btf.zarr",
         }.items()
     }
     paths["PLAIN"].write_text("not a store\n")
@@ -274,6 +323,11 @@ def make_inputs(root: Path) -> dict[str, Path]:
     _btf(paths["SMALL_BTF"], written=2, texels=8)
     for name in ("DAMAGED_CHUNK_BTF", "DAMAGED_METADATA_BTF"):
         _btf(paths[name], written=2)
+    _capture(paths["LOCKED_CAPTURE"], complete=False)
+    _btf(paths["LOCKED_BTF"], written=1)
+    _HELD.append(StoreLock.acquire(paths["LOCKED_CAPTURE"]))
+    _HELD.append(StoreLock.acquire(paths["LOCKED_BTF"]))
+    _HELD.append(StoreLock.reserve(paths["LOCKED_NEW"]))  # a store being created
     (paths["DAMAGED_CHUNK_BTF"] / "reflectance" / "c" / "1" / "0" / "0" / "0").write_bytes(
         b"\x28\xb5\x2f\xfd not zstd"
     )
@@ -314,9 +368,14 @@ def test_bad_input_is_one_line_without_traceback(inputs, arguments, code, phrase
 
 
 def test_probes_write_nothing(inputs):
-    """No refused command created the stores or folders it was given."""
-    for name in ("NEW", "NEW_BTF", "NEW_FOLDER"):
+    """No refused command created the stores or folders it was given, or left a lock file."""
+    for name in ("NEW", "NEW_BTF", "NEW_FOLDER", "LOCKED_NEW"):
         assert not inputs[name].exists()
+    root = inputs["NEW"].parent
+    hidden = sorted(path.name for path in root.iterdir() if path.name.startswith("."))
+    assert hidden == [".locked_new.capture.zarr.writer.lock"]  # the fixture's reservation
+    for name in ("CAPTURE", "INCOMPLETE_CAPTURE", "BTF", "INCOMPLETE_BTF"):
+        assert not (inputs[name] / ".writer.lock").exists()
     assert sorted(path.name for path in inputs["EMPTY"].iterdir()) == []
     assert sorted(path.name for path in inputs["FULL_FOLDER"].iterdir()) == ["notes.txt"]
 
@@ -327,7 +386,7 @@ def test_a_device_that_keeps_failing_stops_the_capture_with_exit_1(inputs, monke
     def failing_session(*args, **kwargs):
         raise DeviceTimeout("simulated timeout of k4.snap")
 
-    monkeypatch.setattr("twin.gonio.sim_session.run_demo_session", failing_session)
+    monkeypatch.setattr("twin.gonio.capture.CaptureProgram.run", failing_session)
     result = runner.invoke(app, ["capture", str(inputs["NEW"]), "--workers", "0"])
     assert result.exit_code == 1, result.output
     assert result.stderr.count("\n") == 1 and "--resume" in result.stderr

@@ -1,19 +1,25 @@
-"""Capture sessions on the simulated backend: resume after SIGKILL, faults, bad input."""
+"""Capture sessions on the simulated backend: resume after SIGKILL and SIGINT, one writer per
+store, faults, bad input."""
 
+import dataclasses
+import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from hwbridge.errors import BridgeInputError
+from hwbridge.errors import BridgeInputError, SessionInterrupted, StoreBusy
+from hwbridge.lock import StoreLock, lock_owner
 from hwbridge.plans import dark_series, estimate_duration_s, gonio_sample_run
 from hwbridge.session import run_session
 from hwbridge.store import CaptureStore
-from twin.gonio.sim_session import demo_plan, run_demo_session
+from twin.gonio.sim_session import demo_plan, demo_program, run_demo_session
 
 SEED = 2026
 
@@ -25,37 +31,289 @@ def _frames_and_index(store: CaptureStore):
     return store.frames("k4")[:], index
 
 
-def test_sigkill_at_20_random_moments_then_resume_gives_the_uninterrupted_result(tmp_path):
-    reference = run_demo_session(tmp_path / "reference.capture.zarr", SEED)
-    reference_frames, reference_index = _frames_and_index(reference)
-    path = tmp_path / "killed.capture.zarr"
-    rng = np.random.default_rng(20)
-    command = [sys.executable, "-m", "twin.gonio.sim_session", str(path), str(SEED)]
-    kills = 0
-    while kills < 20:
-        resume = ["--resume"] if path.exists() else []
-        process = subprocess.Popen(
-            command + resume, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+# A driver process that imports the command line and the demo program once, then forks a fresh
+# `spectwin capture` for every request: each capture is a real process of its own (killed,
+# interrupted, refused like any other) that starts in milliseconds instead of seconds of imports,
+# so the test spends its time capturing and interrupting. Requests on stdin, one JSON per line:
+# {"args": [...], "stderr": path} starts a capture and answers {"pid": ...}; {"wait": pid}
+# reaps it and answers {"code": exit code, or -signal}.
+DRIVER = r"""
+import json, os, sys, traceback
+from twin.cli.app import app
+import twin.gonio.sim_session  # noqa: F401 (the demo program's imports)
+
+for line in sys.stdin:
+    request = json.loads(line)
+    if "wait" in request:
+        _, status = os.waitpid(request["wait"], 0)
+        print(json.dumps({"code": os.waitstatus_to_exitcode(status)}), flush=True)
+        continue
+    pid = os.fork()
+    if pid == 0:
+        os.dup2(os.open(request["stderr"], os.O_WRONLY | os.O_CREAT | os.O_TRUNC), 2)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), 1)
+        code = 0
+        try:
+            app(request["args"], prog_name="spectwin")
+        except SystemExit as end:
+            code = end.code if isinstance(end.code, int) else 1
+        except BaseException:
+            traceback.print_exc()
+            code = 99
+        sys.stderr.flush()
+        os._exit(code)
+    print(json.dumps({"pid": pid}), flush=True)
+"""
+ROOT = Path(__file__).resolve().parents[2]
+
+
+class _Captures:
+    """`spectwin capture` processes forked by the driver."""
+
+    def __init__(self, folder: Path):
+        environment = os.environ | {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
+        self._driver = subprocess.Popen(
+            [sys.executable, "-c", DRIVER],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+            cwd=ROOT,
+            env=environment,
         )
-        time.sleep(rng.uniform(1.5, 4.0))
-        if process.poll() is None:
-            os.kill(process.pid, signal.SIGKILL)
-            process.wait()
-            kills += 1
-        elif process.returncode == 0:
-            break  # finished before the kill: restart from scratch to keep killing
-        else:
-            pytest.fail(f"session exited with {process.returncode}")
-    if not path.exists() or not CaptureStore.open(path).complete:
-        subprocess.run(command + (["--resume"] if path.exists() else []), check=True)
-    resumed = CaptureStore.open(path)
-    assert resumed.complete and resumed.pending_steps() == []
-    frames, index = _frames_and_index(resumed)
+        self._folder, self._count, self._live = folder, 0, set()
+
+    def _ask(self, request: dict) -> dict:
+        self._driver.stdin.write(json.dumps(request) + "\n")
+        self._driver.stdin.flush()
+        return json.loads(self._driver.stdout.readline())
+
+    def start(self, args: list[str]) -> tuple[int, Path]:
+        self._count += 1
+        stderr = self._folder / f"capture{self._count}.stderr"
+        pid = self._ask({"args": args, "stderr": str(stderr)})["pid"]
+        self._live.add(pid)
+        return pid, stderr
+
+    def wait(self, pid: int) -> int:
+        self._live.discard(pid)
+        return self._ask({"wait": pid})["code"]
+
+    def close(self) -> None:
+        for pid in self._live:  # left running (or stopped) by a failed check
+            os.kill(pid, signal.SIGKILL)
+        self._driver.stdin.close()
+        self._driver.wait(timeout=30)
+
+
+def _lock_names(path: Path, pid: int) -> bool:
+    """Whether the store's lock file (inside it, or beside it while it is created) names pid."""
+    for lock_file in (path / ".writer.lock", path.with_name(f".{path.name}.writer.lock")):
+        try:
+            if json.loads(lock_file.read_text())["pid"] == pid:
+                return True
+        except (OSError, ValueError, KeyError):
+            pass
+    return False
+
+
+def _running(pid: int) -> bool:
+    """Whether process ``pid`` runs (has not ended; a child not yet reaped is a zombie)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (FileNotFoundError, IndexError):
+        return False
+    return state not in ("Z", "X")
+
+
+def _check_done_steps(path: Path, reference_frames: np.ndarray) -> int:
+    """Every step flagged done holds the uninterrupted run's frame; returns how many are done."""
+    store = CaptureStore.open(path)
+    done = sorted(set(range(len(store.attrs["plan"]))) - set(store.pending_steps()))
+    frames = store.frames("k4")
+    for step in done:  # the demo plan has one camera: its slot is the step
+        np.testing.assert_array_equal(frames[step], reference_frames[step])
+    return len(done)
+
+
+def _check_complete(path: Path, reference_frames: np.ndarray, reference_index: dict) -> None:
+    store = CaptureStore.open(path)
+    assert store.complete and store.pending_steps() == []
+    frames, index = _frames_and_index(store)
     assert frames.shape == reference_frames.shape == (len(demo_plan()), 32, 32)
     np.testing.assert_array_equal(frames, reference_frames)  # bit-identical, nothing duplicated
     for name, values in reference_index.items():
         np.testing.assert_array_equal(index[name], values)
-    assert kills >= 1
+    assert not (path / ".writer.lock").exists()
+
+
+def test_20_sigkills_and_5_sigints_at_random_moments_resume_to_the_uninterrupted_frames(tmp_path):
+    """Captures of the demo program, each stopped at a seeded random moment by SIGKILL (20) or
+    SIGINT (5) and continued with --resume until complete (then begun afresh); in every capture,
+    at a random moment, a second writer is started (with the first held by SIGSTOP, so that it
+    cannot finish meanwhile) and must be refused, naming the first. Every store that completes
+    holds the uninterrupted run's frames; after every stop, every step flagged done holds its
+    frame; a SIGINT ends with exit 130 and the line saying how far it got."""
+    reference = run_demo_session(tmp_path / "reference.capture.zarr", SEED)
+    reference_frames, reference_index = _frames_and_index(reference)
+    path = tmp_path / "killed.capture.zarr"
+    rng = np.random.default_rng(2026)
+    signals = [signal.SIGKILL] * 20 + [signal.SIGINT] * 5
+    rng.shuffle(signals)
+    delivered = {signal.SIGKILL: 0, signal.SIGINT: 0}
+    captures = _Captures(tmp_path)
+    refused = completed = progressed = 0
+    started = time.monotonic()
+    try:
+        while signals:
+            before = _check_done_steps(path, reference_frames) if path.exists() else 0
+            args = ["capture", str(path), "--json"]
+            args += ["--resume"] if path.exists() else ["--seed", str(SEED)]
+            pid, stderr = captures.start(args)
+            deadline = time.monotonic() + 60
+            while not _lock_names(path, pid) and _running(pid):
+                assert time.monotonic() < deadline, stderr.read_text()
+                time.sleep(0.005)
+            moment = rng.uniform(0.0, 1.5)
+            second_at = rng.uniform(0.0, moment)
+            time.sleep(second_at)
+            os.kill(pid, signal.SIGSTOP)
+            if _lock_names(path, pid) and (owner := lock_owner(path)) and owner.pid == pid:
+                second_args = ["capture", str(path)] + (["--resume"] if path.exists() else [])
+                second, second_stderr = captures.start(second_args)
+                assert captures.wait(second) == 1, second_stderr.read_text()
+                lines = second_stderr.read_text().splitlines()
+                assert len(lines) == 1 and lines[0].startswith("error: "), lines
+                assert f"by PID {pid} on host " in lines[0] and " since " in lines[0]
+                refused += 1
+            os.kill(pid, signal.SIGCONT)
+            time.sleep(moment - second_at)
+            number = signals[0]
+            os.kill(pid, number)
+            code = captures.wait(pid)
+            if code == 0:  # it finished before the signal: check it and begin afresh
+                _check_complete(path, reference_frames, reference_index)
+                shutil.rmtree(path)
+                completed += 1
+                continue
+            signals.pop(0)
+            delivered[number] += 1
+            done = _check_done_steps(path, reference_frames) if path.exists() else 0
+            progressed += done > before
+            total = len(demo_plan())
+            if number == signal.SIGKILL:
+                assert code == -signal.SIGKILL, stderr.read_text()
+            else:
+                assert code == 130, stderr.read_text()
+                then = (
+                    "the capture is complete"
+                    if done == total
+                    else f"continue with: spectwin capture {path} --resume"
+                )
+                assert stderr.read_text().splitlines() == [
+                    f"interrupted after {done} of {total} frames; {then}"
+                ]
+            if done == total:  # stopped after its last frame: check it and begin afresh
+                _check_complete(path, reference_frames, reference_index)
+                shutil.rmtree(path)
+                completed += 1
+        args = ["capture", str(path), "--json"]
+        args += ["--resume"] if path.exists() else ["--seed", str(SEED)]
+        pid, stderr = captures.start(args)
+        assert captures.wait(pid) == 0, stderr.read_text()
+    finally:
+        captures.close()
+    _check_complete(path, reference_frames, reference_index)
+    assert delivered == {signal.SIGKILL: 20, signal.SIGINT: 5}
+    assert refused >= 20  # all but the moments when the first had already ended
+    leftovers = [p.name for p in tmp_path.iterdir() if p.name.startswith(".")]
+    assert leftovers == []  # no reservation or half-made store of a killed creation remains
+    print(
+        f"{sum(delivered.values())} signals ({progressed} after the process had written frames), "
+        f"{refused} second writers refused, {completed} captures completed, "
+        f"{time.monotonic() - started:.1f} s"
+    )
+
+
+class _SignalsAtFrame:
+    """The demo's white-standard signal, sending ``signals`` to this very process while it
+    computes lit frame ``frame`` (the darks, shutter closed, ask for no signal)."""
+
+    def __init__(self, inner, frame: int, signals: list[int]):
+        self._inner, self._frame, self._signals, self._calls = inner, frame, signals, 0
+
+    def __call__(self, rig, start_s: float, exposure_s: float) -> np.ndarray:
+        self._calls += 1
+        if self._calls == self._frame:
+            for number in self._signals:
+                os.kill(os.getpid(), number)
+        return self._inner(rig, start_s, exposure_s)
+
+
+def _demo_signalled(frame: int, signals: list[int]):
+    program = demo_program(SEED)
+    devices = dataclasses.replace(
+        program.devices, signal=_SignalsAtFrame(program.devices.signal, frame, signals)
+    )
+    return dataclasses.replace(program, devices=devices)
+
+
+@pytest.mark.parametrize(
+    ("signals", "done"),
+    [
+        ([signal.SIGINT], 6 + 10),  # the frame being taken is finished and written, then stop
+        ([signal.SIGTERM], 6 + 10),
+        ([signal.SIGINT, signal.SIGINT], 6 + 9),  # a second Ctrl-C abandons that frame
+    ],
+    ids=["sigint", "sigterm", "sigint-twice"],
+)
+def test_a_signal_stops_the_session_between_frames_and_resume_completes_it(tmp_path, signals, done):
+    path = tmp_path / "stopped.capture.zarr"
+    previous = signal.getsignal(signal.SIGINT)
+    with pytest.raises(SessionInterrupted) as stopped:
+        _demo_signalled(10, signals).run(path)
+    assert signal.getsignal(signal.SIGINT) is previous  # the session's handlers are gone
+    total = len(demo_plan())
+    assert (stopped.value.done, stopped.value.total) == (done, total)
+    store = CaptureStore.open(path)
+    assert store.pending_steps() == list(range(done, total)) and not store.complete
+    assert not (path / ".writer.lock").exists()
+    reference = run_demo_session(tmp_path / "reference.capture.zarr", SEED)
+    reference_frames, reference_index = _frames_and_index(reference)
+    assert _check_done_steps(path, reference_frames) == done
+    run_demo_session(path, SEED, resume=True)
+    _check_complete(path, reference_frames, reference_index)
+
+
+def test_a_second_session_on_a_store_being_written_is_refused_and_writes_nothing(tmp_path):
+    path = tmp_path / "busy.capture.zarr"
+    with pytest.raises(SessionInterrupted):
+        _demo_signalled(3, [signal.SIGINT]).run(path)
+    before = CaptureStore.open(path).pending_steps()
+    with StoreLock.acquire(path):  # another writer
+        with pytest.raises(StoreBusy, match=rf"is being written by PID {os.getpid()} on host"):
+            run_demo_session(path, SEED, resume=True)
+        with pytest.raises(StoreBusy, match="is being written by PID"):
+            run_demo_session(path, SEED)
+    assert CaptureStore.open(path).pending_steps() == before
+    with StoreLock.reserve(tmp_path / "new.capture.zarr"):  # another writer creating it
+        with pytest.raises(StoreBusy, match="is being created by PID"):
+            run_demo_session(tmp_path / "new.capture.zarr", SEED)
+    assert not (tmp_path / "new.capture.zarr").exists()
+
+
+def test_the_stale_lock_of_a_killed_session_is_taken_over(tmp_path):
+    path = tmp_path / "stale.capture.zarr"
+    command = [sys.executable, "-m", "twin.gonio.sim_session", str(path), str(SEED)]
+    process = subprocess.Popen(command, cwd=ROOT, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 120
+    while not (path / "progress").exists() or not _lock_names(path, process.pid):
+        assert time.monotonic() < deadline and process.poll() is None
+        time.sleep(0.01)
+    process.kill()
+    process.wait()
+    assert json.loads((path / ".writer.lock").read_text())["pid"] == process.pid  # left behind
+    store = run_demo_session(path, SEED, resume=True)
+    assert store.complete and not (path / ".writer.lock").exists()
 
 
 def test_timeouts_and_disconnects_on_one_call_in_20_are_retried_and_recorded(tmp_path):

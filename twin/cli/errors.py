@@ -8,7 +8,10 @@ run that failed) never shows a Python traceback: the command prints one line
   (:class:`recon.errors.SpectwinInputError`, :class:`hwbridge.errors.BridgeInputError`, the
   option parser's own errors);
 - 1 for failed runs: data that turned out damaged (:class:`recon.errors.SpectwinDataError`),
-  devices that kept failing (:class:`hwbridge.errors.DeviceError`), a check that failed.
+  devices that kept failing (:class:`hwbridge.errors.DeviceError`), a store that another writer
+  holds (:class:`hwbridge.errors.StoreBusy`), a check that failed;
+- 130 for a run stopped by Ctrl-C (``KeyboardInterrupt``) or, in a capture, SIGTERM: one line
+  ``interrupted ...`` (``spectwin capture`` says how far it got and how to continue).
 
 :class:`SpectwinGroup` applies this to every command registered on the app; anything else is a
 bug and keeps its traceback.
@@ -22,10 +25,11 @@ from typing import Any, NoReturn
 import typer
 from typer.core import TyperGroup
 
-from hwbridge.errors import BridgeInputError, DeviceError
+from hwbridge.errors import BridgeInputError, DeviceError, SessionInterrupted, StoreBusy
 from recon.errors import SpectwinDataError, SpectwinInputError
 
 __all__ = [
+    "INTERRUPTED",
     "RUN_FAILED",
     "USAGE",
     "SpectwinGroup",
@@ -38,6 +42,7 @@ __all__ = [
 
 USAGE = 2
 RUN_FAILED = 1
+INTERRUPTED = 130
 
 
 def one_line(message: object) -> str:
@@ -79,7 +84,7 @@ def require_output_file(path: Path, option: str = "--out") -> None:
 
 
 _USAGE_ERRORS = (SpectwinInputError, BridgeInputError)
-_RUN_ERRORS = (SpectwinDataError, DeviceError)
+_RUN_ERRORS = (SpectwinDataError, DeviceError, StoreBusy)
 
 
 def _usage_error(error: typer.TyperException) -> NoReturn:
@@ -113,3 +118,11 @@ class SpectwinGroup(TyperGroup):
             if isinstance(error, DeviceError):
                 fail(f"a device kept failing ({error}); continue with --resume", RUN_FAILED)
             fail(error, RUN_FAILED)
+        except SessionInterrupted as stop:  # a capture inside another command (the demo)
+            typer.echo(
+                f"interrupted after {stop.done} of {stop.total} frames of {stop.store}", err=True
+            )
+            raise typer.Exit(INTERRUPTED) from None
+        except KeyboardInterrupt:
+            typer.echo("interrupted", err=True)
+            raise typer.Exit(INTERRUPTED) from None

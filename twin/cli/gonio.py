@@ -14,15 +14,22 @@ A full twin run at reduced sampling (thesis 3.3 and 4.1)::
 
 from __future__ import annotations
 
+import shlex
 from collections import Counter
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, NoReturn
 
 import numpy as np
 import typer
 
-from twin.cli.errors import fail, require_output_file, require_output_folder, run_failed
+from twin.cli.errors import (
+    INTERRUPTED,
+    fail,
+    require_output_file,
+    require_output_folder,
+    run_failed,
+)
 from twin.cli.output import JsonFlag, console, print_summary
 
 __all__ = ["register"]
@@ -70,10 +77,11 @@ _PROGRAM_OPTIONS = {
     "window": {Program.gonio_run},
     "spp": {Program.gonio_run},
     "fault_rate": {Program.demo},
-    "dry_run": {Program.demo},
 }
 # Options a --dry-run (which captures nothing) refuses.
 _CAPTURE_ONLY = ("seed", "resume", "fault_rate", "workers", "scheduler")
+# Settings a resumed capture reads from its store (given ones must agree).
+_STORED = ("program", "seed", "material", "pixels", "window", "spp")
 
 
 def _given(ctx: typer.Context, name: str) -> bool:
@@ -86,7 +94,7 @@ def _option(ctx: typer.Context, name: str) -> str:
     return next(p.opts[0] for p in ctx.command.params if p.name == name)
 
 
-def _refuse_unused(ctx: typer.Context, program: Program, dry_run: bool) -> None:
+def _refuse_unused(ctx: typer.Context, program: Program) -> None:
     for name, programs in _PROGRAM_OPTIONS.items():
         if program not in programs and _given(ctx, name):
             used_by = ", ".join(sorted(p.value for p in programs))
@@ -94,10 +102,12 @@ def _refuse_unused(ctx: typer.Context, program: Program, dry_run: bool) -> None:
                 f"{_option(ctx, name)} is not used by --program {program.value} "
                 f"(only by {used_by}); leave it out"
             )
-    if dry_run:
-        for name in _CAPTURE_ONLY:
-            if _given(ctx, name):
-                fail(f"{_option(ctx, name)} is not used by --dry-run, which captures nothing")
+
+
+def _refuse_capture_only(ctx: typer.Context) -> None:
+    for name in _CAPTURE_ONLY:
+        if _given(ctx, name):
+            fail(f"{_option(ctx, name)} is not used by --dry-run, which captures nothing")
 
 
 def _require_complete(capture, path: Path) -> None:
@@ -107,6 +117,113 @@ def _require_complete(capture, path: Path) -> None:
             f"{len(capture.attrs['plan'])} steps pending); "
             "finish it with spectwin capture --resume"
         )
+
+
+def _shown(name: str, value: object) -> str:
+    if name == "window" and value is None:
+        return "none (the whole field)"
+    return str(value.value if isinstance(value, Program) else value)
+
+
+def _stored_settings(ctx: typer.Context, store: Path, given: dict[str, object]) -> dict:
+    """The program and settings of the capture store to resume; an option given on the command
+    line must agree with the store's value."""
+    from hwbridge.lock import lock_owner
+    from hwbridge.store import CaptureStore
+    from twin.gonio.capture import stored_settings
+
+    if not store.exists():
+        if lock_owner(store) is None:
+            fail(f"{store} does not exist: start the capture without --resume")
+    else:
+        stored = stored_settings(CaptureStore.open(store))
+        if stored["program"] not in {p.value for p in Program}:
+            fail(f"{store}: made by program {stored['program']!r}, which capture does not know")
+        stored["program"] = Program(stored["program"])
+        if stored["program"] is Program.gonio_run:
+            side = given["window"] or given["pixels"]
+            if _given(ctx, "window") and side == (stored["window"] or stored["pixels"]):
+                given = given | {"window": stored["window"]}  # the whole field, named
+        for name in _STORED:
+            if name in stored and _given(ctx, name) and given[name] != stored[name]:
+                option = _option(ctx, name)
+                fail(
+                    f"{store} was captured with {option} {_shown(name, stored[name])}, not "
+                    f"{_shown(name, given[name])}: leave {option} out to resume it with the "
+                    "store's value"
+                )
+        return stored
+    return {}
+
+
+def _program_of(
+    program: Program,
+    *,
+    calibration: Path | None,
+    exposures_s: np.ndarray | None,
+    material: str,
+    pixels: int,
+    window: int | None,
+    spp: int,
+    seed: int,
+    fault_rate: float,
+    dry_run: bool,
+):
+    """The capture program, every setting checked (nothing is written)."""
+    if program is Program.demo:
+        from twin.gonio.sim_session import demo_program
+
+        return demo_program(seed, fault_rate=fault_rate), {}
+    if program is Program.gonio_calibration:
+        from twin.gonio.capture import gonio_calibration_program
+
+        return gonio_calibration_program(seed=seed), {}
+    from recon.calibration.gonio import GonioCalibration
+    from twin.gonio.capture import gonio_measurement_program
+
+    if window is not None and window > pixels:
+        fail(f"--window {window} is larger than --pixels {pixels}; expected at most {pixels}")
+    notes: dict[str, object] = {}
+    if calibration is not None:
+        planned = GonioCalibration.load(calibration).planned_exposure_s
+        if exposures_s is not None and not np.array_equal(planned, exposures_s):
+            fail(
+                f"--calibration {calibration} plans other band exposures than the store's run "
+                "was captured with: leave --calibration out to resume it with the store's"
+            )
+        exposures_s = planned
+    elif exposures_s is None:
+        if not dry_run:
+            fail("--program gonio-run needs --calibration (the JSON of spectwin calibrate)")
+        from twin.gonio.capture_time import band_exposures_s
+        from twin.rigs.rig_config import load_rig
+
+        _, exposures_s = band_exposures_s(load_rig("gonio"))
+        notes["exposures"] = "the rig model's band plan (no --calibration given)"
+    built = gonio_measurement_program(
+        exposures_s, material=material, pixels=pixels, window=window, spp=spp, seed=seed
+    )
+    return built, notes
+
+
+def _interrupted(store: Path, done: int | None = None, total: int | None = None) -> NoReturn:
+    """Say how far an interrupted capture got and how to continue it; exit 130."""
+    if done is None:
+        from hwbridge.store import CaptureStore
+
+        if not store.exists():
+            typer.echo("interrupted before the store was created; nothing was written", err=True)
+            raise typer.Exit(INTERRUPTED)
+        capture = CaptureStore.open(store)
+        total = len(capture.attrs["plan"])
+        done = total - len(capture.pending_steps())
+    then = (
+        "the capture is complete"
+        if done == total
+        else f"continue with: spectwin capture {shlex.quote(str(store))} --resume"
+    )
+    typer.echo(f"interrupted after {done} of {total} frames; {then}", err=True)
+    raise typer.Exit(INTERRUPTED)
 
 
 def capture(
@@ -119,19 +236,26 @@ def capture(
         typer.Option(
             help="demo: darks + 2 pairs x 33 bands of the white standard; gonio-calibration: "
             "darks, response series, white standard; gonio-run: a measurement run "
-            "(needs --calibration)."
+            "(needs --calibration). With --resume: the store's."
         ),
     ] = Program.demo,
     calibration: Annotated[
         Path | None,
-        typer.Option(help="gonio-run: spectwin calibrate's JSON, the band exposure plan."),
+        typer.Option(
+            help="gonio-run: spectwin calibrate's JSON, the band exposure plan (a --dry-run "
+            "without it uses the rig model's plan; --resume reads the store's)."
+        ),
     ] = None,
     material: Annotated[
         str, typer.Option(help="gonio-run: material on the holder (scenes/materials).")
     ] = "colorchecker16",
     pixels: Annotated[
         int,
-        typer.Option(min=32, max=4096, help="gonio-run: pixels across the camera's 20 cm field."),
+        typer.Option(
+            min=32,
+            max=4096,
+            help="gonio-run: pixels across the camera's 20 cm field (at most the sensor's).",
+        ),
     ] = 256,
     window: Annotated[
         int | None,
@@ -145,12 +269,25 @@ def capture(
     spp: Annotated[
         int, typer.Option(min=1, max=65536, help="gonio-run: samples per pixel of the renders.")
     ] = 64,
-    seed: Annotated[int, typer.Option(min=0, help="Session seed (noise of every frame).")] = 0,
+    seed: Annotated[
+        int,
+        typer.Option(
+            min=0, help="Session seed (noise of every frame). With --resume: the store's."
+        ),
+    ] = 0,
     resume: Annotated[
-        bool, typer.Option("--resume", help="Continue an interrupted session.")
+        bool,
+        typer.Option(
+            "--resume",
+            help="Continue an interrupted session, with the program and settings in the store.",
+        ),
     ] = False,
     dry_run: Annotated[
-        bool, typer.Option("--dry-run", help="demo: print the plan and its duration.")
+        bool,
+        typer.Option(
+            "--dry-run",
+            help="Print the plan (steps, frames, estimated duration, storage); write nothing.",
+        ),
     ] = False,
     fault_rate: Annotated[
         float,
@@ -166,80 +303,73 @@ def capture(
 ) -> None:
     """Capture a simulated gonioreflectometer session into a capture store (resumable).
 
+    One writer per store: a second capture, resume or process of the same store is refused
+    while the first runs. Ctrl-C (or SIGTERM) stops after the current frame and says how to
+    continue; --resume continues with the program and settings the store was made with.
+
     With --workers N (a local cluster) or --scheduler ADDRESS the steps run as Dask tasks, view
     by view; the frames are bit-identical to a capture in one process.
 
     Example: spectwin capture out/run.capture.zarr --program gonio-run --calibration cal.json
     """
-    from hwbridge.plans import estimate_duration_s
+    from hwbridge.errors import SessionInterrupted
+    from hwbridge.lock import require_new_store
 
-    _refuse_unused(ctx, program, dry_run)
-    summary: dict[str, object] = {"store": str(store), "program": program.value}
-    if program is Program.demo:
-        from twin.gonio.sim_session import demo_plan
-
-        plan = demo_plan()
-        summary["estimated_duration_s"] = estimate_duration_s(plan)
-        if dry_run:
-            summary |= {"steps": len(plan), "kinds": dict(Counter(s["kind"] for s in plan))}
-            print_summary(summary, "capture (dry run)", as_json)
-            return
-    exposures = None
-    if program is Program.gonio_run:
-        from recon.calibration.gonio import GonioCalibration
-        from twin.materials import load_material
-
-        if calibration is None:
-            fail("--program gonio-run needs --calibration (the JSON of spectwin calibrate)")
-        if window is not None and window > pixels:
-            fail(f"--window {window} is larger than --pixels {pixels}; expected at most {pixels}")
-        exposures = GonioCalibration.load(calibration).planned_exposure_s
-        load_material(material)
-    if store.exists() and not resume:
-        fail(f"{store} exists: continue it with --resume or choose another store")
+    if dry_run:
+        _refuse_capture_only(ctx)
+    exposures_s = None
+    if resume:
+        given = {
+            "program": program,
+            "seed": seed,
+            "material": material,
+            "pixels": pixels,
+            "window": window,
+            "spp": spp,
+        }
+        stored = _stored_settings(ctx, store, given)
+        program, seed = stored.get("program", program), stored.get("seed", seed)
+        if program is Program.gonio_run and stored:
+            material, pixels, window = stored["material"], stored["pixels"], stored["window"]
+            spp, exposures_s = stored["spp"], stored["exposures_s"]
+    _refuse_unused(ctx, program)
+    built, notes = _program_of(
+        program,
+        calibration=calibration,
+        exposures_s=exposures_s,
+        material=material,
+        pixels=pixels,
+        window=window,
+        spp=spp,
+        seed=seed,
+        fault_rate=fault_rate,
+        dry_run=dry_run,
+    )
+    summary: dict[str, object] = {"store": str(store)}
+    if dry_run:
+        summary |= built.dry_run() | notes | {"written": "nothing (dry run)"}
+        print_summary(summary, "capture (dry run)", as_json)
+        return
+    if not resume:
+        require_new_store(store)
     require_output_folder(store, "STORE")
     from twin.devices.cluster import cluster_description, dask_client
 
-    with dask_client(workers, scheduler) as client:
-        summary["cluster"] = cluster_description(client)
-        if program is Program.demo:
-            from twin.gonio.sim_session import run_demo_session
-
-            result = run_demo_session(
-                store,
-                seed,
-                resume=resume,
-                fault_rate=fault_rate,
-                show_progress=not as_json,
-                client=client,
-            )
-        elif program is Program.gonio_calibration:
-            from twin.gonio.capture import run_gonio_calibration
-
-            result = run_gonio_calibration(
-                store, seed=seed, resume=resume, show_progress=not as_json, client=client
-            )
-        else:
-            from twin.gonio.capture import run_gonio_measurement
-
-            result = run_gonio_measurement(
-                store,
-                exposures,
-                material=material,
-                pixels=pixels,
-                window=window,
-                spp=spp,
-                seed=seed,
-                resume=resume,
-                show_progress=not as_json,
-                client=client,
-            )
-    index = result.index(result.attrs["plan"][0]["camera"])
-    summary |= {
-        "complete": result.complete,
-        "frames": dict(Counter(index["kind"].tolist())),
-        "frames_with_faults": int(sum(status != "ok" for status in index["status"])),
-    }
+    summary["program"] = program.value
+    try:
+        with dask_client(workers, scheduler) as client:
+            summary["cluster"] = cluster_description(client)
+            result = built.run(store, resume=resume, show_progress=not as_json, client=client)
+        index = result.index(result.attrs["plan"][0]["camera"])
+        summary |= {
+            "complete": result.complete,
+            "frames": dict(Counter(index["kind"].tolist())),
+            "frames_with_faults": int(sum(status != "ok" for status in index["status"])),
+        }
+    except SessionInterrupted as stop:
+        _interrupted(store, stop.done, stop.total)
+    except KeyboardInterrupt:  # outside the session's own handling, or a second Ctrl-C
+        _interrupted(store)
     print_summary(summary, "capture (simulated backend)", as_json)
 
 
@@ -311,6 +441,7 @@ def process(
 
     Example: spectwin process out/run.capture.zarr --calibration out/cal.json --out out/cc.btf.zarr
     """
+    from hwbridge.lock import require_new_store
     from hwbridge.store import CaptureStore
     from recon.calibration.gonio import GonioCalibration
     from recon.registration.border import read_manual_corners
@@ -320,21 +451,29 @@ def process(
     corners = read_manual_corners(manual_corners) if manual_corners else None
     capture = CaptureStore.open(store)
     _require_complete(capture, store)
-    if out.exists() and not resume:
-        fail(f"--out {out} exists: continue it with --resume or choose another --out")
+    if not resume:
+        require_new_store(out)
     require_output_folder(out)
-    with dask_client(workers, scheduler) as client:
-        cluster = cluster_description(client)
-        btf = run_process(
-            capture,
-            gonio_calibration,
-            out,
-            texels=texels,
-            manual_corners=corners,
-            resume=resume,
-            show_progress=not as_json,
-            client=client,
+    try:
+        with dask_client(workers, scheduler) as client:
+            cluster = cluster_description(client)
+            btf = run_process(
+                capture,
+                gonio_calibration,
+                out,
+                texels=texels,
+                manual_corners=corners,
+                resume=resume,
+                show_progress=not as_json,
+                client=client,
+            )
+    except KeyboardInterrupt:
+        again = shlex.join(
+            ["spectwin", "process", str(store), "--calibration", str(calibration)]
+            + ["--out", str(out), "--texels", str(texels), "--resume"]
         )
+        typer.echo(f"interrupted; continue with: {again}", err=True)
+        raise typer.Exit(INTERRUPTED) from None
     summary = {
         "btf": str(out),
         "shape": list(btf.shape),
@@ -378,11 +517,12 @@ def compress(
 
     Example: spectwin compress out/cc.btf.zarr --layout joint --json
     """
+    from hwbridge.lock import StoreLock
     from recon.btf.compression import compress_btf, compression_report, save_compressed
     from recon.btf.store import BTFStore
 
     store = BTFStore.open(btf, writable=True)
-    with console.status("compressing"):
+    with StoreLock.acquire(btf), console.status("compressing"):
         reflectance = store.read()
         compressed = compress_btf(
             reflectance,

@@ -24,6 +24,14 @@ and submits one task per pending direction pair; a worker registers its pair and
 pair's chunks. Workers return metadata only (steps done, pairs registered coarsely or not at all);
 the coordinator alone writes the stores' attributes (``complete``, the outcome lists).
 
+One writer per store (:mod:`hwbridge.lock`): the coordinator holds the store's writer lock for
+the whole run, serial or distributed, and the workers write their chunks inside it. When the run
+ends early (an error, SIGINT or SIGTERM) the coordinator sets a Dask ``Event`` that every task
+checks before each step (capture) or pair (processing) and waits for the running tasks to end
+before it lets the lock go, so no worker writes to a store whose lock is free (a second Ctrl-C
+stops the waiting). The workers of a ``LocalCluster`` ignore SIGINT, so that Ctrl-C in a terminal,
+which reaches the whole process group, stops them through the coordinator, between steps.
+
 Examples
 --------
 >>> with dask_client(workers=2) as client:  # doctest: +SKIP
@@ -32,25 +40,38 @@ Examples
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
+import signal
+import threading
+import time
+import uuid
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-from distributed import Client, Future, LocalCluster, WorkerPlugin, as_completed
+from distributed import Client, Event, Future, LocalCluster, WorkerPlugin, as_completed, wait
 
 from hwbridge.errors import BridgeInputError
-from hwbridge.session import SessionDevices, capture_steps, open_session_store, run_session
+from hwbridge.lock import StoreLock
+from hwbridge.session import (
+    SessionDevices,
+    SignalStop,
+    StopRequest,
+    capture_steps,
+    locked_session_store,
+    raise_if_interrupted,
+    run_session,
+)
 from hwbridge.store import CaptureStore
 from recon.btf.processing import (
     GonioRun,
     PairOutcomes,
     open_btf_store,
     prepare_gonio_run,
-    process_gonio,
     process_pairs,
     record_outcomes,
 )
@@ -116,18 +137,35 @@ def dask_client(
     if workers <= 1:
         yield None
         return
-    cluster = LocalCluster(
-        n_workers=workers,
-        threads_per_worker=1,
-        processes=True,
-        dashboard_address=None,
-        # No dashboard; the scheduler's health page on a free port, so that clusters of
-        # concurrent runs do not compete for port 8787.
-        scheduler_kwargs={"dashboard_address": ":0"},
-        silence_logs=logging.ERROR,
-    )
+    with _workers_ignore_ctrl_c():
+        cluster = LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            # No dashboard; the scheduler's health page on a free port, so that clusters of
+            # concurrent runs do not compete for port 8787.
+            scheduler_kwargs={"dashboard_address": ":0"},
+            silence_logs=logging.ERROR,
+        )
     with cluster, Client(cluster) as client:
         yield client
+
+
+@contextmanager
+def _workers_ignore_ctrl_c() -> Iterator[None]:
+    """Start worker processes that ignore SIGINT (an ignored signal stays ignored in a child):
+    Ctrl-C in a terminal reaches every process of the foreground group, and the workers are to
+    finish their current step and stop when the coordinator says so (:func:`run_capture`), not
+    die in the middle of it. Ctrl-C is ignored while the cluster starts."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous if previous is not None else signal.SIG_DFL)
 
 
 def cluster_description(client: Client | None) -> str:
@@ -181,28 +219,74 @@ def view_tasks(
     return tasks
 
 
-def _gather(futures: list[Future], description: str, total: int, show_progress: bool) -> list:
-    """The metadata of tasks that return ``(steps done, metadata)``, in the order they finish,
-    advancing a bar of ``total`` steps; on an error the remaining tasks are cancelled and the
-    error raised (a capture or process cut short resumes with ``resume``)."""
-    results = []
+class _EventStop(StopRequest):
+    """In a worker: stop when the coordinator sets the run's Dask event."""
+
+    def __init__(self, event: Event):
+        self._event = event
+
+    def __call__(self) -> bool:
+        return bool(self._event.is_set())
+
+
+@contextmanager
+def _stoppable_tasks(client: Client) -> Iterator[tuple[Event, list[Future]]]:
+    """A stop event for the tasks submitted into the yielded list; when the block ends (however
+    it ends) the event is set and every task is waited for, so none still writes afterwards."""
+    event = Event(f"spectwin-stop-{uuid.uuid4().hex}", client=client)
+    futures: list[Future] = []
     try:
-        with progress_steps(description, total, enabled=show_progress) as advance:
-            for _, result in as_completed(futures, with_results=True):
-                advance(result[0])
-                results.append(result[1])
-    except BaseException:
-        for future in futures:
-            future.cancel()
-        raise
+        yield event, futures
+    finally:
+        event.set()  # tasks not started return at once, running ones after their current step
+        with contextlib.suppress(Exception):  # tasks that failed or were lost with a worker
+            wait(futures)
+        with contextlib.suppress(Exception):
+            event.clear()
+
+
+def _gather(
+    futures: list[Future],
+    description: str,
+    total: int,
+    show_progress: bool,
+    stop: StopRequest | None = None,
+) -> list:
+    """The metadata of tasks that return ``(steps done, metadata)``, in the order they finish,
+    advancing a bar of ``total`` steps, until all are done or ``stop`` asks to stop; a task's
+    error is raised (a capture or process cut short resumes with ``resume``)."""
+    stop = stop or StopRequest()
+    results = []
+    completed = as_completed(futures, with_results=True)
+    with progress_steps(description, total, enabled=show_progress) as advance:
+        while not completed.is_empty() and not stop():
+            if not completed.has_ready():
+                time.sleep(0.05)
+                continue
+            _, result = next(completed)
+            advance(result[0])
+            results.append(result[1])
     return results
 
 
 def _capture_task(
-    store_path: str, devices: Callable[[], SessionDevices], seed: int, steps: list[int]
+    store_path: str,
+    devices: Callable[[], SessionDevices],
+    seed: int,
+    steps: list[int],
+    stop: Event,
 ) -> tuple[int, None]:
-    capture_steps(CaptureStore.open(store_path), steps, devices(), seed=seed, check_complete=False)
-    return len(steps), None
+    if stop.is_set():
+        return 0, None
+    taken = capture_steps(
+        CaptureStore.open(store_path),
+        steps,
+        devices(),
+        seed=seed,
+        check_complete=False,
+        stop=_EventStop(stop),
+    )
+    return taken, None
 
 
 def run_capture(
@@ -245,6 +329,13 @@ def run_capture(
     -------
     CaptureStore
         The complete store.
+
+    Raises
+    ------
+    StoreBusy
+        Another writer holds the store (:mod:`hwbridge.lock`).
+    SessionInterrupted
+        SIGINT or SIGTERM stopped the capture (on a cluster: after the workers' current steps).
     """
     if client is None:
         return run_session(
@@ -257,33 +348,57 @@ def run_capture(
             resume=resume,
             show_progress=show_progress,
         )
-    session = open_session_store(
-        store, plan, devices(), rig=rig, backend=backend, seed=seed, resume=resume
-    )
-    if not session.one_chunk_per_frame:
-        raise BridgeInputError(
-            f"{session.path}: this store keeps kind and status in one chunk per camera (an "
-            "older spectwin made it), so only one writer may fill it: resume it without "
-            "--workers or --scheduler"
-        )
-    pending = session.pending_steps()
-    client.register_plugin(RendererSetup(), name=RendererSetup.name)
-    [recipe] = client.scatter([devices], broadcast=True, hash=False)
-    path = str(session.path.resolve())
-    futures = [
-        client.submit(_capture_task, path, recipe, seed, steps, pure=False)
-        for steps in view_tasks(plan, pending, max_steps)
-    ]
-    _gather(futures, "capture", len(pending), show_progress)
-    session.refresh_complete()
+    with (
+        SignalStop() as stop,
+        locked_session_store(
+            store, plan, devices(), rig=rig, backend=backend, seed=seed, resume=resume
+        ) as session,
+    ):
+        if not session.one_chunk_per_frame:
+            raise BridgeInputError(
+                f"{session.path}: this store keeps kind and status in one chunk per camera (an "
+                "older spectwin made it), so only one writer may fill it: resume it without "
+                "--workers or --scheduler"
+            )
+        pending = session.pending_steps()
+        client.register_plugin(RendererSetup(), name=RendererSetup.name)
+        [recipe] = client.scatter([devices], broadcast=True, hash=False)
+        path = str(session.path.resolve())
+        try:
+            with _stoppable_tasks(client) as (event, futures):
+                futures += [
+                    client.submit(_capture_task, path, recipe, seed, steps, event, pure=False)
+                    for steps in view_tasks(plan, pending, max_steps)
+                ]
+                _gather(futures, "capture", len(pending), show_progress, stop)
+        except KeyboardInterrupt:
+            if not stop():
+                raise
+        raise_if_interrupted(session, stop)
+        session.refresh_complete()
     return session
 
 
 def _process_task(
-    run: GonioRun, btf_path: str, pair: int, manual_corners: dict[str, np.ndarray] | None
+    run: GonioRun,
+    btf_path: str,
+    pair: int,
+    manual_corners: dict[str, np.ndarray] | None,
+    stop: Event,
 ) -> tuple[int, PairOutcomes]:
+    if stop.is_set():
+        return 0, PairOutcomes()
     btf = BTFStore.open(btf_path, writable=True)
     return 1, process_pairs(run, btf, [pair], manual_corners=manual_corners, check_complete=False)
+
+
+def _btf_lock(out: Path, resume: bool) -> StoreLock:
+    """The writer lock of the BTF store ``out``: of the store when resuming one (checked to be a
+    BTF store first), else a reservation of the name, moved into the store once it exists."""
+    if resume and out.exists():
+        BTFStore.open(out)
+        return StoreLock.acquire(out)
+    return StoreLock.reserve(out)
 
 
 def run_process(
@@ -297,34 +412,41 @@ def run_process(
     show_progress: bool = False,
     client: Client | None = None,
 ) -> BTFStore:
-    """Turn a measurement run into a BTF store in this process
-    (:func:`recon.btf.processing.process_gonio`) or over ``client``'s cluster, one task per
-    direction pair; the parameters are ``process_gonio``'s.
+    """Turn a measurement run into a BTF store in this process (as
+    :func:`recon.btf.processing.process_gonio`) or over ``client``'s cluster, one task per
+    direction pair; the parameters are ``process_gonio``'s. The BTF store's writer lock
+    (:mod:`hwbridge.lock`) is held throughout.
 
     Returns
     -------
     BTFStore
         The store, complete unless some pairs were not registered (``unregistered_pairs``).
+
+    Raises
+    ------
+    StoreBusy
+        Another writer holds the BTF store.
     """
-    if client is None:
-        return process_gonio(
-            capture,
-            calibration,
-            out,
-            texels=texels,
-            manual_corners=manual_corners,
-            resume=resume,
-            show_progress=show_progress,
-        )
-    run = prepare_gonio_run(capture, calibration)
-    btf = open_btf_store(run, out, texels=texels, resume=resume)
-    pending = btf.pending_pairs()
-    [context] = client.scatter([run], broadcast=True, hash=False)
-    path = str(btf.path.resolve())
-    futures = [
-        client.submit(_process_task, context, path, pair, manual_corners, pure=False)
-        for pair in pending
-    ]
-    record_outcomes(btf, _gather(futures, "process", len(pending), show_progress))
-    btf.refresh_complete()
+    with _btf_lock(Path(out), resume) as lock:
+        run = prepare_gonio_run(capture, calibration)
+        btf = open_btf_store(run, out, texels=texels, resume=resume)
+        lock.move_into()
+        pending = btf.pending_pairs()
+        if client is None:
+            with progress_steps("process", len(pending), enabled=show_progress) as advance:
+                outcomes = [
+                    process_pairs(run, btf, pending, manual_corners=manual_corners, advance=advance)
+                ]
+            record_outcomes(btf, outcomes)
+            return btf
+        [context] = client.scatter([run], broadcast=True, hash=False)
+        path = str(btf.path.resolve())
+        with _stoppable_tasks(client) as (event, futures):
+            futures += [
+                client.submit(_process_task, context, path, pair, manual_corners, event, pure=False)
+                for pair in pending
+            ]
+            outcomes = _gather(futures, "process", len(pending), show_progress)
+        record_outcomes(btf, outcomes)
+        btf.refresh_complete()
     return btf

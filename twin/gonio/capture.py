@@ -15,14 +15,24 @@ The material is rendered by Mitsuba for the pose the robot actually reaches
 (:func:`actual_poses`: the nominal pose off by the robot's repeatability), so every frame needs
 registration. The store's ``rig`` attribute carries what real processing knows about the rig:
 the nominal directions, the approximate image corners of the registration marks from the nominal
-kinematics, the sample's size relative to the marks and the white standard's data sheet.
-Exposure times are multiples of 1/15 s (HMI flicker, thesis 3.2.2).
+kinematics, the sample's size relative to the marks and the white standard's data sheet, and the
+program's settings (``program``, ``material``, ``sensor_px``, ``window_px``, ``spp``), which a
+resumed capture reads back (:func:`stored_settings`). Exposure times are multiples of 1/15 s
+(HMI flicker, thesis 3.2.2).
+
+Each program is first built as a :class:`CaptureProgram` (:func:`gonio_calibration_program`,
+:func:`gonio_measurement_program`): building checks every setting against the rig and camera
+models and writes nothing, so settings that cannot work are refused before a store exists;
+:meth:`CaptureProgram.dry_run` describes the plan (steps, frames, duration, storage) and
+:meth:`CaptureProgram.run` captures it.
 """
 
 from __future__ import annotations
 
+from collections import Counter
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -42,6 +52,7 @@ from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.components.targets import zenith_white_reflectance
 from twin.devices.cluster import run_capture
 from twin.devices.sim_devices import SimGonioDevices, VirtualRig
+from twin.gonio.capture_time import estimate_plan_s
 from twin.gonio.render import gonio_camera, pose_matrix
 from twin.gonio.signals import RenderedGonioSignal, WhiteReferenceSignal
 from twin.materials import load_material
@@ -57,11 +68,16 @@ if TYPE_CHECKING:
 __all__ = [
     "CAMERA_ID",
     "REDUCED_RINGS",
+    "CaptureProgram",
     "GonioPairs",
     "actual_poses",
+    "check_capture_settings",
+    "gonio_calibration_program",
+    "gonio_measurement_program",
     "gonio_pairs",
     "run_gonio_calibration",
     "run_gonio_measurement",
+    "stored_settings",
     "texture_corners_world",
 ]
 
@@ -72,6 +88,9 @@ end-to-end check, 13 x 13 light x view combinations."""
 _OECF_BANDS_NM = (420.0, 450.0, 550.0, 650.0, 700.0)
 _OECF_EXPOSURES = 200  # per band; thesis 3.3: 200 exposures for the response curve
 _DARK_FRAMES = 8
+# Index bytes per frame besides the lamp monitor: light_id, view_id, band_nm (4 each),
+# exposure_s, timestamp (8 each), pose (6 x 8), the progress flag (1).
+_INDEX_BYTES = 3 * 4 + 2 * 8 + 6 * 8 + 1
 
 
 class GonioPairs:
@@ -155,53 +174,175 @@ class _GonioSignal:
         return self._material(rig, start_s, exposure_s)
 
 
-def _capture(
-    store: Path,
-    plan: list[dict],
-    signal,
-    views: int,
-    pixels: int,
-    rig_attrs: dict,
-    seed: int,
-    resume: bool,
-    show_progress: bool,
-    client: Client | None,
-) -> CaptureStore:
-    devices = SimGonioDevices(
-        CAMERA_ID,
-        Sensor(str(rig_attrs["camera"]), roi=(pixels, pixels)),
-        signal,
-        plan_start_times_s(plan),
-        views,
-    )
-    return run_capture(
-        store,
-        plan,
-        devices,
-        rig=rig_attrs,
-        seed=seed,
-        resume=resume,
-        show_progress=show_progress,
-        client=client,
-    )
+def check_capture_settings(
+    config: GonioConfig, *, pixels: int, window: int | None = None, spp: int = 1
+) -> None:
+    """Refuse capture settings that the rig's camera cannot take, before anything is made.
+
+    ``pixels`` across the camera's field are at most the sensor's pixels; the read-out
+    ``window`` (a region of interest) lies within them; renders take at least one sample per
+    pixel.
+
+    Raises
+    ------
+    SpectwinInputError
+        Naming the setting, its range and the value given.
+    """
+    camera = Sensor(config.camera.definition).config
+    side = min(camera.width, camera.height)
+    if not _is_whole(pixels) or not 1 <= pixels <= side:
+        raise SpectwinInputError(
+            f"pixels: expected 1..{side} pixels across the field of the {camera.name} (its "
+            f"sensor has {camera.width}x{camera.height}), got {pixels}"
+        )
+    if window is not None and (not _is_whole(window) or not 1 <= window <= pixels):
+        raise SpectwinInputError(
+            f"window: expected a read-out window of 1..{pixels} pixels (at most pixels, "
+            f"{pixels}), got {window}"
+        )
+    if not _is_whole(spp) or spp < 1:
+        raise SpectwinInputError(f"spp: expected at least 1 sample per pixel, got {spp}")
+
+
+def _is_whole(value: object) -> bool:
+    return isinstance(value, int | np.integer) and not isinstance(value, bool)
+
+
+def _check_seed(seed: object) -> None:
+    if not _is_whole(seed) or seed < 0:
+        raise SpectwinInputError(f"seed: expected a whole number >= 0, got {seed}")
+
+
+def _check_exposures(plan: list[dict], sensor: Sensor) -> None:
+    low, high = sensor.config.exposure_range_s
+    outside = sorted({step["exposure_s"] for step in plan if not low <= step["exposure_s"] <= high})
+    if outside:
+        shown = ", ".join(f"{value:g}" for value in outside[:5])
+        raise SpectwinInputError(
+            f"exposures: the plan has exposures ({shown} s) outside the {sensor.config.name}'s "
+            f"range {low:g}..{high:g} s"
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class CaptureProgram:
+    """A capture program of the simulated gonioreflectometer, checked and ready to run.
+
+    Attributes
+    ----------
+    name
+        ``demo``, ``gonio-calibration`` or ``gonio-run`` (the store's ``rig["program"]``).
+    plan
+        One dict per step (:mod:`hwbridge.plans`).
+    devices
+        The devices' recipe (it pickles, for the workers of a cluster).
+    rig
+        The store's ``rig`` attribute.
+    seed
+        The session seed.
+    poses
+        The robot pose of each view that has one (the capture-time estimate).
+    """
+
+    name: str
+    plan: list[dict]
+    devices: SimGonioDevices
+    rig: dict[str, Any]
+    seed: int
+    poses: dict[int, GonioPose]
+
+    def __post_init__(self) -> None:
+        _check_seed(self.seed)
+        if not 0.0 <= self.devices.fault_rate <= 1.0:  # also refuses nan
+            raise SpectwinInputError(
+                f"fault_rate: expected a probability in [0, 1], got {self.devices.fault_rate}"
+            )
+        _check_exposures(self.plan, self.devices.sensor)
+
+    def dry_run(self) -> dict[str, object]:
+        """The plan in numbers, capturing nothing: steps, frames per camera and per kind,
+        views, frame size, the estimated duration (the rig's timing,
+        :func:`twin.gonio.capture_time.estimate_plan_s`) and the storage the frames and their
+        index take uncompressed (the store compresses them)."""
+        devices = self.devices()
+        monitor = devices.get("monitor")
+        samples = monitor.samples if monitor is not None else 0
+        frames = Counter(step["camera"] for step in self.plan)
+        storage = 0
+        for camera, count in frames.items():
+            height, width = devices["cameras"][camera].frame_shape
+            storage += count * (2 * height * width + _INDEX_BYTES + 4 * samples)
+        duration_s = estimate_plan_s(load_rig("gonio"), self.plan, self.poses)
+        height, width = self.devices.sensor.height, self.devices.sensor.width
+        return {
+            "program": self.name,
+            "steps": len(self.plan),
+            "frames": dict(frames),
+            "kinds": dict(Counter(step["kind"] for step in self.plan)),
+            "views": len({step.get("view_id", -1) for step in self.plan} - {-1}),
+            "frame_size": f"{height} x {width} px",
+            "estimated_duration_s": duration_s,
+            "estimated_duration_h": duration_s / 3600,
+            "storage_mb": storage / 1e6,
+        }
+
+    def run(
+        self,
+        store: str | Path,
+        *,
+        resume: bool = False,
+        show_progress: bool = False,
+        client: Client | None = None,
+    ) -> CaptureStore:
+        """Capture the plan into ``store`` (or continue it), in this process or over
+        ``client``'s cluster (:func:`twin.devices.cluster.run_capture`)."""
+        return run_capture(
+            Path(store),
+            self.plan,
+            self.devices,
+            rig=self.rig,
+            seed=self.seed,
+            resume=resume,
+            show_progress=show_progress,
+            client=client,
+        )
+
+
+def stored_settings(store: CaptureStore) -> dict[str, Any]:
+    """The program and settings a capture store was made with, as ``spectwin capture`` names
+    them: ``program``, ``seed`` and, for a measurement run, ``material``, ``pixels``,
+    ``window`` (``None`` when the whole field is read out), ``spp`` and the band
+    ``exposures_s`` of its white frames."""
+    attrs = store.attrs
+    rig = attrs.get("rig") or {}
+    if attrs.get("backend") != "sim":
+        raise SpectwinInputError(
+            f"{store.path}: a {attrs.get('backend')!r} store, not made by spectwin capture; only "
+            "simulated captures continue with --resume"
+        )
+    settings: dict[str, Any] = {"program": rig.get("program", "demo"), "seed": attrs["seed"]}
+    if settings["program"] == "gonio-run":
+        pixels = int(rig["sensor_px"])
+        settings |= {
+            "material": rig["material"],
+            "pixels": pixels,
+            "window": None if int(rig["window_px"]) == pixels else int(rig["window_px"]),
+            "spp": int(rig["spp"]),
+            "exposures_s": np.array(
+                [step["exposure_s"] for step in attrs["plan"] if step["kind"] == "white"]
+            ),
+        }
+    return settings
 
 
 def _with_view(steps: list[dict], view: int) -> list[dict]:
     return [{**step, "view_id": view} for step in steps]
 
 
-def run_gonio_calibration(
-    store: str | Path,
-    *,
-    pixels: int = 64,
-    spp: int = 64,
-    seed: int = 0,
-    white_fill: float = 0.6,
-    resume: bool = False,
-    show_progress: bool = False,
-    client: Client | None = None,
-) -> CaptureStore:
-    """The calibration session (see the module docstring) into ``store``.
+def gonio_calibration_program(
+    *, pixels: int = 64, spp: int = 64, seed: int = 0, white_fill: float = 0.6
+) -> CaptureProgram:
+    """The calibration session (see the module docstring), checked and not yet captured.
 
     The response series photographs the colour checker on its holder (view 1, seen frontally,
     lit from 30 degrees: its fields, card and print give the spread of radiances Robertson's
@@ -211,9 +352,14 @@ def run_gonio_calibration(
     about 150 distinct whole numbers of flicker periods (thesis 3.3: 200 exposures). The white
     photographs (view 0) share one exposure time, the longest whole number of flicker periods
     that keeps the brightest band below ``white_fill`` of saturation (the operator's test shots).
-    With a Dask ``client`` the session runs over its cluster (:mod:`twin.devices.cluster`).
     """
     config = load_rig("gonio")
+    check_capture_settings(config, pixels=pixels, spp=spp)
+    _check_seed(seed)
+    if not 0.0 < white_fill < 1.0:
+        raise SpectwinInputError(
+            f"white_fill: expected a fraction of saturation in (0, 1), got {white_fill}"
+        )
     sensor = Sensor(config.camera.definition, roi=(pixels, pixels))
     lctf = LiquidCrystalTunableFilter.varispec(config.camera.filter)
     white = _white_signal(config, sensor)
@@ -231,23 +377,31 @@ def run_gonio_calibration(
     chart = RenderedGonioSignal(
         config, load_material("colorchecker16"), {1: chart_pose}, pixels=pixels, spp=spp
     )
-    attrs = _rig_attrs(config, pixels, "gonio-calibration")
-    return _capture(
-        Path(store),
-        plan,
-        _GonioSignal(white, 0, chart),
-        2,
-        pixels,
-        attrs,
-        seed,
-        resume,
-        show_progress,
-        client,
+    devices = SimGonioDevices(
+        CAMERA_ID, sensor, _GonioSignal(white, 0, chart), plan_start_times_s(plan), 2
     )
+    attrs = _rig_attrs(config, pixels, "gonio-calibration")
+    return CaptureProgram("gonio-calibration", plan, devices, attrs, seed, {1: chart_pose})
 
 
-def run_gonio_measurement(
+def run_gonio_calibration(
     store: str | Path,
+    *,
+    pixels: int = 64,
+    spp: int = 64,
+    seed: int = 0,
+    white_fill: float = 0.6,
+    resume: bool = False,
+    show_progress: bool = False,
+    client: Client | None = None,
+) -> CaptureStore:
+    """The calibration session (:func:`gonio_calibration_program`) into ``store``. With a Dask
+    ``client`` the session runs over its cluster (:mod:`twin.devices.cluster`)."""
+    program = gonio_calibration_program(pixels=pixels, spp=spp, seed=seed, white_fill=white_fill)
+    return program.run(store, resume=resume, show_progress=show_progress, client=client)
+
+
+def gonio_measurement_program(
     exposures_s: np.ndarray,
     *,
     material: str = "colorchecker16",
@@ -257,16 +411,11 @@ def run_gonio_measurement(
     window: int | None = None,
     spp: int = 64,
     seed: int = 0,
-    resume: bool = False,
-    show_progress: bool = False,
-    client: Client | None = None,
-) -> CaptureStore:
-    """One measurement run (see the module docstring) with the band exposures of the plan.
+) -> CaptureProgram:
+    """One measurement run (see the module docstring), checked and not yet captured.
 
     Parameters
     ----------
-    store
-        Capture store to write.
     exposures_s
         ``(33,)`` band exposure times from the calibration (Eq. 3.4), multiples of 1/15 s.
     material
@@ -276,14 +425,14 @@ def run_gonio_measurement(
         given pairs.
     pixels, window, spp
         Pixels per side over the camera's 20 cm field, the centred window of them read out
-        (default all; the K4's region of interest) and samples per pixel.
-    seed, resume, show_progress
-        Session seed (noise, robot repeatability), resume an interrupted run, progress bar.
-    client
-        A Dask client to capture over its cluster (:mod:`twin.devices.cluster`), ``None`` to capture
-        in this process; the frames are the same.
+        (default all; the K4's region of interest) and samples per pixel
+        (:func:`check_capture_settings`).
+    seed
+        Session seed (noise, robot repeatability).
     """
     config = load_rig("gonio")
+    check_capture_settings(config, pixels=pixels, window=window, spp=spp)
+    _check_seed(seed)
     lctf = LiquidCrystalTunableFilter.varispec(config.camera.filter)
     bands = np.asarray(lctf.band_centres_nm, np.float64)
     exposures = np.asarray(exposures_s, np.float64)
@@ -298,6 +447,7 @@ def run_gonio_measurement(
             "exposures_s: with the HMI lamp every band exposure must be a multiple of 1/15 s "
             "(thesis 3.2.2); plan them with spectwin calibrate"
         )
+    sample = load_material(material)
     pairs = pairs or gonio_pairs(config, rings)
     n_pairs = len(pairs.poses)
     side = window or pixels
@@ -308,7 +458,7 @@ def run_gonio_measurement(
     plan += gonio_sample_run(CAMERA_ID, range(n_pairs), bands, exposures)
     rendered = RenderedGonioSignal(
         config,
-        load_material(material),
+        sample,
         actual_poses(config, pairs.poses, seed),
         pixels=pixels,
         spp=spp,
@@ -330,8 +480,39 @@ def run_gonio_measurement(
         "view_dirs": pairs.view_dirs.tolist(),
         "skipped_pairs": pairs.skipped,
         "expected_corners_xy": expected.tolist(),
-        "sample_fraction": load_material(material).size_m / (2 * PRINT_OUTER_HALF_M),
+        "sample_fraction": sample.size_m / (2 * PRINT_OUTER_HALF_M),
     }
-    return _capture(
-        Path(store), plan, signal, n_pairs + 1, side, attrs, seed, resume, show_progress, client
+    devices = SimGonioDevices(CAMERA_ID, sensor, signal, plan_start_times_s(plan), n_pairs + 1)
+    return CaptureProgram("gonio-run", plan, devices, attrs, seed, dict(enumerate(pairs.poses)))
+
+
+def run_gonio_measurement(
+    store: str | Path,
+    exposures_s: np.ndarray,
+    *,
+    material: str = "colorchecker16",
+    rings: tuple[tuple[float, int], ...] = REDUCED_RINGS,
+    pairs: GonioPairs | None = None,
+    pixels: int = 256,
+    window: int | None = None,
+    spp: int = 64,
+    seed: int = 0,
+    resume: bool = False,
+    show_progress: bool = False,
+    client: Client | None = None,
+) -> CaptureStore:
+    """One measurement run (:func:`gonio_measurement_program`, whose parameters these are)
+    into ``store``; ``resume`` continues an interrupted run, ``client`` (a Dask client) captures
+    over its cluster (:mod:`twin.devices.cluster`), ``None`` in this process: the frames are the
+    same."""
+    program = gonio_measurement_program(
+        exposures_s,
+        material=material,
+        rings=rings,
+        pairs=pairs,
+        pixels=pixels,
+        window=window,
+        spp=spp,
+        seed=seed,
     )
+    return program.run(store, resume=resume, show_progress=show_progress, client=client)

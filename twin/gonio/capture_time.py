@@ -9,10 +9,14 @@ moves), 1 s settle: :math:`6561 \\times 74 s = 134.9 h` for one material.
 Pairs are ordered to keep moves short: one run per lamp position (the lamp is moved by hand
 between runs), within a run the rail sweeps monotonically and the robot visits the poses of each
 rail stop in nearest-neighbour order.
+
+:func:`estimate_plan_s` applies the same timing to a capture plan as it stands (the dry run of
+``spectwin capture``).
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,7 +28,14 @@ from twin.rigs.rig_config import GonioConfig
 from twin.sensor.model import Sensor
 from twin.sensor.white_reference import equalized_exposures_s, white_reference_rates
 
-__all__ = ["GonioEstimate", "band_exposures_s", "estimate_gonio", "move_seconds", "order_pairs"]
+__all__ = [
+    "GonioEstimate",
+    "band_exposures_s",
+    "estimate_gonio",
+    "estimate_plan_s",
+    "move_seconds",
+    "order_pairs",
+]
 
 
 def _wrapped(delta_deg: np.ndarray) -> np.ndarray:
@@ -53,6 +64,31 @@ def move_seconds(start: GonioPose, end: GonioPose, config: GonioConfig) -> float
     rail = config.rail
     rail_s = rail.start_stop_s + rail_change / rail.speed_deg_per_s if rail_change > 1e-6 else 0.0
     return max(robot_s, rail_s)
+
+
+def estimate_plan_s(
+    config: GonioConfig, plan: list[dict], poses: Mapping[int, GonioPose | None]
+) -> float:
+    """Duration of a capture plan in its order (``hwbridge.plans`` steps), with the rig's timing.
+
+    Per frame: the exposure plus the filter switch and download (``switch_and_download_s``).
+    Per change of view (``view_id``): the move from the previous view's robot pose to this one's
+    (:func:`move_seconds`) and ``settle_s``. The rig starts at the first view's pose, and a view
+    without a pose in ``poses`` (the white standard, put on the holder by hand) costs the settle
+    time only and leaves the robot where it was.
+    """
+    timing = config.timing
+    total, view, pose = 0.0, None, None
+    for step in plan:
+        step_view = step.get("view_id", -1)
+        if step_view != -1 and step_view != view:
+            target = poses.get(step_view)
+            if pose is not None and target is not None:
+                total += move_seconds(pose, target, config)
+            total += timing.settle_s
+            view, pose = step_view, target if target is not None else pose
+        total += float(step["exposure_s"]) + timing.switch_and_download_s
+    return total
 
 
 def order_pairs(solution: GonioSolution) -> np.ndarray:

@@ -3,11 +3,17 @@ results
 of one process, bit for bit (timestamps are wall-clock time and differ)."""
 
 import json
+import os
+import signal
+import threading
+import time
 
 import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from hwbridge.errors import BridgeInputError, SessionInterrupted, StoreBusy
+from hwbridge.lock import StoreLock, lock_owner
 from hwbridge.plans import plan_start_times_s
 from hwbridge.session import capture_steps, open_session_store
 from hwbridge.store import CaptureStore
@@ -141,6 +147,59 @@ def test_a_capture_cut_short_resumes_on_the_cluster_with_the_same_frames(client,
     assert not store.complete
     resumed = run_demo_session(path, 11, resume=True, client=client)
     _assert_same_capture(resumed, reference, "k4")
+
+
+def _done(path) -> int:
+    try:
+        store = CaptureStore.open(path)
+    except BridgeInputError:  # not created yet
+        return 0
+    return len(store.attrs["plan"]) - len(store.pending_steps())
+
+
+def test_sigint_stops_a_capture_on_the_cluster_inside_the_coordinators_lock(client, tmp_path):
+    """The coordinator holds the store's lock while the workers write; on SIGINT the workers
+    stop after their current step, the coordinator returns only when none writes any more, and
+    a resume on the cluster ends with the uninterrupted frames."""
+    path = tmp_path / "stopped.capture.zarr"
+    seen: dict[str, object] = {}
+
+    def interrupt_once_frames_are_written() -> None:
+        deadline = time.monotonic() + 120
+        while _done(path) < 5 and time.monotonic() < deadline:
+            time.sleep(0.02)
+        seen["owner"] = lock_owner(path)
+        try:
+            StoreLock.acquire(path).release()
+        except StoreBusy as busy:
+            seen["busy"] = str(busy)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    interrupter = threading.Thread(target=interrupt_once_frames_are_written)
+    interrupter.start()
+    with pytest.raises(SessionInterrupted) as stopped:
+        run_demo_session(path, 11, client=client)
+    interrupter.join()
+    assert seen["owner"].pid == os.getpid()  # the coordinator's lock, not a worker's
+    assert f"is being written by PID {os.getpid()}" in seen["busy"]
+    done = _done(path)
+    assert stopped.value.done == done and 5 <= done < len(demo_plan())
+    time.sleep(1.0)
+    assert _done(path) == done  # no worker wrote after the coordinator returned
+    assert not (path / ".writer.lock").exists()
+    reference = run_demo_session(tmp_path / "reference.capture.zarr", 11)
+    resumed = run_demo_session(path, 11, resume=True, client=client)
+    _assert_same_capture(resumed, reference, "k4")
+
+
+def test_a_capture_on_the_cluster_is_refused_while_another_writer_holds_the_store(client, tmp_path):
+    path, plan, devices = tmp_path / "held.capture.zarr", demo_plan(), _demo_devices(11)
+    store = open_session_store(path, plan, devices(), rig={}, backend="sim", seed=11)
+    capture_steps(store, range(4), devices(), seed=11)
+    with StoreLock.acquire(path):
+        with pytest.raises(StoreBusy, match=f"PID {os.getpid()}"):
+            run_demo_session(path, 11, resume=True, client=client)
+    assert store.pending_steps() == list(range(4, len(plan)))
 
 
 def test_workers_of_one_session_fill_disjoint_steps_of_one_store(tmp_path):
