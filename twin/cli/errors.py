@@ -7,8 +7,9 @@ run that failed) never shows a Python traceback: the command prints one line
 - 2 for usage errors: bad options, unknown names, missing or wrong input files
   (:class:`recon.errors.SpectwinInputError`, :class:`hwbridge.errors.BridgeInputError`, the
   option parser's own errors);
-- 1 for failed runs: data that turned out damaged (:class:`recon.errors.SpectwinDataError`),
-  devices that kept failing (:class:`hwbridge.errors.DeviceError`), a check that failed.
+- 1 for failed runs: data that turned out damaged (:class:`recon.errors.SpectwinDataError`,
+  :class:`hwbridge.errors.StoreDamagedError`), devices that kept failing
+  (:class:`hwbridge.errors.DeviceError`), a check that failed.
 
 :class:`SpectwinGroup` applies this to every command registered on the app; anything else is a
 bug and keeps its traceback.
@@ -22,7 +23,7 @@ from typing import Any, NoReturn
 import typer
 from typer.core import TyperGroup
 
-from hwbridge.errors import BridgeInputError, DeviceError
+from hwbridge.errors import BridgeInputError, DeviceError, StoreDamagedError
 from recon.errors import SpectwinDataError, SpectwinInputError
 
 __all__ = [
@@ -79,7 +80,7 @@ def require_output_file(path: Path, option: str = "--out") -> None:
 
 
 _USAGE_ERRORS = (SpectwinInputError, BridgeInputError)
-_RUN_ERRORS = (SpectwinDataError, DeviceError)
+_RUN_ERRORS = (SpectwinDataError, StoreDamagedError, DeviceError)
 
 
 def _usage_error(error: typer.TyperException) -> NoReturn:

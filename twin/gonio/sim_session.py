@@ -83,7 +83,12 @@ def run_demo_session(
         store,
         plan,
         devices,
-        rig={"rig": "gonioreflectometer", "camera": "coolsnap_k4", "window_px": _PIXELS},
+        rig={
+            "rig": "gonioreflectometer",
+            "program": "demo",
+            "camera": "coolsnap_k4",
+            "window_px": _PIXELS,
+        },
         seed=seed,
         resume=resume,
         show_progress=show_progress,
