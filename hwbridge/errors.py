@@ -5,6 +5,11 @@ class BridgeInputError(ValueError):
     """A request the device cannot take (e.g. a wavelength outside its range)."""
 
 
+class StoreDamagedError(RuntimeError):
+    """A store whose data or metadata is missing or corrupt on disk (a chunk deleted, truncated
+    or altered, a ``zarr.json`` gone): the message names the path and what is wrong."""
+
+
 class DeviceError(RuntimeError):
     """A device answered something unexpected or reported an error."""
 

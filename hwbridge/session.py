@@ -193,7 +193,9 @@ def open_session_store(
     rig, backend, seed
         Stored with the plan as the store's attributes.
     resume
-        Reopen an existing store instead; it must hold the same plan and seed.
+        Reopen an existing store instead; it must hold the same plan and seed. Steps flagged
+        done whose chunks are missing or corrupt are taken again on the simulated backend and
+        refused on the others (:meth:`~hwbridge.store.CaptureStore.prepare_resume`).
 
     Returns
     -------
@@ -212,6 +214,7 @@ def open_session_store(
                 f"{differ} differs; the store's seed is {stored['seed']}, its plan "
                 f"{len(stored['plan'])} steps; this session's seed {seed}, plan {len(plan)} steps)"
             )
+        store.prepare_resume()  # damaged steps: taken again (simulated) or refused (real)
         return store
     monitor = devices.get("monitor")
     return CaptureStore.create(

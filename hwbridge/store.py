@@ -20,20 +20,42 @@ and resumed as before, by one writer (:attr:`CaptureStore.one_chunk_per_frame`).
 A step's frame slot is fixed by the plan, so redoing a step after a crash overwrites the same
 slot: an interrupted session resumes without losing or duplicating a frame, and ``complete``
 turns true only when every step is done.
+
+Integrity (:mod:`hwbridge.integrity`): every array ends its codec chain with a CRC-32C checksum,
+so a chunk altered on disk raises on read. :meth:`CaptureStore.check` checks the progress record
+against the chunks: a step flagged done whose frame or index chunk is missing (Zarr would read
+the fill value) or corrupt is reported by camera, step and chunk key. :meth:`CaptureStore.open`
+refuses a store whose metadata (``zarr.json`` files) is missing or unreadable, naming the file,
+and :meth:`CaptureStore.read_frames` refuses to return a missing or corrupt frame. Before a
+session resumes, :meth:`CaptureStore.prepare_resume` flags the damaged steps of a simulated
+capture pending again (they are taken again, identically) and refuses to resume a damaged real
+or replayed capture, which cannot take its frames again. Stores made before checksums open and
+are checked for missing and undecodable chunks.
 """
 
 from __future__ import annotations
 
 import shutil
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import zarr
 
-from hwbridge.errors import BridgeInputError
+from hwbridge.errors import BridgeInputError, StoreDamagedError
+from hwbridge.integrity import (
+    ChunkChecker,
+    ChunkProblem,
+    IntegrityReport,
+    checksum_state,
+    checksummed_compressors,
+    chunk_key,
+    metadata_problem,
+    read_flags,
+    with_empty_chunks,
+)
 
 __all__ = ["FRAME_KINDS", "CaptureStore", "FrameRecord"]
 
@@ -46,6 +68,10 @@ _NUMERIC_FIELDS = {
     "exposure_s": "float64",
     "timestamp": "float64",
 }
+# Index fields every frame writes with a value other than the fill value: a step flagged done
+# must have their chunks (the others hold the fill value legitimately, e.g. no light for a dark).
+_REQUIRED_FIELDS = ("kind", "status", "exposure_s")
+_INDEX_FIELDS = (*_STRING_FIELDS, *_NUMERIC_FIELDS, "pose")
 
 
 @dataclass(frozen=True)
@@ -83,9 +109,13 @@ class CaptureStore:
         self._cameras = [step["camera"] for step in plan]
         counts: dict[str, int] = {}
         self._slots = []
-        for camera in self._cameras:
+        self._steps: dict[str, list[int]] = {}
+        for step, camera in enumerate(self._cameras):
             self._slots.append(counts.get(camera, 0))
             counts[camera] = counts.get(camera, 0) + 1
+            self._steps.setdefault(camera, []).append(step)
+        self.recaptured: list[ChunkProblem] = []
+        """Damaged chunks of steps that :meth:`prepare_resume` flagged pending again."""
         # Steps this writer has not seen done. Reading the progress flags touches one chunk per
         # step, so mark_done consults this set and re-reads the flags only when it runs empty.
         self._unseen: set[int] | None = None
@@ -141,19 +171,35 @@ class CaptureStore:
                 shape=(count, height, width),
                 chunks=(1, height, width),
                 dtype="uint16",
+                compressors=checksummed_compressors(),
             )
             index = f"index/{camera}"
             for name in _STRING_FIELDS:
                 group.create_array(
-                    f"{index}/{name}", shape=(count,), chunks=(1,), dtype=str, fill_value=""
+                    f"{index}/{name}",
+                    shape=(count,),
+                    chunks=(1,),
+                    dtype=str,
+                    fill_value="",
+                    compressors=checksummed_compressors(),
                 )
             for name, dtype in _NUMERIC_FIELDS.items():
                 fill = -1 if dtype.startswith("int") else np.nan
                 group.create_array(
-                    f"{index}/{name}", shape=(count,), chunks=(1,), dtype=dtype, fill_value=fill
+                    f"{index}/{name}",
+                    shape=(count,),
+                    chunks=(1,),
+                    dtype=dtype,
+                    fill_value=fill,
+                    compressors=checksummed_compressors(),
                 )
             group.create_array(
-                f"{index}/pose", shape=(count, 6), chunks=(1, 6), dtype="float64", fill_value=np.nan
+                f"{index}/pose",
+                shape=(count, 6),
+                chunks=(1, 6),
+                dtype="float64",
+                fill_value=np.nan,
+                compressors=checksummed_compressors(),
             )
             if monitor_samples:
                 group.create_array(
@@ -162,9 +208,15 @@ class CaptureStore:
                     chunks=(1, monitor_samples),
                     dtype="float32",
                     fill_value=np.nan,
+                    compressors=checksummed_compressors(),
                 )
         group.create_array(
-            "progress", shape=(len(plan),), chunks=(1,), dtype="bool", fill_value=False
+            "progress",
+            shape=(len(plan),),
+            chunks=(1,),
+            dtype="bool",
+            fill_value=False,
+            compressors=checksummed_compressors(),
         )
         building.rename(path)
         return cls(zarr.open_group(str(path), mode="r+"), path)
@@ -176,14 +228,30 @@ class CaptureStore:
             raise BridgeInputError(f"{path} does not exist: expected a capture store")
         if not path.is_dir():
             raise BridgeInputError(f"{path} is a file: expected a capture store (a folder)")
+        root_problem = metadata_problem(path, "")
+        if root_problem and any((path / name).is_dir() for name in ("frames", "index", "progress")):
+            raise StoreDamagedError(
+                f"damaged capture store: {root_problem}: the root metadata (plan, seed, backend) "
+                "is gone, so no frame can be placed; restore the store from a copy or capture again"
+            )
         try:
             group = zarr.open_group(str(path), mode="r+")
         except (OSError, ValueError) as error:
             raise BridgeInputError(
                 f"{path} is not a capture store (not a Zarr group: {error})"
             ) from None
-        if "plan" not in group.attrs or "progress" not in group:
+        if "plan" not in group.attrs:
             raise BridgeInputError(f"{path} is not a capture store (no plan or progress)")
+        cameras = sorted({str(step.get("camera")) for step in group.attrs["plan"]})
+        for node in _layout(cameras):
+            problem = metadata_problem(path, node)
+            # lamp_monitor exists only where the rig has a monitor: missing is fine, unless its
+            # chunks are there without their metadata.
+            if problem and (not node.endswith("/lamp_monitor") or (path / node).is_dir()):
+                raise StoreDamagedError(
+                    f"damaged capture store: {problem} (the metadata of {node}); restore the "
+                    "store from a copy or capture again"
+                )
         return cls(group, path)
 
     # -- writing -------------------------------------------------------------------------------
@@ -198,7 +266,7 @@ class CaptureStore:
                 f"frame: expected uint16 {frames.shape[1:]} for camera {camera!r}, got "
                 f"{frame.dtype} {frame.shape}"
             )
-        frames[slot] = frame
+        with_empty_chunks(frames)[slot] = frame
         index = self._group[f"index/{camera}"]
         for name in (*_STRING_FIELDS, *_NUMERIC_FIELDS):
             index[name][slot] = getattr(record, name)
@@ -243,7 +311,7 @@ class CaptureStore:
     # -- reading -------------------------------------------------------------------------------
 
     def pending_steps(self) -> list[int]:
-        return np.flatnonzero(~self._group["progress"][:]).tolist()
+        return np.flatnonzero(~self._flags()).tolist()
 
     @property
     def complete(self) -> bool:
@@ -272,9 +340,172 @@ class CaptureStore:
         chunk per frame, so reading fewer is proportionally faster)."""
         group = self._group[f"index/{camera}"]
         names = list(group.array_keys()) if fields is None else list(fields)
-        return {name: group[name][:] for name in names}
+        return {name: self._read(group[name]) for name in names}
+
+    def read_frames(self, camera: str, slots: Sequence[int]) -> np.ndarray:
+        """The frames ``(n, H, W)`` of ``camera`` at ``slots``; a frame whose chunk is missing
+        (it would read as zeros) or corrupt raises :class:`~hwbridge.errors.StoreDamagedError`
+        naming camera, step and chunk key."""
+        frames = self.frames(camera)
+        stack = np.empty((len(slots), *frames.shape[1:]), dtype=frames.dtype)
+        for position, slot in enumerate(slots):
+            coords = (int(slot), 0, 0)
+            name = self._step_name(self._steps[camera][int(slot)])
+            if not (self.path / chunk_key(frames, coords)).is_file():
+                raise StoreDamagedError(
+                    f"{self.path}: damaged capture store: {name}: {chunk_key(frames, coords)} is "
+                    "missing"
+                )
+            try:
+                stack[position] = frames[int(slot)]
+            except (ValueError, RuntimeError) as error:  # checksum or decompression
+                raise StoreDamagedError(
+                    f"{self.path}: damaged capture store: {name}: {chunk_key(frames, coords)} "
+                    f"is corrupt ({' '.join(str(error).split())[:120]})"
+                ) from None
+        return stack
+
+    # -- integrity -----------------------------------------------------------------------------
+
+    def check(self, *, verify: bool = True) -> IntegrityReport:
+        """Check every step flagged done against its chunks (see :mod:`hwbridge.integrity`).
+
+        Parameters
+        ----------
+        verify
+            Check the chunks' checksums too (reads every frame once, without decompressing);
+            ``False``: only that the chunk files exist.
+
+        Returns
+        -------
+        IntegrityReport
+            Pending steps, missing and corrupt chunks by camera, step and chunk key, whether
+            the store has checksums, and its seed, program and backend.
+        """
+        checker = ChunkChecker(self.path, verify=verify)
+        progress = self._group["progress"]
+        flags, problems = read_flags(checker, progress, self._step_name)
+        arrays = {camera: self._unit_arrays(camera) for camera in self._steps}
+        outcomes: dict[str, tuple[str, str] | None] = {}
+        units: dict[str, list[int]] = {}
+        for step in np.flatnonzero(flags).tolist():
+            camera, slot = self._camera_and_slot(step)
+            for array, required in arrays[camera]:
+                coords = (slot // array.chunks[0], *(0,) * (array.ndim - 1))
+                key = chunk_key(array, coords)
+                if key not in outcomes:  # a chunk shared by frames (older stores) is read once
+                    outcome = checker.check(array, coords)
+                    if outcome is not None and outcome[0] == "missing" and not required:
+                        outcome = None
+                    outcomes[key] = outcome
+                if outcomes[key] is not None:
+                    units.setdefault(key, []).append(step)
+        for key, steps in units.items():
+            problem, detail = outcomes[key]
+            problems.append(
+                ChunkProblem(self._step_name(steps[0]), key, problem, detail, tuple(steps))
+            )
+        problems.sort(key=lambda problem: (min(problem.units, default=-1), problem.key))
+        every_array = [progress, *(a for listed in arrays.values() for a, _ in listed)]
+        rig = self._group.attrs.get("rig") or {}
+        return IntegrityReport(
+            path=self.path,
+            kind="capture",
+            unit="step",
+            total=len(self._cameras),
+            pending=np.flatnonzero(~flags).tolist(),
+            complete_flag=bool(self._group.attrs.get("complete", False)),
+            problems=problems,
+            checksums=checksum_state(checker.checksums(array) for array in every_array),
+            verified=verify,
+            provenance={
+                "backend": self._group.attrs.get("backend"),
+                "program": rig.get("program") if isinstance(rig, dict) else None,
+                "seed": self._group.attrs.get("seed"),
+            },
+        )
+
+    def prepare_resume(self) -> list[ChunkProblem]:
+        """Check the store before a session resumes it; steps whose chunks are damaged are
+        flagged pending again, to be taken again, where the backend can take them again.
+
+        A simulated device takes a step again identically (its noise comes from the seed and
+        the step): the damaged steps' corrupt chunks are deleted (so that no step shares an
+        unreadable chunk with its rewrite) and their flags cleared. A real rig or a replay cannot
+        take a frame again: a damaged frame or index chunk raises
+        :class:`~hwbridge.errors.StoreDamagedError` naming the first bad frame. An unreadable
+        progress flag only makes its step pending, on every backend (as a lost flag does).
+
+        Returns
+        -------
+        list of ChunkProblem
+            The damaged chunks of the steps flagged pending again, also kept in
+            :attr:`recaptured`.
+        """
+        report = self.check()
+        if report.flags_disagree or report.problems:
+            self._group.attrs["complete"] = False
+        flags = [problem for problem in report.problems if problem.key.startswith("progress/")]
+        data = [problem for problem in report.problems if problem not in flags]
+        backend = self._group.attrs.get("backend")
+        if data and backend != "sim":
+            damage = replace(report, problems=data).damage()
+            raise StoreDamagedError(
+                f"{self.path}: damaged capture store: {damage}; a {backend} capture cannot "
+                "take its frames again, so --resume would leave them wrong: restore the store "
+                "from a copy, or capture again into a new store"
+            )
+        progress = self._group["progress"]
+        for problem in report.problems:
+            if problem.problem == "corrupt":
+                (self.path / problem.key).unlink(missing_ok=True)
+            for step in problem.units:
+                progress[step] = False
+        self._unseen = None
+        self.recaptured = list(report.problems)
+        return self.recaptured
+
+    def _unit_arrays(self, camera: str) -> list[tuple[zarr.Array, bool]]:
+        """The per-frame arrays of ``camera`` and whether a done step must have its chunk."""
+        index = self._group[f"index/{camera}"]
+        fields = [name for name in (*_INDEX_FIELDS, "lamp_monitor") if name in index]
+        return [(self._group[f"frames/{camera}"], True)] + [
+            (index[name], name in _REQUIRED_FIELDS) for name in fields
+        ]
+
+    def _step_name(self, step: int) -> str:
+        camera, slot = self._camera_and_slot(step)
+        return f"camera {camera} step {step} (frame {slot})"
+
+    def _flags(self) -> np.ndarray:
+        """The progress flags; a corrupt flag chunk raises, naming it."""
+        progress = self._group["progress"]
+        try:
+            return np.asarray(progress[:], dtype=bool)
+        except (ValueError, RuntimeError) as error:
+            _, problems = read_flags(ChunkChecker(self.path), progress, self._step_name)
+            first = problems[0] if problems else f"progress cannot be read ({error})"
+            raise StoreDamagedError(f"{self.path}: damaged capture store: {first}") from None
+
+    def _read(self, array: zarr.Array) -> np.ndarray:
+        try:
+            return array[:]
+        except (ValueError, RuntimeError) as error:
+            raise StoreDamagedError(
+                f"{self.path}: damaged capture store: {array.path} cannot be read "
+                f"({' '.join(str(error).split())[:120]})"
+            ) from None
 
     def _camera_and_slot(self, step: int) -> tuple[str, int]:
         if not 0 <= step < len(self._cameras):
             raise BridgeInputError(f"step: expected 0..{len(self._cameras) - 1}, got {step}")
         return self._cameras[step], self._slots[step]
+
+
+def _layout(cameras: Sequence[str]) -> list[str]:
+    """The nodes (groups and arrays) every capture store of ``cameras`` has."""
+    nodes = ["frames", "index", "progress"]
+    for camera in cameras:
+        nodes += [f"frames/{camera}", f"index/{camera}"]
+        nodes += [f"index/{camera}/{name}" for name in (*_INDEX_FIELDS, "lamp_monitor")]
+    return nodes

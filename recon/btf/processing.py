@@ -60,6 +60,7 @@ from recon.registration.corners import CornerRefinementError, texture_transform
 __all__ = [
     "GonioRun",
     "PairOutcomes",
+    "check_gonio_run",
     "inset_corners",
     "open_btf_store",
     "prepare_gonio_run",
@@ -98,6 +99,26 @@ def _rig(store: CaptureStore) -> dict:
             "run of the gonioreflectometer (spectwin capture --program gonio-run)"
         )
     return rig
+
+
+def check_gonio_run(
+    store: CaptureStore, calibration: GonioCalibration
+) -> tuple[dict, str, dict[str, np.ndarray]]:
+    """Refuse a capture that is not a measurement run of the gonioreflectometer, or whose white
+    photographs are at other bands than the calibration's: from the attributes and the index,
+    before any frame is read. Returns the rig attribute, the camera id and the index."""
+    rig = _rig(store)
+    camera = str(rig.get("camera_id", "k4"))
+    index = store.index(camera, _INDEX_FIELDS)
+    white_bands = np.sort(index["band_nm"][index["kind"] == "white"].astype(np.float64))
+    if white_bands.shape != calibration.bands_nm.shape or not np.allclose(
+        white_bands, calibration.bands_nm
+    ):
+        raise SpectwinInputError(
+            f"{store.path}: white photographs at {white_bands.tolist()} nm, the calibration has "
+            f"{calibration.bands_nm.tolist()} nm"
+        )
+    return rig, camera, index
 
 
 @dataclass(frozen=True)
@@ -161,16 +182,9 @@ def prepare_gonio_run(
         Everything :func:`process_pairs` needs besides the frames.
     """
     store = capture if isinstance(capture, CaptureStore) else CaptureStore.open(capture)
-    rig = _rig(store)
-    camera = str(rig.get("camera_id", "k4"))
+    rig, camera, index = check_gonio_run(store, calibration)
     darks = dark_model(store, camera)
-    white_bands, factors = store_white_factors(store, camera, darks, calibration.inverse_response)
-    if not np.allclose(white_bands, calibration.bands_nm):
-        raise SpectwinInputError(
-            f"{store.path}: white photographs at {white_bands.tolist()} nm, the calibration has "
-            f"{calibration.bands_nm.tolist()} nm"
-        )
-    index = store.index(camera, _INDEX_FIELDS)
+    _, factors = store_white_factors(store, camera, darks, calibration.inverse_response)
     reference = index["lamp_monitor"][index["kind"] == "white"].astype(np.float64).mean(axis=0)
     return GonioRun(
         capture_path=store.path.resolve(),
@@ -190,7 +204,9 @@ def open_btf_store(
     """Create the BTF store of ``run`` at ``out``; with ``resume`` an existing one is reopened
     (its pending pairs are still to process)."""
     if resume and Path(out).exists():
-        return BTFStore.open(out, writable=True)
+        btf = BTFStore.open(out, writable=True)
+        btf.prepare_resume()  # damaged pairs are pending again
+        return btf
     return BTFStore.create(
         out,
         light_dirs=np.asarray(run.rig["light_dirs"], np.float64),
@@ -216,8 +232,7 @@ def _pair_frames(
             f"{store.path}: pair {view} has bands {index['band_nm'][slots].tolist()}, the "
             f"calibration {bands_nm.tolist()}"
         )
-    frames = store.frames(run.camera)
-    stack = np.stack([frames[slot] for slot in slots])
+    stack = store.read_frames(run.camera, slots)
     return stack, index["exposure_s"][slots], index["lamp_monitor"][slots]
 
 

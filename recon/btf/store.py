@@ -27,6 +27,15 @@ chunk (a worker writes the pairs it owns, and the coordinator of a distributed r
 ``complete`` when the workers are done: :meth:`BTFStore.refresh_complete`), and rewriting a pair
 first clears its flag, so an interrupted rewrite leaves the pair pending, never silently corrupt.
 
+Integrity (``hwbridge.integrity``): every array ends its codec chain with a CRC-32C checksum, so a
+chunk altered on disk raises on read; :meth:`BTFStore.check` checks every pair flagged written
+against its reflectance chunk (a missing chunk would read as NaN) and the compressed form's
+chunks, and names the damaged pairs and chunk keys; :meth:`BTFStore.open` refuses missing or
+unreadable metadata, naming the file; reading a pair whose chunk is missing or corrupt raises
+:class:`~recon.errors.SpectwinDataError`. :meth:`BTFStore.prepare_resume` flags damaged pairs
+pending again, so ``spectwin process --resume`` processes them again. Stores made before
+checksums open and are checked for missing and undecodable chunks.
+
 References
 ----------
 - The thesis, section 4.1.2 (texture extraction, Eq. 3.6, 6561 textures of 800 x 800 texels and
@@ -36,13 +45,25 @@ References
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import zarr
 
+from hwbridge.integrity import (
+    ChunkChecker,
+    ChunkProblem,
+    IntegrityReport,
+    checksum_state,
+    checksummed_compressors,
+    chunk_key,
+    has_checksums,
+    metadata_problem,
+    read_flags,
+    with_empty_chunks,
+)
 from recon.errors import SpectwinDataError, SpectwinInputError
 from recon.spectra import WavelengthGrid
 
@@ -139,18 +160,35 @@ class BTFStore:
                 f"{path}: BTF store format version {attrs.get('format_version')!r} is not "
                 f"supported (expected {BTF_FORMAT_VERSION})"
             )
-        missing = [name for name in _ARRAYS if name not in group]
-        if missing:
+        problems = {name: metadata_problem(path, name) for name in _ARRAYS}
+        if problems["written"] and not (path / "written").is_dir():
+            # ``written`` is created last: without it (and its chunks) the creation stopped.
+            missing = [name for name, problem in problems.items() if problem]
             raise SpectwinInputError(
                 f"{path}: BTF store lacks arrays {missing} (its creation was interrupted?)"
             )
-        self.grid = WavelengthGrid(group["wavelengths"][:])
-        self.light_dirs = group["light_dirs"][:]
-        self.view_dirs = group["view_dirs"][:]
+        for name, problem in problems.items():
+            if problem:
+                raise SpectwinDataError(
+                    f"{path}: damaged store: {problem} (the metadata of {name}); process the "
+                    "capture again"
+                )
+        checker = ChunkChecker(path, verify=False)
+        for name in ("wavelengths", "light_dirs", "view_dirs"):
+            array = group[name]
+            if checker.check(array, (0,) * array.ndim):
+                raise SpectwinDataError(
+                    f"{path}: damaged store: {chunk_key(array, (0,) * array.ndim)} is missing "
+                    f"(the {name}); process the capture again"
+                )
+        self.grid = WavelengthGrid(self._read_small(group["wavelengths"]))
+        self.light_dirs = self._read_small(group["light_dirs"])
+        self.view_dirs = self._read_small(group["view_dirs"])
         for array in (self.light_dirs, self.view_dirs):
             array.setflags(write=False)
-        # Flags known to be set (a cache, refreshed lazily: other processes may write pairs).
-        self._known_written = group["written"][:]
+        # Flags known to be set (a cache, refreshed lazily: other processes may write pairs); an
+        # unreadable flag counts as unset here, and check() reports it.
+        self._known_written, _ = read_flags(checker, group["written"], self._pair_name)
         shape = group["reflectance"].shape
         n_pairs = self.light_dirs.shape[0]
         if (
@@ -236,18 +274,24 @@ class BTFStore:
             dtype="float32",
             fill_value=np.nan,
             attributes={"units": "1/sr", "axes": ["pair", "y", "x", "band"]},
+            compressors=checksummed_compressors(),
         )
         for name, directions in (("light_dirs", light_dirs), ("view_dirs", view_dirs)):
             array = group.create_array(
-                name, shape=(n_pairs, 3), chunks=(n_pairs, 3), dtype="float64"
+                name,
+                shape=(n_pairs, 3),
+                chunks=(n_pairs, 3),
+                dtype="float64",
+                compressors=checksummed_compressors(),
             )
-            array[:] = directions
+            with_empty_chunks(array)[:] = directions
         wavelengths = group.create_array(
             "wavelengths",
             shape=(n_bands,),
             chunks=(n_bands,),
             dtype="float64",
             attributes={"units": "nm"},
+            compressors=checksummed_compressors(),
         )
         wavelengths[:] = grid.wavelengths_nm
         group.create_array(
@@ -257,9 +301,17 @@ class BTFStore:
             dtype="float64",
             fill_value=np.nan,
             attributes={"units": "px", "meaning": "registered image corners of the texture square"},
+            compressors=checksummed_compressors(),
         )
         # Created last: a store whose creation was interrupted lacks it and does not open.
-        group.create_array("written", shape=(n_pairs,), chunks=(1,), dtype="bool", fill_value=False)
+        group.create_array(
+            "written",
+            shape=(n_pairs,),
+            chunks=(1,),
+            dtype="bool",
+            fill_value=False,
+            compressors=checksummed_compressors(),
+        )
         return cls(group, path, writable=True)
 
     @classmethod
@@ -273,6 +325,12 @@ class BTFStore:
         if not path.is_dir():
             raise SpectwinInputError(
                 f"{path} is a file: expected a BTF store (a folder made by spectwin process)"
+            )
+        root_problem = metadata_problem(path, "")
+        if root_problem and any((path / name).is_dir() for name in _ARRAYS):
+            raise SpectwinDataError(
+                f"{path}: damaged store: {root_problem}: the root metadata (format, material, "
+                "calibration, complete) is gone; process the capture again"
             )
         try:
             group = zarr.open_group(str(path), mode="r+" if writable else "r", zarr_format=3)
@@ -319,8 +377,16 @@ class BTFStore:
         return bool(self._fresh_attrs()["complete"])
 
     def written(self) -> np.ndarray:
-        """One bool per pair: its texture is written."""
-        self._known_written = self._group["written"][:]
+        """One bool per pair: its texture is written (a corrupt flag raises, naming it)."""
+        written = self._group["written"]
+        try:
+            self._known_written = np.asarray(written[:], dtype=bool)
+        except (ValueError, RuntimeError) as error:
+            _, problems = read_flags(ChunkChecker(self.path), written, self._pair_name)
+            first = problems[0] if problems else f"written cannot be read ({error})"
+            raise SpectwinDataError(
+                f"{self.path}: damaged store: {first}; process the capture again with --resume"
+            ) from None
         return self._known_written.copy()
 
     def pending_pairs(self) -> list[int]:
@@ -467,6 +533,7 @@ class BTFStore:
         An incomplete store raises unless ``allow_incomplete``; then unwritten pairs are NaN.
         """
         self._require_complete(allow_incomplete, "read")
+        self._require_chunks(np.flatnonzero(self.written()))
         return self._decoded(slice(None))
 
     def read_pair(self, pair: int, *, allow_incomplete: bool = False) -> np.ndarray:
@@ -479,13 +546,15 @@ class BTFStore:
         self._require_complete(allow_incomplete, f"read pair {pair} of")
         if not self._group["written"][pair]:
             raise SpectwinInputError(f"{self.path}: pair {pair} is not written yet")
+        self._require_chunks([pair])
         return self._decoded(pair)
 
     def iter_pairs(self, *, allow_incomplete: bool = False) -> Iterator[tuple[int, np.ndarray]]:
         """``(pair, texture)`` for every written pair, one chunk in memory at a time."""
         self._require_complete(allow_incomplete, "iterate over")
         for pair in np.flatnonzero(self.written()):
-            yield int(pair), self._group["reflectance"][int(pair)]
+            self._require_chunks([pair])
+            yield int(pair), self._decoded(int(pair))
 
     def reflectance(self, *, allow_incomplete: bool = False) -> zarr.Array:
         """The lazy Zarr array ``(n_pairs, H, W, K)``: slicing it reads only the chunks needed
@@ -517,9 +586,13 @@ class BTFStore:
         for name, values in arrays.items():
             values = np.asarray(values)
             array = group.create_array(
-                name, shape=values.shape, chunks=_compressed_chunks(values), dtype=values.dtype
+                name,
+                shape=values.shape,
+                chunks=_compressed_chunks(values),
+                dtype=values.dtype,
+                compressors=checksummed_compressors(),
             )
-            array[...] = values
+            with_empty_chunks(array)[...] = values
         group.attrs.update({**attrs, "arrays": sorted(arrays), "complete": True})
 
     def read_compressed(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
@@ -533,7 +606,116 @@ class BTFStore:
                 f"{self.path}: the compressed form ({COMPRESSED_GROUP}/) was not completely "
                 "written; compress again"
             )
-        return {name: group[name][...] for name in attrs["arrays"]}, attrs
+        arrays = {}
+        for name in attrs["arrays"]:
+            try:
+                arrays[name] = group[name][...]
+            except (KeyError, ValueError, RuntimeError) as error:
+                raise SpectwinDataError(
+                    f"{self.path}: damaged store: the compressed form's array "
+                    f"{COMPRESSED_GROUP}/{name} cannot be read ({error}); compress again"
+                ) from None
+        return arrays, attrs
+
+    # -- integrity -----------------------------------------------------------------------------
+
+    def check(self, *, verify: bool = True) -> IntegrityReport:
+        """Check every pair flagged written against its chunks, and the compressed form's
+        chunks (see ``hwbridge.integrity``).
+
+        Parameters
+        ----------
+        verify
+            Check the chunks' checksums too (reads every chunk once, without decompressing);
+            ``False``: only that the chunk files exist.
+
+        Returns
+        -------
+        IntegrityReport
+            Pending pairs, missing and corrupt chunks by pair and chunk key (those of the
+            compressed form name no pair), whether the store has checksums, its material and
+            source capture.
+        """
+        checker = ChunkChecker(self.path, verify=verify)
+        written = self._group["written"]
+        flags, problems = read_flags(checker, written, self._pair_name)
+        reflectance = self._group["reflectance"]
+        corners = self._group["corners_xy"] if "corners_xy" in self._group else None
+        for pair in np.flatnonzero(flags).tolist():
+            for array, required in ((reflectance, True), (corners, False)):
+                if array is None:
+                    continue
+                coords = (pair, *(0,) * (array.ndim - 1))
+                outcome = checker.check(array, coords)
+                if outcome is not None and (required or outcome[0] == "corrupt"):
+                    key = chunk_key(array, coords)
+                    problems.append(ChunkProblem(self._pair_name(pair), key, *outcome, (pair,)))
+        arrays = [self._group[name] for name in _ARRAYS]
+        problems += self._compressed_problems(checker, arrays)
+        attrs = self._fresh_attrs()
+        return IntegrityReport(
+            path=self.path,
+            kind="BTF",
+            unit="pair",
+            total=self.n_pairs,
+            pending=np.flatnonzero(~flags).tolist(),
+            complete_flag=bool(attrs.get("complete", False)),
+            problems=problems,
+            checksums=checksum_state(checker.checksums(array) for array in arrays),
+            verified=verify,
+            provenance={
+                "material": attrs.get("material"),
+                "source_capture": attrs.get("source_capture"),
+            },
+        )
+
+    def prepare_resume(self) -> list[ChunkProblem]:
+        """Before processing resumes: flag the pairs whose chunks are missing or corrupt pending
+        again (their corrupt chunks are deleted) and drop a damaged compressed form; returns the
+        problems found."""
+        self._require_writable()
+        report = self.check()
+        if report.flags_disagree or report.problems:
+            self._set_complete(False)
+        written = self._group["written"]
+        for problem in report.problems:
+            if problem.problem == "corrupt":
+                (self.path / problem.key).unlink(missing_ok=True)
+            if not problem.units:
+                self._drop_compressed()
+        for pair in report.damaged_units:
+            written[pair] = False
+            self._known_written[pair] = False
+        return report.problems
+
+    def _compressed_problems(
+        self, checker: ChunkChecker, arrays: list[zarr.Array]
+    ) -> list[ChunkProblem]:
+        """Missing or corrupt chunks of a complete compressed form (its arrays are added to
+        ``arrays``, for the checksum state)."""
+        if COMPRESSED_GROUP not in self._group:
+            return []
+        group = self._group[COMPRESSED_GROUP]
+        if group.attrs.get("complete") is not True:
+            return []
+        problems = []
+        item = f"compressed form ({COMPRESSED_GROUP}/)"
+        for name in group.attrs.get("arrays", []):
+            node = f"{COMPRESSED_GROUP}/{name}"
+            problem = metadata_problem(self.path, node)
+            if problem:
+                problems.append(ChunkProblem(item, f"{node}/zarr.json", "missing"))
+                continue
+            array = group[name]
+            arrays.append(array)
+            # Written with every chunk, when it has checksums; before, chunks of only the fill
+            # value were left out.
+            required = has_checksums(array)
+            for coords in np.ndindex(*array.cdata_shape):
+                outcome = checker.check(array, tuple(coords))
+                if outcome is not None and (required or outcome[0] == "corrupt"):
+                    problems.append(ChunkProblem(item, chunk_key(array, coords), *outcome))
+        return problems
 
     # -- helpers -------------------------------------------------------------------------------
 
@@ -546,15 +728,40 @@ class BTFStore:
             )
         return int(pair)
 
+    def _pair_name(self, pair: int) -> str:
+        return f"pair {pair}"
+
+    def _read_small(self, array: zarr.Array) -> np.ndarray:
+        """A whole small array (directions, wavelengths); unreadable is a damaged store."""
+        try:
+            return array[:]
+        except (ValueError, RuntimeError) as error:
+            raise SpectwinDataError(
+                f"{self.path}: damaged store: {array.path} cannot be read "
+                f"({' '.join(str(error).split())[:120]}); process the capture again"
+            ) from None
+
+    def _require_chunks(self, pairs: Iterable[int]) -> None:
+        """Raise when a written pair's reflectance chunk is missing (it would read as NaN)."""
+        reflectance = self._group["reflectance"]
+        for pair in pairs:
+            key = chunk_key(reflectance, (int(pair), 0, 0, 0))
+            if not (self.path / key).is_file():
+                raise SpectwinDataError(
+                    f"{self.path}: damaged store: pair {pair}: {key} is missing; process the "
+                    "capture again with --resume"
+                )
+
     def _decoded(self, pairs: int | slice) -> np.ndarray:
         """Reflectance of ``pairs``; a chunk that cannot be decoded is a damaged store."""
         try:
             return self._group["reflectance"][pairs]
-        except RuntimeError as error:  # numcodecs' decompression errors
+        except (ValueError, RuntimeError) as error:  # checksum and decompression errors
+            where = f"pair {pairs}: " if isinstance(pairs, int) else ""
             raise SpectwinDataError(
-                f"{self.path}: damaged store: a reflectance chunk cannot be decoded ({error}); "
-                "process the capture again"
-            ) from error
+                f"{self.path}: damaged store: {where}a reflectance chunk cannot be decoded "
+                f"({' '.join(str(error).split())[:120]}); process the capture again"
+            ) from None
 
     def _require_writable(self) -> None:
         if not self.writable:

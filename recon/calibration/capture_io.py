@@ -56,9 +56,8 @@ def select_frames(
             f"{store.path}: no {kind!r} frames of camera {camera!r} match band={band_nm}, "
             f"exposure={exposure_s}"
         )
-    frames = store.frames(camera)
     return FrameSelection(
-        frames=np.stack([frames[slot] for slot in slots]).astype(np.float64),
+        frames=store.read_frames(camera, slots).astype(np.float64),
         exposure_s=index["exposure_s"][slots],
         band_nm=index["band_nm"][slots],
         light_id=index["light_id"][slots],

@@ -16,6 +16,7 @@ from twin.cli.dome import register as register_dome
 from twin.cli.errors import SpectwinGroup, require_output_folder, run_failed
 from twin.cli.gonio import register as register_gonio
 from twin.cli.output import JsonFlag, console, print_summary
+from twin.cli.store import register as register_store
 
 app = typer.Typer(
     cls=SpectwinGroup,
@@ -254,6 +255,7 @@ def demo(
 
 register_gonio(app)
 register_dome(app)
+register_store(app)
 
 
 if __name__ == "__main__":

@@ -7,9 +7,10 @@ run that failed) never shows a Python traceback: the command prints one line
 - 2 for usage errors: bad options, unknown names, missing or wrong input files
   (:class:`recon.errors.SpectwinInputError`, :class:`hwbridge.errors.BridgeInputError`, the
   option parser's own errors);
-- 1 for failed runs: data that turned out damaged (:class:`recon.errors.SpectwinDataError`),
-  devices that kept failing (:class:`hwbridge.errors.DeviceError`), a store that another writer
-  holds (:class:`hwbridge.errors.StoreBusy`), a check that failed;
+- 1 for failed runs: data that turned out damaged (:class:`recon.errors.SpectwinDataError`,
+  :class:`hwbridge.errors.StoreDamagedError`), devices that kept failing
+  (:class:`hwbridge.errors.DeviceError`), a store that another writer holds
+  (:class:`hwbridge.errors.StoreBusy`), a check that failed;
 - 130 for a run stopped by Ctrl-C (``KeyboardInterrupt``) or, in a capture, SIGTERM: one line
   ``interrupted ...`` (``spectwin capture`` says how far it got and how to continue).
 
@@ -25,7 +26,13 @@ from typing import Any, NoReturn
 import typer
 from typer.core import TyperGroup
 
-from hwbridge.errors import BridgeInputError, DeviceError, SessionInterrupted, StoreBusy
+from hwbridge.errors import (
+    BridgeInputError,
+    DeviceError,
+    SessionInterrupted,
+    StoreBusy,
+    StoreDamagedError,
+)
 from recon.errors import SpectwinDataError, SpectwinInputError
 
 __all__ = [
@@ -84,7 +91,7 @@ def require_output_file(path: Path, option: str = "--out") -> None:
 
 
 _USAGE_ERRORS = (SpectwinInputError, BridgeInputError)
-_RUN_ERRORS = (SpectwinDataError, DeviceError, StoreBusy)
+_RUN_ERRORS = (SpectwinDataError, StoreDamagedError, DeviceError, StoreBusy)
 
 
 def _usage_error(error: typer.TyperException) -> NoReturn:

@@ -31,6 +31,7 @@ from twin.cli.errors import (
     run_failed,
 )
 from twin.cli.output import JsonFlag, console, print_summary
+from twin.cli.store import require_sound_btf, require_sound_capture
 
 __all__ = ["register"]
 
@@ -108,15 +109,6 @@ def _refuse_capture_only(ctx: typer.Context) -> None:
     for name in _CAPTURE_ONLY:
         if _given(ctx, name):
             fail(f"{_option(ctx, name)} is not used by --dry-run, which captures nothing")
-
-
-def _require_complete(capture, path: Path) -> None:
-    if not capture.complete:
-        fail(
-            f"{path}: the capture is incomplete ({len(capture.pending_steps())} of "
-            f"{len(capture.attrs['plan'])} steps pending); "
-            "finish it with spectwin capture --resume"
-        )
 
 
 def _shown(name: str, value: object) -> str:
@@ -361,11 +353,19 @@ def capture(
             summary["cluster"] = cluster_description(client)
             result = built.run(store, resume=resume, show_progress=not as_json, client=client)
         index = result.index(result.attrs["plan"][0]["camera"])
+        recaptured = [
+            f"{problem.item}: {problem.key} was {problem.problem}" for problem in result.recaptured
+        ]
         summary |= {
             "complete": result.complete,
             "frames": dict(Counter(index["kind"].tolist())),
             "frames_with_faults": int(sum(status != "ok" for status in index["status"])),
+            "recaptured_frames": len(recaptured),
         }
+        if as_json:
+            summary["recaptured"] = recaptured
+        for line in recaptured:
+            typer.echo(f"re-captured {line}")
     except SessionInterrupted as stop:
         _interrupted(store, stop.done, stop.total)
     except KeyboardInterrupt:  # outside the session's own handling, or a second Ctrl-C
@@ -394,7 +394,7 @@ def calibrate(
 
     require_output_file(out)
     capture = CaptureStore.open(store)
-    _require_complete(capture, store)
+    require_sound_capture(capture, store)
     with console.status("calibrating"):
         result = calibrate_gonio(capture, white_fill=white_fill)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -443,17 +443,23 @@ def process(
     """
     from hwbridge.lock import require_new_store
     from hwbridge.store import CaptureStore
+    from recon.btf.processing import check_gonio_run
     from recon.calibration.gonio import GonioCalibration
     from recon.registration.border import read_manual_corners
     from twin.devices.cluster import cluster_description, dask_client, run_process
 
+    # Everything that can be checked is, before the first frame is read: the options, the
+    # calibration, the output, the store's integrity and progress, its kind and bands.
     gonio_calibration = GonioCalibration.load(calibration)
     corners = read_manual_corners(manual_corners) if manual_corners else None
-    capture = CaptureStore.open(store)
-    _require_complete(capture, store)
+    if out.resolve() == store.resolve():
+        fail(f"--out {out} is the capture store itself; choose another --out")
     if not resume:
         require_new_store(out)
     require_output_folder(out)
+    capture = CaptureStore.open(store)
+    require_sound_capture(capture, store)
+    check_gonio_run(capture, gonio_calibration)
     try:
         with dask_client(workers, scheduler) as client:
             cluster = cluster_description(client)
@@ -521,6 +527,7 @@ def compress(
     from recon.btf.compression import compress_btf, compression_report, save_compressed
     from recon.btf.store import BTFStore
 
+    require_sound_btf(btf, "compress")
     store = BTFStore.open(btf, writable=True)
     with StoreLock.acquire(btf), console.status("compressing"):
         reflectance = store.read()
@@ -553,6 +560,7 @@ def evaluate(
 
     if figure is not None:
         require_output_file(figure, "--figure")
+    require_sound_btf(btf, "evaluate", allow_unregistered=True)
     with console.status("rendering the truth and comparing"):
         result = evaluate_gonio(btf, spp=spp)
     summary = result.summary()
@@ -601,6 +609,7 @@ def validate(
     from twin.validate.render_back import validate_btf
 
     require_output_folder(out)
+    require_sound_btf(btf, "validate", allow_unregistered=True, compressed=compressed)
     with console.status("validating") as status:
         metrics = validate_btf(
             btf,

@@ -13,6 +13,7 @@ from typing import Annotated
 import numpy as np
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from twin.output_format import dumps, format_value, quantity
@@ -53,5 +54,5 @@ def print_summary(
         rows[name] = f"{rows[name]} = {text}" if name in rows else text
     table = Table("quantity", "value", title=title)
     for name, text in rows.items():
-        table.add_row(name, text)
+        table.add_row(escape(name), escape(text))  # values are text, never markup: "[a, b]"
     console.print(table)

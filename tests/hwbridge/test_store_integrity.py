@@ -1,0 +1,304 @@
+"""Integrity of the capture store (hwbridge.store, hwbridge.integrity): checksums per chunk, the
+progress record checked against the chunks, damaged metadata, and what a resumed session does
+with damage (takes simulated frames again, refuses real and replayed ones)."""
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+import zarr
+
+from hwbridge.errors import StoreDamagedError
+from hwbridge.integrity import has_checksums
+from hwbridge.session import run_session
+from hwbridge.store import CaptureStore, FrameRecord
+
+PLAN = [{"camera": "k4", "kind": "dark", "exposure_s": 0.1}] + [
+    {"camera": "k4", "kind": "sample", "exposure_s": 0.5, "band_nm": 400.0 + 10 * i}
+    for i in range(4)
+]
+SHAPE = (16, 12)
+
+
+class StepCamera:
+    """A camera whose frame is a function of the seed and the step, like the simulated ones."""
+
+    frame_shape = SHAPE
+
+    def __init__(self):
+        self.snaps = []
+
+    def set_exposure(self, exposure_s):
+        self.exposure_s = exposure_s
+
+    def set_step(self, seed, step):
+        self.step = (seed, step)
+
+    def snap(self):
+        self.snaps.append(self.step[1])
+        values = np.random.default_rng(self.step).integers(100, 4000, SHAPE)
+        return values.astype(np.uint16), {"timestamp": 1.0}
+
+
+class Filter:
+    def set(self, band_nm):
+        self.band_nm = band_nm
+
+
+def _capture(path, backend="sim", **options):
+    return run_session(
+        path,
+        PLAN,
+        cameras={"k4": StepCamera()},
+        tunable_filter=Filter(),
+        rig={"rig": "gonioreflectometer", "program": "test"},
+        backend=backend,
+        seed=5,
+        show_progress=False,
+        **options,
+    )
+
+
+@pytest.fixture(scope="module")
+def pristine(tmp_path_factory):
+    """A complete store of 5 steps, copied by each test that damages it."""
+    return _capture(tmp_path_factory.mktemp("pristine") / "run.capture.zarr").path
+
+
+@pytest.fixture
+def store(pristine, tmp_path):
+    path = tmp_path / "run.capture.zarr"
+    shutil.copytree(pristine, path)
+    return path
+
+
+def _truncate(file):
+    file.write_bytes(file.read_bytes()[:7])
+
+
+def _flip(file):
+    data = bytearray(file.read_bytes())
+    data[len(data) // 2] ^= 0x04
+    file.write_bytes(bytes(data))
+
+
+DAMAGE = {"deleted": lambda file: file.unlink(), "truncated": _truncate, "flipped": _flip}
+
+
+def test_a_healthy_store_has_checksums_on_every_array_and_reports_its_provenance(store):
+    report = CaptureStore.open(store).check()
+    assert report.healthy and report.complete and report.problems == []
+    assert report.checksums == "yes" and report.damage() is None
+    assert report.provenance == {"backend": "sim", "program": "test", "seed": 5}
+    group = zarr.open_group(str(store), mode="r")
+    arrays = [group["frames/k4"], group["progress"], *group["index/k4"].array_values()]
+    assert all(has_checksums(array) for array in arrays)
+
+
+@pytest.mark.parametrize("damage", DAMAGE)
+def test_a_damaged_frame_chunk_is_named_by_camera_step_and_key(store, damage):
+    DAMAGE[damage](store / "frames/k4/c/3/0/0")
+    capture = CaptureStore.open(store)
+    report = capture.check()
+    assert not report.healthy and report.damaged_units == [3]
+    (problem,) = report.problems
+    assert problem.item == "camera k4 step 3 (frame 3)"
+    assert problem.key == "frames/k4/c/3/0/0"
+    assert problem.problem == ("missing" if damage == "deleted" else "corrupt")
+    assert report.damage().startswith("camera k4 step 3 (frame 3): frames/k4/c/3/0/0 is ")
+    # Zarr alone would return zeros for the deleted chunk; reading through the store refuses.
+    with pytest.raises(StoreDamagedError, match=r"camera k4 step 3 \(frame 3\): frames/k4/c/3/0/0"):
+        capture.read_frames("k4", [2, 3])
+    np.testing.assert_array_equal(
+        capture.read_frames("k4", [2])[0], capture.frames("k4")[2]
+    )  # the sound frames still read
+    if damage == "deleted":
+        assert not capture.check(verify=False).healthy  # presence alone finds it
+    else:
+        assert capture.check(verify=False).healthy  # only the checksums find it
+
+
+@pytest.mark.parametrize("damage", DAMAGE)
+def test_a_damaged_index_chunk_of_a_done_step_is_found(store, damage):
+    DAMAGE[damage](store / "index/k4/exposure_s/c/2")
+    report = CaptureStore.open(store).check()
+    assert [(p.item, p.key) for p in report.problems] == [
+        ("camera k4 step 2 (frame 2)", "index/k4/exposure_s/c/2")
+    ]
+    if damage == "deleted":  # Zarr reads the fill value: only the check sees it
+        assert np.isnan(CaptureStore.open(store).index("k4", ["exposure_s"])["exposure_s"][2])
+    else:
+        with pytest.raises(StoreDamagedError, match="index/k4/exposure_s cannot be read"):
+            CaptureStore.open(store).index("k4")
+
+
+@pytest.mark.parametrize("damage", DAMAGE)
+def test_resuming_a_simulated_capture_takes_the_damaged_frames_again(store, pristine, damage):
+    DAMAGE[damage](store / "frames/k4/c/1/0/0")
+    DAMAGE[damage](store / "frames/k4/c/4/0/0")
+    camera = StepCamera()
+    resumed = run_session(
+        store,
+        PLAN,
+        cameras={"k4": camera},
+        tunable_filter=Filter(),
+        rig={},
+        backend="sim",
+        seed=5,
+        resume=True,
+        show_progress=False,
+    )
+    assert camera.snaps == [1, 4]  # only the damaged steps were taken again
+    assert [p.key for p in resumed.recaptured] == ["frames/k4/c/1/0/0", "frames/k4/c/4/0/0"]
+    assert resumed.complete and CaptureStore.open(store).check().healthy
+    np.testing.assert_array_equal(
+        resumed.frames("k4")[:], CaptureStore.open(pristine).frames("k4")[:]
+    )
+
+
+@pytest.mark.parametrize("backend", ["real", "replay"])
+@pytest.mark.parametrize("damage", DAMAGE)
+def test_resuming_a_real_or_replayed_capture_with_damaged_frames_is_refused(
+    tmp_path, backend, damage
+):
+    path = _capture(tmp_path / "run.capture.zarr", backend=backend).path
+    DAMAGE[damage](path / "frames/k4/c/2/0/0")
+    DAMAGE[damage](path / "frames/k4/c/3/0/0")
+    camera = StepCamera()
+    with pytest.raises(StoreDamagedError) as refused:
+        run_session(
+            path,
+            PLAN,
+            cameras={"k4": camera},
+            tunable_filter=Filter(),
+            rig={},
+            backend=backend,
+            seed=5,
+            resume=True,
+            show_progress=False,
+        )
+    message = str(refused.value)
+    assert "camera k4 step 2 (frame 2): frames/k4/c/2/0/0 is" in message
+    assert f"a {backend} capture cannot take its frames again" in message
+    assert "\n" not in message and camera.snaps == []
+    assert CaptureStore.open(path).pending_steps() == []  # nothing was changed
+
+
+def test_a_deleted_progress_flag_makes_the_step_pending_and_contradicts_complete(store):
+    (store / "progress/c/2").unlink()
+    capture = CaptureStore.open(store)
+    report = capture.check()
+    assert report.pending == [2] and report.flags_disagree and not report.healthy
+    assert report.problems == [] and capture.complete  # the attribute alone still says so
+    assert report.damage() == "marked complete, but the progress flag of step 2 is not set"
+    capture.prepare_resume()
+    assert not capture.complete and capture.pending_steps() == [2]
+
+
+@pytest.mark.parametrize("backend", ["sim", "real"])
+def test_a_corrupt_progress_flag_only_makes_its_step_pending(tmp_path, backend):
+    path = _capture(tmp_path / "run.capture.zarr", backend=backend).path
+    _flip(path / "progress/c/1")
+    capture = CaptureStore.open(path)
+    report = capture.check()
+    assert report.pending == [1]
+    assert [(p.item, p.problem) for p in report.problems] == [
+        ("camera k4 step 1 (frame 1) (progress flag)", "corrupt")
+    ]
+    with pytest.raises(StoreDamagedError, match=r"progress/c/1 is corrupt \(checksum mismatch\)"):
+        capture.pending_steps()
+    assert [p.key for p in capture.prepare_resume()] == ["progress/c/1"]  # any backend
+    assert capture.pending_steps() == [1] and not capture.complete
+
+
+def test_a_frame_of_zeros_is_written_and_not_taken_for_a_missing_chunk(tmp_path):
+    capture = CaptureStore.create(
+        tmp_path / "zeros.capture.zarr",
+        rig={},
+        backend="sim",
+        seed=0,
+        plan=PLAN[:1],
+        cameras={"k4": SHAPE},
+    )
+    capture.write_frame(0, np.zeros(SHAPE, np.uint16), FrameRecord("dark", 0.1, 0.0))
+    capture.mark_done(0)
+    assert (capture.path / "frames/k4/c/0/0/0").is_file() and capture.check().healthy
+
+
+@pytest.mark.parametrize(
+    ("node", "what"),
+    [
+        ("zarr.json", "the root metadata"),
+        ("index/k4/kind/zarr.json", "the metadata of index/k4/kind"),
+        ("index/k4/zarr.json", "the metadata of index/k4"),
+        ("frames/k4/zarr.json", "the metadata of frames/k4"),
+        ("progress/zarr.json", "the metadata of progress"),
+    ],
+)
+@pytest.mark.parametrize("damage", ["deleted", "unreadable"])
+def test_damaged_metadata_is_one_line_naming_the_file(store, node, what, damage):
+    file = store / node
+    if damage == "deleted":
+        file.unlink()
+    else:
+        file.write_text(file.read_text()[:40])
+    with pytest.raises(StoreDamagedError) as refused:
+        CaptureStore.open(store)
+    message = str(refused.value)
+    expected = "is missing" if damage == "deleted" else "is unreadable"
+    assert f"{file} {expected}" in message and what in message and "\n" not in message
+
+
+def _old_store(path):
+    """A store laid out as before checksums: Zarr's default codecs, ``kind`` and ``status`` in
+    one chunk per camera (the oldest layout), frames one chunk each."""
+    group = zarr.open_group(str(path), mode="w-", zarr_format=3)
+    plan = PLAN[:3]
+    group.attrs.update({"rig": {}, "backend": "sim", "seed": 1, "plan": plan, "complete": True})
+    frames = group.create_array("frames/k4", shape=(3, *SHAPE), chunks=(1, *SHAPE), dtype="uint16")
+    frames[:] = np.arange(1, 4, dtype=np.uint16)[:, None, None] * 100
+    for name in ("kind", "status"):
+        values = [step["kind"] for step in plan] if name == "kind" else ["ok"] * 3
+        group.create_array(f"index/k4/{name}", shape=(3,), chunks=(3,), dtype=str, fill_value="")[
+            :
+        ] = values
+    numeric = {"light_id": -1, "view_id": -1, "band_nm": np.nan, "exposure_s": np.nan}
+    for name, fill in {**numeric, "timestamp": np.nan}.items():
+        array = group.create_array(
+            f"index/k4/{name}",
+            shape=(3,),
+            chunks=(1,),
+            dtype="float64" if np.isnan(fill) else "int32",
+            fill_value=fill,
+        )
+        if name in ("exposure_s", "timestamp"):
+            array[:] = [0.1, 0.5, 0.5]
+    group.create_array("index/k4/pose", shape=(3, 6), chunks=(1, 6), dtype="float64")
+    group.create_array("progress", shape=(3,), chunks=(1,), dtype="bool", fill_value=False)[:] = (
+        True
+    )
+    return path
+
+
+def test_a_store_made_before_checksums_opens_and_says_so(tmp_path):
+    path = _old_store(tmp_path / "old.capture.zarr")
+    report = CaptureStore.open(path).check()
+    assert report.healthy and report.checksums == "no"
+    assert report.summary()["checksums"] == "no"
+    (path / "frames/k4/c/1/0/0").unlink()
+    _truncate(path / "index/k4/kind/c/0")  # shared by every frame of the camera
+    report = CaptureStore.open(path).check()
+    assert [(p.key, p.problem, p.units) for p in report.problems] == [
+        ("index/k4/kind/c/0", "corrupt", (0, 1, 2)),
+        ("frames/k4/c/1/0/0", "missing", (1,)),
+    ]
+    assert "cannot be decoded" in report.problems[0].detail
+
+
+def test_the_report_serializes_for_json(store):
+    (store / "frames/k4/c/0/0/0").unlink()
+    document = json.loads(json.dumps(CaptureStore.open(store).check().as_dict()))
+    assert document["verdict"] == "damaged" and document["missing_chunks"] == 1
+    assert document["damaged"][0]["key"] == "frames/k4/c/0/0/0"
+    assert document["damaged"][0]["units"] == [0]
