@@ -42,7 +42,14 @@ from pathlib import Path
 
 from hwbridge.errors import BridgeInputError, StoreBusy
 
-__all__ = ["LOCK_NAME", "LockOwner", "StoreLock", "lock_owner", "require_new_store"]
+__all__ = [
+    "LOCK_NAME",
+    "LockOwner",
+    "StoreLock",
+    "lock_owner",
+    "require_new_store",
+    "require_no_writer",
+]
 
 LOCK_NAME = ".writer.lock"
 """The lock file inside a store folder."""
@@ -346,6 +353,18 @@ def require_new_store(store: str | Path) -> None:
     store = Path(store)
     if store.exists():
         _refuse_existing(store)
+
+
+def require_no_writer(store: str | Path) -> None:
+    """Refuse ``store`` with :class:`StoreBusy` naming its writer while one holds it (checked
+    before anything else about the store: a store being written is naturally incomplete). A
+    path that is not a folder is left to the checks that say what it should be."""
+    store = Path(store)
+    if store.exists() and not store.is_dir():
+        return
+    for lock_file in (store / LOCK_NAME, _reservation(store)):
+        if _held_by_other(lock_file):
+            raise _busy(store, lock_file, creating=lock_file != store / LOCK_NAME)
 
 
 def _refuse_existing(store: Path) -> None:

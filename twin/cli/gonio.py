@@ -441,7 +441,7 @@ def process(
 
     Example: spectwin process out/run.capture.zarr --calibration out/cal.json --out out/cc.btf.zarr
     """
-    from hwbridge.lock import require_new_store
+    from hwbridge.lock import require_new_store, require_no_writer
     from hwbridge.store import CaptureStore
     from recon.btf.processing import check_gonio_run
     from recon.calibration.gonio import GonioCalibration
@@ -454,6 +454,7 @@ def process(
     corners = read_manual_corners(manual_corners) if manual_corners else None
     if out.resolve() == store.resolve():
         fail(f"--out {out} is the capture store itself; choose another --out")
+    require_no_writer(out)
     if not resume:
         require_new_store(out)
     require_output_folder(out)
@@ -523,10 +524,11 @@ def compress(
 
     Example: spectwin compress out/cc.btf.zarr --layout joint --json
     """
-    from hwbridge.lock import StoreLock
+    from hwbridge.lock import StoreLock, require_no_writer
     from recon.btf.compression import compress_btf, compression_report, save_compressed
     from recon.btf.store import BTFStore
 
+    require_no_writer(btf)
     require_sound_btf(btf, "compress")
     store = BTFStore.open(btf, writable=True)
     with StoreLock.acquire(btf), console.status("compressing"):
