@@ -51,6 +51,17 @@ class GenICamCamera:
             raise BridgeInputError(f"{self.name}: GenTL producer {self._cti} does not exist")
         self.unstage()
         self._harvester = Harvester()
+        try:
+            self._acquirer = self._create_acquirer()
+        except BaseException:
+            # A failed stage releases the producer: a harvester left behind would hide its
+            # cameras from the next one in this process.
+            self.unstage()
+            raise
+        if self._exposure_s is not None:
+            self.set_exposure(self._exposure_s)
+
+    def _create_acquirer(self):
         self._harvester.add_file(str(self._cti))
         self._harvester.update()
         devices = self._harvester.device_info_list
@@ -65,9 +76,7 @@ class GenICamCamera:
             raise DeviceError(
                 f"{self.name}: no camera with serial {self._serial!r}; found {serials}"
             )
-        self._acquirer = self._harvester.create(selector)
-        if self._exposure_s is not None:
-            self.set_exposure(self._exposure_s)
+        return self._harvester.create(selector)
 
     def unstage(self) -> None:
         if self._acquirer is not None:

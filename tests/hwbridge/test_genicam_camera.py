@@ -39,3 +39,17 @@ def test_wrong_serials_producers_and_exposures_are_reported(tmp_path):
         genicam_camera.GenICamCamera(tmp_path / "none.cti").stage()
     with pytest.raises(DeviceError, match="not staged"):
         genicam_camera.GenICamCamera(genicam_camera.simulated_producer()).snap()
+
+
+def test_a_failed_stage_releases_the_producer_for_the_next_camera():
+    with pytest.raises(DeviceError, match="no camera with serial"):
+        genicam_camera.GenICamCamera(
+            genicam_camera.simulated_producer(), serial_number="999"
+        ).stage()
+    # A harvester left behind by the failed stage would hide the producer's cameras.
+    camera = genicam_camera.GenICamCamera(genicam_camera.simulated_producer())
+    camera.stage()
+    try:
+        assert camera.snap()[0].dtype == np.uint16
+    finally:
+        camera.unstage()
