@@ -109,6 +109,73 @@ def _flip_dynamic_exponent(values, args, kwargs):
     return np.asarray(values) ** -1.0
 
 
+def _weak_reweighting(original):
+    """Eq. 9.8 with the floor of its denominators at 0.4 of the previous peak (not 0.05): the
+    reweighting by the previous response is mostly lost."""
+
+    @functools.wraps(original)
+    def mutated(count, previous):
+        rows = original(count, None)
+        if previous is not None:
+            rows /= (previous[:-1] + previous[1:] + 0.4 * max(previous.max(), 1e-12))[:, None]
+        return rows
+
+    return mutated
+
+
+def _moves_in_series(original):
+    """Robot and rail one after the other: each axis's time from the original with the other
+    axis made instantaneous, summed."""
+
+    @functools.wraps(original)
+    def mutated(start, end, config):
+        instant = {"start_stop_s": 0.0}
+        robot = config.robot.model_copy(update={**instant, "joint_speed_deg_per_s": 1e12})
+        rail = config.rail.model_copy(update={**instant, "speed_deg_per_s": 1e12})
+        return original(start, end, config.model_copy(update={"robot": robot})) + original(
+            start, end, config.model_copy(update={"rail": rail})
+        )
+
+    return mutated
+
+
+def _switching_off_by_one(estimate, args, kwargs):
+    from dataclasses import replace
+
+    config = args[0]
+    switch = config.timing.switch_and_download_s
+    return replace(
+        estimate,
+        per_pair_capture_s=estimate.per_pair_capture_s - switch,
+        total_s=estimate.total_s - estimate.pairs * switch,
+    )
+
+
+def _bands_shifted(table, args, kwargs):
+    """Every spectrum read one band off (band k holds band k - 1's value), in the decoded table
+    and in the PCA factors alike, so that raw and compressed renderings still agree."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    from twin.render.plugins.btf_bsdf import BTFTable
+
+    if isinstance(table, BTFTable):
+        values = np.roll(table.values, 1, axis=-1)
+        return BTFTable(table.light_dirs, table.view_dirs, values, table.grid)
+    pca = table.compressed
+    per_band = pca.layout == "per_band"
+    shifted = replace(
+        pca,
+        spectral_scores=np.roll(pca.spectral_scores, 1, axis=1),
+        spectral_mean=np.roll(pca.spectral_mean, 1, axis=0) if per_band else pca.spectral_mean,
+        spectral_components=(
+            np.roll(pca.spectral_components, 1, axis=0) if per_band else pca.spectral_components
+        ),
+    )
+    return replace(table, compressed=shifted)
+
+
 MUTATIONS = (
     Mutation(
         "relative_error x2",
@@ -135,49 +202,83 @@ MUTATIONS = (
         "robertson exposures reversed",
         "recon.radiometric.response_curve:robertson",
         "exposure times paired with the wrong frames",
-        ("tests/recon/test_response_curve.py",),
+        ("tests/recon/radiometric/test_response_curve.py",),
         _arguments(_reverse_exposures),
     ),
     Mutation(
         "subtract_dark sign flip",
         "recon.radiometric.dark_frames:subtract_dark",
         "dark frame added instead of subtracted (Eq. 3.2)",
-        ("tests/recon/test_dark_frames.py",),
+        ("tests/recon/radiometric/test_dark_frames.py",),
         _result(_add_dark),
     ),
     Mutation(
         "drift_factors inverted",
         "recon.calibration.spectral:drift_factors",
         "F_i,long (Eq. 3.6) maps the reference onto the point instead of back",
-        ("tests/recon/test_spectral_calibration.py",),
+        ("tests/recon/calibration/test_spectral_calibration.py",),
         _result(lambda values, args, kwargs: 1.0 / values),
     ),
     Mutation(
         "merge_hdr exposure x2",
         "recon.radiometric.hdr:_merge_flat",
         "Eq. 10.3 with every exposure time doubled",
-        ("tests/recon/test_response_curve.py",),
+        ("tests/recon/radiometric/test_response_curve.py",),
         _arguments(_double_merge_time),
     ),
     Mutation(
         "dynamic_scale exponent sign",
         "recon.spectralize.solve:dynamic_scale",
         "Eq. 10.2 f_i = (sum V)^(+p_dyn)",
-        ("tests/recon/test_spectralize.py",),
+        ("tests/recon/spectralize/test_spectralize.py",),
         _result(_flip_dynamic_exponent),
     ),
     Mutation(
         "sensor electrons x2",
         "twin.sensor.model:Sensor.mean_electrons",
         "twice the photo-electrons per radiant exposure",
-        ("tests/twin/test_sensor.py",),
+        ("tests/twin/sensor/test_sensor.py",),
         _result(lambda values, args, kwargs: 2 * values),
+    ),
+    Mutation(
+        "camchar smoothness floor 0.4",
+        "recon.camera_char:_smoothness_rows",
+        "Eq. 9.8's reweighting floored at 0.4 of the previous peak instead of 0.05",
+        (
+            "tests/integration/test_camera_char.py"
+            "::test_extended_method_survives_specularity_and_shading_where_basic_fails",
+        ),
+        _weak_reweighting,
+    ),
+    Mutation(
+        "gonio moves in series",
+        "twin.gonio.capture_time:move_seconds",
+        "robot and rail move one after the other instead of in parallel (4.1.1)",
+        ("tests/twin/rigs/test_rig_geometry.py",),
+        _moves_in_series,
+    ),
+    Mutation(
+        "gonio switching for 32 bands",
+        "twin.gonio.capture_time:estimate_gonio",
+        "filter switching and download counted for 32 of the 33 bands",
+        (
+            "tests/twin/rigs/test_rig_geometry.py",
+            "tests/e2e/test_cli_smoke.py::test_estimate_gonio_reports_a_total_that_is_the_sum_of_its_printed_parts",
+        ),
+        _result(_switching_off_by_one),
+    ),
+    Mutation(
+        "validate reads spectra one band off",
+        "twin.render.plugins.btf_bsdf:store_table",
+        "the BTF store read for rendering with every spectrum one band off (raw and PCA alike)",
+        ("tests/e2e/test_gonio_pipeline.py",),
+        _result(_bands_shifted),
     ),
     Mutation(
         "lamp ignores exposure time",
         "twin.components.lamps:_SteadyLamp.part_exposure_s",
         "a steady lamp's integral is one second's whatever the exposure",
-        ("tests/twin/test_components.py",),
+        ("tests/twin/components/test_components.py",),
         _arguments(_ignore_exposure_time),
     ),
 )

@@ -71,6 +71,7 @@ __all__ = [
     "P_DYN",
     "SINGLE_IMAGE_LEDS",
     "SingleImage",
+    "band_schedules",
     "comparison",
     "cross_check",
     "exposure_comparison",
@@ -93,7 +94,13 @@ _SPHERE_LEDS = tuple(range(0, 198, 11))  # 18 of the 198 LEDs stand for all of t
 
 def schedules(setup: DomeSetup) -> dict[str, dict]:
     """The 8-image and the 10-image schedule (noisiest bands twice, as many as fit) of the plan."""
-    exposures = setup.exposures_s
+    return band_schedules(setup.exposures_s)
+
+
+def band_schedules(exposures_s: np.ndarray) -> dict[str, dict]:
+    """:func:`schedules` of any ``(30,)`` band exposures (e.g. a plan with another longest band,
+    ``benchmarks/capture_time_sensitivity.py``)."""
+    exposures = np.asarray(exposures_s, np.float64)
     noisiest = np.argsort(-exposures)
     repeats = 0
     while (

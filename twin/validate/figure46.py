@@ -47,6 +47,7 @@ __all__ = [
     "Figure46",
     "field_interiors",
     "render_figure46",
+    "render_spectral_panel",
     "room_entries",
     "room_lights",
     "write_figure46",
@@ -226,14 +227,23 @@ class Figure46:
 
     def field_delta_e(self) -> tuple[np.ndarray, np.ndarray]:
         """Delta E94 of every field's mean colour (interior), spectral and RGB rendering."""
-        means = [
-            np.array([image[field].mean(axis=0) for field in self.fields])
-            for image in (self.photograph, self.spectral, self.rgb)
-        ]
-        reference = _lab(means[0], self.white_xyz)
-        return tuple(
-            colour.delta_E(_lab(mean, self.white_xyz), reference, method="CIE 1994")
-            for mean in means[1:]
+        return (
+            self.field_delta_e_between(self.spectral, self.photograph),
+            self.field_delta_e_between(self.rgb, self.photograph),
+        )
+
+    def field_delta_e_between(self, image: np.ndarray, reference: np.ndarray) -> np.ndarray:
+        """``(n_fields,)`` Delta E94 of every field's mean colour (interior) in ``image`` against
+        ``reference``, both XYZ ``(H, W, 3)`` of this figure's camera (e.g. a panel of another
+        BTF from :func:`render_spectral_panel`), relative to the map's white."""
+        image_means, reference_means = (
+            np.array([values[field].mean(axis=0) for field in self.fields])
+            for values in (image, reference)
+        )
+        return colour.delta_E(
+            _lab(image_means, self.white_xyz),
+            _lab(reference_means, self.white_xyz),
+            method="CIE 1994",
         )
 
     def summary(self) -> dict[str, float]:
@@ -311,19 +321,10 @@ def render_figure46(
         height=map_size[0],
         width=map_size[1],
     )
-    film = _xyz_film()
     true_sample = {part.name: mitsuba_shape(part) for part in material.parts}
-    photograph = _render({**room, **true_sample}, pixels, spp, film, lights)
+    photograph = _render({**room, **true_sample}, pixels, spp, _xyz_film(), lights)
     square = _sample_square(material.size_m)
-    spectral = _render(
-        {
-            "environment": spectral_envmap(environment),
-            "sample": {**square, "bsdf": btf_bsdf(table)},
-        },
-        pixels,
-        spp,
-        film,
-    )
+    spectral = render_spectral_panel(material, table, environment, pixels=pixels, spp=spp)
     channels = []
     for rgb_table, rgb_map in zip(_rgb_table(table), _rgb_maps(environment), strict=True):
         entries = {
@@ -356,6 +357,25 @@ def render_figure46(
         colour.delta_E(_lab(rgb, white), reference, method="CIE 1994"),
         environment,
     )
+
+
+def render_spectral_panel(
+    material: Material,
+    table: BTFTable | CompressedTable,
+    environment: SpectralMap,
+    *,
+    pixels: int = 96,
+    spp: int = 64,
+) -> np.ndarray:
+    """Panel (b) alone: the BTF on the material's square under a spectral map, recorded through
+    the CIE 1931 matching functions, XYZ ``(pixels, pixels, 3)``. With the same map, size and
+    samples, two BTFs are rendered with the same random numbers (the BSDF samples the cosine
+    hemisphere whatever its values), so their difference is the BTFs'."""
+    entries = {
+        "environment": spectral_envmap(environment),
+        "sample": {**_sample_square(material.size_m), "bsdf": btf_bsdf(table)},
+    }
+    return _render(entries, pixels, spp, _xyz_film())
 
 
 def _cmfs_on(grid: WavelengthGrid) -> np.ndarray:

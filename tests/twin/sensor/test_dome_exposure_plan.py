@@ -12,7 +12,9 @@ implies about the longest band: with 10 images at +61 % an image lasts 1.61 x 3.
 on average, and an image cannot be shorter than its longest band, while a packing whose images
 are bounded by the longest band (how 8 images come out as the fewest, see
 ``recon.scheduling.dome_schedule.fewest_images``) cannot average more. So the longest band is set
-to 5.48 s.
+to 5.48 s. That is a calibration taken from the thesis's +61 %: the tests below check the plan
+and the schedules against their closed forms in the band exposures, whatever the longest band,
+and one calibration check compares the resulting 10-image increase with the +61 %.
 """
 
 from __future__ import annotations
@@ -41,7 +43,7 @@ from twin.sensor.white_reference import white_reference_rates
 
 BAND_CENTRES_NM = np.arange(410.0, 701.0, 10.0)
 RGB_S = sum(THESIS_RGB_EXPOSURES_S)
-LONGEST_S = 1.61 * RGB_S
+LONGEST_S = 1.61 * RGB_S  # calibration: from the thesis's +61 % for 10 images (docstring)
 GREY = 0.2  # reflectance of the sample whose band images set the filter sizes
 TARGET_RELATIVE_NOISE = 0.02
 
@@ -81,7 +83,8 @@ def test_exposures_follow_the_thesis_rule_and_the_blue_end_is_longest(dome):
     exposures = dome["exposures"]
     product = dome["sensitivity"] * dome["light"]
     assert np.allclose(exposures * np.sqrt(product), exposures[0] * np.sqrt(product[0]))
-    assert exposures.max() == pytest.approx(LONGEST_S)
+    # t_base = t_longest sqrt(min E L): t_lambda = t_longest sqrt(min E L / E L).
+    np.testing.assert_allclose(exposures, LONGEST_S * np.sqrt(product.min() / product), rtol=1e-9)
     assert BAND_CENTRES_NM[np.argmax(exposures)] == 410.0  # no LED light, weak LCTF and QE
     assert BAND_CENTRES_NM[np.argmin(exposures)] in (550.0, 560.0, 570.0)  # phosphor peak
     # Some bands are longer than the RGB set (thesis: "some of the exposure times ... are
@@ -95,19 +98,21 @@ def test_thirty_bands_in_eight_images(dome):
     plan = schedule_bands(exposures, 8)
     assert plan.optimal
     assert sorted(b for image in plan.images for b in image) == list(range(30))
-    # 48 s of bands exceed 8 x 3.402 s: every image is spectral-bound and the optimum is the
-    # band sum itself, +76 % where the thesis reports +41 % (its bands sum to about 38 s).
-    assert exposures.sum() == pytest.approx(47.97, abs=0.05)
-    assert plan.total_s == pytest.approx(exposures.sum(), rel=1e-6)
-    assert plan.increase == pytest.approx(0.762, abs=0.005)
-    assert plan.image_s.max() < 1.05 * exposures.sum() / 8  # balanced, about 6 s each
+    # The bands (measured 47.97 s) exceed 8 x 3.402 s: every image is spectral-bound and the
+    # optimum is the band sum itself (measured +76 % where the thesis reports +41 %: its bands
+    # sum to about 38 s).
+    band_sum = exposures.sum()
+    assert band_sum > 8 * RGB_S
+    assert plan.total_s == pytest.approx(band_sum, rel=1e-6)
+    assert plan.increase == pytest.approx(band_sum / (8 * RGB_S) - 1, rel=1e-6)
+    assert plan.image_s.max() < 1.05 * band_sum / 8  # balanced, about 6 s each
     # With images no longer than the longest band, 8 do not suffice: 47.97 / 5.48 > 8.
     with pytest.raises(SpectwinInputError, match="no schedule of 30 band exposures in 8"):
         schedule_bands(exposures, 8, image_limit_s=exposures.max())
     fewest = fewest_images(exposures)
-    assert fewest.n_images == math.ceil(exposures.sum() / exposures.max()) == 9
+    assert fewest.n_images == math.ceil(band_sum / exposures.max()) == 9
     assert fewest.optimal
-    assert fewest.increase == pytest.approx(0.567, abs=0.005)
+    assert fewest.increase == pytest.approx(band_sum / (9 * RGB_S) - 1, rel=1e-6)  # +56.7 %
 
 
 def test_ten_images_with_the_noisiest_bands_twice(dome):
@@ -126,7 +131,22 @@ def test_ten_images_with_the_noisiest_bands_twice(dome):
     holding_410 = [image for image, bands in enumerate(plan.images) if noisiest[0] in bands]
     assert len(holding_410) == 2
     assert plan.total_s == pytest.approx(exposures.sum() + exposures.max(), rel=1e-6)
-    assert plan.increase == pytest.approx(0.571, abs=0.005)  # thesis: about +61 %
+    assert plan.increase == pytest.approx(
+        (exposures.sum() + exposures.max()) / (10 * RGB_S) - 1, rel=1e-6
+    )
+
+
+def test_calibration_check_the_longest_band_gives_about_the_thesis_increase_for_10_images(dome):
+    """A calibration check, not a prediction: the longest band was derived from the thesis's
+    +61 % (module docstring), so the 10-image schedule lands near it by construction. Measured
+    +57.1 %: the twin's other bands are shorter than the thesis's (their sum, 48 s, is the
+    model's). How the increase moves with the longest band:
+    benchmarks/capture_time_sensitivity.py."""
+    exposures = dome["exposures"]
+    plan = schedule_bands(
+        exposures, 10, repeat_bands=[int(np.argmax(exposures))], image_limit_s=exposures.max()
+    )
+    assert plan.increase == pytest.approx(0.61, abs=0.05)
 
 
 def test_filter_sizes_from_simulated_band_images_cancel_their_noise(dome, rng):
