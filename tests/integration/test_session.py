@@ -105,9 +105,13 @@ class _Captures:
         self._driver.wait(timeout=30)
 
 
-def _lock_names(path: Path, pid: int) -> bool:
-    """Whether the store's lock file (inside it, or beside it while it is created) names pid."""
-    for lock_file in (path / ".writer.lock", path.with_name(f".{path.name}.writer.lock")):
+def _lock_names(path: Path, pid: int, inside: bool = False) -> bool:
+    """Whether the store's lock file (inside it, or beside it while it is created, unless
+    ``inside``) names pid."""
+    lock_files = [path / ".writer.lock"]
+    if not inside:
+        lock_files.append(path.with_name(f".{path.name}.writer.lock"))
+    for lock_file in lock_files:
         try:
             if json.loads(lock_file.read_text())["pid"] == pid:
                 return True
@@ -306,7 +310,7 @@ def test_the_stale_lock_of_a_killed_session_is_taken_over(tmp_path):
     command = [sys.executable, "-m", "twin.gonio.sim_session", str(path), str(SEED)]
     process = subprocess.Popen(command, cwd=ROOT, stderr=subprocess.DEVNULL)
     deadline = time.monotonic() + 120
-    while not (path / "progress").exists() or not _lock_names(path, process.pid):
+    while not (path / "progress").exists() or not _lock_names(path, process.pid, inside=True):
         assert time.monotonic() < deadline and process.poll() is None
         time.sleep(0.01)
     process.kill()
