@@ -6,6 +6,6 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
         "cluster": ["dask_client", "run_capture", "run_process"],
-        "sim_devices": ["SimGonioDevices", "VirtualRig"],
+        "sim_devices": ["SimDomeDevices", "SimGonioDevices", "VirtualRig"],
     },
 )

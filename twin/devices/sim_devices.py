@@ -10,8 +10,9 @@ and starts its exposure at the plan's start time for that step, so a resumed ses
 an uninterrupted one, and a capture split over Dask workers a serial one. Optional fault injection
 raises timeouts and disconnects.
 
-:class:`SimGonioDevices` is the recipe of the gonioreflectometer's devices: plain data that builds
-them over a fresh :class:`VirtualRig` when called, in the process that runs the steps.
+:class:`SimGonioDevices` and :class:`SimDomeDevices` are the recipes of the gonioreflectometer's
+and the dome's devices: plain data that builds them over a fresh :class:`VirtualRig` when called,
+in the process that runs the steps.
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ from twin.sensor.model import Sensor
 __all__ = [
     "Signal",
     "SimCamera",
+    "SimDomeDevices",
     "SimGonioDevices",
     "SimLamp",
     "SimLedArray",
@@ -52,6 +54,7 @@ class VirtualRig:
     lamp_on: bool = True
     led_pattern: np.ndarray | None = None
     clock_s: float = 0.0  # start of the current exposure (set by the camera for each step)
+    step: int = -1  # the plan step being taken (set by the camera), for what the plan places
     fault_rate: float = 0.0
     fault_rng: np.random.Generator | None = None
 
@@ -190,7 +193,8 @@ class SimSpectrometer:
 
 
 class SimPositioner:
-    """The gonioreflectometer's robot and rail, addressed by view (direction pair) index."""
+    """The gonioreflectometer's robot and rail, addressed by view (direction pair) index, or the
+    dome's rotation stage, addressed by stage position."""
 
     def __init__(self, rig: VirtualRig, views: int, *, name: str = "goniometer"):
         self.name, self._rig, self._views = name, rig, views
@@ -257,10 +261,12 @@ class SimCamera:
         self._shutter_open = bool(open_)
 
     def set_step(self, seed: int, step: int) -> None:
-        """Derive the noise and the exposure start of the next frame from the plan step."""
+        """Derive the noise and the exposure start of the next frame from the plan step, and
+        tell the rig which step it is (a dome signal reads what the plan put on the holder)."""
         self._rng = np.random.default_rng([seed, step])
         self._start_s = float(self._start_times_s[step])
         self._rig.clock_s = self._start_s
+        self._rig.step = int(step)
 
     def snap(self) -> tuple[np.ndarray, dict[str, Any]]:
         self._rig.maybe_fail(f"{self.name}.snap")
@@ -330,4 +336,51 @@ class SimGonioDevices:
             tunable_filter=SimTunableFilter(rig),
             positioner=SimPositioner(rig, self.views),
             monitor=SimSpectrometer(rig, HMILamp(), DEFAULT_GRID),
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class SimDomeDevices:
+    """The simulated LED dome's devices for one plan, as a recipe (it pickles, like
+    :class:`SimGonioDevices`).
+
+    Calling it builds, over a fresh :class:`VirtualRig`, one camera per entry of ``cameras``
+    (its sensor fed by its signal, exposure ``k`` starting at ``start_times_s[k]``), the tunable
+    filter in front of the spectral camera, the rotation stage (a positioner over
+    ``stage_positions`` positions) and the array of ``led_count`` LEDs.
+
+    Attributes
+    ----------
+    cameras
+        ``(camera id, sensor, signal)`` of every camera of the plan.
+    start_times_s
+        Exposure start of every plan step (:func:`hwbridge.dome_plans.dome_start_times_s`).
+    stage_positions
+        Number of positions the rotation stage knows.
+    led_count
+        Number of LEDs.
+    fault_rate, fault_seed
+        Injected device faults per call and the seed of their draws (``[fault_seed, 99]``).
+    """
+
+    cameras: tuple[tuple[str, Sensor, Signal], ...]
+    start_times_s: np.ndarray
+    stage_positions: int
+    led_count: int
+    fault_rate: float = 0.0
+    fault_seed: int = 0
+
+    def __call__(self) -> SessionDevices:
+        rig = VirtualRig(
+            fault_rate=self.fault_rate, fault_rng=np.random.default_rng([self.fault_seed, 99])
+        )
+        return SessionDevices(
+            cameras={
+                camera_id: SimCamera(rig, sensor, signal, self.start_times_s, name=camera_id)
+                for camera_id, sensor, signal in self.cameras
+            },
+            tunable_filter=SimTunableFilter(rig),
+            positioner=SimPositioner(rig, self.stage_positions, name="rotation_stage"),
+            leds=SimLedArray(rig, self.led_count),
+            led_count=self.led_count,
         )
