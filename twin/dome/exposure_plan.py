@@ -33,7 +33,7 @@ from recon.spectra import SampledSpectra
 from twin.components.lamps import FINE_GRID
 from twin.components.targets import colorchecker_reflectances, zenith_white_reflectance
 from twin.dome.capture import THESIS_BANDS_NM, DomeCameras, dome_cameras
-from twin.dome.setup import BAND_GRID
+from twin.dome.setup import BAND_GRID, rgb_response_series_s, spectral_response_series_s
 from twin.rigs.dome_geometry import dome_geometry
 from twin.rigs.rig_config import DomeConfig
 
@@ -42,8 +42,6 @@ __all__ = [
     "band_schedules",
     "dome_exposures",
     "model_band_exposures_s",
-    "rgb_response_series_s",
-    "spectral_response_series_s",
 ]
 
 REFERENCE_BAND_NM = 550.0
@@ -52,8 +50,6 @@ with every LED on (the band of the thesis's low-SNR series, 10.3)."""
 
 _PAPER_REFLECTANCE = 0.85  # the holder's white paper (twin.materials.sample_holder)
 _ALL_LEDS_FILL = 0.5
-_SERIES_FRAMES = 12
-_SERIES_TOP_E = 15000.0  # electrons of the brightest field in the longest series frame
 
 
 def model_band_exposures_s(cameras: DomeCameras, longest_band_s: float) -> np.ndarray:
@@ -101,18 +97,6 @@ def band_schedules(exposures_s: np.ndarray) -> dict[str, dict]:
     out["band_exposures_sum_s"] = float(exposures.sum())
     out["rgb_set_s"] = float(sum(THESIS_RGB_EXPOSURES_S))
     return out
-
-
-def rgb_response_series_s() -> np.ndarray:
-    """The RGB cameras' response series: 14 exposures over 1 ms to 3.3 s, no two ratios powers
-    of one factor (:mod:`recon.radiometric.response_curve`)."""
-    return np.geomspace(1e-3, 3.0, 14) * (1 + 0.1 * (np.arange(14) % 3))
-
-
-def spectral_response_series_s(brightest_rate_e_per_s: float) -> np.ndarray:
-    """The spectral camera's low-signal series: 12 evenly spaced exposures from 20 ms to the one
-    that gives the brightest field about 3000 DN above the offset."""
-    return np.linspace(0.02, _SERIES_TOP_E / brightest_rate_e_per_s, _SERIES_FRAMES)
 
 
 def _irradiance_factor(config: DomeConfig, leds: np.ndarray) -> float:

@@ -29,6 +29,7 @@ from twin.rigs.rig_config import DomeConfig
 from twin.sensor.model import Sensor
 
 __all__ = [
+    "DomeView",
     "dome_camera",
     "dome_part_rates",
     "dome_rates",
@@ -102,16 +103,9 @@ def dome_part_rates(
     """Photo-electron rates ``(H, W, n_channels)`` in e-/s of ``parts`` (sample frame) turned by
     the stage to ``stage_deg`` and lit by the LEDs ``leds`` together: R, G, B for an RGB camera
     (before the Bayer mosaic), one channel per band for the spectral camera."""
+    view = DomeView(config, camera, pixels, window=window, bands_nm=bands_nm)
     return dome_shape_rates(
-        config,
-        dome_shapes(parts, stage_deg),
-        leds=leds,
-        camera=camera,
-        pixels=pixels,
-        window=window,
-        spp=spp,
-        seed=seed,
-        bands_nm=bands_nm,
+        config, dome_shapes(parts, stage_deg), view, leds=leds, spp=spp, seed=seed
     )
 
 
@@ -122,24 +116,47 @@ def dome_shapes(parts: Sequence[SurfacePart], stage_deg: float) -> dict[str, obj
     return {part.name: mitsuba_shape(transformed(part, matrix)) for part in parts}
 
 
+class DomeView:
+    """Camera ``camera`` of the dome ready to render (:func:`dome_camera`'s arguments): its
+    channels (the sensor's electron responses, through the filter's bands) and its Mitsuba
+    sensor, built once for all the renders of the camera."""
+
+    def __init__(
+        self,
+        config: DomeConfig,
+        camera: int | str,
+        pixels: int,
+        *,
+        window: int | None = None,
+        bands_nm: Sequence[float] | None = None,
+    ):
+        self.view, sensor, bands = dome_camera(
+            config, camera, pixels, window=window, bands_nm=bands_nm
+        )
+        self.channels = sensor.electron_responses(FINE_GRID, bands)
+        self._sensors: dict[tuple[int, bytes], dict[str, object]] = {}
+
+    def mitsuba_sensor(self, channels: SampledSpectra, spp: int) -> dict[str, object]:
+        """:meth:`twin.render.scene.PinholeCamera.mitsuba_sensor`, kept per film and spp."""
+        key = (int(spp), channels.values.tobytes())
+        if key not in self._sensors:
+            self._sensors[key] = self.view.mitsuba_sensor(channels, spp)
+        return self._sensors[key]
+
+
 def dome_shape_rates(
     config: DomeConfig,
     shapes: dict[str, object],
+    view: DomeView,
     *,
     leds: Sequence[int],
-    camera: int | str,
-    pixels: int,
-    window: int | None = None,
     spp: int = 64,
     seed: int = 0,
-    bands_nm: Sequence[float] | None = None,
 ) -> np.ndarray:
-    """:func:`dome_part_rates` of shapes made by :func:`dome_shapes`."""
-    view, sensor, bands = dome_camera(config, camera, pixels, window=window, bands_nm=bands_nm)
-    channels = sensor.electron_responses(FINE_GRID, bands)
+    """:func:`dome_part_rates` of shapes made by :func:`dome_shapes`, seen by ``view``."""
     return render_lit(
         view,
-        channels,
+        view.channels,
         shapes,
         [_led_group(config, leds)],
         spp=spp,

@@ -62,6 +62,8 @@ __all__ = [
     "THESIS_LONGEST_BAND_S",
     "DomeSetup",
     "dome_setup",
+    "rgb_response_series_s",
+    "spectral_response_series_s",
 ]
 
 BAND_GRID = WavelengthGrid(THESIS_BANDS_NM)
@@ -137,6 +139,18 @@ def _rgb_response(cameras: DomeCameras) -> np.ndarray:
     return shape / (white @ shape)
 
 
+def rgb_response_series_s() -> np.ndarray:
+    """The RGB cameras' response series: 14 exposures over 1 ms to 3.3 s, no two ratios powers
+    of one factor (:mod:`recon.radiometric.response_curve`)."""
+    return np.geomspace(1e-3, 3.0, 14) * (1 + 0.1 * (np.arange(14) % 3))
+
+
+def spectral_response_series_s(brightest_rate_e_per_s: float) -> np.ndarray:
+    """The spectral camera's low-signal series: 12 evenly spaced exposures from 20 ms to the one
+    that gives the brightest field about 3000 DN above the offset."""
+    return np.linspace(0.02, 15000.0 / brightest_rate_e_per_s, 12)
+
+
 def _band_frames_of_white(cameras, rates, exposures, rng) -> np.ndarray:
     side = cameras.spectral.height // cameras.pixels_per_texel
     shape = (side, side)
@@ -182,7 +196,7 @@ def dome_setup(
     # offset for the brightest field: the low-SNR range and the long reference exposures.
     # (evenly spaced, so no two ratios are powers of one factor: see
     # recon.radiometric.response_curve)
-    series_t = np.linspace(0.02, 15000.0 / (chart_bands[..., _SERIES_BAND].max()), 12)
+    series_t = spectral_response_series_s(float(chart_bands[..., _SERIES_BAND].max()))
     series = np.stack(
         [cameras.band_frame(chart_bands[..., _SERIES_BAND], float(t), rng) for t in series_t]
     )
@@ -199,7 +213,7 @@ def dome_setup(
         sigma_px=2.0,
         bit_depth=cameras.spectral.config.bit_depth,
     )
-    rgb_series_t = np.geomspace(1e-3, 3.0, 14) * (1 + 0.1 * (np.arange(14) % 3))
+    rgb_series_t = rgb_response_series_s()
     chart_rgb = cos_i * chart.weights[0] @ rgb_basis
     hdr_set = np.array(THESIS_RGB_EXPOSURES_S)
     rgb = calibrate_rgb_camera(

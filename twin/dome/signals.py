@@ -20,7 +20,7 @@ import numpy as np
 from hwbridge.dome_layout import SPECTRAL_CAMERA
 from twin.devices.sim_devices import VirtualRig
 from twin.dome.holder import holder_scene_parts
-from twin.dome.render import dome_shape_rates, dome_shapes
+from twin.dome.render import DomeView, dome_shape_rates, dome_shapes
 from twin.materials import Material
 from twin.rigs.rig_config import DomeConfig
 
@@ -80,9 +80,10 @@ class RenderedDomeSignal:
         self._scene, self._camera = scene, camera
         self._key: tuple | None = None
         self._rates: np.ndarray | None = None
+        self._view: DomeView | None = None
 
     def __getstate__(self) -> dict:
-        return {**self.__dict__, "_key": None, "_rates": None}
+        return {**self.__dict__, "_key": None, "_rates": None, "_view": None}
 
     def rates(self, content: str, view_id: int, leds: tuple[int, ...]) -> np.ndarray:
         """Rates ``(H, W, n_channels)`` of one state (the last state's kept)."""
@@ -91,16 +92,21 @@ class RenderedDomeSignal:
             scene = self._scene
             lit = "all" if len(leds) == scene.config.led_count else ",".join(map(str, leds))
             seed = zlib.crc32(f"{content}|{view_id}|{lit}|{self._camera}".encode()) & 0x7FFFFFFF
+            if self._view is None:
+                self._view = DomeView(
+                    scene.config,
+                    self._camera,
+                    scene.pixels,
+                    window=scene.window,
+                    bands_nm=scene.bands_nm,
+                )
             self._rates = dome_shape_rates(
                 scene.config,
                 scene.shapes(content, view_id),
+                self._view,
                 leds=leds,
-                camera=self._camera,
-                pixels=scene.pixels,
-                window=scene.window,
                 spp=scene.spp,
                 seed=seed,
-                bands_nm=scene.bands_nm,
             ).astype(np.float32)
             self._key = key
         return self._rates
