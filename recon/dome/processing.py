@@ -1,0 +1,399 @@
+"""Dome run -> spectral BTF store, without a renderer (thesis 10.1.2, 10.2.2, 10.4.2).
+
+For a ``dome-run`` capture store and the dome's calibration
+(:func:`recon.calibration.dome_capture.calibrate_dome`):
+
+1. every camera is registered at every stage position on its alignment frame
+   (:func:`recon.dome.images.register_view`);
+2. the images of the run (stage position and LED) are reconstructed in groups, one cycle of the
+   band schedule each (:func:`recon.dome.run.joint_groups`): every RGB camera's image of every
+   LED of the group gives :math:`V` (:func:`recon.dome.images.white_balanced_rgb`); the spectral
+   camera's scheduled bands of an LED, noisy reflectance factors
+   (:func:`recon.dome.images.band_reflectance`), are matched to that LED's image from the RGB
+   camera nearest the spectral camera's view (the same light; 10.2.2 places the spectral camera
+   beside an RGB camera so that both see nearly the same), each after a Gaussian filter sized to
+   its noise (:func:`band_sigma_px`, Figure 10.5); the group is solved jointly with Eq. 10.12 and
+   the dynamic-range compression of Eq. 10.2 (:func:`recon.spectralize.reconstruct`), so the
+   spectral data spread to the images and cameras without any (10.4.2);
+3. every image of every RGB camera becomes a direction pair of the BTF store (reflectance
+   factor / pi, in 1/sr), lit from the LED and seen from the calibrated camera, both in the
+   sample frame, with the texture's corners in the camera's frame; the store is written group by
+   group (an interrupted run resumes with the groups that have pending pairs).
+
+A camera whose marks are not found at a stage position (and not given in a manual corner file,
+keys ``"<camera>_view<view_id>"``) leaves its pairs there unwritten, listed in the BTF's
+``unregistered_pairs``; the spectral camera's, the band data of that position.
+
+References
+----------
+- The thesis, sections 10.1 (Eq. 10.1, 10.2, 10.12, 10.13), 10.2.2 and 10.4.2.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from hwbridge.dome_layout import SPECTRAL_CAMERA
+from hwbridge.store import CaptureStore
+from recon.btf.store import BTFStore
+from recon.calibration.dome_capture import DomeCalibration
+from recon.calibration.dome_geometric import stage_rotation
+from recon.dome.images import (
+    Registration,
+    TexelGrid,
+    band_reflectance,
+    register_view,
+    rgb_alignment_image,
+    white_balanced_rgb,
+)
+from recon.dome.run import DomeRun, joint_groups, open_dome_run
+from recon.errors import SpectwinInputError
+from recon.progress import progress_steps
+from recon.registration.border import MarksNotFoundError
+from recon.registration.corners import CornerRefinementError
+from recon.scheduling.dome_schedule import FILTER_SIZE_PER_SIGMA, filter_sizes
+from recon.spectralize.solve import BandImage, reconstruct
+
+__all__ = [
+    "P_DYN",
+    "TARGET_RELATIVE_NOISE",
+    "DomeProcessing",
+    "band_sigma_px",
+    "check_dome_run",
+    "dome_directions",
+    "process_dome",
+]
+
+P_DYN = 0.5
+"""Eq. 10.2's exponent (the thesis found 0.5-0.6 best for BTFs)."""
+
+TARGET_RELATIVE_NOISE = 0.02
+"""Relative noise the band filters leave (Figure 10.5's filters nearly cancel the noise; the
+prior of Eq. 10.12 smooths what is left)."""
+
+_MAX_SIGMA_FRACTION = 0.25  # of the texture's side
+
+
+def band_sigma_px(values: np.ndarray) -> float:
+    """Gaussian sigma (texels) for a noisy band image (Figure 10.5): its noise from the
+    neighbouring texels' differences (robustly: their median absolute deviation, so edges of
+    the texture count little), relative to its mean signal, through
+    :func:`recon.scheduling.dome_schedule.filter_sizes` to :data:`TARGET_RELATIVE_NOISE`;
+    at most a quarter of the image's side."""
+    differences = np.diff(np.asarray(values, np.float64), axis=1).ravel()
+    noise = 1.4826 * np.median(np.abs(differences - np.median(differences))) / np.sqrt(2)
+    mean = float(np.mean(values))
+    if not mean > 0:
+        return _MAX_SIGMA_FRACTION * values.shape[0]
+    size = filter_sizes(np.array([noise / mean]), TARGET_RELATIVE_NOISE)[0]
+    return float(min(size / FILTER_SIZE_PER_SIGMA, _MAX_SIGMA_FRACTION * values.shape[0]))
+
+
+def check_dome_run(run: DomeRun, calibration: DomeCalibration) -> None:
+    """Refuse a run the calibration does not fit (bands, frame size, cameras, LEDs), naming the
+    difference, before any frame is read."""
+    if run.bands_nm.shape != calibration.bands_nm.shape or not np.allclose(
+        run.bands_nm, calibration.bands_nm
+    ):
+        raise SpectwinInputError(
+            f"{run.capture_path}: bands {run.bands_nm.tolist()} nm, the calibration's "
+            f"{calibration.bands_nm.tolist()} nm"
+        )
+    if int(run.rig["window_px"]) != calibration.window_px:
+        raise SpectwinInputError(
+            f"{run.capture_path}: frames of {run.rig['window_px']} px, the calibration's of "
+            f"{calibration.window_px} px; calibrate with the run's --texels"
+        )
+    cameras = sorted({*run.rgb_cameras, SPECTRAL_CAMERA} - set(calibration.geometry))
+    if cameras:
+        raise SpectwinInputError(f"{run.capture_path}: cameras {cameras} are not calibrated")
+    leds = sorted({light for _, light in run.images} - set(calibration.leds.tolist()))
+    if leds:
+        raise SpectwinInputError(
+            f"{run.capture_path}: LEDs {leds[:5]} have no white frames in the calibration; "
+            "calibrate with the run's --leds"
+        )
+
+
+def dome_directions(run: DomeRun, calibration: DomeCalibration) -> tuple[np.ndarray, np.ndarray]:
+    """Light and view directions ``(n_pairs, 3)`` in the sample frame: pair ``i`` is image
+    ``i // n_cameras`` seen by RGB camera ``i % n_cameras``; the LED's position from the rig,
+    the camera's from its calibration."""
+    geometry = run.rig["geometry"]
+    leds = np.asarray(geometry["led_positions_m"], np.float64)
+    angles = geometry["stage_angles_deg"]
+    lights, views = [], []
+    for view, light in run.images:
+        to_sample = stage_rotation(angles[view]).T
+        for camera in run.rgb_cameras:
+            lights.append(to_sample @ leds[light])
+            views.append(calibration.geometry[camera].geometry.position_in_sample(angles[view]))
+    lights, views = np.array(lights), np.array(views)
+    return (
+        lights / np.linalg.norm(lights, axis=1, keepdims=True),
+        views / np.linalg.norm(views, axis=1, keepdims=True),
+    )
+
+
+def spectral_partner(run: DomeRun, calibration: DomeCalibration) -> str:
+    """The RGB camera whose view lies nearest the spectral camera's."""
+    positions = {c: r.geometry.position_m for c, r in calibration.geometry.items()}
+    spectral = positions[SPECTRAL_CAMERA] / np.linalg.norm(positions[SPECTRAL_CAMERA])
+    cosines = [spectral @ positions[c] / np.linalg.norm(positions[c]) for c in run.rgb_cameras]
+    return run.rgb_cameras[int(np.argmax(cosines))]
+
+
+@dataclass
+class DomeProcessing:
+    """A dome run being processed: the run, its calibration and the registrations found."""
+
+    run: DomeRun
+    calibration: DomeCalibration
+    texels: int
+    manual_corners: Mapping[str, np.ndarray] | None = None
+    registrations: dict[tuple[str, int], Registration | None] = field(default_factory=dict)
+    saturated_texels: int = 0
+
+    def grid(self, view: int) -> TexelGrid:
+        angle = self.run.rig["geometry"]["stage_angles_deg"][view]
+        return TexelGrid(self.texels, self.run.sample_size_m, float(angle))
+
+    def register(self, store: CaptureStore) -> None:
+        """Register every camera at every stage position (step 1)."""
+        geometry = self.run.rig["geometry"]
+        for camera in (*self.run.rgb_cameras, SPECTRAL_CAMERA):
+            for view in self.run.views:
+                slot = self.run.slots(camera, "alignment", view)[:1]
+                if slot.size == 0:
+                    raise SpectwinInputError(
+                        f"{self.run.capture_path}: no alignment frame of camera {camera!r} at "
+                        f"stage position {view}"
+                    )
+                frame = store.read_frames(camera, slot)[0]
+                if camera == SPECTRAL_CAMERA:
+                    exposure = float(self.run.index[camera]["exposure_s"][slot[0]])
+                    image = self.calibration.spectral.linear_rate(frame, exposure)
+                else:
+                    image = rgb_alignment_image(self.calibration.rgb[camera], frame)
+                try:
+                    self.registrations[camera, view] = register_view(
+                        image,
+                        self.calibration.geometry[camera].geometry,
+                        geometry["holder"],
+                        geometry["stage_angles_deg"][view],
+                        self.run.sample_size_m,
+                        frame_id=f"{camera}_view{view}",
+                        manual_corners=self.manual_corners,
+                    )
+                except (MarksNotFoundError, CornerRefinementError):
+                    self.registrations[camera, view] = None
+
+    def rgb(self, store: CaptureStore, image: int, camera: str) -> np.ndarray:
+        """:math:`V` of one image of one RGB camera, saturated texels at the image's brightest
+        finite value."""
+        view, light = self.run.images[image]
+        slots = self.run.slots(camera, "sample", view, light)
+        times = self.run.index[camera]["exposure_s"][slots]
+        order = [int(np.argmin(np.abs(self.calibration.rgb[camera].exposure_s - t))) for t in times]
+        frames = store.read_frames(camera, slots[np.argsort(order)])
+        values = white_balanced_rgb(
+            self.calibration,
+            camera,
+            frames,
+            self.registrations[camera, view].corners_xy,
+            self.grid(view),
+            light,
+            np.asarray(self.run.rig["geometry"]["led_positions_m"][light]),
+        )
+        saturated = ~np.isfinite(values)
+        self.saturated_texels += int(saturated.any(axis=-1).sum())
+        top = np.nanmax(np.where(saturated, np.nan, values).reshape(-1, 3), axis=0)
+        return np.where(saturated, top, values)
+
+    def bands(self, store: CaptureStore, image: int) -> list[tuple[int, np.ndarray]]:
+        """``(band, noisy reflectance factors)`` of the spectral frames of one image."""
+        view, light = self.run.images[image]
+        registration = self.registrations[SPECTRAL_CAMERA, view]
+        if registration is None:
+            return []
+        slots = self.run.slots(SPECTRAL_CAMERA, "sample", view, light)
+        frames = store.read_frames(SPECTRAL_CAMERA, slots)
+        position = np.asarray(self.run.rig["geometry"]["led_positions_m"][light])
+        index = self.run.index[SPECTRAL_CAMERA]
+        return [
+            (
+                band,
+                band_reflectance(
+                    self.calibration,
+                    frame,
+                    float(index["exposure_s"][slot]),
+                    band,
+                    registration.corners_xy,
+                    self.grid(view),
+                    light,
+                    position,
+                ),
+            )
+            for frame, slot, band in zip(frames, slots, self.run.image_bands(image), strict=True)
+        ]
+
+
+def _open_btf(work: DomeProcessing, out: Path, resume: bool) -> BTFStore:
+    if resume and out.exists():
+        btf = BTFStore.open(out, writable=True)
+        btf.prepare_resume()
+        return btf
+    light_dirs, view_dirs = dome_directions(work.run, work.calibration)
+    return BTFStore.create(
+        out,
+        light_dirs=light_dirs,
+        view_dirs=view_dirs,
+        texels=work.texels,
+        grid=work.calibration.grid,
+        material=work.run.material,
+        source_capture=work.run.capture_path,
+        calibration={
+            "source": work.calibration.source,
+            "rig": "dome",
+            "p_dyn": P_DYN,
+            "target_relative_noise": TARGET_RELATIVE_NOISE,
+        },
+    )
+
+
+def _solve_group(
+    work: DomeProcessing,
+    store: CaptureStore,
+    btf: BTFStore,
+    group: list[int],
+    partner: str,
+    solver: Mapping[str, object],
+) -> list[int]:
+    """Reconstruct the images ``group`` jointly and write their pairs; returns the pairs left
+    unregistered."""
+    cameras = work.run.rgb_cameras
+    shown, unregistered, rgb = [], [], []
+    for image in group:
+        view, _ = work.run.images[image]
+        for number, camera in enumerate(cameras):
+            pair = image * len(cameras) + number
+            if work.registrations[camera, view] is None:
+                unregistered.append(pair)
+                continue
+            shown.append((pair, image, camera))
+            rgb.append(work.rgb(store, image, camera))
+    if not shown:
+        return unregistered
+    position = {(image, camera): slot for slot, (_, image, camera) in enumerate(shown)}
+    band_images = [
+        BandImage(position[image, partner], band, values, band_sigma_px(values))
+        for image in group
+        if (image, partner) in position
+        for band, values in work.bands(store, image)
+    ]
+    cube = reconstruct(
+        np.stack(rgb),
+        work.calibration.response,
+        band_images=band_images,
+        p_dyn=P_DYN,
+        **solver,
+    ).spectra
+    for slot, (pair, image, camera) in enumerate(shown):
+        view, _ = work.run.images[image]
+        btf.write_pair(
+            pair,
+            cube[slot] / np.pi,
+            grid=work.calibration.grid,
+            corners_xy=work.registrations[camera, view].corners_xy,
+        )
+    return unregistered
+
+
+def process_dome(
+    capture: str | Path | CaptureStore,
+    calibration: DomeCalibration,
+    out: str | Path,
+    *,
+    texels: int | None = None,
+    manual_corners: Mapping[str, np.ndarray] | None = None,
+    resume: bool = False,
+    show_progress: bool = False,
+    solver: Mapping[str, object] | None = None,
+    created: Callable[[BTFStore], None] = lambda btf: None,
+) -> BTFStore:
+    """Turn a dome run into a spectral BTF store (module docstring).
+
+    Parameters
+    ----------
+    capture
+        The run's capture store (complete).
+    calibration
+        From :func:`recon.calibration.dome_capture.calibrate_dome` (or
+        :meth:`~recon.calibration.dome_capture.DomeCalibration.load`).
+    out
+        BTF store to create; with ``resume`` an existing one is continued.
+    texels
+        Texels across the sample (default: the capture's ``texels``).
+    manual_corners
+        Corner file contents (:func:`recon.registration.border.read_manual_corners`) keyed by
+        ``"<camera>_view<view_id>"``, for alignment frames whose marks are not found.
+    resume
+        Continue an interrupted processing: the groups with pending pairs are done again.
+    show_progress
+        Progress bars.
+    solver
+        Options of :func:`recon.spectralize.reconstruct` (``tol``, ``max_iterations``,
+        ``solver``, ``appearance``, ...).
+    created
+        Called with the BTF store once it exists (before any pair is written): a writer lock
+        moves into it.
+
+    Returns
+    -------
+    BTFStore
+        Complete unless some pairs were not registered (``unregistered_pairs``).
+    """
+    store = capture if isinstance(capture, CaptureStore) else CaptureStore.open(capture)
+    run = open_dome_run(store)
+    check_dome_run(run, calibration)
+    side = int(run.rig["texels"] if texels is None else texels)
+    work = DomeProcessing(run, calibration, side, manual_corners)
+    btf = _open_btf(work, Path(out), resume)
+    created(btf)
+    work.register(store)
+    pending = set(btf.pending_pairs())
+    cameras = len(run.rgb_cameras)
+    groups = [
+        group
+        for group in joint_groups(
+            [run.image_bands(image) for image in range(len(run.images))],
+            len(run.rig["band_schedule"]),
+            run.bands_nm.size,
+        )
+        if any(image * cameras + c in pending for image in group for c in range(cameras))
+    ]
+    partner = spectral_partner(run, calibration)
+    unregistered: list[int] = []
+    with progress_steps("process (joint groups)", len(groups), enabled=show_progress) as advance:
+        for group in groups:
+            unregistered += _solve_group(work, store, btf, group, partner, dict(solver or {}))
+            advance()
+    btf.set_attribute("unregistered_pairs", sorted(unregistered))
+    btf.set_attribute("coarse_corner_pairs", [])
+    btf.set_attribute(
+        "dome_pairs",
+        [[view, light, camera] for view, light in run.images for camera in run.rgb_cameras],
+    )
+    btf.set_attribute(
+        "marks_offset_px",
+        {
+            f"{camera}_view{view}": None if found is None else found.marks_offset_px
+            for (camera, view), found in work.registrations.items()
+        },
+    )
+    btf.set_attribute("saturated_texels", work.saturated_texels)
+    return btf
