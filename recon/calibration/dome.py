@@ -6,7 +6,8 @@ Spectral camera, in the low-SNR range its short band exposures live in (thesis 1
    :func:`recon.radiometric.dark_frames.average_dark_frames`), interpolated to any exposure time;
 2. the inverse OECF :math:`f` from an exposure series of dark-subtracted, Gaussian-filtered
    frames, offset by 30 so negative values stay on the curve (Eq. 10.4-10.8,
-   :func:`recon.radiometric.response_curve.robertson_filtered`);
+   :func:`recon.radiometric.response_curve.robertson_filtered`), its ends
+   (:data:`CURVE_END_LEVELS`) continued by straight lines;
 3. the sensitivity :math:`E_\\lambda` per band: the linearized response to a white diffuse
    reference lit by the LED, divided by the LED spectrum (and the reference's reflectance).
 
@@ -39,6 +40,7 @@ from recon.radiometric.hdr import interpolate_curve, merge_hdr
 from recon.radiometric.response_curve import robertson, robertson_filtered
 
 __all__ = [
+    "CURVE_END_LEVELS",
     "DARK_VALUE_OFFSET",
     "RgbCameraCalibration",
     "SpectralCameraCalibration",
@@ -51,6 +53,14 @@ __all__ = [
 
 DARK_VALUE_OFFSET = 30.0
 """Added to dark-subtracted values before the curve (thesis Fig. 10.3: "offset by 30")."""
+
+CURVE_END_LEVELS = 10
+"""Observed levels at each end of the spectral camera's curve that its straight extension
+replaces. Eq. 10.8 averages :math:`t_i \\tilde x_j` over the samples that land on a level, and
+at the ends of the observed range noise decides which samples do: on a dome calibration
+capture's series (12 frames of the colour checker from 20 ms, 8 dark frames per time) the
+lowest levels, 27-32, came out up to 3 DN above the line through the others, which biased a
+20 ms band frame of a dark field by a third."""
 
 
 def texel_mean(image: np.ndarray, texel_px: int) -> np.ndarray:
@@ -204,7 +214,11 @@ def calibrate_spectral_camera(
         )
     observed = np.flatnonzero(np.isfinite(curve))
     partial = SpectralCameraCalibration(
-        times, means, extend_curve(curve), (int(observed[0]), int(observed[-1])), np.ones(led.size)
+        times,
+        means,
+        extend_curve(curve, trim_levels=CURVE_END_LEVELS),
+        (int(observed[0]), int(observed[-1])),
+        np.ones(led.size),
     )
     region = np.ones(frames.shape[1:], bool) if white_region is None else white_region
     if np.shape(region) != frames.shape[1:] or not np.any(region):

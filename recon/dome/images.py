@@ -2,8 +2,9 @@
 
 For each camera and stage position the holder's registration marks are found in the alignment
 frame (every LED on; :func:`register_view`): near where the calibrated camera projects them, to
-sub-pixel accuracy by :func:`recon.registration.border.register_frame`, and the sample's square
-on the plate follows (:func:`recon.registration.sample_plane.sample_square_corners`). Every frame
+sub-pixel accuracy by :func:`recon.registration.border.register_frame` (where they are not
+found, the projection stands in), and the sample's square on the plate follows
+(:func:`recon.registration.sample_plane.sample_square_corners`). Every frame
 of that camera and position is then sampled on the texture's texels
 (:func:`recon.registration.border.extract_texture`, bilinear):
 
@@ -33,7 +34,8 @@ from recon.calibration.dome_geometric import CameraGeometry, stage_rotation
 from recon.calibration.dome_lighting import led_irradiance
 from recon.radiometric.demosaic import demosaic
 from recon.radiometric.hdr import interpolate_curve
-from recon.registration.border import extract_texture, register_frame
+from recon.registration.border import MarksNotFoundError, extract_texture, register_frame
+from recon.registration.corners import CornerRefinementError
 from recon.registration.sample_plane import sample_square_corners, texel_centres_m
 
 __all__ = [
@@ -53,15 +55,18 @@ class Registration:
     Attributes
     ----------
     marks_xy, expected_xy
-        ``(4, 2)`` the registration corners found in the alignment frame and where the
-        calibrated camera projects them.
+        ``(4, 2)`` the registration corners found in the alignment frame (or given in a
+        manual corner file) and where the calibrated camera projects them.
     corners_xy
         ``(4, 2)`` the sample's square on the plate, the texture's corners in the frame.
+    found
+        Whether the marks were found (or given); ``False``: ``marks_xy`` is the projection.
     """
 
     marks_xy: np.ndarray
     expected_xy: np.ndarray
     corners_xy: np.ndarray
+    found: bool
 
     @property
     def marks_offset_px(self) -> float:
@@ -80,17 +85,24 @@ def register_view(
     manual_corners: Mapping[str, np.ndarray] | None = None,
 ) -> Registration:
     """Register a linear alignment frame ``image`` of a camera at ``stage_deg`` (module
-    docstring); ``manual_corners`` (keyed ``frame_id``) replace the detection of marks that it
-    cannot find."""
+    docstring); ``manual_corners`` (keyed ``frame_id``) replace the detection of marks. Where
+    the marks are not found (a steep view leaves the print a pixel or two wide) the calibrated
+    camera's projection of them stands in."""
     marks_m = np.asarray(holder["registration_corners_m"], np.float64)
     expected = geometry.project(marks_m @ stage_rotation(stage_deg).T) + 0.5
-    found = register_frame(
-        image, frame_id=frame_id, manual_corners=manual_corners, expected_xy=expected
-    )
+    try:
+        marks, found = (
+            register_frame(
+                image, frame_id=frame_id, manual_corners=manual_corners, expected_xy=expected
+            ),
+            True,
+        )
+    except (MarksNotFoundError, CornerRefinementError):
+        marks, found = expected, False
     corners = sample_square_corners(
-        found, marks_m, geometry.position_in_sample(stage_deg), sample_size_m
+        marks, marks_m, geometry.position_in_sample(stage_deg), sample_size_m
     )
-    return Registration(found, expected, corners)
+    return Registration(marks, expected, corners, found)
 
 
 def rgb_alignment_image(calibration: RgbCameraCalibration, frame: np.ndarray) -> np.ndarray:

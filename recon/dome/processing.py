@@ -20,9 +20,10 @@ For a ``dome-run`` capture store and the dome's calibration
    sample frame, with the texture's corners in the camera's frame; the store is written group by
    group (an interrupted run resumes with the groups that have pending pairs).
 
-A camera whose marks are not found at a stage position (and not given in a manual corner file,
-keys ``"<camera>_view<view_id>"``) leaves its pairs there unwritten, listed in the BTF's
-``unregistered_pairs``; the spectral camera's, the band data of that position.
+Where a camera's marks are not found at a stage position (nor given in a manual corner file,
+keys ``"<camera>_view<view_id>"``) the calibrated camera's projection of them stands in; the
+BTF's ``projected_marks`` names those, ``marks_offset_px`` how far the marks found lie from
+the projection everywhere.
 
 References
 ----------
@@ -36,6 +37,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from scipy import ndimage
+from skimage.registration import phase_cross_correlation
 
 from hwbridge.dome_layout import SPECTRAL_CAMERA
 from hwbridge.store import CaptureStore
@@ -53,8 +56,7 @@ from recon.dome.images import (
 from recon.dome.run import DomeRun, joint_groups, open_dome_run
 from recon.errors import SpectwinInputError
 from recon.progress import progress_steps
-from recon.registration.border import MarksNotFoundError
-from recon.registration.corners import CornerRefinementError
+from recon.registration.border import extract_texture
 from recon.scheduling.dome_schedule import FILTER_SIZE_PER_SIGMA, filter_sizes
 from recon.spectralize.solve import BandImage, reconstruct
 
@@ -65,15 +67,22 @@ __all__ = [
     "band_sigma_px",
     "check_dome_run",
     "dome_directions",
+    "parallax_shift",
     "process_dome",
+    "spectral_partner",
 ]
 
-P_DYN = 0.5
-"""Eq. 10.2's exponent (the thesis found 0.5-0.6 best for BTFs)."""
+P_DYN = 0.0
+"""Eq. 10.2's exponent: no dynamic-range compression. The thesis found 0.5-0.6 best for BTFs;
+on the twin's reduced dome capture of the colour checker (2 stage positions x 5 LEDs x 3 RGB
+cameras, 32 texels) the diffuse fields came out at 27.8 % (Eq. 6.8) with 0.5, 13.2 % with 0.25
+and 10.8 % with 0 (``benchmarks/dome_processing.py``, BENCHMARKS.md)."""
 
-TARGET_RELATIVE_NOISE = 0.02
-"""Relative noise the band filters leave (Figure 10.5's filters nearly cancel the noise; the
-prior of Eq. 10.12 smooths what is left)."""
+TARGET_RELATIVE_NOISE = 0.04
+"""Relative noise the band filters leave. Figure 10.5's filters nearly cancel the noise; the
+thesis found smaller ones often suffice, the prior of Eq. 10.12 smoothing what is left: on the
+capture of :data:`P_DYN` filters for 0.04 gave 9.1 % against 10.8 % for 0.02 (twice as wide)
+and 48.9 % for 0.01."""
 
 _MAX_SIGMA_FRACTION = 0.25  # of the texture's side
 
@@ -139,6 +148,18 @@ def dome_directions(run: DomeRun, calibration: DomeCalibration) -> tuple[np.ndar
     )
 
 
+def parallax_shift(partner: np.ndarray, spectral: np.ndarray) -> np.ndarray:
+    """The shift ``(rows, columns)`` in texels that carries the spectral camera's texture onto
+    the partner's (both of the alignment frames, every LED on): cross-correlation to a tenth of
+    a texel (``skimage.registration.phase_cross_correlation``). The texture lies on the plate,
+    and what rises above it moves with the view (a 9.6 mm Lego brick's top by 3 texels at 32
+    texels between the spectral camera and the 37.5 degree RGB camera); thesis 10.1 registers
+    the spectral images to the RGB images "using markers or other methods like optical
+    flow"."""
+    shift, _, _ = phase_cross_correlation(partner, spectral, upsample_factor=10, normalization=None)
+    return shift
+
+
 def spectral_partner(run: DomeRun, calibration: DomeCalibration) -> str:
     """The RGB camera whose view lies nearest the spectral camera's."""
     positions = {c: r.geometry.position_m for c, r in calibration.geometry.items()}
@@ -149,13 +170,18 @@ def spectral_partner(run: DomeRun, calibration: DomeCalibration) -> str:
 
 @dataclass
 class DomeProcessing:
-    """A dome run being processed: the run, its calibration and the registrations found."""
+    """A dome run being processed: the run, its calibration, the RGB camera whose images take
+    the band data (:func:`spectral_partner`), and what registration found: per camera and
+    stage position the marks, per stage position the band data's shift onto the partner's
+    texture."""
 
     run: DomeRun
     calibration: DomeCalibration
     texels: int
+    partner: str
     manual_corners: Mapping[str, np.ndarray] | None = None
-    registrations: dict[tuple[str, int], Registration | None] = field(default_factory=dict)
+    registrations: dict[tuple[str, int], Registration] = field(default_factory=dict)
+    band_shift: dict[int, np.ndarray] = field(default_factory=dict)
     saturated_texels: int = 0
 
     def grid(self, view: int) -> TexelGrid:
@@ -163,8 +189,10 @@ class DomeProcessing:
         return TexelGrid(self.texels, self.run.sample_size_m, float(angle))
 
     def register(self, store: CaptureStore) -> None:
-        """Register every camera at every stage position (step 1)."""
+        """Register every camera at every stage position, and the spectral camera's texture
+        onto the partner's (step 1)."""
         geometry = self.run.rig["geometry"]
+        textures = {}
         for camera in (*self.run.rgb_cameras, SPECTRAL_CAMERA):
             for view in self.run.views:
                 slot = self.run.slots(camera, "alignment", view)[:1]
@@ -179,18 +207,22 @@ class DomeProcessing:
                     image = self.calibration.spectral.linear_rate(frame, exposure)
                 else:
                     image = rgb_alignment_image(self.calibration.rgb[camera], frame)
-                try:
-                    self.registrations[camera, view] = register_view(
-                        image,
-                        self.calibration.geometry[camera].geometry,
-                        geometry["holder"],
-                        geometry["stage_angles_deg"][view],
-                        self.run.sample_size_m,
-                        frame_id=f"{camera}_view{view}",
-                        manual_corners=self.manual_corners,
-                    )
-                except (MarksNotFoundError, CornerRefinementError):
-                    self.registrations[camera, view] = None
+                self.registrations[camera, view] = register_view(
+                    image,
+                    self.calibration.geometry[camera].geometry,
+                    geometry["holder"],
+                    geometry["stage_angles_deg"][view],
+                    self.run.sample_size_m,
+                    frame_id=f"{camera}_view{view}",
+                    manual_corners=self.manual_corners,
+                )
+                if camera in (self.partner, SPECTRAL_CAMERA):
+                    corners = self.registrations[camera, view].corners_xy
+                    textures[camera, view] = extract_texture(image, corners, resolution=self.texels)
+        for view in self.run.views:
+            self.band_shift[view] = parallax_shift(
+                textures[self.partner, view], textures[SPECTRAL_CAMERA, view]
+            )
 
     def rgb(self, store: CaptureStore, image: int, camera: str) -> np.ndarray:
         """:math:`V` of one image of one RGB camera, saturated texels at the image's brightest
@@ -218,24 +250,28 @@ class DomeProcessing:
         """``(band, noisy reflectance factors)`` of the spectral frames of one image."""
         view, light = self.run.images[image]
         registration = self.registrations[SPECTRAL_CAMERA, view]
-        if registration is None:
-            return []
         slots = self.run.slots(SPECTRAL_CAMERA, "sample", view, light)
         frames = store.read_frames(SPECTRAL_CAMERA, slots)
         position = np.asarray(self.run.rig["geometry"]["led_positions_m"][light])
         index = self.run.index[SPECTRAL_CAMERA]
+        shift = self.band_shift[view]
         return [
             (
                 band,
-                band_reflectance(
-                    self.calibration,
-                    frame,
-                    float(index["exposure_s"][slot]),
-                    band,
-                    registration.corners_xy,
-                    self.grid(view),
-                    light,
-                    position,
+                ndimage.shift(
+                    band_reflectance(
+                        self.calibration,
+                        frame,
+                        float(index["exposure_s"][slot]),
+                        band,
+                        registration.corners_xy,
+                        self.grid(view),
+                        light,
+                        position,
+                    ),
+                    shift,
+                    order=1,
+                    mode="nearest",
                 ),
             )
             for frame, slot, band in zip(frames, slots, self.run.image_bands(image), strict=True)
@@ -270,47 +306,28 @@ def _solve_group(
     store: CaptureStore,
     btf: BTFStore,
     group: list[int],
-    partner: str,
     solver: Mapping[str, object],
-) -> list[int]:
-    """Reconstruct the images ``group`` jointly and write their pairs; returns the pairs left
-    unregistered."""
+) -> None:
+    """Reconstruct the images ``group`` jointly and write their pairs (step 2 and 3)."""
     cameras = work.run.rgb_cameras
-    shown, unregistered, rgb = [], [], []
-    for image in group:
-        view, _ = work.run.images[image]
-        for number, camera in enumerate(cameras):
-            pair = image * len(cameras) + number
-            if work.registrations[camera, view] is None:
-                unregistered.append(pair)
-                continue
-            shown.append((pair, image, camera))
-            rgb.append(work.rgb(store, image, camera))
-    if not shown:
-        return unregistered
-    position = {(image, camera): slot for slot, (_, image, camera) in enumerate(shown)}
+    shown = [(image, camera) for image in group for camera in cameras]
+    rgb = np.stack([work.rgb(store, image, camera) for image, camera in shown])
     band_images = [
-        BandImage(position[image, partner], band, values, band_sigma_px(values))
+        BandImage(shown.index((image, work.partner)), band, values, band_sigma_px(values))
         for image in group
-        if (image, partner) in position
         for band, values in work.bands(store, image)
     ]
     cube = reconstruct(
-        np.stack(rgb),
-        work.calibration.response,
-        band_images=band_images,
-        p_dyn=P_DYN,
-        **solver,
+        rgb, work.calibration.response, band_images=band_images, p_dyn=P_DYN, **solver
     ).spectra
-    for slot, (pair, image, camera) in enumerate(shown):
+    for slot, (image, camera) in enumerate(shown):
         view, _ = work.run.images[image]
         btf.write_pair(
-            pair,
+            image * len(cameras) + cameras.index(camera),
             cube[slot] / np.pi,
             grid=work.calibration.grid,
             corners_xy=work.registrations[camera, view].corners_xy,
         )
-    return unregistered
 
 
 def process_dome(
@@ -355,13 +372,15 @@ def process_dome(
     Returns
     -------
     BTFStore
-        Complete unless some pairs were not registered (``unregistered_pairs``).
+        The store, complete.
     """
     store = capture if isinstance(capture, CaptureStore) else CaptureStore.open(capture)
     run = open_dome_run(store)
     check_dome_run(run, calibration)
     side = int(run.rig["texels"] if texels is None else texels)
-    work = DomeProcessing(run, calibration, side, manual_corners)
+    work = DomeProcessing(
+        run, calibration, side, spectral_partner(run, calibration), manual_corners
+    )
     btf = _open_btf(work, Path(out), resume)
     created(btf)
     work.register(store)
@@ -376,24 +395,26 @@ def process_dome(
         )
         if any(image * cameras + c in pending for image in group for c in range(cameras))
     ]
-    partner = spectral_partner(run, calibration)
-    unregistered: list[int] = []
     with progress_steps("process (joint groups)", len(groups), enabled=show_progress) as advance:
         for group in groups:
-            unregistered += _solve_group(work, store, btf, group, partner, dict(solver or {}))
+            _solve_group(work, store, btf, group, dict(solver or {}))
             advance()
-    btf.set_attribute("unregistered_pairs", sorted(unregistered))
+    registrations = {f"{camera}_view{view}": r for (camera, view), r in work.registrations.items()}
+    btf.set_attribute("unregistered_pairs", [])
     btf.set_attribute("coarse_corner_pairs", [])
+    btf.set_attribute(
+        "projected_marks", sorted(name for name, r in registrations.items() if not r.found)
+    )
+    btf.set_attribute(
+        "marks_offset_px", {name: r.marks_offset_px for name, r in registrations.items()}
+    )
     btf.set_attribute(
         "dome_pairs",
         [[view, light, camera] for view, light in run.images for camera in run.rgb_cameras],
     )
-    btf.set_attribute(
-        "marks_offset_px",
-        {
-            f"{camera}_view{view}": None if found is None else found.marks_offset_px
-            for (camera, view), found in work.registrations.items()
-        },
-    )
     btf.set_attribute("saturated_texels", work.saturated_texels)
+    btf.set_attribute("band_partner", work.partner)
+    btf.set_attribute(
+        "band_shift_texels", {str(view): shift.tolist() for view, shift in work.band_shift.items()}
+    )
     return btf

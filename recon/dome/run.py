@@ -106,7 +106,8 @@ def joint_groups(
     groups = [list(range(start, min(start + cycle, count))) for start in range(0, count, cycle)]
     last = {band for image in groups[-1] for band in bands_per_image[image]}
     if len(groups) > 1 and len(last) < n_bands:
-        groups[-2] += groups.pop()
+        merged = groups.pop()
+        groups[-1] += merged
     return groups
 
 

@@ -1,0 +1,188 @@
+"""A rendered twin dome capture processed into a spectral BTF without a renderer (thesis 10.1-10.4).
+
+One capture, shared by the module: the calibration program and runs of the colour checker and
+of the Lego bricks, rendered by Mitsuba at a reduced size (``SIZE``: 2 stage positions x 5 LEDs
+x 3 RGB cameras at arc indices 0, 5 and 10, 32 texels; 10 images per material, one cycle of
+the band schedule, 30 direction pairs). The calibration and both runs are then processed in a
+subprocess in which ``twin``, ``mitsuba`` and ``drjit`` cannot be imported, and the BTFs are
+compared with the twin's truth. The size of ``benchmarks/dome_processing.py`` (2 x 24 x 3 at 64
+texels) is timed there.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from recon.btf.store import BTFStore
+from recon.calibration.dome_capture import DomeCalibration
+from twin.cli.app import app
+from twin.dome.capture import dome_cameras
+from twin.dome.programs import DomeCaptureSize, dome_calibration_program, dome_run_program
+from twin.validate.dome_evaluation import evaluate_dome
+
+pytestmark = pytest.mark.render
+
+ROOT = Path(__file__).resolve().parents[2]
+SEED = 11
+SIZE = DomeCaptureSize(stage_positions=2, leds=5, rgb_cameras=3, texels=32, spp=64)
+MATERIALS = ("colorchecker16", "lego")
+
+NO_RENDERER = textwrap.dedent(
+    """
+    import importlib.abc
+    import sys
+
+    class NoRenderer(importlib.abc.MetaPathFinder):
+        '''Refuses twin, mitsuba and drjit, as on a machine without the renderer.'''
+
+        def find_spec(self, name, path=None, target=None):
+            if name.partition(".")[0] in {"twin", "mitsuba", "drjit"}:
+                raise ImportError(f"{name} is not installed here")
+            return None
+
+    sys.meta_path.insert(0, NoRenderer())
+    """
+)
+
+
+def run_without_renderer(code: str, *arguments: str) -> subprocess.CompletedProcess:
+    """Run ``code`` in a fresh interpreter in which ``twin``, ``mitsuba`` and ``drjit`` raise
+    ImportError (a ``sys.meta_path`` finder installed before anything else is imported)."""
+    return subprocess.run(
+        [sys.executable, "-c", NO_RENDERER + textwrap.dedent(code), *arguments],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        check=False,
+    )
+
+
+PROCESS = """
+import json, sys
+from pathlib import Path
+
+from recon.calibration.dome_capture import calibrate_dome
+from recon.dome.processing import process_dome
+
+root = Path(sys.argv[1])
+calibration = calibrate_dome(root / "cal.capture.zarr")
+calibration.save(root / "cal.npz")
+for material in sys.argv[2:]:
+    process_dome(root / f"{material}.capture.zarr", calibration, root / f"{material}.btf.zarr")
+try:
+    import twin  # noqa: F401
+    blocked = False
+except ImportError:
+    blocked = True
+loaded = sorted({m.partition(".")[0] for m in sys.modules} & {"twin", "mitsuba", "drjit"})
+print(json.dumps({"blocked": blocked, "loaded": loaded}))
+"""
+
+
+@pytest.fixture(scope="module")
+def root(tmp_path_factory) -> Path:
+    """The captures, then their processing without a renderer."""
+    folder = tmp_path_factory.mktemp("dome")
+    dome_calibration_program(size=SIZE, dark_frames=16, seed=SEED).run(folder / "cal.capture.zarr")
+    for material in MATERIALS:
+        dome_run_program(material, size=SIZE, seed=SEED).run(folder / f"{material}.capture.zarr")
+    result = run_without_renderer(PROCESS, str(folder), *MATERIALS)
+    (folder / "process.json").write_text(result.stdout.strip().splitlines()[-1] if result.stdout else "")
+    assert result.returncode == 0, result.stderr[-3000:]
+    return folder
+
+
+@pytest.fixture(scope="module")
+def evaluations(root):
+    return {material: evaluate_dome(root / f"{material}.btf.zarr") for material in MATERIALS}
+
+
+def test_processing_runs_without_twin_mitsuba_or_drjit(root):
+    """The calibration and both runs were processed in an interpreter that refuses the three
+    (the refusal itself checked there), and none of them was loaded."""
+    report = json.loads((root / "process.json").read_text())
+    assert report == {"blocked": True, "loaded": []}
+    for material in MATERIALS:
+        btf = BTFStore.open(root / f"{material}.btf.zarr")
+        assert btf.complete and btf.shape == (30, 32, 32, 30)
+
+
+def test_the_blocker_refuses_a_renderer_import():
+    result = run_without_renderer("import mitsuba")
+    assert result.returncode == 1 and "mitsuba is not installed here" in result.stderr
+
+
+def test_cameras_calibrate_near_their_nominal_pose(root):
+    """OpenCV on the checkerboard frames: every camera that sees the board in a frame is placed
+    within 5 mm and 0.3 degrees of the store's nominal camera (the twin's, exactly), reprojecting
+    the corners within 0.3 px; the 75 degree camera sees the board in at most one frame."""
+    calibration = DomeCalibration.load(root / "cal.npz")
+    for camera, result in calibration.geometry.items():
+        deviation = calibration.nominal_deviation[camera]
+        if result.frames_used == 0:
+            assert camera == "rgb10" and result.fitted == "nothing"
+            continue
+        assert result.reprojection_rms_px < 0.3, camera
+        assert deviation["position_mm"] < 5 and deviation["rotation_deg"] < 0.3, camera
+    assert calibration.geometry["rgb00"].frames_used >= 4
+    assert calibration.geometry["spectral"].frames_used >= 4
+
+
+def test_band_sensitivities_follow_the_camera_model(root):
+    """10.3: the sensitivity E (white standard's linear rate over LED x reflectance, over the
+    pixels that see it) has the shape of the camera model's electrons per unit LED intensity
+    through each band, within 1 %."""
+    calibration = DomeCalibration.load(root / "cal.npz")
+    cameras = dome_cameras(1, texel_px=2, bands_nm=calibration.bands_nm)
+    _, white_rates = cameras.white_rates()
+    model = white_rates / (calibration.led_per_band * calibration.white_per_band)
+    ratio = calibration.spectral.sensitivity / model
+    assert np.ptp(ratio) / ratio.mean() < 0.01
+
+
+def test_rectified_texels_register_within_half_a_pixel(evaluations):
+    """The texture's corners in every camera's frame lie within 0.5 px of the nominal camera's
+    projection of the sample's square, and the textures within 0.5 texel of the truth's
+    (phase correlation of the colour checker's band means; the Lego's studs repeat every 8
+    texels, which makes its correlation ambiguous)."""
+    for evaluation in evaluations.values():
+        assert evaluation.corner_error_px.max() < 0.5
+    assert evaluations["colorchecker16"].shift_texels.max() < 0.5
+
+
+@pytest.mark.parametrize(
+    ("material", "relative_pct", "delta_e94"),
+    [("colorchecker16", 15.0, 4.0), ("lego", 60.0, 12.0)],
+)
+def test_the_spectral_btf_meets_the_truth(evaluations, material, relative_pct, delta_e94):
+    """Eq. 6.8 and Delta E94 against the twin's truth, on the colour checker's diffuse fields
+    and on the Lego's material texels (bounds: BENCHMARKS.md, "Dome processing")."""
+    summary = evaluations[material].summary()
+    what = "diffuse_fields" if material == "colorchecker16" else "material_texels"
+    assert summary[f"mean_relative_error_{what}_pct"] < relative_pct
+    assert summary[f"mean_delta_e94_{what}"] < delta_e94
+
+
+def test_process_refuses_workers_for_a_dome_run(root, tmp_path):
+    result = CliRunner().invoke(
+        app,
+        [
+            "process",
+            str(root / "lego.capture.zarr"),
+            "--calibration",
+            str(root / "cal.npz"),
+            "--out",
+            str(tmp_path / "x.btf.zarr"),
+            "--workers",
+            "2",
+        ],
+    )
+    assert result.exit_code == 2 and "--workers is not used for a dome run" in result.output
