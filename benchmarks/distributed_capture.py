@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.common import machine_description
+from benchmarks.common import machine_description, timed
 from hwbridge.store import CaptureStore
 from recon.calibration.gonio import GonioCalibration
 from recon.calibration.spectral import HMI_FLICKER_PERIOD_S
@@ -35,12 +35,6 @@ from twin.materials import load_material
 from twin.render.variant import activate
 from twin.rigs.rig_config import load_rig
 from twin.studies.demo import DEMO_RINGS
-
-
-def _timed(function):
-    started = time.perf_counter()
-    result = function()
-    return result, round(time.perf_counter() - started, 2)
 
 
 def _cpu_s() -> float:
@@ -108,16 +102,16 @@ def main() -> None:
         )
 
     cpu_s = _cpu_s()
-    serial, serial_s = _timed(lambda: capture("serial", None))
+    serial, serial_s = timed(lambda: capture("serial", None))
     serial_cpu_s = _cpu_s() - cpu_s
-    serial_btf, serial_process_s = _timed(lambda: process("serial", None))
+    serial_btf, serial_process_s = timed(lambda: process("serial", None))
     started = time.perf_counter()
     with dask_client(arguments.workers) as client:
         start_s = round(time.perf_counter() - started, 2)
         workers_cpu_s = client.run(_cpu_s)
-        cluster, cluster_s = _timed(lambda: capture("cluster", client))
+        cluster, cluster_s = timed(lambda: capture("cluster", client))
         cluster_cpu_s = sum(client.run(_cpu_s).values()) - sum(workers_cpu_s.values())
-        cluster_btf, cluster_process_s = _timed(lambda: process("cluster", client))
+        cluster_btf, cluster_process_s = timed(lambda: process("cluster", client))
     frames = serial.frames(CAMERA_ID).shape[0]
     results["capture"] = {
         "frames": frames,

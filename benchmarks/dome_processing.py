@@ -16,22 +16,15 @@ import argparse
 import json
 import shutil
 import tempfile
-import time
 from pathlib import Path
 
 from threadpoolctl import threadpool_limits
 
-from benchmarks.common import machine_description, peak_rss_mib
+from benchmarks.common import machine_description, peak_rss_mib, timed
 from recon.calibration.dome_capture import calibrate_dome
 from recon.dome.processing import process_dome
 from twin.dome.programs import DomeCaptureSize, dome_calibration_program, dome_run_program
 from twin.validate.dome_evaluation import evaluate_dome
-
-
-def _timed(function):
-    started = time.perf_counter()
-    result = function()
-    return result, round(time.perf_counter() - started, 1)
 
 
 def main() -> None:
@@ -78,14 +71,14 @@ def main() -> None:
     }
     for name, program in programs.items():
         if not stores[name].exists():
-            _, seconds = _timed(lambda program=program, name=name: program.run(stores[name]))
+            _, seconds = timed(lambda program=program, name=name: program.run(stores[name]))
             results[f"{name}_capture_render_s"] = seconds
         results[f"{name}_frames"] = len(program.plan)
     btf_path = root / f"{arguments.material}.btf.zarr"
     shutil.rmtree(btf_path, ignore_errors=True)
     with threadpool_limits(arguments.threads):
-        calibration, results["calibrate_s"] = _timed(lambda: calibrate_dome(stores["calibration"]))
-        btf, results["process_s"] = _timed(
+        calibration, results["calibrate_s"] = timed(lambda: calibrate_dome(stores["calibration"]))
+        btf, results["process_s"] = timed(
             lambda: process_dome(stores["run"], calibration, btf_path)
         )
     results["btf_shape"] = list(btf.shape)

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -68,6 +68,7 @@ __all__ = [
     "DomeCalibration",
     "band_response",
     "calibrate_dome",
+    "dome_rig",
     "reference_band_nm",
     "rgb_linear_image",
     "rig_spectrum",
@@ -84,6 +85,21 @@ WHITE_FRACTION = 0.9
 
 SERIES_SIGMA_PX = 2.0
 """Gaussian filter of the spectral camera's filtered Robertson recovery (Eq. 10.4)."""
+
+
+def dome_rig(store: CaptureStore, program: str, keys: Sequence[str]) -> dict[str, Any]:
+    """The ``rig`` attribute of a dome capture made by ``program`` (``dome-calibration`` or
+    ``dome-run``) that has ``keys``; anything else is refused, naming what it is or lacks."""
+    rig = store.attrs.get("rig") or {}
+    if rig.get("rig") != "dome" or rig.get("program") != program:
+        raise SpectwinInputError(
+            f"{store.path}: expected a {program} capture of the dome (spectwin capture "
+            f"--program {program}), got program {rig.get('program')!r}"
+        )
+    missing = [key for key in keys if key not in rig]
+    if missing:
+        raise SpectwinInputError(f"{store.path}: the capture's rig attribute lacks {missing}")
+    return rig
 
 
 def rig_spectrum(rig: Mapping[str, Any], name: str, grid: WavelengthGrid) -> np.ndarray:
@@ -466,15 +482,7 @@ def calibrate_dome(
     DomeCalibration
     """
     store = store if isinstance(store, CaptureStore) else CaptureStore.open(store)
-    rig = store.attrs.get("rig") or {}
-    if rig.get("rig") != "dome" or rig.get("program") != "dome-calibration":
-        raise SpectwinInputError(
-            f"{store.path}: expected a dome calibration capture (spectwin capture --program "
-            f"dome-calibration), got program {rig.get('program')!r}"
-        )
-    missing = [name for name in ("rgb_response", "led_spectrum") if name not in rig]
-    if missing:
-        raise SpectwinInputError(f"{store.path}: the capture's rig attribute lacks {missing}")
+    rig = dome_rig(store, "dome-calibration", ("rgb_response", "led_spectrum"))
     grid = WavelengthGrid(np.asarray(rig["bands_nm"], np.float64))
     led = rig_spectrum(rig, "led_spectrum", grid)
     white_reflectance = rig_spectrum(rig, "white_reflectance", grid)

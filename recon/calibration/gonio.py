@@ -86,9 +86,7 @@ def dark_model(store: CaptureStore, camera: str) -> DarkModel:
     return DarkModel(times, means)
 
 
-def extend_curve(
-    curve: np.ndarray, *, fit_levels: int = 64, trim_levels: int = 0
-) -> np.ndarray:
+def extend_curve(curve: np.ndarray, *, fit_levels: int = 64, trim_levels: int = 0) -> np.ndarray:
     """Fill the NaN ends of an inverse response (levels never observed) by straight lines fitted
     to the ``fit_levels`` outermost observed levels, so dark frames and rare values just
     outside the observed range still linearize; ``trim_levels`` observed levels at each end

@@ -307,19 +307,25 @@ def _solve_group(
     btf: BTFStore,
     group: list[int],
     solver: Mapping[str, object],
+    advance: Callable[..., None],
 ) -> None:
-    """Reconstruct the images ``group`` jointly and write their pairs (step 2 and 3)."""
+    """Reconstruct the images ``group`` jointly and write their pairs (step 2 and 3);
+    ``advance`` once per image read and by the group's size once solved."""
     cameras = work.run.rgb_cameras
     shown = [(image, camera) for image in group for camera in cameras]
-    rgb = np.stack([work.rgb(store, image, camera) for image, camera in shown])
-    band_images = [
-        BandImage(shown.index((image, work.partner)), band, values, band_sigma_px(values))
-        for image in group
-        for band, values in work.bands(store, image)
-    ]
+    rgb, band_images = [], []
+    for image in group:
+        rgb += [work.rgb(store, image, camera) for camera in cameras]
+        partner = shown.index((image, work.partner))
+        band_images += [
+            BandImage(partner, band, values, band_sigma_px(values))
+            for band, values in work.bands(store, image)
+        ]
+        advance()
     cube = reconstruct(
-        rgb, work.calibration.response, band_images=band_images, p_dyn=P_DYN, **solver
+        np.stack(rgb), work.calibration.response, band_images=band_images, p_dyn=P_DYN, **solver
     ).spectra
+    advance(len(group))
     for slot, (image, camera) in enumerate(shown):
         view, _ = work.run.images[image]
         btf.write_pair(
@@ -347,10 +353,10 @@ def process_dome(
     Parameters
     ----------
     capture
-        The run's capture store (complete).
+        A complete ``dome-run`` capture store.
     calibration
-        From :func:`recon.calibration.dome_capture.calibrate_dome` (or
-        :meth:`~recon.calibration.dome_capture.DomeCalibration.load`).
+        The dome's calibration (:func:`recon.calibration.dome_capture.calibrate_dome`, or a
+        saved one: :meth:`~recon.calibration.dome_capture.DomeCalibration.load`).
     out
         BTF store to create; with ``resume`` an existing one is continued.
     texels
@@ -395,10 +401,10 @@ def process_dome(
         )
         if any(image * cameras + c in pending for image in group for c in range(cameras))
     ]
-    with progress_steps("process (joint groups)", len(groups), enabled=show_progress) as advance:
+    steps = 2 * sum(len(group) for group in groups)  # reading the images, then solving them
+    with progress_steps("process (read, solve)", steps, enabled=show_progress) as advance:
         for group in groups:
-            _solve_group(work, store, btf, group, dict(solver or {}))
-            advance()
+            _solve_group(work, store, btf, group, dict(solver or {}), advance)
     registrations = {f"{camera}_view{view}": r for (camera, view), r in work.registrations.items()}
     btf.set_attribute("unregistered_pairs", [])
     btf.set_attribute("coarse_corner_pairs", [])

@@ -22,6 +22,7 @@ import numpy as np
 
 from hwbridge.dome_layout import SPECTRAL_CAMERA
 from hwbridge.store import CaptureStore
+from recon.calibration.dome_capture import dome_rig
 from recon.errors import SpectwinInputError
 
 __all__ = ["DomeRun", "joint_groups", "open_dome_run"]
@@ -115,15 +116,7 @@ def open_dome_run(capture: str | Path | CaptureStore) -> DomeRun:
     """Read a dome run's attributes and index; refuse a store that is not one, naming what it
     lacks, before any frame is read."""
     store = capture if isinstance(capture, CaptureStore) else CaptureStore.open(capture)
-    rig = store.attrs.get("rig") or {}
-    if rig.get("rig") != "dome" or rig.get("program") != "dome-run":
-        raise SpectwinInputError(
-            f"{store.path}: expected a dome run (spectwin capture --program dome-run), got "
-            f"program {rig.get('program')!r}"
-        )
-    missing = [key for key in _RIG_KEYS if key not in rig]
-    if missing:
-        raise SpectwinInputError(f"{store.path}: the run's rig attribute lacks {missing}")
+    rig = dome_rig(store, "dome-run", _RIG_KEYS)
     cameras = list(rig["geometry"]["cameras"])
     if SPECTRAL_CAMERA not in cameras or len(cameras) < 2:
         raise SpectwinInputError(

@@ -1,7 +1,7 @@
-"""``spectwin calibrate``, ``process`` and ``evaluate`` of the LED dome's stores.
+"""``spectwin calibrate`` and ``process`` of the LED dome's capture stores.
 
-The commands of :mod:`twin.cli.gonio` hand a dome store (``rig == "dome"`` in a capture store;
-a BTF store processed from a dome run) to these functions:
+The commands of :mod:`twin.cli.gonio` hand a dome store (``rig == "dome"``) to these functions
+(``evaluate`` tells a dome BTF by its ``dome_pairs``):
 
     spectwin capture out/cal.capture.zarr --program dome-calibration --leds 24 --rgb-cameras 3
     spectwin calibrate out/cal.capture.zarr --out out/dome_cal.npz
@@ -22,9 +22,9 @@ import numpy as np
 import typer
 
 from twin.cli.errors import INTERRUPTED, fail, require_output_file, require_output_folder
-from twin.cli.output import console, print_summary
+from twin.cli.output import print_summary
 
-__all__ = ["DEFAULT_CALIBRATION", "calibrate_dome_store", "evaluate_dome_btf", "process_dome_store"]
+__all__ = ["DEFAULT_CALIBRATION", "calibrate_dome_store", "process_dome_store"]
 
 DEFAULT_CALIBRATION = Path("dome_cal.npz")
 """Where ``spectwin calibrate`` writes a dome calibration without ``--out``."""
@@ -55,8 +55,8 @@ def calibrate_dome_store(capture, store: Path, out: Path | None, as_json: bool) 
         )
         if result.reprojection_rms_px is not None:
             summary[f"{camera} reprojection_rms_px"] = result.reprojection_rms_px
-        summary[f"{camera} off nominal_mm"] = deviation["position_mm"]
-        summary[f"{camera} off nominal_deg"] = deviation["rotation_deg"]
+        summary[f"{camera} position off nominal_mm"] = deviation["position_mm"]
+        summary[f"{camera} orientation off nominal_deg"] = deviation["rotation_deg"]
     if as_json:
         summary = calibration.summary() | {"calibration": str(out)}
     print_summary(summary, "dome calibration", as_json)
@@ -115,18 +115,3 @@ def process_dome_store(
         "saturated_texels": attrs["saturated_texels"],
     }
     print_summary(summary, "dome processing", as_json)
-
-
-def evaluate_dome_btf(btf: Path, figure: Path | None, spp: int, as_json: bool) -> None:
-    """Compare a BTF processed from a dome run with the twin's truth."""
-    from twin.validate.dome_evaluation import evaluate_dome, write_dome_figure
-
-    if figure is not None:
-        require_output_file(figure, "--figure")
-    with console.status("rendering the truth and comparing"):
-        result = evaluate_dome(btf, spp=spp)
-    summary = result.summary()
-    if figure is not None:
-        figure.parent.mkdir(parents=True, exist_ok=True)
-        summary["figure"] = str(write_dome_figure(result, figure))
-    print_summary(summary, "dome BTF vs the twin's truth", as_json)

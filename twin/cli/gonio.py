@@ -698,23 +698,26 @@ def evaluate(
     Example: spectwin evaluate out/cc.btf.zarr --figure out/cc_vs_truth.png --json
     """
     from recon.btf.store import BTFStore
+    from twin.validate.dome_evaluation import evaluate_dome, write_dome_figure
     from twin.validate.gonio_evaluation import evaluate_gonio, write_gonio_figure
 
     require_sound_btf(btf, "evaluate", allow_unregistered=True)
-    if "dome_pairs" in BTFStore.open(btf).attrs:
-        from twin.cli.dome_pipeline import evaluate_dome_btf
-
-        evaluate_dome_btf(btf, figure, spp, as_json)
-        return
     if figure is not None:
         require_output_file(figure, "--figure")
+    dome = "dome_pairs" in BTFStore.open(btf).attrs
     with console.status("rendering the truth and comparing"):
-        result = evaluate_gonio(btf, spp=spp)
+        result = evaluate_dome(btf, spp=spp) if dome else evaluate_gonio(btf, spp=spp)
     summary = result.summary()
     if figure is not None:
         figure.parent.mkdir(parents=True, exist_ok=True)
-        summary["figure"] = str(write_gonio_figure(result, BTFStore.open(btf), figure))
-    print_summary(summary, "BTF vs the twin's truth", as_json)
+        written = (
+            write_dome_figure(result, figure)
+            if dome
+            else write_gonio_figure(result, BTFStore.open(btf), figure)
+        )
+        summary["figure"] = str(written)
+    title = "dome BTF vs the twin's truth" if dome else "BTF vs the twin's truth"
+    print_summary(summary, title, as_json)
 
 
 def validate(

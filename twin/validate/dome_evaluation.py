@@ -119,8 +119,10 @@ class DomeEvaluation:
             "material": self.material,
             "pairs_compared": int(self.pairs.size),
             f"mean_relative_error_{what}_pct": float(np.nanmean(self.relative_pct)),
+            f"median_relative_error_{what}_pct": float(np.nanmedian(self.relative_pct)),
             f"p95_relative_error_{what}_pct": float(np.nanpercentile(self.relative_pct, 95)),
             f"mean_delta_e94_{what}": float(np.nanmean(self.delta_e94)),
+            f"median_delta_e94_{what}": float(np.nanmedian(self.delta_e94)),
             f"p95_delta_e94_{what}": float(np.nanpercentile(self.delta_e94, 95)),
             "per_texel_relative_error_pct": float(self.texel_relative_pct.mean()),
             "per_texel_delta_e94": float(self.texel_delta_e94.mean()),
@@ -276,44 +278,49 @@ def evaluate_dome(
 
 
 def write_dome_figure(evaluation: DomeEvaluation, path: str | Path) -> Path:
-    """Four panels: the error histograms (Eq. 6.8, Delta E94), measured against true spectra
-    of the pair with the median error, and that pair's measured and true textures (sRGB
-    previews under equal energy)."""
+    """Six panels: the error histograms (Eq. 6.8, Delta E94), the mean errors per RGB camera,
+    measured against true spectra of the pair with the median error, and that pair's measured
+    and true textures (sRGB previews under equal energy)."""
     path = Path(path)
-    figure = Figure(figsize=(13, 9))
-    axes = figure.subplots(2, 2)
+    figure = Figure(figsize=(16, 9))
+    axes = figure.subplots(2, 3)
     what = "diffuse field" if evaluation.chart else "material texel"
     for axis, values, label in (
         (axes[0, 0], evaluation.relative_pct, "relative error (Eq. 6.8), %"),
         (axes[0, 1], evaluation.delta_e94, "Delta E94 (ten CIE illuminants)"),
     ):
         finite = values[np.isfinite(values)]
-        axis.hist(finite, bins=40, color="tab:blue")
+        axis.hist(finite, bins=np.linspace(0, np.percentile(finite, 99), 40), color="tab:blue")
         axis.axvline(finite.mean(), color="k", linewidth=1)
         axis.set(
-            xlabel=label,
+            xlabel=f"{label}; 99 % of them shown",
             ylabel=f"{what} x pair count",
-            title=f"{evaluation.material}: mean {finite.mean():.2f}, 95th percentile "
-            f"{np.percentile(finite, 95):.2f}",
+            title=f"{evaluation.material}: mean {finite.mean():.2f}, median "
+            f"{np.median(finite):.2f}",
         )
+    cameras = list(dict.fromkeys(evaluation.cameras.tolist()))
+    means = [np.nanmean(evaluation.relative_pct[evaluation.cameras == c]) for c in cameras]
+    axes[0, 2].bar(cameras, means, color="tab:blue")
+    axes[0, 2].set(ylabel="mean relative error (Eq. 6.8), %", title="per RGB camera")
     per_pair = np.nanmean(evaluation.relative_pct, axis=1)
     median = int(np.argsort(per_pair)[per_pair.size // 2])
     measured, truth = evaluation.measured[median], evaluation.truth[median]
-    wavelengths = evaluation.grid.wavelengths_nm
     rows = np.linspace(0, measured.shape[0] - 1, 4).astype(int)[1:-1]
     for row in rows:
         for column in rows:
+            wavelengths = evaluation.grid.wavelengths_nm
             (line,) = axes[1, 0].plot(wavelengths, truth[row, column])
             axes[1, 0].plot(wavelengths, measured[row, column], "o", color=line.get_color())
+    pair = evaluation.pairs[median]
     axes[1, 0].set(
         xlabel="wavelength, nm",
         ylabel="reflectance factor",
-        title=f"pair {evaluation.pairs[median]}: lines truth, dots measured (4 texels)",
+        title=f"pair {pair}: lines truth, dots measured (4 texels)",
     )
-    previews = [spectral_to_srgb(image, evaluation.grid) for image in (measured, truth)]
-    axes[1, 1].imshow(np.concatenate(previews, axis=1))
-    axes[1, 1].set_title(f"pair {evaluation.pairs[median]}: measured | truth", fontsize=9)
-    axes[1, 1].axis("off")
+    for axis, image, name in ((axes[1, 1], measured, "measured"), (axes[1, 2], truth, "truth")):
+        axis.imshow(spectral_to_srgb(image, evaluation.grid))
+        axis.set_title(f"pair {pair} ({evaluation.cameras[median]}): {name}", fontsize=9)
+        axis.axis("off")
     figure.tight_layout()
-    figure.savefig(path, dpi=110)
+    figure.savefig(path, dpi=100)
     return path
