@@ -19,8 +19,9 @@ checkerboard flat on the holder and on a wedge at several stage positions, every
    its standard deviation (:func:`focal_length_uncertainty`) is below
    :data:`FOCAL_LENGTH_TOLERANCE`, else the nominal one stays and the pose is fitted.
 
-The board's 180 degree symmetry lets OpenCV list its corners from either end; the nominal
-camera (the rig's design) picks the listing whose projection lies nearer.
+OpenCV lists the board's corners from any of its ends (its 180 degree symmetry, and rows or
+columns in reverse); the nominal camera (the rig's design) picks the listing whose projection
+lies nearest.
 
 Conventions: OpenCV's camera model (x right, y down, z forward; pixel centres at integer
 coordinates); the world frame of :mod:`hwbridge.dome_layout` (origin at the sample centre on the
@@ -244,12 +245,14 @@ def focal_length_uncertainty(
     return float(np.sqrt(covariance[6, 6]) / camera_matrix[0, 0])
 
 
-def _listing(found: np.ndarray, expected: np.ndarray) -> np.ndarray:
-    """``found`` or its reverse (the board turned by 180 degrees), whichever lies nearer to the
-    expected image points."""
-    forward = np.linalg.norm(found - expected, axis=1).mean()
-    backward = np.linalg.norm(found[::-1] - expected, axis=1).mean()
-    return found if forward <= backward else found[::-1]
+def _listing(found: np.ndarray, expected: np.ndarray, inner_corners: tuple[int, int]):
+    """``found`` reordered to the board's listing: as OpenCV listed them, from the opposite
+    end (the board turned by 180 degrees), or with its rows or columns in reverse, whichever
+    lies nearest to the expected image points."""
+    grid = found.reshape(inner_corners[1], inner_corners[0], 2)
+    candidates = [grid, grid[::-1, ::-1], grid[::-1], grid[:, ::-1]]
+    distances = [np.linalg.norm(c.reshape(-1, 2) - expected, axis=1).mean() for c in candidates]
+    return candidates[int(np.argmin(distances))].reshape(-1, 2)
 
 
 def calibrate_camera_geometry(
@@ -297,7 +300,7 @@ def calibrate_camera_geometry(
             continue
         world = points @ np.asarray(pose)[:3, :3].T + np.asarray(pose)[:3, 3]
         world_points.append(world)
-        image_points.append(_listing(found, nominal.project(world)))
+        image_points.append(_listing(found, nominal.project(world), inner_corners))
     if not image_points:
         return GeometricCalibration(nominal, 0, len(images), None, "nothing")
     every_world, every_image = np.concatenate(world_points), np.concatenate(image_points)

@@ -7,11 +7,11 @@ camera defines it (LCTF x quantum efficiency x LED, :func:`spectral_passbands`: 
 calibration measures); both are compared as reflectance factors (pi x the BTF's 1/sr):
 
 - materials with chart fields (``field_*``): per pair and diffuse field (the fields without
-  gloss), the field's interior (:func:`twin.validate.gonio_evaluation.field_masks`): Eq. 6.8
+  gloss), the field's interior (:func:`twin.materials.chart_fields.field_masks`): Eq. 6.8
   and Delta E94 (the thesis's ten illuminants) of the interior's mean spectra, and their means
   over the interior's texels;
 - other materials: per texel, over the texels that show the material (its own render, without
-  the holder, at least :data:`twin.dome.capture_study.MATERIAL_TEXEL_REFLECTANCE`), in the pairs
+  the holder, at least :data:`twin.materials.textures.MATERIAL_TEXEL_REFLECTANCE`), in the pairs
   away from the mirror configuration (half vector more than :data:`SPECULAR_DEG` from the
   normal): there a glossy sample's highlight depends on the LED's and the camera's distance
   (a spot under the dome's LED 0.75 m away, the whole sample under the truth's distant light)
@@ -44,11 +44,11 @@ from recon.preview import spectral_to_srgb
 from recon.spectra import SampledSpectra, WavelengthGrid
 from twin.components.lamps import FINE_GRID
 from twin.dome.capture import dome_cameras
-from twin.dome.capture_study import MATERIAL_TEXEL_REFLECTANCE
 from twin.materials import load_material
+from twin.materials.chart_fields import field_masks
 from twin.materials.sample_holder import holder_parts
+from twin.materials.textures import MATERIAL_TEXEL_REFLECTANCE
 from twin.render.truth import truth_btf
-from twin.validate.gonio_evaluation import field_masks
 
 __all__ = [
     "SPECULAR_DEG",
