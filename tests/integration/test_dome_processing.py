@@ -168,7 +168,7 @@ def test_rectified_texels_register_within_half_a_pixel(root, evaluations):
 @pytest.mark.parametrize(
     ("material", "what", "mean_pct", "median_pct", "mean_delta_e94"),
     [
-        ("colorchecker16", "diffuse_fields", 12.0, 6.0, 4.5),
+        ("colorchecker16", "diffuse_fields", 12.0, 7.0, 4.5),
         ("lego", "material_texels", 90.0, 35.0, 17.0),
     ],
 )
@@ -176,9 +176,12 @@ def test_the_spectral_btf_meets_the_truth(
     evaluations, material, what, mean_pct, median_pct, mean_delta_e94
 ):
     """Eq. 6.8 and Delta E94 against the twin's truth, on the colour checker's diffuse fields
-    and on the Lego's material texels; bounds 1.3 to 1.4 times the values measured with this
-    seed (BENCHMARKS.md, "Dome processing", where the 75 degree camera's pairs and the Lego's
-    shadowed texels are broken out)."""
+    and on the Lego's material texels. Measured with this seed: colour checker mean 8.8 %,
+    median 5.0 %, Delta E94 3.3 (the 0 and 37.5 degree cameras' pairs 4.6 % and 0.9; the 75
+    degree camera's 21 % and 10.6: a texel spans half a pixel across its view); Lego mean
+    65 %, median 24 %, Delta E94 12.6 (median 4.4: Eq. 6.8 on stud shadows and a few percent
+    of texels at bricks' edges reconstructed below zero). The bounds are 1.35-1.4 times those
+    (BENCHMARKS.md, "Dome processing")."""
     summary = evaluations[material].summary()
     assert summary[f"mean_relative_error_{what}_pct"] < mean_pct
     assert summary[f"median_relative_error_{what}_pct"] < median_pct
@@ -200,3 +203,11 @@ def test_process_refuses_workers_for_a_dome_run(root, tmp_path):
         ],
     )
     assert result.exit_code == 2 and "--workers is not used for a dome run" in result.output
+
+
+def test_calibrate_refuses_a_json_file_for_a_dome_calibration(root, tmp_path):
+    """A dome calibration holds dark frames: an .npz file, refused in one line otherwise."""
+    result = CliRunner().invoke(
+        app, ["calibrate", str(root / "cal.capture.zarr"), "--out", str(tmp_path / "c.json")]
+    )
+    assert result.exit_code == 2 and "a dome calibration is an .npz file" in result.output

@@ -23,6 +23,7 @@ import typer
 
 from twin.cli.errors import INTERRUPTED, fail, require_output_file, require_output_folder
 from twin.cli.output import print_summary
+from twin.cli.store import require_sound_capture
 
 __all__ = ["DEFAULT_CALIBRATION", "calibrate_dome_store", "process_dome_store"]
 
@@ -31,14 +32,15 @@ DEFAULT_CALIBRATION = Path("dome_cal.npz")
 
 
 def calibrate_dome_store(capture, store: Path, out: Path | None, as_json: bool) -> None:
-    """Calibrate the dome from the calibration capture ``capture`` (opened, checked sound) into
-    ``out`` (a ``.npz`` file)."""
+    """Calibrate the dome from the calibration capture ``capture`` (opened from ``store``) into
+    ``out`` (a ``.npz`` file): the options and the store's integrity checked first."""
     from recon.calibration.dome_capture import calibrate_dome
 
     out = DEFAULT_CALIBRATION if out is None else out
     if out.suffix != ".npz":
         fail(f"--out {out}: a dome calibration is an .npz file (it holds dark frames)")
     require_output_file(out)
+    require_sound_capture(capture, store)
     calibration = calibrate_dome(capture, show_progress=not as_json)
     out.parent.mkdir(parents=True, exist_ok=True)
     calibration.save(out)
@@ -73,7 +75,8 @@ def process_dome_store(
     resume: bool,
     as_json: bool,
 ) -> None:
-    """Process the dome run ``capture`` (opened, checked sound) into the BTF store ``out``."""
+    """Process the dome run ``capture`` (opened from ``store``) into the BTF store ``out``: the
+    calibration, the options and the store's integrity and fit checked first."""
     from hwbridge.lock import StoreLock
     from recon.calibration.dome_capture import DomeCalibration
     from recon.dome.processing import check_dome_run, process_dome
@@ -82,8 +85,9 @@ def process_dome_store(
 
     dome_calibration = DomeCalibration.load(calibration)
     corners = read_manual_corners(manual_corners) if manual_corners else None
-    check_dome_run(open_dome_run(capture), dome_calibration)
     require_output_folder(out)
+    require_sound_capture(capture, store)
+    check_dome_run(open_dome_run(capture), dome_calibration)
     lock = StoreLock.acquire(out) if resume and out.exists() else StoreLock.reserve(out)
     try:
         with lock:

@@ -503,7 +503,6 @@ def calibrate(
 
         if _given(ctx, "white_fill"):
             fail("--white-fill is not used by a dome calibration; leave it out")
-        require_sound_capture(capture, store)
         calibrate_dome_store(capture, store, out, as_json)
         return
     out = Path("cal.json") if out is None else out
@@ -581,7 +580,6 @@ def process(
         for name in ("workers", "scheduler"):
             if _given(ctx, name):
                 fail(f"{_option(ctx, name)} is not used for a dome run; leave it out")
-        require_sound_capture(capture, store)
         process_dome_store(
             capture,
             store,
