@@ -279,8 +279,15 @@ class DomeProcessing:
 
 
 def _open_btf(work: DomeProcessing, out: Path, resume: bool) -> BTFStore:
+    """The BTF store: created, or with ``resume`` an existing one reopened (its damaged pairs
+    pending again), which must have the texels asked for."""
     if resume and out.exists():
         btf = BTFStore.open(out, writable=True)
+        if btf.texels != (work.texels, work.texels):
+            raise SpectwinInputError(
+                f"{out}: processed at {btf.texels[0]} texels, not {work.texels}; resume it with "
+                f"texels={btf.texels[0]} (or leave texels out)"
+            )
         btf.prepare_resume()
         return btf
     light_dirs, view_dirs = dome_directions(work.run, work.calibration)
@@ -360,7 +367,7 @@ def process_dome(
     out
         BTF store to create; with ``resume`` an existing one is continued.
     texels
-        Texels across the sample (default: the capture's ``texels``).
+        Texels across the sample (default: the capture's ``texels``, or a resumed store's).
     manual_corners
         Corner file contents (:func:`recon.registration.border.read_manual_corners`) keyed by
         ``"<camera>_view<view_id>"``, for alignment frames whose marks are not found.
@@ -383,11 +390,14 @@ def process_dome(
     store = capture if isinstance(capture, CaptureStore) else CaptureStore.open(capture)
     run = open_dome_run(store)
     check_dome_run(run, calibration)
-    side = int(run.rig["texels"] if texels is None else texels)
+    out = Path(out)
+    if texels is None:
+        existing = resume and out.exists()
+        texels = BTFStore.open(out).texels[0] if existing else int(run.rig["texels"])
     work = DomeProcessing(
-        run, calibration, side, spectral_partner(run, calibration), manual_corners
+        run, calibration, int(texels), spectral_partner(run, calibration), manual_corners
     )
-    btf = _open_btf(work, Path(out), resume)
+    btf = _open_btf(work, out, resume)
     created(btf)
     work.register(store)
     pending = set(btf.pending_pairs())

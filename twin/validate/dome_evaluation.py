@@ -124,8 +124,8 @@ class DomeEvaluation:
             f"mean_delta_e94_{what}": float(np.nanmean(self.delta_e94)),
             f"median_delta_e94_{what}": float(np.nanmedian(self.delta_e94)),
             f"p95_delta_e94_{what}": float(np.nanpercentile(self.delta_e94, 95)),
-            "per_texel_relative_error_pct": float(self.texel_relative_pct.mean()),
-            "per_texel_delta_e94": float(self.texel_delta_e94.mean()),
+            "per_texel_relative_error_pct": float(np.nanmean(self.texel_relative_pct)),
+            "per_texel_delta_e94": float(np.nanmean(self.texel_delta_e94)),
             "max_corner_error_px": float(self.corner_error_px.max()),
             "mean_corner_error_px": float(self.corner_error_px.mean()),
             "max_shift_texels": float(self.shift_texels.max()),
@@ -199,7 +199,9 @@ def _texel_errors(measured, truth, grid, material):
     relative = np.where(material, relative_error(measured, truth), np.nan)
     colour = np.where(material, delta_e94(measured, truth, grid), np.nan)
     flat = [values.reshape(len(values), -1) for values in (relative, colour)]
-    return [*flat, np.nanmean(flat[0], axis=1), np.nanmean(flat[1], axis=1)]
+    counts = material.reshape(len(material), -1).sum(axis=1)
+    means = [np.where(material.reshape(counts.size, -1), v, 0).sum(1) for v in flat]
+    return [*flat, *(np.where(counts > 0, mean / np.maximum(counts, 1), np.nan) for mean in means)]
 
 
 def evaluate_dome(
