@@ -39,7 +39,13 @@ from sklearn.decomposition import PCA
 
 from recon.errors import SpectwinInputError
 
-__all__ = ["ResponsePrior", "learn_response_prior"]
+__all__ = ["PRIOR_COMPONENTS", "PRIOR_WEIGHT", "ResponsePrior", "learn_response_prior"]
+
+# Chosen by benchmarks/camchar_prior_tuning.py on scenarios the study and the tests do not use.
+PRIOR_COMPONENTS = 3
+"""Principal directions per channel of the prior learned by :func:`learn_response_prior`."""
+PRIOR_WEIGHT = 0.01
+"""The prior's weight :math:`\\lambda` in ``recon.camera_char.estimate_response``."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -90,7 +96,7 @@ class ResponsePrior:
 
 
 def learn_response_prior(
-    responses: np.ndarray, wavelengths: np.ndarray, *, components: int = 3
+    responses: np.ndarray, wavelengths: np.ndarray, *, components: int = PRIOR_COMPONENTS
 ) -> ResponsePrior:
     """Learn the prior of the module description from measured camera responses.
 

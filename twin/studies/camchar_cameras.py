@@ -37,7 +37,7 @@ from scipy import stats
 
 from recon.camera_char import estimate_response
 from recon.camera_jiang2013 import jiang2013_response
-from recon.camera_prior import learn_response_prior
+from recon.camera_prior import PRIOR_COMPONENTS, PRIOR_WEIGHT, learn_response_prior
 from recon.errors import SpectwinInputError
 from recon.measured_data import camera_name, camera_names, read_camera_sensitivities
 from recon.metrics import peak_relative_rmse
@@ -65,8 +65,6 @@ NOISE = 0.005
 LIGHT = "D65"
 METHODS = ("prior", "extended", "jiang2013")
 BOUNDS_PCT = {"mean": 4.0, "max": 7.0}  # the goal for the method with prior
-PRIOR_COMPONENTS = 3  # benchmarks/camchar_prior_tuning.py
-PRIOR_WEIGHT = 3e-3
 
 
 @dataclass(frozen=True)
