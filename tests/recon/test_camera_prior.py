@@ -9,10 +9,9 @@ from recon.camera_char import estimate_response
 from recon.camera_jiang2013 import jiang2013_response
 from recon.camera_prior import learn_response_prior
 from recon.errors import SpectwinInputError
-from recon.measured_data import camera_names, read_camera_sensitivities
+from recon.measured_data import camera_names, read_camera_sensitivities, read_spectra_csv
 from recon.metrics import peak_relative_rmse
 from recon.spectra import DEFAULT_GRID, WavelengthGrid, from_colour, resample
-from twin.components.targets import camera_chart_reflectances
 
 GRID = WavelengthGrid.regular(380, 780, 10)
 WAVELENGTHS = GRID.wavelengths_nm
@@ -23,7 +22,16 @@ RESPONSES = np.array(
         for name in NAMES
     ]
 )
-CHART = camera_chart_reflectances(GRID).values
+
+
+def _reflectances(file_name: str) -> np.ndarray:
+    measured = read_spectra_csv(f"spectra/reflectances/{file_name}")
+    values = resample(measured, GRID, method="box", out_of_range="clamp").values
+    return np.clip(values[values.max(axis=1) <= 1.0], 0, 1)  # diffuse reflectances only
+
+
+CHART = _reflectances("rawtoaces_training_190.csv")  # the 185 within [0, 1]
+COLORCHECKER = _reflectances("macbeth_colorchecker.csv")
 DAYLIGHT = resample(from_colour(colour.SDS_ILLUMINANTS["D65"]), GRID, method="box").values
 
 
@@ -75,13 +83,13 @@ def test_the_prior_is_a_maximum_likelihood_ppca_and_scores_shapes_not_scales():
 
 def test_a_camera_unlike_the_others_has_a_high_prior_energy():
     """The Canon PowerShot S90 (a compact camera) lies far from the other 50; a Sony mirrorless
-    near them (measured summed energies 1500 and 41; a typical training camera scores 40)."""
+    near them (measured summed energies 1500 and 41; the median over the 51 cameras is 83)."""
     energies = {}
     for name in ("Canon PowerShot S90", "Sony ILCE-7M3"):
         truth, others = _left_out(name)
         energies[name] = learn_response_prior(others, WAVELENGTHS).energy(truth).sum()
     assert energies["Canon PowerShot S90"] > 10 * energies["Sony ILCE-7M3"]
-    assert energies["Sony ILCE-7M3"] < 3 * 41
+    assert energies["Sony ILCE-7M3"] < 83
 
 
 def test_jiang2013_through_colour_recovers_a_camera_from_an_undisturbed_photograph():
@@ -95,11 +103,11 @@ def test_jiang2013_through_colour_recovers_a_camera_from_an_undisturbed_photogra
     assert peak_relative_rmse(estimate, truth).max() < 0.005
 
 
-def test_the_prior_repairs_what_a_sparse_chart_cannot_constrain():
+def test_the_prior_helps_where_a_small_chart_says_little():
     """On the 24 ColorChecker fields (few for 41 bands), undisturbed, the prior from the other
-    cameras brings the estimate closer (measured 8.4 % without, 5.6 % with)."""
+    cameras brings the estimate closer (measured 8.4 % without, 5.0 % with)."""
     truth, others = _left_out("Nikon D850")
-    chart = CHART[-55:-31]  # the ColorChecker's 24 fields
+    chart = COLORCHECKER
     rgb = (chart * DAYLIGHT) @ truth
     positions = np.array([[j % 6, j // 6] for j in range(24)], dtype=float)
     errors = [
@@ -111,7 +119,7 @@ def test_the_prior_repairs_what_a_sparse_chart_cannot_constrain():
         ).max()
         for prior in (None, learn_response_prior(others, WAVELENGTHS))
     ]
-    assert errors[1] < 0.75 * errors[0] and errors[1] < 0.065
+    assert errors[1] < 0.7 * errors[0] and errors[1] < 0.06
 
 
 @pytest.mark.parametrize(
@@ -145,7 +153,7 @@ def test_the_prior_repairs_what_a_sparse_chart_cannot_constrain():
         ),
         (
             lambda: jiang2013_response(
-                np.ones((240, 3)), CHART, DAYLIGHT, WAVELENGTHS, RESPONSES[:2], components=2
+                np.ones((185, 3)), CHART, DAYLIGHT, WAVELENGTHS, RESPONSES[:2], components=2
             ),
             "training_responses",
         ),

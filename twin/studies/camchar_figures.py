@@ -75,6 +75,6 @@ def errors_figure(
     axes.set_xticks(positions, [cameras[i] for i in order], rotation=90, fontsize=7)
     axes.set_ylabel("worst channel's RMSE [% of peak]")
     axes.set_title(title)
-    axes.legend(fontsize=8)
+    axes.legend(fontsize=8, ncol=3, loc="upper center")
     figure.tight_layout()
     return figure
