@@ -15,8 +15,8 @@ photographed field means :math:`D`, the known field reflectances :math:`S` and t
 - ``method="extended"`` with ``prior``: Eq. 9.6 plus a term :math:`\\lambda E_{prior}` that keeps
   each channel's shape near those of measured cameras (``recon.camera_prior``): the energy of
   a Gaussian over peak-normalized responses, free in scale, divided by the square of the previous
-  estimate's peak as Eq. 9.8 divides by the previous estimate. The prior takes over the role of
-  the coarse multigrid levels: the solve starts at full spectral resolution.
+  estimate's peak as Eq. 9.8 divides by the previous estimate. The solve starts at full spectral
+  resolution: the prior, not the coarse multigrid levels, keeps the first estimates plausible.
 
 Also: the reference method with the LCTF as monochromator (Eq. 9.15-9.16), the illuminant from a
 colour temperature (9.5.5), the prediction error for cross-validation (Eq. 9.17) and the
