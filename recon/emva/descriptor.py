@@ -237,7 +237,7 @@ def read_descriptor(path: str | Path) -> EMVADescriptor:
         they are read (:func:`read_frame`).
     """
     path = Path(path)
-    size: tuple[int, int, int, int] | None = None
+    size: tuple[int, int, int] | None = None
     version = "3.0"
     steps: list[EMVAStep] = []
     images: list[tuple[int, str]] = []
@@ -266,7 +266,7 @@ def read_descriptor(path: str | Path) -> EMVADescriptor:
             if size is not None:
                 raise _fail(path, number, "a second n line; expected one 'n BITS WIDTH HEIGHT'")
             _check_size(path, number, *values)
-            size = (number, *values)
+            size = values
         else:
             version = values[0]
     close_step()
@@ -277,7 +277,7 @@ def read_descriptor(path: str | Path) -> EMVADescriptor:
     if not steps:
         raise SpectwinInputError(f"{path}: no b or d lines; expected the measurement's steps")
     _check_structure(path, steps)
-    _, bits, width, height = size
+    bits, width, height = size
     return EMVADescriptor(bits, width, height, tuple(steps), path, version)
 
 

@@ -175,6 +175,44 @@ def _fit_knee(
     )
 
 
+def _gain(analysis: EMVAAnalysis, **model: float) -> float:
+    """The system gain for which the package finds the measured K in the model's predicted
+    photon transfer (fixed-point iteration; the measured K itself without a knee)."""
+    transfer = analysis.transfer
+    gain = analysis.system_gain_dn_per_e
+    for _ in range(20):
+        predicted = _predicted_temporal(transfer, gain=gain, **model)
+        results = run_results1288(
+            {"temporal": predicted, "spatial": {}}, saturation_index=transfer.saturation_index
+        )
+        correction = analysis.system_gain_dn_per_e / float(results.K)
+        gain *= correction
+        if abs(correction - 1) < 1e-7:
+            break
+    return gain
+
+
+def _full_well(
+    saturation_e: float, *, gain: float, read_dn: float, prnu: float, top: float, source: object
+) -> float:
+    """The full well whose variance peak lies at the measured saturation (charge, e-)."""
+
+    def peak_offset(full_well_e: float) -> float:
+        peak = predicted_saturation_e(
+            full_well_e, gain_dn_per_e=gain, read_noise_dn=read_dn, prnu=prnu, adc_top_dn=top
+        )
+        return peak - saturation_e
+
+    try:
+        return optimize.brentq(peak_offset, saturation_e, 1.5 * saturation_e, xtol=1e-3)
+    except ValueError as error:
+        raise SpectwinInputError(
+            f"{source}: no full well puts the variance peak at the measured saturation "
+            f"({saturation_e:.0f} e-); expected a measurement that saturates at its full well "
+            "or at the ADC's top"
+        ) from error
+
+
 def fit_sensor(analysis: EMVAAnalysis, *, wavelength_nm: float) -> FittedSensor:
     """Fit the camera model's parameters to an EMVA 1288 measurement.
 
@@ -216,25 +254,15 @@ def fit_sensor(analysis: EMVAAnalysis, *, wavelength_nm: float) -> FittedSensor:
     read_dn = math.sqrt(max(analysis.dark_noise_dn**2 - QUANTIZATION_VARIANCE_DN2, 0.0)) / (
         1 + knee
     )
-    gain = analysis.system_gain_dn_per_e
-    for _ in range(20):
-        predicted = _predicted_temporal(
-            transfer,
-            gain=gain,
-            responsivity=responsivity,
-            knee=knee,
-            dark_rate=dark_rate,
-            read_dn=read_dn,
-            offset=offset,
-            top=top,
-        )
-        results = run_results1288(
-            {"temporal": predicted, "spatial": {}}, saturation_index=transfer.saturation_index
-        )
-        correction = analysis.system_gain_dn_per_e / float(results.K)
-        gain *= correction
-        if abs(correction - 1) < 1e-7:
-            break
+    gain = _gain(
+        analysis,
+        responsivity=responsivity,
+        knee=knee,
+        dark_rate=dark_rate,
+        read_dn=read_dn,
+        offset=offset,
+        top=top,
+    )
     eta = responsivity / gain
     dark_current = dark_rate / (1 + knee) / gain
     spatial_u = (responsivity * analysis.spatial_photons) / top
@@ -242,28 +270,22 @@ def fit_sensor(analysis: EMVAAnalysis, *, wavelength_nm: float) -> FittedSensor:
     if not math.isfinite(prnu):
         prnu = 0.0
     offset_sigma = analysis.dsnu_dn if math.isfinite(analysis.dsnu_dn) else 0.0
+    saturated_by: Literal["ADC", "full well"]
     if transfer.mean_dn.max() >= max_dn - 0.5:
-        saturated_by: Literal["ADC", "full well"] = "ADC"
+        saturated_by = "ADC"
         top_e = top / gain
         full_well = top_e + _FULL_WELL_MARGIN_SIGMAS * math.sqrt(top_e)
     else:
         saturated_by = "full well"
         index = transfer.saturation_index
-        target_e = eta * transfer.photons[index] + dark_current * transfer.exposure_s[index]
-
-        def peak_offset(full_well_e: float) -> float:
-            return (
-                predicted_saturation_e(
-                    full_well_e,
-                    gain_dn_per_e=gain,
-                    read_noise_dn=read_dn,
-                    prnu=prnu,
-                    adc_top_dn=top,
-                )
-                - target_e
-            )
-
-        full_well = optimize.brentq(peak_offset, target_e, 1.5 * target_e, xtol=1e-3)
+        full_well = _full_well(
+            eta * transfer.photons[index] + dark_current * transfer.exposure_s[index],
+            gain=gain,
+            read_dn=read_dn,
+            prnu=prnu,
+            top=top,
+            source=descriptor.path,
+        )
     return FittedSensor(
         analysis=analysis,
         wavelength_nm=float(wavelength_nm),
