@@ -445,6 +445,8 @@ def run_session(
             except KeyboardInterrupt:
                 if not stop():
                     raise  # not a signal of this session's
+        if not store.complete:  # a writer killed after its last flag, before marking complete
+            store.refresh_complete()
         raise_if_interrupted(store, stop)
     return store
 
