@@ -274,8 +274,9 @@ class SimCamera:
             electrons = np.asarray(
                 self._signal(self._rig, self._start_s, self._exposure_s), np.float32
             )
-        else:
-            electrons = np.zeros(self.frame_shape, np.float32)
+        else:  # shutter closed: dark signal only (R, G, B planes for a colour sensor)
+            channels = (3,) if self._sensor.is_colour else ()
+            electrons = np.zeros((*self.frame_shape, *channels), np.float32)
         frame = self._sensor.capture(electrons, self._exposure_s, self._rng)
         return frame, {"timestamp": time.time(), "exposure_s": self._exposure_s}
 

@@ -73,10 +73,11 @@ __all__ = [
     "stored_dome_settings",
 ]
 
-GEOMETRIC_VIEWS = ((0.0, 0.0), (0.0, 20.0), (0.25, 20.0), (0.5, 20.0), (0.75, 20.0))
+GEOMETRIC_VIEWS = ((0.0, 0.0), *((turn / 8, 30.0) for turn in range(8)))
 """Geometric calibration frames: (fraction of a stage turn, wedge tilt in degrees): the
-checkerboard flat, then on a 20 degree wedge at four stage angles 90 degrees apart, so that
-every camera sees it in five plane orientations."""
+checkerboard flat, then on a 30 degree wedge at eight stage angles 45 degrees apart, so that
+every camera sees it in up to nine plane orientations (the oblique cameras lose those where the
+wedge turns the board away from them)."""
 
 DEFAULT_SPP = 64
 """Samples per pixel of the dome's renders by default (``--spp``): at 64 the spectral camera's
