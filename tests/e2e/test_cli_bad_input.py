@@ -37,7 +37,7 @@ PROBES: list[tuple[list[str], int, str]] = [
     (["smoke", "--pixels-per-patch", "2"], 2, "'--pixels-per-patch'"),
     (["smoke", "--out", "@PLAIN"], 2, "is a file; expected a folder"),
     # camera
-    (["camera", "nosuch"], 2, "expected a path or one of ['coolsnap_k4'"),
+    (["camera", "nosuch"], 2, "expected a path or one of ['basler_ccd12', 'coolsnap_k4'"),
     (["camera", "coolsnap_k4", "--seed", "-1"], 2, "'--seed'"),
     (["camera", "@BAD_CAMERA"], 2, "bit_depth"),
     (["camera", "@MALFORMED_YAML"], 2, "malformed YAML"),

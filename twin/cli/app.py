@@ -11,11 +11,12 @@ from typing import Annotated
 
 import typer
 
+from twin.cli.camera import register as register_camera
 from twin.cli.choices import Chart, Light, RGBCamera
 from twin.cli.dome import register as register_dome
 from twin.cli.errors import SpectwinGroup, require_output_folder, run_failed
 from twin.cli.gonio import register as register_gonio
-from twin.cli.output import JsonFlag, console, print_summary
+from twin.cli.output import JsonFlag, SeedOption, console, print_summary
 from twin.cli.store import register as register_store
 
 app = typer.Typer(
@@ -24,8 +25,6 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
 )
-
-SeedOption = Annotated[int, typer.Option(min=0, help="Seed of the simulated noise.")]
 
 
 @app.command()
@@ -73,32 +72,6 @@ def smoke(
         run_failed(f"smoke render {verdict}; more --spp lowers the render noise")
     if not as_json:
         console.print(verdict)
-
-
-@app.command()
-def camera(
-    name: Annotated[
-        str, typer.Argument(help="Camera file in scenes/cameras (e.g. coolsnap_k4) or a path.")
-    ],
-    out: Annotated[
-        Path, typer.Option(help="Folder for camera_report.png and summary.json.")
-    ] = Path("out/camera"),
-    seed: SeedOption = 0,
-    as_json: JsonFlag = False,
-) -> None:
-    """Bench-test a camera: photon transfer, dark frames, HMI flicker vs exposure time."""
-    from twin.rigs.camera_config import load_camera_config
-    from twin.studies.camera_bench import run_camera_report
-
-    config = load_camera_config(name)
-    folder = out / Path(name).stem
-    require_output_folder(out)
-    require_output_folder(folder)
-    with console.status(f"simulating {config.name}"):
-        summary = run_camera_report(name, folder, seed=seed)
-    print_summary(summary, str(summary["camera"]), as_json, skip=("camera", "outputs"))
-    if not as_json:
-        console.print(f"wrote {folder / 'camera_report.png'}")
 
 
 @app.command()
@@ -248,6 +221,7 @@ def demo(
         console.print(f"report: {out / 'report.html'}")
 
 
+register_camera(app)
 register_gonio(app)
 register_dome(app)
 register_store(app)

@@ -61,6 +61,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "DEFAULT_SPP",
+    "LED_FULL_SCALE_MA",
     "GEOMETRIC_VIEWS",
     "DomeCaptureProgram",
     "DomeCaptureSize",
@@ -78,6 +79,10 @@ GEOMETRIC_VIEWS = ((0.0, 0.0), *((turn / 8, 30.0) for turn in range(8)))
 checkerboard flat, then on a 30 degree wedge at eight stage angles 45 degrees apart, so that
 every camera sees it in up to nine plane orientations (the oblique cameras lose those where the
 wedge turns the board away from them)."""
+
+LED_FULL_SCALE_MA = 700.0
+"""The LED drivers' full scale, at which the dome's LEDs emit their nominal intensity (the
+drive current of every frame of the programs)."""
 
 DEFAULT_SPP = 64
 """Samples per pixel of the dome's renders by default (``--spp``): at 64 the spectral camera's
@@ -298,12 +303,11 @@ def _program(
     frame = FrameSize(config, size.texels)
     sample = load_material(material) if material is not None else None
     exposures = parts.exposures
-    geometry = dome_geometry(config)
     scene = DomeScene(
         config,
         sample,
         tuple(holder_content(step["kind"], step.get("tilt_deg")) for step in plan),
-        tuple(geometry.stage_angles_deg.tolist()),
+        LED_FULL_SCALE_MA,
         frame.pixels,
         frame.window,
         size.spp,
@@ -330,8 +334,9 @@ def _program(
     devices = SimDomeDevices(
         tuple(cameras),
         dome_start_times_s(plan, timing),
-        config.rotation_stage_positions,
+        config.rotation_stage_step_deg,
         config.led_count,
+        LED_FULL_SCALE_MA,
         fault_rate=float(fault_rate),
         fault_seed=seed,
     )
