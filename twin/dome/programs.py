@@ -347,6 +347,7 @@ def _program(
         "band_exposures_s": list(exposures.band_s),
         "band_schedule": [list(image) for image in exposures.schedule],
         "calibration_led": parts.calibration_led,
+        "led_current_ma": LED_FULL_SCALE_MA,
         "led_spectrum": _spectrum(PhosphorWhiteLED().intensity(FINE_GRID).values),
         "white_reflectance": _spectrum(zenith_white_reflectance(FINE_GRID).values),
         "geometry": geometry_metadata(
