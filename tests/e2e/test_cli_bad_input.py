@@ -231,6 +231,10 @@ PROBES: list[tuple[list[str], int, str]] = [
     (["camchar", "--chart", "nosuch"], 2, "'esser'"),
     (["camchar", "--bend", "0.5"], 2, "'--bend'"),
     (["camchar", "--out", "@PLAIN"], 2, "is a file; expected a folder"),
+    # camchar-cameras
+    (["camchar-cameras", "--camera", "Nikon D85"], 2, "closest: Nikon D850"),
+    (["camchar-cameras", "--seed", "-1"], 2, "'--seed'"),
+    (["camchar-cameras", "--out", "@PLAIN"], 2, "is a file; expected a folder"),
     # spectralize-study
     (["spectralize-study", "--texels", "16", "--no-sweeps"], 2, "'--texels'"),
     (["spectralize-study", "--out", "@PLAIN"], 2, "is a file; expected a folder"),
