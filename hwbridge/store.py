@@ -10,6 +10,10 @@ Layout of ``<name>.capture.zarr`` (ARCHITECTURE.md, "Stores"):
   (the monitor spectrum, when the rig has one);
 - ``progress``: one flag per plan step, set only after the step's frame and index are written.
 
+A dome capture (thesis 10.2-10.4) uses the same layout with one group per camera (the RGB
+cameras of the arc and the spectral camera); :mod:`hwbridge.dome_layout` says what its index
+fields and its ``rig`` attribute (camera, LED and stage geometry, the targets) hold.
+
 Every per-frame array (frames, each index field, progress) has one chunk per frame, so writers
 that own disjoint sets of steps write disjoint chunks: the workers of a distributed capture
 (``twin.devices.cluster``) write straight into one store, and the coordinator that created it sets
@@ -59,7 +63,7 @@ from hwbridge.integrity import (
 
 __all__ = ["FRAME_KINDS", "CaptureStore", "FrameRecord"]
 
-FRAME_KINDS = ("dark", "white", "chart", "sample", "oecf", "alignment")
+FRAME_KINDS = ("dark", "white", "chart", "sample", "oecf", "alignment", "geometric")
 _STRING_FIELDS = ("kind", "status")
 _NUMERIC_FIELDS = {
     "light_id": "int32",
