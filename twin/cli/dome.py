@@ -11,47 +11,7 @@ from twin.cli.choices import DomeMaterial
 from twin.cli.errors import fail, require_output_folder
 from twin.cli.output import JsonFlag, console, print_summary
 
-__all__ = ["dome_capture_program", "register", "stored_capture_settings"]
-
-
-def dome_capture_program(
-    program: str,
-    *,
-    material: str,
-    spp: int,
-    seed: int,
-    fault_rate: float,
-    stage_positions: int,
-    leds: int,
-    rgb_cameras: int,
-    texels: int,
-    dark_frames: int,
-):
-    """The dome capture program ``program`` (``dome-calibration`` or ``dome-run``) of
-    ``spectwin capture``, every setting checked (nothing is written)."""
-    from twin.dome.programs import DomeCaptureSize, dome_calibration_program, dome_run_program
-
-    size = DomeCaptureSize(stage_positions, leds, rgb_cameras, texels, spp)
-    if program == "dome-run":
-        return dome_run_program(material, size=size, seed=seed, fault_rate=fault_rate)
-    return dome_calibration_program(
-        size=size, dark_frames=dark_frames, seed=seed, fault_rate=fault_rate
-    )
-
-
-def stored_capture_settings(store) -> dict:
-    """The program and settings a capture store was made with (``spectwin capture --resume``):
-    a dome store's (:func:`twin.dome.programs.stored_dome_settings`) or a gonioreflectometer
-    store's (:func:`twin.gonio.capture.stored_settings`, which refuses stores not made by
-    ``spectwin capture``)."""
-    from twin.gonio.capture import stored_settings
-
-    settings = stored_settings(store)
-    if str(settings["program"]).startswith("dome-"):
-        from twin.dome.programs import stored_dome_settings
-
-        return stored_dome_settings(store)
-    return settings
+__all__ = ["register"]
 
 
 def dome_study(

@@ -147,13 +147,17 @@ def _stored_settings(ctx: typer.Context, store: Path, given: dict[str, object]) 
     line must agree with the store's value."""
     from hwbridge.lock import lock_owner
     from hwbridge.store import CaptureStore
-    from twin.cli.dome import stored_capture_settings
+    from twin.dome.programs import stored_dome_settings
+    from twin.gonio.capture import stored_settings
 
     if not store.exists():
         if lock_owner(store) is None:
             fail(f"{store} does not exist: start the capture without --resume")
     else:
-        stored = stored_capture_settings(CaptureStore.open(store))
+        capture = CaptureStore.open(store)
+        stored = stored_settings(capture)  # refuses stores spectwin capture did not make
+        if str(stored["program"]).startswith("dome-"):
+            stored = stored_dome_settings(capture)
         if stored["program"] not in {p.value for p in Program}:
             fail(f"{store}: made by program {stored['program']!r}, which capture does not know")
         stored["program"] = Program(stored["program"])
@@ -189,12 +193,21 @@ def _program_of(
 ):
     """The capture program, every setting checked (nothing is written)."""
     if program in _DOME:
-        from twin.cli.dome import dome_capture_program
-
-        built = dome_capture_program(
-            program.value, material=material, spp=spp, seed=seed, fault_rate=fault_rate, **dome
+        from twin.dome.programs import (
+            DomeCaptureSize,
+            dome_calibration_program,
+            dome_run_program,
         )
-        return built, {}
+
+        size = DomeCaptureSize(
+            dome["stage_positions"], dome["leds"], dome["rgb_cameras"], dome["texels"], spp
+        )
+        if program is Program.dome_run:
+            return dome_run_program(material, size=size, seed=seed, fault_rate=fault_rate), {}
+        calibration_program = dome_calibration_program(
+            size=size, dark_frames=dome["dark_frames"], seed=seed, fault_rate=fault_rate
+        )
+        return calibration_program, {}
     if program is Program.demo:
         from twin.gonio.sim_session import demo_program
 

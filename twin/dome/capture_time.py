@@ -15,8 +15,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from hwbridge.dome_plans import DomeTiming, dome_calibration, dome_duration_s, dome_run
-from twin.dome.programs import DomeCaptureSize, DomePlanParts, dome_plan_parts, dome_timing
+from hwbridge.dome_plans import DomeTiming, dome_duration_s
+from twin.dome.programs import (
+    DomeCaptureSize,
+    DomePlanParts,
+    calibration_plan,
+    dome_plan_parts,
+    dome_timing,
+    run_plan,
+)
 from twin.dome.setup import THESIS_LONGEST_BAND_S
 from twin.rigs.rig_config import DomeConfig
 
@@ -91,18 +98,9 @@ def estimate_dome(
     )
     parts: DomePlanParts = dome_plan_parts(config, size, longest_band_s=longest_band_s)
     timing = dome_timing(config, parts.cameras)
-    run = dome_run(
-        parts.cameras, parts.exposures, stage_positions=parts.stage_views, leds=parts.leds
-    )
+    run = run_plan(parts)
     rgb_only = [step for step in run if step["camera"] != parts.cameras.spectral]
-    calibration = dome_calibration(
-        parts.cameras,
-        parts.exposures,
-        leds=parts.leds,
-        calibration_led=parts.calibration_led,
-        geometric_views=parts.geometric_views,
-        dark_frames=dark_frames,
-    )
+    calibration = calibration_plan(parts, dark_frames)
     exposure_only = _exposure_only(timing)
     first_rgb = parts.cameras.rgb[0]
     return DomeEstimate(

@@ -29,11 +29,10 @@ from recon.scheduling.dome_schedule import (
     schedule_bands,
     spectral_exposures,
 )
-from recon.spectra import SampledSpectra
+from recon.spectra import SampledSpectra, WavelengthGrid
 from twin.components.lamps import FINE_GRID
 from twin.components.targets import colorchecker_reflectances, zenith_white_reflectance
 from twin.dome.capture import THESIS_BANDS_NM, DomeCameras, dome_cameras
-from twin.dome.setup import BAND_GRID, rgb_response_series_s, spectral_response_series_s
 from twin.rigs.dome_geometry import dome_geometry
 from twin.rigs.rig_config import DomeConfig
 
@@ -42,6 +41,8 @@ __all__ = [
     "band_schedules",
     "dome_exposures",
     "model_band_exposures_s",
+    "rgb_response_series_s",
+    "spectral_response_series_s",
 ]
 
 REFERENCE_BAND_NM = 550.0
@@ -58,7 +59,7 @@ def model_band_exposures_s(cameras: DomeCameras, longest_band_s: float) -> np.nd
     the calibration of :func:`twin.dome.setup.dome_setup` measures it), the weakest band exposed
     ``longest_band_s``, clipped to the spectral camera's range."""
     _, white_rates = cameras.white_rates()
-    support = white_rates / zenith_white_reflectance(BAND_GRID).values
+    support = white_rates / zenith_white_reflectance(WavelengthGrid(THESIS_BANDS_NM)).values
     base = longest_band_s * math.sqrt(support.min())
     return spectral_exposures(
         base, support, np.ones_like(support), limits_s=cameras.spectral.config.exposure_range_s
@@ -97,6 +98,18 @@ def band_schedules(exposures_s: np.ndarray) -> dict[str, dict]:
     out["band_exposures_sum_s"] = float(exposures.sum())
     out["rgb_set_s"] = float(sum(THESIS_RGB_EXPOSURES_S))
     return out
+
+
+def rgb_response_series_s() -> np.ndarray:
+    """The RGB cameras' response series: 14 exposures over 1 ms to 3.3 s, no two ratios powers
+    of one factor (:mod:`recon.radiometric.response_curve`)."""
+    return np.geomspace(1e-3, 3.0, 14) * (1 + 0.1 * (np.arange(14) % 3))
+
+
+def spectral_response_series_s(brightest_rate_e_per_s: float) -> np.ndarray:
+    """The spectral camera's low-signal series: 12 evenly spaced exposures from 20 ms to the one
+    that gives the brightest field about 3000 DN above the offset."""
+    return np.linspace(0.02, 15000.0 / brightest_rate_e_per_s, 12)
 
 
 def _irradiance_factor(config: DomeConfig, leds: np.ndarray) -> float:

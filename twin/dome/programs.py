@@ -5,7 +5,7 @@ Two programs, as on the real rig (plans: :mod:`hwbridge.dome_plans`; store layou
 
 1. ``dome-calibration``: dark frames (200 per spectral exposure by default), response series of
    the colour checker, the white standard under the LEDs, and the checkerboard flat and on a
-   20 degree wedge at four stage positions;
+   30 degree wedge at eight stage positions;
 2. ``dome-run``: per stage position an alignment frame of every camera with all LEDs on, then
    per LED the RGB cameras' HDR sets and the spectral camera's scheduled noisy bands.
 
@@ -25,7 +25,6 @@ from __future__ import annotations
 
 from collections import Counter
 from dataclasses import dataclass
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -44,7 +43,13 @@ from hwbridge.store import CaptureStore
 from recon.errors import SpectwinInputError
 from twin.components.lamps import FINE_GRID, PhosphorWhiteLED
 from twin.components.targets import zenith_white_reflectance
-from twin.devices.cluster import run_capture
+from twin.devices.programs import (
+    ProgramCapture,
+    check_exposures,
+    check_fault_rate,
+    check_seed,
+    is_whole,
+)
 from twin.devices.sim_devices import SimDomeDevices
 from twin.dome.capture_geometry import FrameSize, camera_arc_index, geometry_metadata
 from twin.dome.exposure_plan import dome_exposures
@@ -57,36 +62,43 @@ from twin.rigs.rig_config import DomeConfig, load_rig
 from twin.sensor.model import Sensor
 
 if TYPE_CHECKING:
-    from distributed import Client
+    pass
 
 __all__ = [
     "DEFAULT_SPP",
+    "LED_FULL_SCALE_MA",
     "GEOMETRIC_VIEWS",
     "DomeCaptureProgram",
     "DomeCaptureSize",
     "DomePlanParts",
     "calibration_led",
+    "calibration_plan",
     "dome_calibration_program",
     "dome_plan_parts",
     "dome_run_program",
     "dome_timing",
+    "run_plan",
     "stored_dome_settings",
 ]
 
-GEOMETRIC_VIEWS = ((0.0, 0.0), (0.0, 20.0), (0.25, 20.0), (0.5, 20.0), (0.75, 20.0))
+GEOMETRIC_VIEWS = ((0.0, 0.0), *((turn / 8, 30.0) for turn in range(8)))
 """Geometric calibration frames: (fraction of a stage turn, wedge tilt in degrees): the
-checkerboard flat, then on a 20 degree wedge at four stage angles 90 degrees apart, so that
-every camera sees it in five plane orientations."""
+checkerboard flat, then on a 30 degree wedge at eight stage angles 45 degrees apart, so that
+every camera sees it in up to nine plane orientations (the oblique cameras lose those where the
+wedge turns the board away from them)."""
+
+RGB_DARK_FRAMES = 16
+"""Most dark frames per exposure time of an RGB camera (its darks serve the HDR merge only)."""
+
+LED_FULL_SCALE_MA = 700.0
+"""The LED drivers' full scale, at which the dome's LEDs emit their nominal intensity (the
+drive current of every frame of the programs)."""
 
 DEFAULT_SPP = 64
 """Samples per pixel of the dome's renders by default (``--spp``): at 64 the spectral camera's
 30-band renders of a white field scatter by 0.7 % per pixel and their means lie within 1 % of
 the closed form; at 16, where the low-discrepancy sampler gives each band about two wavelengths
 per pixel, they scatter by 48 % (``tests/integration/test_dome_capture.py``)."""
-
-
-def _is_whole(value: object) -> bool:
-    return isinstance(value, int | np.integer) and not isinstance(value, bool)
 
 
 def _spread(count: int, total: int) -> list[int]:
@@ -129,9 +141,9 @@ class DomeCaptureSize:
         }
         for name, top in limits.items():
             value = getattr(self, name)
-            if not _is_whole(value) or not 1 <= value <= top:
+            if not is_whole(value) or not 1 <= value <= top:
                 raise SpectwinInputError(f"{name}: expected 1..{top} (the rig's), got {value}")
-        if not _is_whole(self.spp) or self.spp < 1:
+        if not is_whole(self.spp) or self.spp < 1:
             raise SpectwinInputError(f"spp: expected at least 1 sample per pixel, got {self.spp}")
         FrameSize(config, self.texels)
 
@@ -190,12 +202,33 @@ def dome_plan_parts(
     )
 
 
+def run_plan(parts: DomePlanParts) -> list[dict]:
+    """The ``dome-run`` plan of ``parts`` (:func:`hwbridge.dome_plans.dome_run`)."""
+    return dome_run(
+        parts.cameras, parts.exposures, stage_positions=parts.stage_views, leds=parts.leds
+    )
+
+
+def calibration_plan(parts: DomePlanParts, dark_frames: int) -> list[dict]:
+    """The ``dome-calibration`` plan of ``parts`` (:func:`hwbridge.dome_plans.dome_calibration`):
+    ``dark_frames`` per spectral exposure time, as many (at most 16) per RGB exposure time."""
+    return dome_calibration(
+        parts.cameras,
+        parts.exposures,
+        leds=parts.leds,
+        calibration_led=parts.calibration_led,
+        geometric_views=parts.geometric_views,
+        dark_frames=dark_frames,
+        rgb_dark_frames=min(dark_frames, RGB_DARK_FRAMES),
+    )
+
+
 def _spectrum(values: np.ndarray) -> dict[str, list[float]]:
     return {"wavelengths_nm": FINE_GRID.wavelengths_nm.tolist(), "values": values.tolist()}
 
 
 @dataclass(frozen=True, eq=False)
-class DomeCaptureProgram:
+class DomeCaptureProgram(ProgramCapture):
     """A capture program of the simulated dome, checked and ready to run.
 
     Attributes
@@ -251,35 +284,6 @@ class DomeCaptureProgram:
             "storage_mb": len(self.plan) * per_frame / 1e6,
         }
 
-    def run(
-        self,
-        store: str | Path,
-        *,
-        resume: bool = False,
-        show_progress: bool = False,
-        client: Client | None = None,
-    ) -> CaptureStore:
-        """Capture the plan into ``store`` (or continue it), in this process or over
-        ``client``'s cluster (:func:`twin.devices.cluster.run_capture`): the frames are the
-        same."""
-        return run_capture(
-            Path(store),
-            self.plan,
-            self.devices,
-            rig=self.rig,
-            seed=self.seed,
-            resume=resume,
-            show_progress=show_progress,
-            client=client,
-        )
-
-
-def _check_common(seed: object, fault_rate: object) -> None:
-    if not _is_whole(seed) or seed < 0:
-        raise SpectwinInputError(f"seed: expected a whole number >= 0, got {seed}")
-    if not isinstance(fault_rate, int | float) or not 0.0 <= fault_rate <= 1.0:
-        raise SpectwinInputError(f"fault_rate: expected a probability in [0, 1], got {fault_rate}")
-
 
 def _program(
     name: str,
@@ -297,12 +301,11 @@ def _program(
     frame = FrameSize(config, size.texels)
     sample = load_material(material) if material is not None else None
     exposures = parts.exposures
-    geometry = dome_geometry(config)
     scene = DomeScene(
         config,
         sample,
         tuple(holder_content(step["kind"], step.get("tilt_deg")) for step in plan),
-        tuple(geometry.stage_angles_deg.tolist()),
+        LED_FULL_SCALE_MA,
         frame.pixels,
         frame.window,
         size.spp,
@@ -317,20 +320,13 @@ def _program(
         )
         cameras.append((camera, Sensor(definition, roi=roi), RenderedDomeSignal(scene, arc)))
     timing = dome_timing(config, parts.cameras)
-    for camera, sensor, _ in cameras:
-        low, high = sensor.config.exposure_range_s
-        times = sorted({step["exposure_s"] for step in plan if step["camera"] == camera})
-        outside = [t for t in times if not low <= t <= high]
-        if outside:
-            raise SpectwinInputError(
-                f"exposures: camera {camera} would expose {outside[0]:g} s, outside the "
-                f"{sensor.config.name}'s range {low:g}..{high:g} s"
-            )
+    check_exposures(plan, {camera: sensor for camera, sensor, _ in cameras})
     devices = SimDomeDevices(
         tuple(cameras),
         dome_start_times_s(plan, timing),
-        config.rotation_stage_positions,
+        config.rotation_stage_step_deg,
         config.led_count,
+        LED_FULL_SCALE_MA,
         fault_rate=float(fault_rate),
         fault_seed=seed,
     )
@@ -351,6 +347,7 @@ def _program(
         "band_exposures_s": list(exposures.band_s),
         "band_schedule": [list(image) for image in exposures.schedule],
         "calibration_led": parts.calibration_led,
+        "led_current_ma": LED_FULL_SCALE_MA,
         "led_spectrum": _spectrum(PhosphorWhiteLED().intensity(FINE_GRID).values),
         "white_reflectance": _spectrum(zenith_white_reflectance(FINE_GRID).values),
         "rgb_response": _spectrum(Sensor(config.rgb_camera).electron_responses(FINE_GRID).values),
@@ -370,16 +367,15 @@ def dome_run_program(
 ) -> DomeCaptureProgram:
     """The measurement of ``material`` (``scenes/materials``) at ``size``, checked and not yet
     captured (module docstring); ``fault_rate`` injects device faults drawn from ``seed``."""
-    _check_common(seed, fault_rate)
+    check_seed(seed)
+    check_fault_rate(fault_rate)
     if material not in available_materials():
         raise SpectwinInputError(
             f"material: expected one of {available_materials()}, got {material!r}"
         )
     config = load_rig("dome")
     parts = dome_plan_parts(config, size)
-    plan = dome_run(
-        parts.cameras, parts.exposures, stage_positions=parts.stage_views, leds=parts.leds
-    )
+    plan = run_plan(parts)
     return _program(
         "dome-run",
         config,
@@ -408,20 +404,13 @@ def dome_calibration_program(
     spectral exposure time (thesis 10.3: 200; the RGB cameras take as many, at most 16, per
     exposure time), checked and not yet captured. ``size.stage_positions`` is not used: the
     geometric frames take the stage positions of :data:`GEOMETRIC_VIEWS`."""
-    _check_common(seed, fault_rate)
-    if not _is_whole(dark_frames) or dark_frames < 1:
+    check_seed(seed)
+    check_fault_rate(fault_rate)
+    if not is_whole(dark_frames) or dark_frames < 1:
         raise SpectwinInputError(f"dark_frames: expected at least 1, got {dark_frames}")
     config = load_rig("dome")
     parts = dome_plan_parts(config, size)
-    plan = dome_calibration(
-        parts.cameras,
-        parts.exposures,
-        leds=parts.leds,
-        calibration_led=parts.calibration_led,
-        geometric_views=parts.geometric_views,
-        dark_frames=dark_frames,
-        rgb_dark_frames=min(dark_frames, 16),
-    )
+    plan = calibration_plan(parts, dark_frames)
     return _program(
         "dome-calibration",
         config,

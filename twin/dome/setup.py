@@ -50,6 +50,7 @@ from recon.spectra import WavelengthGrid
 from twin.components.lamps import FINE_GRID
 from twin.components.targets import zenith_white_reflectance
 from twin.dome.capture import THESIS_BANDS_NM, DomeCameras, dome_cameras
+from twin.dome.exposure_plan import rgb_response_series_s, spectral_response_series_s
 from twin.materials.textures import TextureTruth
 from twin.render.truth import band_passbands, texture_truth
 from twin.rigs.hemisphere import direction
@@ -62,8 +63,6 @@ __all__ = [
     "THESIS_LONGEST_BAND_S",
     "DomeSetup",
     "dome_setup",
-    "rgb_response_series_s",
-    "spectral_response_series_s",
 ]
 
 BAND_GRID = WavelengthGrid(THESIS_BANDS_NM)
@@ -137,18 +136,6 @@ def _rgb_response(cameras: DomeCameras) -> np.ndarray:
     shape = (passbands / passbands.sum(1, keepdims=True)) @ electrons.T
     white = zenith_white_reflectance(BAND_GRID).values
     return shape / (white @ shape)
-
-
-def rgb_response_series_s() -> np.ndarray:
-    """The RGB cameras' response series: 14 exposures over 1 ms to 3.3 s, no two ratios powers
-    of one factor (:mod:`recon.radiometric.response_curve`)."""
-    return np.geomspace(1e-3, 3.0, 14) * (1 + 0.1 * (np.arange(14) % 3))
-
-
-def spectral_response_series_s(brightest_rate_e_per_s: float) -> np.ndarray:
-    """The spectral camera's low-signal series: 12 evenly spaced exposures from 20 ms to the one
-    that gives the brightest field about 3000 DN above the offset."""
-    return np.linspace(0.02, 15000.0 / brightest_rate_e_per_s, 12)
 
 
 def _band_frames_of_white(cameras, rates, exposures, rng) -> np.ndarray:

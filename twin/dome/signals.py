@@ -1,10 +1,11 @@
 """Signals of the simulated dome's cameras: mean photo-electrons of a frame from the rig's state.
 
 :class:`RenderedDomeSignal` renders, with Mitsuba, what one camera sees: the holder with what
-the plan step puts on it (:mod:`twin.dome.holder`), turned to the stage position the rotation
-stage has set, lit by the LEDs the LED array has switched on. A render is a rate per pixel
+the plan step puts on it (:mod:`twin.dome.holder`), turned to the angle the rotation stage has
+set, lit by the LEDs the LED array has switched on (their intensity in proportion to the drive
+current, the LED's nominal one at full scale). A render is a rate per pixel
 (e-/s; all of the tunable filter's bands at once for the spectral camera), so one render per
-(stage position, LEDs, holder content, camera) serves every exposure of the HDR set and every
+(stage angle, LEDs, holder content, camera) serves every exposure of the HDR set and every
 band: the camera keeps its last render, and a plan that takes a camera's frames of one LED
 together renders it once. Each render's Monte Carlo seed follows from what it shows, so a
 resumed or distributed capture renders the same images as an uninterrupted one.
@@ -39,8 +40,9 @@ class DomeScene:
         The material of ``sample`` and ``alignment`` frames (``None`` for a calibration).
     holders
         Per plan step, what lies on the holder (:func:`twin.dome.holder.holder_content`).
-    stage_angles_deg
-        Angle of every stage position.
+    led_full_scale_ma
+        The LEDs' current at their nominal intensity
+        (:class:`twin.components.lamps.PhosphorWhiteLED`).
     pixels, window
         Pixels across the 0.2 m field and the centred window read out.
     spp
@@ -52,7 +54,7 @@ class DomeScene:
     config: DomeConfig
     material: Material | None
     holders: tuple[str | None, ...]
-    stage_angles_deg: tuple[float, ...]
+    led_full_scale_ma: float
     pixels: int
     window: int
     spp: int
@@ -62,14 +64,13 @@ class DomeScene:
     def __getstate__(self) -> dict:
         return {**self.__dict__, "_shapes": {}}  # Mitsuba shapes stay in their process
 
-    def shapes(self, content: str, view_id: int) -> dict[str, object]:
-        """Mitsuba shapes of the holder with ``content`` at stage position ``view_id`` (the
-        last ones kept)."""
-        key = (content, view_id)
+    def shapes(self, content: str, stage_deg: float) -> dict[str, object]:
+        """Mitsuba shapes of the holder with ``content`` turned to ``stage_deg`` (the last ones
+        kept)."""
+        key = (content, stage_deg)
         if key not in self._shapes:
             self._shapes.clear()
-            parts = holder_scene_parts(content, self.material)
-            self._shapes[key] = dome_shapes(parts, self.stage_angles_deg[view_id])
+            self._shapes[key] = dome_shapes(holder_scene_parts(content, self.material), stage_deg)
         return self._shapes[key]
 
 
@@ -85,13 +86,14 @@ class RenderedDomeSignal:
     def __getstate__(self) -> dict:
         return {**self.__dict__, "_key": None, "_rates": None, "_view": None}
 
-    def rates(self, content: str, view_id: int, leds: tuple[int, ...]) -> np.ndarray:
-        """Rates ``(H, W, n_channels)`` of one state (the last state's kept)."""
-        key = (content, view_id, leds)
+    def rates(self, content: str, stage_deg: float, leds: tuple[int, ...]) -> np.ndarray:
+        """Rates ``(H, W, n_channels)`` of one state at full-scale current (the last kept)."""
+        key = (content, stage_deg, leds)
         if key != self._key:
             scene = self._scene
             lit = "all" if len(leds) == scene.config.led_count else ",".join(map(str, leds))
-            seed = zlib.crc32(f"{content}|{view_id}|{lit}|{self._camera}".encode()) & 0x7FFFFFFF
+            name = f"{content}|{stage_deg:.6f}|{lit}|{self._camera}"
+            seed = zlib.crc32(name.encode()) & 0x7FFFFFFF
             if self._view is None:
                 self._view = DomeView(
                     scene.config,
@@ -102,7 +104,7 @@ class RenderedDomeSignal:
                 )
             self._rates = dome_shape_rates(
                 scene.config,
-                scene.shapes(content, view_id),
+                scene.shapes(content, stage_deg),
                 self._view,
                 leds=leds,
                 spp=scene.spp,
@@ -118,10 +120,11 @@ class RenderedDomeSignal:
             shape = (side, side) if self._camera == SPECTRAL_CAMERA else (side, side, 3)
             return np.zeros(shape, np.float32)
         leds = tuple(np.flatnonzero(rig.led_pattern).tolist())
-        rates = self.rates(content, rig.view_id, leds)
+        rates = self.rates(content, rig.stage_deg, leds)
+        scale = np.float32(exposure_s * rig.led_current_ma / self._scene.led_full_scale_ma)
         if self._camera == SPECTRAL_CAMERA:
             if rig.band_nm is None:
                 raise ValueError("the filter has not been tuned yet")
             band = int(np.argmin(np.abs(np.asarray(self._scene.bands_nm) - rig.band_nm)))
-            return rates[..., band] * np.float32(exposure_s)
-        return rates * np.float32(exposure_s)
+            return rates[..., band] * scale
+        return rates * scale
