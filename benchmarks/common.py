@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import os
 import platform
 import resource
@@ -27,3 +28,22 @@ def timed(function: Callable[[], Result]) -> tuple[Result, float]:
     started = time.perf_counter()
     result = function()
     return result, round(time.perf_counter() - started, 2)
+
+
+def add_dome_size_arguments(parser: argparse.ArgumentParser) -> None:
+    """The reduced dome capture's size as options, 2 x 24 x 3 at 64 texels and 64 spp by
+    default (``twin.dome.programs.DomeCaptureSize``)."""
+    for name, default in (
+        ("--stage-positions", 2),
+        ("--leds", 24),
+        ("--rgb-cameras", 3),
+        ("--texels", 64),
+        ("--spp", 64),
+    ):
+        parser.add_argument(name, type=int, default=default)
+
+
+def dome_size_settings(arguments: argparse.Namespace) -> dict[str, int]:
+    """The options of :func:`add_dome_size_arguments`, by ``DomeCaptureSize``'s field names."""
+    names = ("stage_positions", "leds", "rgb_cameras", "texels", "spp")
+    return {name: getattr(arguments, name) for name in names}

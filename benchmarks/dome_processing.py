@@ -1,10 +1,10 @@
 """Time of the dome's processing at a reduced size, on this machine. Prints JSON.
 
-Captures (rendered by Mitsuba, not timed here: ``spectwin capture --dry-run`` says how long the
-real rig takes) a ``dome-calibration`` and a ``dome-run`` of ``--material`` at ``--stage-positions``
-x ``--leds`` x ``--rgb-cameras`` and ``--texels`` (default 2 x 24 x 3 at 64 texels), then times
-``calibrate_dome`` and ``process_dome`` with numpy's BLAS held to ``--threads`` threads, and
-evaluates the BTF against the twin's truth (Eq. 6.8, Delta E94; not timed).
+Renders (Mitsuba, wall time recorded; ``spectwin capture --dry-run`` says how long the real rig
+takes) a ``dome-calibration`` and a ``dome-run`` of ``--material`` at ``--stage-positions`` x
+``--leds`` x ``--rgb-cameras``, ``--texels`` and ``--spp`` (default 2 x 24 x 3 at 64 texels, 64
+spp), then times ``calibrate_dome`` and ``process_dome`` with numpy's BLAS held to ``--threads``
+threads, and evaluates the BTF against the twin's truth (Eq. 6.8, Delta E94; not timed).
 
 Run: .venv/bin/python -m benchmarks.dome_processing [--out DIR] [--threads 2]
 (``--out`` keeps the stores; an existing capture there is reused.)
@@ -20,7 +20,13 @@ from pathlib import Path
 
 from threadpoolctl import threadpool_limits
 
-from benchmarks.common import machine_description, peak_rss_mib, timed
+from benchmarks.common import (
+    add_dome_size_arguments,
+    dome_size_settings,
+    machine_description,
+    peak_rss_mib,
+    timed,
+)
 from recon.calibration.dome_capture import calibrate_dome
 from recon.dome.processing import process_dome
 from twin.dome.programs import DomeCaptureSize, dome_calibration_program, dome_run_program
@@ -30,10 +36,7 @@ from twin.validate.dome_evaluation import evaluate_dome
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--material", default="lego")
-    parser.add_argument("--stage-positions", type=int, default=2)
-    parser.add_argument("--leds", type=int, default=24)
-    parser.add_argument("--rgb-cameras", type=int, default=3)
-    parser.add_argument("--texels", type=int, default=64)
+    add_dome_size_arguments(parser)
     parser.add_argument("--dark-frames", type=int, default=200)
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--seed", type=int, default=2026)
@@ -41,12 +44,7 @@ def main() -> None:
     arguments = parser.parse_args()
     root = arguments.out or Path(tempfile.mkdtemp(prefix="spectwin-dome-"))
     root.mkdir(parents=True, exist_ok=True)
-    size = DomeCaptureSize(
-        arguments.stage_positions,
-        arguments.leds,
-        arguments.rgb_cameras,
-        arguments.texels,
-    )
+    size = DomeCaptureSize(**dome_size_settings(arguments))
     stores = {
         "calibration": root / "cal.capture.zarr",
         "run": root / f"{arguments.material}.capture.zarr",
@@ -60,13 +58,7 @@ def main() -> None:
     results: dict[str, object] = {
         "machine": machine_description(),
         "threads": arguments.threads,
-        "size": {
-            "stage_positions": size.stage_positions,
-            "leds": size.leds,
-            "rgb_cameras": size.rgb_cameras,
-            "texels": size.texels,
-            "dark_frames": arguments.dark_frames,
-        },
+        "size": dome_size_settings(arguments) | {"dark_frames": arguments.dark_frames},
         "material": arguments.material,
     }
     for name, program in programs.items():
