@@ -143,7 +143,11 @@ def _block_cg(
         if not active.all():  # retire the converged columns
             solution[:, columns[~active]] = current[:, ~active]
             columns, current, residual = columns[active], current[:, active], residual[:, active]
-            previous, direction, product = previous[:, active], direction[:, active], product[active]
+            previous, direction, product = (
+                previous[:, active],
+                direction[:, active],
+                product[active],
+            )
         preconditioned = preconditioner(residual, columns)
         following = np.einsum("ij,ij->j", residual, preconditioned)
         beta = (following - np.einsum("ij,ij->j", previous, preconditioned)) / product
