@@ -579,7 +579,9 @@ def reconstruct(
                 f"shape {initial.shape}"
             )
         scaled_initial = initial.reshape(shape) * problem.scale[:, None]
+    started = time.perf_counter()
     parts = problem.kronecker_parts() if solver in ("auto", "multigrid") else None
+    assembly_s = time.perf_counter() - started
     if solver == "multigrid" and parts is None:
         raise SpectwinInputError(
             "solver='multigrid' needs an energy with point spectra, camera, prior and "
@@ -600,7 +602,7 @@ def reconstruct(
         scaled, iterations, converged = _solve_least_squares(
             problem, used, max_iterations, tol, scaled_initial, progress
         )
-    timings = {**problem.timings_s, "solve": time.perf_counter() - started}
+    timings = {**problem.timings_s, "assembly": assembly_s, "solve": time.perf_counter() - started}
     leading = np.shape(rgb)[:-1]
     return SpectralizationResult(
         spectra=(scaled / problem.scale[:, None]).reshape(*leading, problem.n_bands),
