@@ -14,7 +14,9 @@ Diagonalizing :math:`B = Q \\Lambda Q^T` decouples the bands: every column :math
 :math:`(A + \\lambda_l I) y_l = (C Q)_l`. These are solved by conjugate gradients, preconditioned
 with algebraic multigrid (smoothed aggregation, pyamg) where :math:`\\lambda_l` is small next to
 the diagonal of :math:`A` and with the diagonal (Jacobi) where it dominates. One multigrid
-hierarchy serves all shifts within a factor of two, so only a handful are built.
+hierarchy serves all shifts within a factor of two, so only a handful are built, and the columns
+it serves are iterated together as one block (:mod:`recon.spectralize.multigrid`): each sparse
+matrix is read once per step for all of them, and the V-cycle runs in single precision.
 
 This replaces the thesis's matrix-free LSQR (section 6.4), which needs hundreds of iterations
 because information spreads one graph link per iteration; multigrid moves it across the graph in

@@ -6,6 +6,7 @@ import colour
 import numpy as np
 import pytest
 from scipy import sparse
+from scipy.sparse import linalg
 from scipy.spatial.distance import cdist
 
 from recon.errors import SpectwinInputError
@@ -113,12 +114,12 @@ def test_default_multigrid_energy_is_within_1e_4_of_a_direct_solve():
     spatial, spectral, rhs = problem.kronecker_parts()
     shifts, basis = np.linalg.eigh(spectral)
     rotated = rhs @ basis
-    direct = np.column_stack(
-        [
-            sparse.linalg.spsolve((spatial + shift * sparse.identity(spatial.shape[0])).tocsc(), c)
-            for shift, c in zip(shifts, rotated.T, strict=True)
-        ]
-    ) @ basis.T
+    identity = sparse.identity(spatial.shape[0])
+    columns = [
+        linalg.spsolve((spatial + shift * identity).tocsc(), column)
+        for shift, column in zip(shifts, rotated.T, strict=True)
+    ]
+    direct = np.column_stack(columns) @ basis.T
     converged = problem.energy(direct)
     default = reconstruct(rgb, response, **energy)
     assert default.solver == "multigrid" and default.converged
