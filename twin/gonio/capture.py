@@ -53,7 +53,7 @@ from twin.components.targets import zenith_white_reflectance
 from twin.devices.cluster import run_capture
 from twin.devices.sim_devices import SimGonioDevices, VirtualRig
 from twin.gonio.capture_time import estimate_plan_s
-from twin.gonio.render import gonio_camera, pose_matrix
+from twin.gonio.render import GONIO_SPP, gonio_camera, pose_matrix
 from twin.gonio.signals import RenderedGonioSignal, WhiteReferenceSignal
 from twin.materials import load_material
 from twin.materials.sample_holder import PRINT_OUTER_HALF_M, registration_corners
@@ -340,7 +340,7 @@ def _with_view(steps: list[dict], view: int) -> list[dict]:
 
 
 def gonio_calibration_program(
-    *, pixels: int = 64, spp: int = 64, seed: int = 0, white_fill: float = 0.6
+    *, pixels: int = 64, spp: int = GONIO_SPP, seed: int = 0, white_fill: float = 0.6
 ) -> CaptureProgram:
     """The calibration session (see the module docstring), checked and not yet captured.
 
@@ -388,7 +388,7 @@ def run_gonio_calibration(
     store: str | Path,
     *,
     pixels: int = 64,
-    spp: int = 64,
+    spp: int = GONIO_SPP,
     seed: int = 0,
     white_fill: float = 0.6,
     resume: bool = False,
@@ -409,7 +409,7 @@ def gonio_measurement_program(
     pairs: GonioPairs | None = None,
     pixels: int = 256,
     window: int | None = None,
-    spp: int = 64,
+    spp: int = GONIO_SPP,
     seed: int = 0,
 ) -> CaptureProgram:
     """One measurement run (see the module docstring), checked and not yet captured.
@@ -495,7 +495,7 @@ def run_gonio_measurement(
     pairs: GonioPairs | None = None,
     pixels: int = 256,
     window: int | None = None,
-    spp: int = 64,
+    spp: int = GONIO_SPP,
     seed: int = 0,
     resume: bool = False,
     show_progress: bool = False,
