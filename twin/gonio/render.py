@@ -141,8 +141,9 @@ class GonioScene:
             rays, PointLight(rotation @ lamp_m + shift), spp=spp, seed=seed
         )
         height, width, count = radiance.shape
-        rates = radiance.reshape(-1, count) @ self._weights[pose.lamp_id]
-        return rates.reshape(height, width, -1, self._bands).transpose(2, 0, 1, 3)
+        # (n_parts * n_bands, H * W): each band's image contiguous, for the sensor
+        rates = self._weights[pose.lamp_id].T @ radiance.reshape(-1, count).T
+        return rates.reshape(-1, self._bands, height, width).transpose(0, 2, 3, 1)
 
 
 def gonio_part_rates(
