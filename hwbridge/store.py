@@ -165,16 +165,6 @@ class CaptureStore:
         shutil.rmtree(building, ignore_errors=True)
         group = zarr.open_group(str(building), mode="w-", zarr_format=3)
         per_chunk = INDEX_CHUNK_FRAMES if backend == "sim" else 1
-        group.attrs.update(
-            {
-                "rig": rig,
-                "backend": backend,
-                "seed": int(seed),
-                "software_version": software_version,
-                "plan": plan,
-                "complete": False,
-            }
-        )
         for camera, (height, width) in cameras.items():
             count = sum(step["camera"] == camera for step in plan)
             group.create_array(
@@ -229,6 +219,18 @@ class CaptureStore:
             dtype="bool",
             fill_value=False,
             compressors=checksummed_compressors(),
+        )
+        # The attributes last and in one write: the plan of a full campaign is tens of MB of
+        # JSON, which Zarr writes out again for every attribute set.
+        group.update_attributes(
+            {
+                "rig": rig,
+                "backend": backend,
+                "seed": int(seed),
+                "software_version": software_version,
+                "plan": plan,
+                "complete": False,
+            }
         )
         building.rename(path)
         return cls(zarr.open_group(str(path), mode="r+"), path)

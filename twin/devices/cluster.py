@@ -42,6 +42,7 @@ Examples
 from __future__ import annotations
 
 import contextlib
+import functools
 import logging
 import os
 import signal
@@ -272,6 +273,14 @@ def _gather(
     return results
 
 
+@functools.lru_cache(maxsize=4)
+def _worker_store(path: str, stamp: tuple[int, int]) -> CaptureStore:
+    """The capture store at ``path``, opened once per worker process and version of its root
+    metadata (``stamp``: its modification time and size): the plan of a full campaign is tens
+    of MB of JSON, which a task per direction pair would otherwise read again."""
+    return CaptureStore.open(path)
+
+
 def _capture_task(
     store_path: str,
     devices: Callable[[], SessionDevices],
@@ -281,8 +290,9 @@ def _capture_task(
 ) -> tuple[int, list[tuple[int, FrameRecord]]]:
     if stop.is_set():
         return 0, []
+    metadata = os.stat(Path(store_path) / "zarr.json")
     taken = capture_steps(
-        CaptureStore.open(store_path),
+        _worker_store(store_path, (metadata.st_mtime_ns, metadata.st_size)),
         steps,
         devices(),
         seed=seed,

@@ -128,14 +128,14 @@ class PinholeRays:
         import mitsuba as mi
 
         offset = (self.pixels - (self.window or self.pixels)) // 2
-        focal = self.pixels / 2 / self.tan_half_fov
-        centre = self.pixels / 2 - offset
+        focal = _scalar(self.pixels / 2 / self.tan_half_fov)
+        centre = _scalar(self.pixels / 2 - offset)
         direction = (
             _vector(self.forward)
             + _vector(self.left) * ((centre - column) / focal)
             + _vector(self.up) * ((centre - row) / focal)
         )
-        return mi.Ray3f(mi.Point3f(*map(float, self.origin_m)), dr.normalize(direction))
+        return mi.Ray3f(_vector(self.origin_m, mi.Point3f), dr.normalize(direction))
 
 
 @dataclass(frozen=True)
@@ -156,16 +156,27 @@ class ParallelCamera:
     def rays(self, column, row):
         import mitsuba as mi
 
-        scale = 2 * self.half_m / self.texels
+        scale = _scalar(2 * self.half_m / self.texels)
+        half = _scalar(self.half_m)
         view = _vector(self.view)
-        on_plane = mi.Point3f(-self.half_m + column * scale, self.half_m - row * scale, 0.0)
+        on_plane = mi.Point3f(column * scale - half, half - row * scale, 0.0)
         return mi.Ray3f(on_plane + 0.1 * view, -view)
 
 
-def _vector(values: np.ndarray):
+def _vector(values: np.ndarray, kind=None):
+    """A 3-vector as an opaque Dr.Jit value: a kernel input, not a constant compiled into the
+    kernel, so that every view and light runs the same compiled kernel."""
+    import drjit as dr
     import mitsuba as mi
 
-    return mi.Vector3f(*map(float, values))
+    return dr.opaque(kind or mi.Vector3f, [float(value) for value in values])
+
+
+def _scalar(value: float):
+    import drjit as dr
+    import mitsuba as mi
+
+    return dr.opaque(mi.Float, float(value))
 
 
 def _unit_bsdf_key(part: SurfacePart) -> tuple[str, float | None]:
@@ -366,7 +377,7 @@ class NodeScene:
         import mitsuba as mi
 
         if isinstance(light, PointLight):
-            position = mi.Point3f(*map(float, light.position_m))
+            position = _vector(light.position_m, mi.Point3f)
             offset = position - si.p
             distance_squared = dr.squared_norm(offset)
             direction = offset * dr.rsqrt(distance_squared)
