@@ -259,8 +259,14 @@ def capture(
         ),
     ] = None,
     spp: Annotated[
-        int, typer.Option(min=1, max=65536, help="gonio-run: samples per pixel of the renders.")
-    ] = 64,
+        int,
+        typer.Option(
+            min=1,
+            max=65536,
+            help="gonio-run: samples per pixel of the renders (stratified; twin.gonio.render."
+            "GONIO_SPP).",
+        ),
+    ] = 16,
     seed: Annotated[
         int,
         typer.Option(

@@ -32,10 +32,12 @@ __all__ = [
     "simulate_band_frames",
 ]
 
-GONIO_SPP = 4
-"""Samples per pixel of the gonioreflectometer's renders (stratified over the pixel). The
+GONIO_SPP = 16
+"""Samples per pixel of the gonioreflectometer's renders, stratified 4 x 4 over the pixel. The
 spectra carry no sampling noise (:mod:`twin.render.node_transport`); the samples average the
-image over each pixel's area, where edges cross it."""
+image over each pixel's area where edges cross it, which registration measures: on the demo's
+20 pairs the registered corners are off by at most 0.32 px at 4 samples, 0.12 px at 16 and
+0.10 px at 64, and the BTF's error against the truth is the same at all three (BENCHMARKS.md)."""
 
 
 def gonio_lamp(config: GonioConfig, lamp_id: str) -> tuple[Lamp, np.ndarray]:

@@ -177,3 +177,14 @@ def test_resume_of_a_run_reads_its_settings_and_refuses_other_ones(tmp_path, cal
         assert result.exit_code == 2, (arguments, result.output)
         assert message in result.stderr and result.stderr.count("\n") == 1, result.stderr
     assert CaptureStore.open(path).pending_steps() == list(range(3, len(program.plan)))
+
+
+def test_the_capture_renders_at_the_rigs_sample_count_unless_told():
+    import typer.main
+
+    from twin.gonio.render import GONIO_SPP
+
+    capture = typer.main.get_command(app).commands["capture"]
+    (spp,) = [param for param in capture.params if param.name == "spp"]
+    assert spp.default == GONIO_SPP
+    assert gonio_measurement_program(EXPOSURES_S).rig["spp"] == GONIO_SPP
