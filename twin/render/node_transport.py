@@ -44,7 +44,7 @@ import numpy as np
 
 from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra
-from twin.materials import MATERIAL_GRID
+from twin.materials.builders import MATERIAL_GRID
 from twin.materials.surfaces import SurfacePart
 from twin.render.shapes import mitsuba_shape, part_bsdf
 from twin.render.spectra import rendered_spp
