@@ -5,6 +5,11 @@ class BridgeInputError(ValueError):
     """A request the device cannot take (e.g. a wavelength outside its range)."""
 
 
+class DriverNotInstalled(BridgeInputError):
+    """A real device whose driver library is not installed: the message names the extra of
+    ``spectwin`` that brings it (``pip install 'spectwin[rotation-stage]'``)."""
+
+
 class StoreDamagedError(RuntimeError):
     """A store whose data or metadata is missing or corrupt on disk (a chunk deleted, truncated
     or altered, a ``zarr.json`` gone): the message names the path and what is wrong."""

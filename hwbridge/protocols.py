@@ -22,6 +22,7 @@ __all__ = [
     "LedArray",
     "Positioner",
     "Readable",
+    "RotationStage",
     "Spectrometer",
     "Stageable",
     "TunableFilter",
@@ -91,11 +92,29 @@ class Lamp(Readable, Protocol):
 
 
 @runtime_checkable
-class LedArray(Readable, Protocol):
-    """The dome's LEDs: any pattern of them on (thesis 10.2.1)."""
+class LedArray(Readable, Stageable, Protocol):
+    """The dome's LEDs: any pattern of them on at a drive current (thesis 10.2.1).
 
-    def set(self, pattern: np.ndarray) -> None:
-        """``pattern``: boolean array, one entry per LED."""
+    ``read`` reports every LED's current in mA (0: off). Requests are checked as in
+    :mod:`hwbridge.dome_targets`.
+    """
+
+    count: int
+
+    @property
+    def current_range_ma(self) -> tuple[float, float]:
+        """Lowest and highest current an LED that is on can be driven at."""
+
+    @property
+    def current_step_ma(self) -> float:
+        """Resolution of the drive current (0: continuous)."""
+
+    def set(self, pattern: np.ndarray, current_ma: float | None = None) -> None:
+        """``pattern``: boolean array, one entry per LED; those on at ``current_ma`` (``None``:
+        the array's drive current), all others off."""
+
+    def light(self, led: int, current_ma: float | None = None) -> None:
+        """LED ``led`` alone on at ``current_ma`` (``None``: the drive current)."""
 
 
 @runtime_checkable
@@ -103,6 +122,22 @@ class Positioner(Readable, Protocol):
     """Robot pose, rail angle or rotation stage: move and report where it is."""
 
     def set(self, target: dict[str, float]) -> None: ...
+
+
+@runtime_checkable
+class RotationStage(Positioner, Stageable, Protocol):
+    """The dome's rotation stage under the sample (thesis 10.2.2).
+
+    ``set({"angle_deg": a})`` turns to ``a``, ``set({"view_id": k})`` to stage position ``k``
+    (``k * step_deg``), both returning once the stage has stopped there; ``read`` reports the
+    angle in degrees.
+    """
+
+    step_deg: float
+
+    @property
+    def range_deg(self) -> tuple[float, float]:
+        """Lowest and highest angle the stage may be sent to."""
 
 
 @runtime_checkable

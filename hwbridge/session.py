@@ -10,11 +10,12 @@ flagged are skipped, a step that was cut short is taken again into the same slot
 Devices that simulate noise can implement ``set_step(seed, step)`` to derive it from the step
 index, so that a resumed session reproduces the frames of an uninterrupted one bit for bit;
 cameras with ``set_shutter(open)`` get it closed for dark frames. With ``leds`` (an LedArray of
-``led_count`` LEDs) each step's ``light_id`` is switched on alone (``-2``: all LEDs, the dome's
-alignment frames). With a ``monitor`` (Spectrometer) the lamp spectrum is recorded with every lit
-frame (thesis 3.3: the i1 tracks the lamp at every measurement point). Device timeouts are
-retried with exponential backoff, disconnected devices are staged again, and both are recorded
-in the frame's ``status``.
+``led_count`` LEDs) each step's ``light_id`` is switched on alone at the array's drive current
+(``-2``: all LEDs, the dome's alignment frames; a ``light_id`` the array does not have stops the
+session with its one-line error). With a ``monitor`` (Spectrometer) the lamp spectrum is recorded
+with every lit frame (thesis 3.3: the i1 tracks the lamp at every measurement point). Device
+timeouts are retried with exponential backoff, disconnected devices are staged again, and both are
+recorded in the frame's ``status``.
 
 :func:`run_session` does it all in one process. Its two halves serve a distributed capture
 (``twin.devices.cluster``): :func:`open_session_store` creates (or reopens to resume) the store
@@ -388,8 +389,12 @@ def capture_steps(
                 faults += seen
             if leds is not None and settings.get("light_id", -1) != -1:
                 light = int(settings["light_id"])
-                pattern = np.ones(led_count, bool) if light == -2 else np.arange(led_count) == light
-                _, seen = _with_retries(lambda p=pattern: leds.set(p), leds, retries, backoff_s)
+                switch = (
+                    (lambda: leds.set(np.ones(led_count, bool)))
+                    if light == -2
+                    else (lambda led=light: leds.light(led))
+                )
+                _, seen = _with_retries(switch, leds, retries, backoff_s)
                 faults += seen
             if "band_nm" in settings:
                 _, seen = _with_retries(
@@ -498,6 +503,8 @@ def run_session(
             except KeyboardInterrupt:
                 if not stop():
                     raise  # not a signal of this session's
+        if not store.complete:  # a writer killed after its last flag, before marking complete
+            store.refresh_complete()
         raise_if_interrupted(store, stop)
     return store
 

@@ -7,6 +7,7 @@ source; every data folder has a ``SOURCES.md`` naming origin and licence
 
 from __future__ import annotations
 
+import difflib
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -19,8 +20,11 @@ from recon.spectra import SampledSpectra, WavelengthGrid
 
 __all__ = [
     "Llanos2019Multispectral",
-    "read_llanos2019_multispectral",
+    "camera_name",
+    "camera_names",
     "data_path",
+    "read_camera_sensitivities",
+    "read_llanos2019_multispectral",
     "read_spectra_csv",
 ]
 
@@ -71,6 +75,57 @@ def read_spectra_csv(relative_path: str | Path) -> SampledSpectra:
         )
     table = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
     return SampledSpectra(WavelengthGrid(table[:, 0]), table[:, 1:].T, tuple(header[1:]))
+
+
+_CAMERAS_FOLDER = Path("spectra") / "cameras_rawtoaces"
+
+
+def camera_names() -> tuple[str, ...]:
+    """The names of the 51 cameras whose measured RGB sensitivities ship with spectwin, sorted.
+
+    The data are AcademySoftwareFoundation/rawtoaces-data's (Apache-2.0): DSLR, mirrorless and
+    cinema cameras, 380-780 nm in 5 nm steps, relative units (``recon/data/spectra/SOURCES.md``).
+    A name is the file's with spaces for underscores, e.g. ``"Canon EOS 5D Mark II"``.
+    """
+    return tuple(
+        sorted(path.stem.replace("_", " ") for path in data_path(_CAMERAS_FOLDER).glob("*.csv"))
+    )
+
+
+def camera_name(name: str) -> str:
+    """``name`` as :func:`camera_names` spells it (underscores for spaces are accepted).
+
+    Raises
+    ------
+    SpectwinInputError
+        For a name that is not one of the cameras, naming the closest ones.
+    """
+    names = camera_names()
+    wanted = str(name).replace("_", " ")
+    if wanted not in names:
+        close = difflib.get_close_matches(wanted, names, n=3, cutoff=0.5)
+        hint = f"; closest: {', '.join(close)}" if close else f"; e.g. {names[0]!r}"
+        raise SpectwinInputError(
+            f"camera {name!r}: expected one of the {len(names)} measured cameras{hint}"
+        )
+    return wanted
+
+
+def read_camera_sensitivities(name: str) -> SampledSpectra:
+    """Measured RGB spectral sensitivities of the camera ``name`` (see :func:`camera_name`).
+
+    Returns
+    -------
+    SampledSpectra
+        ``(3, 81)`` rows R, G, B on 380-780 nm in 5 nm steps, relative units.
+    """
+    file_name = camera_name(name).replace(" ", "_")
+    spectra = read_spectra_csv(_CAMERAS_FOLDER / f"{file_name}.csv")
+    if spectra.names != ("R", "G", "B"):
+        raise SpectwinDataError(
+            f"camera {name!r}: expected the columns R, G, B, got {spectra.names}"
+        )
+    return spectra
 
 
 _LLANOS2019_FOLDER = Path("real") / "llanos2019" / "multispectral_images"

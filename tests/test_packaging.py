@@ -107,6 +107,9 @@ def test_the_wheel_contains_the_scenes_and_data_the_code_loads(wheel):
         "scenes/rigs/gonio.yaml",
         "scenes/rigs/dome.yaml",
         "scenes/cameras/coolsnap_k4.yaml",
+        "scenes/cameras/basler_ccd12.yaml",
+        "recon/data/real/emva1288_basler_ccd12/EMVA1288_Data.txt",
+        "recon/data/real/emva1288_basler_ccd12/images/d_s_000_snap_049.png",
         "scenes/materials/colorchecker16.yaml",
         "hwbridge/mappings/llanos2019.yaml",
         "recon/data/spectra/sensors/nikon_d70_rgb.csv",
@@ -116,7 +119,12 @@ def test_the_wheel_contains_the_scenes_and_data_the_code_loads(wheel):
     ):
         assert name in members
     # Every data folder names its source and licence.
-    for folder in ("scenes/", "recon/data/spectra/", "recon/data/real/llanos2019/"):
+    for folder in (
+        "scenes/",
+        "recon/data/spectra/",
+        "recon/data/real/llanos2019/",
+        "recon/data/real/emva1288_basler_ccd12/",
+    ):
         assert f"{folder}SOURCES.md" in members
     assert len([m for m in members if m.startswith("recon/data/real/llanos2019/")]) > 60
 
@@ -142,6 +150,7 @@ def test_the_installed_wheel_runs_from_another_folder_without_the_repository(whe
         "from recon.spectra import DEFAULT_GRID\n"
         "[load_rig(n) for n in available_rigs()]\n"
         "[load_camera_config(n) for n in available_cameras()]\n"
+        "assert load_camera_config('basler_ccd12').emva1288.descriptor_path().is_file()\n"
         "[load_material(n) for n in available_materials()]\n"
         "[response() for response in RGB_CAMERA_RESPONSES.values()]\n"
         "esser_reflectances(DEFAULT_GRID)\n"
@@ -162,7 +171,7 @@ def test_the_installed_wheel_runs_from_another_folder_without_the_repository(whe
     assert all(path.startswith(str(target)) for path in locations.values())
     assert names == [
         ["dome", "gonio"],
-        ["coolsnap_k4", "dslr_nikon_5100", "svs_vistek_4022"],
+        ["basler_ccd12", "coolsnap_k4", "dslr_nikon_5100", "svs_vistek_4022"],
         ["colorchecker16", "lego", "red_fabric", "wallpaper"],
     ]
     command = subprocess.run(

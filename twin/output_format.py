@@ -35,6 +35,7 @@ _UNITS = (
     ("_dn_per_e", "DN/e-"),
     ("_e_per_s", "e-/s"),
     ("_dn2", "DN^2"),
+    ("_photons", "photons"),
     ("_dn", "DN"),
     ("_e", "e-"),
     ("_percent", "%"),

@@ -1,7 +1,9 @@
 """Wire emulators of real devices, registered as pyserial URL handlers.
 
-``serial.serial_for_url("varispec://")`` opens an emulated VariSpec: the real driver talks to it
-byte for byte. Importing this package registers the handlers.
+``serial.serial_for_url("varispec://")`` opens an emulated VariSpec LCTF, ``"apt://"`` a Thorlabs
+APT rotation stage, ``"dmxusbpro://"`` an Enttec DMX USB Pro with the dome's LED decoders: the
+real drivers talk to them byte for byte. :mod:`hwbridge.emulators.pty_link` serves an emulator on
+a pseudo-terminal instead. Importing this package registers the handlers.
 """
 
 import serial

@@ -53,6 +53,10 @@ class VariSpecState:
                 self._line += character
         return bytes(out)
 
+    def due(self, now: float) -> bytes:
+        """The controller never speaks unasked."""
+        return b""
+
     def _status(self) -> int:
         return (
             (0x01 if self.initialized else 0)

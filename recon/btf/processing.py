@@ -354,4 +354,6 @@ def process_gonio(
     with progress_steps("process", len(pending), enabled=show_progress) as advance:
         outcomes = process_pairs(run, btf, pending, manual_corners=manual_corners, advance=advance)
     record_outcomes(btf, [outcomes])
+    if not btf.complete:  # a run killed after its last pair's flag, before marking complete
+        btf.refresh_complete()
     return btf

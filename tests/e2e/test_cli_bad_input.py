@@ -37,7 +37,7 @@ PROBES: list[tuple[list[str], int, str]] = [
     (["smoke", "--pixels-per-patch", "2"], 2, "'--pixels-per-patch'"),
     (["smoke", "--out", "@PLAIN"], 2, "is a file; expected a folder"),
     # camera
-    (["camera", "nosuch"], 2, "expected a path or one of ['coolsnap_k4'"),
+    (["camera", "nosuch"], 2, "expected a path or one of ['basler_ccd12', 'coolsnap_k4'"),
     (["camera", "coolsnap_k4", "--seed", "-1"], 2, "'--seed'"),
     (["camera", "@BAD_CAMERA"], 2, "bit_depth"),
     (["camera", "@MALFORMED_YAML"], 2, "malformed YAML"),
@@ -231,6 +231,10 @@ PROBES: list[tuple[list[str], int, str]] = [
     (["camchar", "--chart", "nosuch"], 2, "'esser'"),
     (["camchar", "--bend", "0.5"], 2, "'--bend'"),
     (["camchar", "--out", "@PLAIN"], 2, "is a file; expected a folder"),
+    # camchar-cameras
+    (["camchar-cameras", "--camera", "Nikon D85"], 2, "closest: Nikon D850"),
+    (["camchar-cameras", "--seed", "-1"], 2, "'--seed'"),
+    (["camchar-cameras", "--out", "@PLAIN"], 2, "is a file; expected a folder"),
     # spectralize-study
     (["spectralize-study", "--texels", "16", "--no-sweeps"], 2, "'--texels'"),
     (["spectralize-study", "--out", "@PLAIN"], 2, "is a file; expected a folder"),

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import zarr
 from typer.testing import CliRunner
 
 from hwbridge.store import CaptureStore
@@ -252,3 +253,20 @@ def test_store_check_says_no_checksums_for_an_old_store(tmp_path):
     result = _run("store", "check", path)
     assert result.exit_code == 0, result.output
     assert "no (made before checksums" in " ".join(result.stdout.split())
+
+
+def test_a_capture_killed_after_its_last_frame_but_before_marking_complete_resumes_to_complete(
+    inputs, tmp_path
+):
+    store = tmp_path / "run.capture.zarr"
+    shutil.copytree(inputs / "demo.capture.zarr", store)
+    zarr.open_group(str(store), mode="r+").attrs["complete"] = False  # every flag set, no mark
+    assert not CaptureStore.open(store).complete and CaptureStore.open(store).pending_steps() == []
+    result = _run("capture", store, "--resume", "--json")
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout[result.stdout.index("{") :])["complete"] is True
+    assert CaptureStore.open(store).complete
+    np.testing.assert_array_equal(
+        CaptureStore.open(store).frames("k4")[:],
+        CaptureStore.open(inputs / "demo.capture.zarr").frames("k4")[:],
+    )

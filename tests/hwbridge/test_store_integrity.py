@@ -73,19 +73,6 @@ def store(pristine, tmp_path):
     return path
 
 
-def _truncate(file):
-    file.write_bytes(file.read_bytes()[:7])
-
-
-def _flip(file):
-    data = bytearray(file.read_bytes())
-    data[len(data) // 2] ^= 0x04
-    file.write_bytes(bytes(data))
-
-
-DAMAGE = {"deleted": lambda file: file.unlink(), "truncated": _truncate, "flipped": _flip}
-
-
 def test_a_healthy_store_has_checksums_on_every_array_and_reports_its_provenance(store):
     report = CaptureStore.open(store).check()
     assert report.healthy and report.complete and report.problems == []
@@ -96,16 +83,15 @@ def test_a_healthy_store_has_checksums_on_every_array_and_reports_its_provenance
     assert all(has_checksums(array) for array in arrays)
 
 
-@pytest.mark.parametrize("damage", DAMAGE)
 def test_a_damaged_frame_chunk_is_named_by_camera_step_and_key(store, damage):
-    DAMAGE[damage](store / "frames/k4/c/3/0/0")
+    damage(store / "frames/k4/c/3/0/0")
     capture = CaptureStore.open(store)
     report = capture.check()
     assert not report.healthy and report.damaged_units == [3]
     (problem,) = report.problems
     assert problem.item == "camera k4 step 3 (frame 3)"
     assert problem.key == "frames/k4/c/3/0/0"
-    assert problem.problem == ("missing" if damage == "deleted" else "corrupt")
+    assert problem.problem == ("missing" if damage.kind == "deleted" else "corrupt")
     assert report.damage().startswith("camera k4 step 3 (frame 3): frames/k4/c/3/0/0 is ")
     # Zarr alone would return zeros for the deleted chunk; reading through the store refuses.
     with pytest.raises(StoreDamagedError, match=r"camera k4 step 3 \(frame 3\): frames/k4/c/3/0/0"):
@@ -113,41 +99,38 @@ def test_a_damaged_frame_chunk_is_named_by_camera_step_and_key(store, damage):
     np.testing.assert_array_equal(
         capture.read_frames("k4", [2])[0], capture.frames("k4")[2]
     )  # the sound frames still read
-    if damage == "deleted":
+    if damage.kind == "deleted":
         assert not capture.check(verify=False).healthy  # presence alone finds it
     else:
         assert capture.check(verify=False).healthy  # only the checksums find it
 
 
-@pytest.mark.parametrize("damage", DAMAGE)
 def test_a_damaged_index_chunk_of_done_steps_is_found(store, damage):
     # A simulated capture keeps the index of INDEX_CHUNK_FRAMES frames in one chunk: all five.
-    DAMAGE[damage](store / "index/k4/exposure_s/c/0")
+    damage(store / "index/k4/exposure_s/c/0")
     report = CaptureStore.open(store).check()
     assert [(p.item, p.key, p.units) for p in report.problems] == [
         ("camera k4 step 0 (frame 0)", "index/k4/exposure_s/c/0", (0, 1, 2, 3, 4))
     ]
-    if damage == "deleted":  # Zarr reads the fill value: only the check sees it
+    if damage.kind == "deleted":  # Zarr reads the fill value: only the check sees it
         assert np.isnan(CaptureStore.open(store).index("k4", ["exposure_s"])["exposure_s"]).all()
     else:
         with pytest.raises(StoreDamagedError, match="index/k4/exposure_s cannot be read"):
             CaptureStore.open(store).index("k4")
 
 
-@pytest.mark.parametrize("damage", DAMAGE)
 def test_a_damaged_index_chunk_of_a_real_capture_costs_one_frame(tmp_path, damage):
     path = _capture(tmp_path / "run.capture.zarr", backend="real").path
-    DAMAGE[damage](path / "index/k4/exposure_s/c/2")
+    damage(path / "index/k4/exposure_s/c/2")
     report = CaptureStore.open(path).check()
     assert [(p.item, p.key, p.units) for p in report.problems] == [
         ("camera k4 step 2 (frame 2)", "index/k4/exposure_s/c/2", (2,))
     ]
 
 
-@pytest.mark.parametrize("damage", DAMAGE)
 def test_resuming_a_simulated_capture_takes_the_damaged_frames_again(store, pristine, damage):
-    DAMAGE[damage](store / "frames/k4/c/1/0/0")
-    DAMAGE[damage](store / "frames/k4/c/4/0/0")
+    damage(store / "frames/k4/c/1/0/0")
+    damage(store / "frames/k4/c/4/0/0")
     camera = StepCamera()
     resumed = run_session(
         store,
@@ -169,13 +152,12 @@ def test_resuming_a_simulated_capture_takes_the_damaged_frames_again(store, pris
 
 
 @pytest.mark.parametrize("backend", ["real", "replay"])
-@pytest.mark.parametrize("damage", DAMAGE)
 def test_resuming_a_real_or_replayed_capture_with_damaged_frames_is_refused(
     tmp_path, backend, damage
 ):
     path = _capture(tmp_path / "run.capture.zarr", backend=backend).path
-    DAMAGE[damage](path / "frames/k4/c/2/0/0")
-    DAMAGE[damage](path / "frames/k4/c/3/0/0")
+    damage(path / "frames/k4/c/2/0/0")
+    damage(path / "frames/k4/c/3/0/0")
     camera = StepCamera()
     with pytest.raises(StoreDamagedError) as refused:
         run_session(
@@ -214,11 +196,11 @@ def test_a_deleted_progress_chunk_makes_its_steps_pending_and_contradicts_comple
 
 
 @pytest.mark.parametrize("backend", ["sim", "real"])
-def test_a_corrupt_progress_chunk_only_makes_its_steps_pending(tmp_path, backend):
+def test_a_corrupt_progress_chunk_only_makes_its_steps_pending(tmp_path, backend, chunk_damage):
     path = _capture(tmp_path / "run.capture.zarr", backend=backend).path
     chunk = 0 if backend == "sim" else 1
     lost = [0, 1, 2, 3, 4] if backend == "sim" else [1]
-    _flip(path / f"progress/c/{chunk}")
+    chunk_damage["flipped"](path / f"progress/c/{chunk}")
     capture = CaptureStore.open(path)
     report = capture.check()
     assert report.pending == lost
@@ -302,13 +284,13 @@ def _old_store(path):
     return path
 
 
-def test_a_store_made_before_checksums_opens_and_says_so(tmp_path):
+def test_a_store_made_before_checksums_opens_and_says_so(tmp_path, chunk_damage):
     path = _old_store(tmp_path / "old.capture.zarr")
     report = CaptureStore.open(path).check()
     assert report.healthy and report.checksums == "no"
     assert report.summary()["checksums"] == "no"
     (path / "frames/k4/c/1/0/0").unlink()
-    _truncate(path / "index/k4/kind/c/0")  # shared by every frame of the camera
+    chunk_damage["truncated"](path / "index/k4/kind/c/0")  # shared by every frame of the camera
     report = CaptureStore.open(path).check()
     assert [(p.key, p.problem, p.units) for p in report.problems] == [
         ("index/k4/kind/c/0", "corrupt", (0, 1, 2)),

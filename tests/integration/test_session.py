@@ -216,7 +216,10 @@ def test_20_sigkills_and_5_sigints_at_random_moments_resume_to_the_uninterrupted
                 assert stderr.read_text().splitlines() == [
                     f"interrupted after {done} of {total} frames; {then}"
                 ]
-            if done == total:  # stopped after its last frame: check it and begin afresh
+            if done == total:  # stopped after its last frame: finish, check, begin afresh
+                if not CaptureStore.open(path).complete:  # killed before marking it complete
+                    pid, stderr = captures.start(["capture", str(path), "--resume", "--json"])
+                    assert captures.wait(pid) == 0, stderr.read_text()
                 _check_complete(path, reference_frames, reference_index)
                 shutil.rmtree(path)
                 completed += 1

@@ -11,11 +11,12 @@ from typing import Annotated
 
 import typer
 
+from twin.cli.camera import register as register_camera
 from twin.cli.choices import Chart, Light, RGBCamera
 from twin.cli.dome import register as register_dome
 from twin.cli.errors import SpectwinGroup, require_output_folder, run_failed
 from twin.cli.gonio import register as register_gonio
-from twin.cli.output import JsonFlag, console, print_summary
+from twin.cli.output import JsonFlag, SeedOption, console, print_summary
 from twin.cli.store import register as register_store
 
 app = typer.Typer(
@@ -24,8 +25,6 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
 )
-
-SeedOption = Annotated[int, typer.Option(min=0, help="Seed of the simulated noise.")]
 
 
 @app.command()
@@ -73,32 +72,6 @@ def smoke(
         run_failed(f"smoke render {verdict}; more --spp lowers the render noise")
     if not as_json:
         console.print(verdict)
-
-
-@app.command()
-def camera(
-    name: Annotated[
-        str, typer.Argument(help="Camera file in scenes/cameras (e.g. coolsnap_k4) or a path.")
-    ],
-    out: Annotated[
-        Path, typer.Option(help="Folder for camera_report.png and summary.json.")
-    ] = Path("out/camera"),
-    seed: SeedOption = 0,
-    as_json: JsonFlag = False,
-) -> None:
-    """Bench-test a camera: photon transfer, dark frames, HMI flicker vs exposure time."""
-    from twin.rigs.camera_config import load_camera_config
-    from twin.studies.camera_bench import run_camera_report
-
-    config = load_camera_config(name)
-    folder = out / Path(name).stem
-    require_output_folder(out)
-    require_output_folder(folder)
-    with console.status(f"simulating {config.name}"):
-        summary = run_camera_report(name, folder, seed=seed)
-    print_summary(summary, str(summary["camera"]), as_json, skip=("camera", "outputs"))
-    if not as_json:
-        console.print(f"wrote {folder / 'camera_report.png'}")
 
 
 @app.command()
@@ -199,6 +172,41 @@ def camchar(
         console.print(f"wrote {out / 'responses.png'} and {out / 'chart_photo.png'}")
 
 
+@app.command(name="camchar-cameras")
+def camchar_cameras(
+    out: Annotated[
+        Path, typer.Option(help="Folder for table.csv, errors.png, worst_camera.png, summary.json.")
+    ] = Path("out/camchar-cameras"),
+    camera: Annotated[
+        list[str] | None,
+        typer.Option(
+            help="A measured camera to characterize, e.g. 'Nikon D850' (repeat for several; "
+            "default: all 51). Its prior is always learned from all the others."
+        ),
+    ] = None,
+    seed: Annotated[
+        int, typer.Option(min=0, help="Seed of the specularity, shading and noise.")
+    ] = 0,
+    as_json: JsonFlag = False,
+) -> None:
+    """Chapter 9 on 51 measured cameras, each left out: the extended estimator with a prior
+    learned from the other cameras, without it, and Jiang et al. 2013 on the same photographs."""
+    from twin.studies.camchar_cameras import run_camchar_cameras
+
+    require_output_folder(out)
+    summary = run_camchar_cameras(out, cameras=camera, seed=seed, progress=not as_json)
+    if as_json:
+        print_summary(summary, "camera characterization across cameras", as_json)
+        return
+    rows = {}
+    for method, statistics in summary["methods"].items():
+        rows[f"{method}_mean_pct"] = statistics["mean_pct"]
+        rows[f"{method}_max_pct"] = statistics["max_pct"]
+        rows[f"{method}_hardest"] = ", ".join(statistics["hardest"])
+    print_summary(rows, f"worst channel's RMSE over {summary['cameras']} cameras (seed {seed})")
+    console.print(f"wrote {out / 'table.csv'}, {out / 'errors.png'} and {out / 'worst_camera.png'}")
+
+
 @app.command(name="spectralize-study")
 def spectralize_study(
     out: Annotated[Path, typer.Option(help="Folder for study.json and the PNGs.")] = Path(
@@ -253,6 +261,7 @@ def demo(
         console.print(f"report: {out / 'report.html'}")
 
 
+register_camera(app)
 register_gonio(app)
 register_dome(app)
 register_store(app)

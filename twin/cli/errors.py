@@ -103,6 +103,11 @@ def _usage_error(error: typer.TyperException) -> NoReturn:
     fail(message, getattr(error, "exit_code", USAGE))
 
 
+def _shows_help(error: typer.TyperException) -> bool:
+    """A group called without arguments: click shows its help and exits 2."""
+    return type(error).__name__ == "NoArgsIsHelpError"
+
+
 class SpectwinGroup(TyperGroup):
     """The command group of ``spectwin``: every error of the user is one line on stderr."""
 
@@ -110,7 +115,7 @@ class SpectwinGroup(TyperGroup):
         try:
             return super().parse_args(ctx, args)
         except typer.TyperException as error:
-            if type(error).__name__ == "NoArgsIsHelpError":  # the help was shown: exit 2
+            if _shows_help(error):
                 raise
             _usage_error(error)
 
@@ -118,6 +123,8 @@ class SpectwinGroup(TyperGroup):
         try:
             return super().invoke(ctx)
         except typer.TyperException as error:
+            if _shows_help(error):  # a subgroup (``spectwin store``) without arguments
+                raise
             _usage_error(error)
         except _USAGE_ERRORS as error:
             fail(error, USAGE)

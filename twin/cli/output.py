@@ -18,9 +18,10 @@ from rich.table import Table
 
 from twin.output_format import dumps, format_value, quantity
 
-__all__ = ["JsonFlag", "console", "print_summary"]
+__all__ = ["JsonFlag", "SeedOption", "console", "print_comparison", "print_summary"]
 
 JsonFlag = Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")]
+SeedOption = Annotated[int, typer.Option(min=0, help="Seed of the simulated noise.")]
 
 console = Console()
 
@@ -55,4 +56,21 @@ def print_summary(
     table = Table("quantity", "value", title=title)
     for name, text in rows.items():
         table.add_row(escape(name), escape(text))  # values are text, never markup: "[a, b]"
+    console.print(table)
+
+
+def print_comparison(
+    rows: Mapping[str, Mapping[str, object]], title: str, columns: Sequence[str]
+) -> None:
+    """A table of quantities (rows, named with their unit suffix) against ``columns`` (e.g.
+    ``real``, ``twin``, ``difference_percent``), each value rounded; a column named with a unit
+    suffix shows that unit in its header."""
+    headers = [quantity(column) for column in columns]
+    table = Table("quantity", *(f"{name} ({unit})" if unit else name for name, unit in headers))
+    table.title = title
+    for key, row in rows.items():
+        name, unit = quantity(key)
+        cells = [format_value(row[column]) for column in columns]
+        label = f"{name} ({unit})" if unit else name
+        table.add_row(escape(label), *(escape(cell) for cell in cells))
     console.print(table)

@@ -1,4 +1,5 @@
-"""Reflectance targets: the Zenith Ultra-White standard and the ColorChecker.
+"""Reflectance targets: the Zenith Ultra-White standard, the ColorChecker, the Esser chart and a
+240-field chart of measured reflectances for characterizing cameras.
 
 References
 ----------
@@ -6,6 +7,8 @@ References
   barium sulphate, nearly perfect white and diffuse); section 9.3 (colour charts).
 - Ohta, N. ColorChecker spectra as shipped by ``colour`` ("ColorChecker N Ohta").
 - isetbio (MIT licence): ``recon/data/spectra/reflectances/macbeth_colorchecker.csv``.
+- rawtoaces-data (Apache-2.0): the 190 training reflectances of ACES camera characterization,
+  ``recon/data/spectra/reflectances/rawtoaces_training_190.csv``.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from recon.spectra import OutOfRangePolicy, SampledSpectra, WavelengthGrid, from
 
 __all__ = [
     "COLORCHECKER_SOURCES",
+    "camera_chart_reflectances",
     "colorchecker_reflectances",
     "esser_reflectances",
     "zenith_white_reflectance",
@@ -88,3 +92,50 @@ def esser_reflectances(
     scale = brightest / measured.values[:, visible].mean(axis=1).max()
     resampled = resample(measured, grid, method="pchip", out_of_range=out_of_range)
     return SampledSpectra(grid, np.clip(resampled.values * scale, 0.0, 1.0), measured.names)
+
+
+CAMERA_CHART_FIELDS = 240
+
+
+def camera_chart_reflectances(grid: WavelengthGrid) -> SampledSpectra:
+    """A chart of 240 measured reflectances, 380-780 nm, for characterizing cameras, ``(240, K)``.
+
+    The size of the ColorChecker DC that the thesis photographs (chapter 9), from the measured
+    sets that span the 380-780 nm of the measured cameras (``recon.measured_data``), so the
+    whole response is constrained:
+
+    - the 185 of rawtoaces' 190 training reflectances that stay within [0, 1] (five exceed one
+      near 700-780 nm: fluorescence or measurement artefacts, not diffuse reflectances), the
+      set ACES fits camera matrices with;
+    - the 24 ColorChecker patches (isetbio's measurement, the thesis's chart family);
+    - 31 Esser chart patches chosen farthest first: each is the Esser patch whose RMS distance
+      (380-780 nm, 5 nm steps) to the nearest field already on the chart is largest, so the
+      chart gains the spectra it lacks most.
+
+    The Vrhel and DuPont sets end at 400 and 700 nm and are left out. The fields are chosen on
+    the 5 nm grid of the rawtoaces data and averaged over the cells of ``grid`` (which must lie
+    within 380-780 nm), so every grid gets the same fields.
+    """
+    if grid.start_nm < 380.0 or grid.stop_nm > 780.0:
+        raise SpectwinInputError(
+            f"grid: expected wavelengths within 380-780 nm, got {grid.describe()}"
+        )
+    training = read_spectra_csv("spectra/reflectances/rawtoaces_training_190.csv")
+    diffuse = training.values.max(axis=1) <= 1.0
+    macbeth = read_spectra_csv("spectra/reflectances/macbeth_colorchecker.csv")
+    fields = np.concatenate(
+        [training.values[diffuse], resample(macbeth, training.grid, method="box").values]
+    )
+    names = [name for name, kept in zip(training.names, diffuse, strict=True) if kept]
+    names += [f"colorchecker {name}" for name in macbeth.names]
+    esser = esser_reflectances(training.grid).values
+    distance = np.sqrt(((esser[:, None, :] - fields[None]) ** 2).mean(axis=2)).min(axis=1)
+    for _ in range(CAMERA_CHART_FIELDS - len(fields)):
+        chosen = int(np.argmax(distance))
+        fields = np.vstack([fields, esser[chosen]])
+        names.append(f"esser {chosen + 1}")
+        distance = np.minimum(distance, np.sqrt(((esser - esser[chosen]) ** 2).mean(axis=1)))
+    chart = SampledSpectra(training.grid, fields, tuple(names))
+    if grid != training.grid:
+        chart = resample(chart, grid, method="box", out_of_range="clamp")
+    return SampledSpectra(grid, np.clip(chart.values, 0.0, 1.0), chart.names)  # rounding

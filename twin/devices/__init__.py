@@ -1,4 +1,5 @@
-"""Simulated devices behind the ``hwbridge`` protocols, and capture over a Dask cluster."""
+"""Simulated devices behind the ``hwbridge`` protocols, the dome's devices simulated or real, and
+capture over a Dask cluster."""
 
 import lazy_loader
 
@@ -6,6 +7,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
         "cluster": ["dask_client", "run_capture", "run_process"],
+        "dome_devices": ["DomeDevices"],
         "sim_devices": ["SimGonioDevices", "VirtualRig"],
     },
 )

@@ -10,8 +10,12 @@ and starts its exposure at the plan's start time for that step, so a resumed ses
 an uninterrupted one, and a capture split over Dask workers a serial one. Optional fault injection
 raises timeouts and disconnects.
 
+The dome's rotation stage (:class:`SimRotationStage`) and LEDs (:class:`SimLedArray`) check their
+requests as the real drivers do (:mod:`hwbridge.dome_targets`) and pass the same contract tests.
+
 :class:`SimGonioDevices` is the recipe of the gonioreflectometer's devices: plain data that builds
-them over a fresh :class:`VirtualRig` when called, in the process that runs the steps.
+them over a fresh :class:`VirtualRig` when called, in the process that runs the steps; the dome's
+is :class:`twin.devices.dome_devices.DomeDevices`, simulated or real.
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from hwbridge.dome_targets import check_current_ma, led_pattern, single_led, stage_angle_deg
 from hwbridge.errors import BridgeInputError, DeviceDisconnected, DeviceTimeout
 from hwbridge.protocols import description, reading
 from hwbridge.session import SessionDevices
@@ -37,6 +42,7 @@ __all__ = [
     "SimLamp",
     "SimLedArray",
     "SimPositioner",
+    "SimRotationStage",
     "SimSpectrometer",
     "SimTunableFilter",
     "VirtualRig",
@@ -51,6 +57,8 @@ class VirtualRig:
     view_id: int = -1
     lamp_on: bool = True
     led_pattern: np.ndarray | None = None
+    led_current_ma: float = 0.0
+    stage_deg: float = 0.0
     clock_s: float = 0.0  # start of the current exposure (set by the camera for each step)
     fault_rate: float = 0.0
     fault_rng: np.random.Generator | None = None
@@ -120,26 +128,104 @@ class SimLamp:
 
 
 class SimLedArray:
-    """The dome's LEDs: any on/off pattern over ``count`` LEDs."""
+    """The dome's LEDs: any on/off pattern over ``count`` LEDs, those on at one current of up to
+    ``max_current_ma`` (any value: the simulated driver is continuous)."""
 
-    def __init__(self, rig: VirtualRig, count: int, *, name: str = "leds"):
-        self.name, self._rig, self._count = name, rig, count
+    def __init__(
+        self,
+        rig: VirtualRig,
+        count: int,
+        *,
+        name: str = "leds",
+        max_current_ma: float = 700.0,
+        drive_current_ma: float | None = None,
+    ):
+        self.name, self._rig, self.count = name, rig, count
+        self._max_current_ma = max_current_ma
+        self._drive_current_ma = check_current_ma(
+            max_current_ma if drive_current_ma is None else drive_current_ma,
+            self.current_range_ma,
+            name,
+        )
 
-    def set(self, pattern: np.ndarray) -> None:
-        pattern = np.asarray(pattern, dtype=bool)
-        if pattern.shape != (self._count,):
-            raise BridgeInputError(
-                f"{self.name}: expected a pattern of {self._count} LEDs, got {pattern.shape}"
-            )
+    @property
+    def current_range_ma(self) -> tuple[float, float]:
+        return (0.0, self._max_current_ma)
+
+    @property
+    def current_step_ma(self) -> float:
+        return 0.0
+
+    def stage(self) -> None:
+        """Nothing to open."""
+
+    def unstage(self) -> None:
+        """Nothing to close."""
+
+    def set(self, pattern: np.ndarray, current_ma: float | None = None) -> None:
+        pattern = led_pattern(pattern, self.count, self.name)
+        current = check_current_ma(
+            self._drive_current_ma if current_ma is None else current_ma,
+            self.current_range_ma,
+            self.name,
+        )
         self._rig.maybe_fail(f"{self.name}.set")
-        self._rig.led_pattern = pattern
+        self._rig.led_pattern, self._rig.led_current_ma = pattern, current
+
+    def light(self, led: int, current_ma: float | None = None) -> None:
+        self.set(single_led(led, self.count, self.name), current_ma)
 
     def read(self) -> dict[str, dict[str, Any]]:
-        return reading(f"{self.name}_pattern", self._rig.led_pattern)
+        pattern = self._rig.led_pattern
+        currents = np.zeros(self.count) if pattern is None else pattern * self._rig.led_current_ma
+        return reading(f"{self.name}_current_ma", currents)
 
     def describe(self) -> dict[str, dict[str, Any]]:
         return description(
-            f"{self.name}_pattern", source="simulated", dtype="array", shape=[self._count], units=""
+            f"{self.name}_current_ma",
+            source="simulated",
+            dtype="array",
+            shape=[self.count],
+            units="mA",
+        )
+
+
+class SimRotationStage:
+    """The dome's rotation stage: turning it sets the rig's stage angle at once."""
+
+    def __init__(
+        self,
+        rig: VirtualRig,
+        *,
+        step_deg: float = 15.0,
+        range_deg: tuple[float, float] = (0.0, 360.0),
+        name: str = "stage",
+    ):
+        self.name, self._rig, self.step_deg, self._range_deg = name, rig, step_deg, range_deg
+
+    @property
+    def range_deg(self) -> tuple[float, float]:
+        return self._range_deg
+
+    def stage(self) -> None:
+        """Nothing to open."""
+
+    def unstage(self) -> None:
+        """Nothing to close."""
+
+    def set(self, target: dict[str, float]) -> None:
+        angle = stage_angle_deg(
+            target, step_deg=self.step_deg, range_deg=self._range_deg, name=self.name
+        )
+        self._rig.maybe_fail(f"{self.name}.set")
+        self._rig.stage_deg = angle
+
+    def read(self) -> dict[str, dict[str, Any]]:
+        return reading(f"{self.name}_angle_deg", self._rig.stage_deg)
+
+    def describe(self) -> dict[str, dict[str, Any]]:
+        return description(
+            f"{self.name}_angle_deg", source="simulated", dtype="number", shape=[], units="deg"
         )
 
 

@@ -2,8 +2,9 @@
 
 A camera file names the sensor (size, pixel pitch, bit depth, temperature), its optics (f-number,
 transmission), its spectral response, and the EMVA 1288 parameters of its noise model (system
-gain, read noise, full well, dark current and its temperature law, fixed-pattern noise, OECF).
-Unknown keys, missing keys and out-of-range values are rejected with the offending field named.
+gain, read noise, full well, dark current and its temperature law, fixed-pattern noise, OECF),
+and, for a camera fitted to a real measurement, that measurement. Unknown keys, missing keys
+and out-of-range values are rejected with the offending field named.
 
 References
 ----------
@@ -19,6 +20,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
+from recon.measured_data import data_path
 from recon.spectra import SampledSpectra, WavelengthGrid
 from twin.components.detectors import CCDQuantumEfficiency, rgb_camera_response
 from twin.rigs.yaml_config import (
@@ -87,7 +89,9 @@ class FixedPatternConfig(StrictModel):
     ``dsnu_sigma``: log-normal spread of the per-pixel dark current; ``prnu_sigma``: relative
     spread of the per-pixel photo response; hot pixels have ``hot_pixel_factor`` times the dark
     current; ``transfer_dark_e``: dark charge picked up during readout, growing linearly along the
-    CCD shift direction (rows) to this value at the last row (thesis Fig. 10.2d).
+    CCD shift direction (rows) to this value at the last row (thesis Fig. 10.2d);
+    ``offset_sigma_dn``: standard deviation of the per-pixel offset (DN), the DSNU at zero
+    exposure time.
     """
 
     dsnu_sigma: NonNegative = 0.0
@@ -95,6 +99,7 @@ class FixedPatternConfig(StrictModel):
     hot_pixel_fraction: Annotated[float, Field(ge=0, lt=0.1)] = 0.0
     hot_pixel_factor: Annotated[float, Field(ge=1)] = 1.0
     transfer_dark_e: NonNegative = 0.0
+    offset_sigma_dn: NonNegative = 0.0
 
 
 class OECFConfig(StrictModel):
@@ -109,6 +114,23 @@ class OECFConfig(StrictModel):
         if self.model == "linear" and self.strength != 0:
             raise ValueError("strength applies to the 'knee' model only")
         return self
+
+
+class EMVAMeasurementConfig(StrictModel):
+    """The EMVA 1288 measurement a camera was fitted to (``spectwin camera fit``).
+
+    ``descriptor``: its descriptor file, a relative path inside spectwin's measured data
+    (``recon/data``) or an absolute path; ``wavelength_nm``: the wavelength of its light, where
+    the camera's quantum efficiency was measured.
+    """
+
+    descriptor: str
+    wavelength_nm: Positive
+
+    def descriptor_path(self) -> Path:
+        """The descriptor file (which may no longer exist where the fit found it)."""
+        path = Path(self.descriptor)
+        return path if path.is_absolute() else data_path(path)
 
 
 class CameraConfig(StrictModel):
@@ -134,6 +156,7 @@ class CameraConfig(StrictModel):
     dark_current: DarkCurrentConfig
     fixed_pattern: FixedPatternConfig = FixedPatternConfig()
     oecf: OECFConfig = OECFConfig()
+    emva1288: EMVAMeasurementConfig | None = None
 
     @model_validator(mode="after")
     def _consistent(self) -> CameraConfig:

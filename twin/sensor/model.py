@@ -10,13 +10,15 @@ Mitsuba gives radiance; real cameras give raw digital numbers. Between the two:
    exposure, :math:`\\eta` the quantum efficiency and :math:`T` a filter (e.g. an LCTF band).
    Thesis Eq. 10.9 is the special case of this integral for the RGB cameras.
 2. Fixed patterns (drawn once per camera serial): photo-response non-uniformity (PRNU),
-   dark-signal non-uniformity (DSNU) with hot pixels, and dark charge picked up along the CCD
-   shift direction (thesis Fig. 10.2d).
+   dark-signal non-uniformity (DSNU) of the dark current with hot pixels, dark charge picked up
+   along the CCD shift direction (thesis Fig. 10.2d), and per-pixel offsets (the part of the
+   DSNU that does not grow with exposure time).
 3. Temporal noise: Poisson shot noise of photo and dark electrons, with the dark current
    following the doubling-temperature law (so the cooled K4 has almost none); full-well clip;
    read noise (3 DN for the K4, thesis 10.3).
-4. Conversion: system gain K, a monotone OECF (thesis 3.3: :math:`p = f(tI) + d`, Eq. 3.1),
-   ADC offset, quantization to the bit depth and clamping to :math:`[0, 2^n - 1]`.
+4. Conversion: system gain K, a monotone OECF (thesis 3.3: :math:`p = f(tI) + d`, Eq. 3.1;
+   :mod:`recon.emva.linear_model`), ADC offset, quantization to the bit depth and clamping to
+   :math:`[0, 2^n - 1]`.
 5. For colour sensors, an RGGB Bayer mosaic picks one channel per pixel.
 
 Every stochastic call takes a ``numpy.random.Generator``: the same seed gives the same frame.
@@ -40,8 +42,9 @@ from concurrent.futures import ThreadPoolExecutor
 from functools import cached_property
 
 import numpy as np
-from scipy import constants, stats
+from scipy import constants
 
+from recon.emva.linear_model import knee_oecf, predicted_saturation_e
 from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra, WavelengthGrid, band_integrals
 from twin.rigs.camera_config import CameraConfig, load_camera_config
@@ -68,15 +71,6 @@ _BAYER_RGGB = np.array([[0, 1], [1, 2]])  # channel (R=0, G=1, B=2) at (row % 2,
 def bayer_channel_index(height: int, width: int) -> np.ndarray:
     """Channel index (0 = R, 1 = G, 2 = B) of every pixel of an RGGB mosaic, ``(H, W)``."""
     return np.tile(_BAYER_RGGB, (height // 2 + 1, width // 2 + 1))[:height, :width]
-
-
-def _clipped_gaussian_variance(mean: np.ndarray, sigma: np.ndarray, clip: float) -> np.ndarray:
-    r"""Variance of :math:`\min(X, c)` for :math:`X \sim N(m, s^2)` (truncated moments)."""
-    alpha = (clip - mean) / sigma
-    below, density = stats.norm.cdf(alpha), stats.norm.pdf(alpha)
-    first = mean * below - sigma * density + clip * (1 - below)
-    second = (mean**2 + sigma**2) * below - sigma * (mean + clip) * density + clip**2 * (1 - below)
-    return second - first**2
 
 
 class Sensor:
@@ -145,36 +139,22 @@ class Sensor:
         """Saturation capacity by the EMVA 1288 definition, predicted from this model.
 
         EMVA 1288 places saturation where the temporal variance of the output peaks, which for a
-        clipped signal lies a few noise widths below the hard clip (:attr:`saturation_capacity_e`).
-        The expected variance is that of a Gaussian clipped at the full well (before read noise)
-        or at the ADC's top (after it), averaged over the PRNU spread; its maximum is found on a
-        fine grid of mean photo-electrons. Only defined for a linear OECF (EMVA 1288 Linear).
+        clipped signal lies a few noise widths below the hard clip (:attr:`saturation_capacity_e`):
+        :func:`recon.emva.linear_model.predicted_saturation_e`. Only defined for a linear OECF
+        (EMVA 1288 Linear).
         """
         if self.config.oecf.model != "linear":
             raise SpectwinInputError(
                 "emva_saturation_capacity_e: EMVA 1288 Linear needs a linear OECF"
             )
         config = self.config
-        gain, read_dn = config.system_gain_dn_per_e, config.read_noise_dn
-        nodes, weights = np.polynomial.hermite_e.hermegauss(48)
-        weights = weights / weights.sum()
-        means_e = np.linspace(0.8, 1.05, 5001)[:, None] * self.saturation_capacity_e
-        pixel_means_e = means_e * (1 + config.fixed_pattern.prnu_sigma * nodes)
-        if config.full_well_e <= (self.max_dn - config.adc_offset_dn) / gain:
-            variance = (
-                gain**2
-                * _clipped_gaussian_variance(
-                    pixel_means_e, np.sqrt(pixel_means_e), config.full_well_e
-                )
-                + read_dn**2
-            )
-        else:
-            variance = _clipped_gaussian_variance(
-                gain * pixel_means_e,
-                np.sqrt(gain**2 * pixel_means_e + read_dn**2),
-                self.max_dn - config.adc_offset_dn,
-            )
-        return float(means_e[np.argmax(variance @ weights), 0])
+        return predicted_saturation_e(
+            config.full_well_e,
+            gain_dn_per_e=config.system_gain_dn_per_e,
+            read_noise_dn=config.read_noise_dn,
+            prnu=config.fixed_pattern.prnu_sigma,
+            adc_top_dn=self.max_dn - config.adc_offset_dn,
+        )
 
     # -- spectral response -------------------------------------------------------------------
 
@@ -251,10 +231,12 @@ class Sensor:
 
     @cached_property
     def _fixed_pattern(self) -> dict[str, np.ndarray]:
-        """PRNU, DSNU (with hot pixels) and the transfer gradient of the full sensor, cropped.
+        """PRNU, DSNU (with hot pixels), the transfer gradient and the per-pixel offsets of the
+        full sensor, cropped.
 
         Drawn from a generator seeded by the camera serial: the same serial always has the same
-        patterns, as a real camera does.
+        patterns, as a real camera does. The offsets are drawn last, so a camera without them
+        keeps the patterns it had before they existed.
         """
         pattern = self.config.fixed_pattern
         generator = np.random.default_rng(zlib.crc32(self.config.serial.encode()))
@@ -267,11 +249,16 @@ class Sensor:
         dark_factor[hot] *= pattern.hot_pixel_factor
         rows = np.arange(self.config.height, dtype=np.float32)[:, None]
         transfer = pattern.transfer_dark_e * rows / max(self.config.height - 1, 1)
+        if pattern.offset_sigma_dn > 0:
+            offset = pattern.offset_sigma_dn * generator.standard_normal(shape, np.float32)
+        else:
+            offset = np.zeros((self.config.height, 1), np.float32)  # broadcasts over columns
         window = (slice(0, self.height), slice(0, self.width))
         return {
             "photo_response": np.clip(photo_response, 0, None)[window],
             "dark_factor": dark_factor.astype(np.float32)[window],
             "transfer_e": transfer[: self.height],
+            "offset_dn": offset[window] + np.float32(self.config.adc_offset_dn),
         }
 
     def mean_dark_electrons(self, exposure_s: float) -> np.ndarray:
@@ -316,7 +303,8 @@ class Sensor:
         def convert(block: int) -> None:
             rows = slice(blocks[block][0], blocks[block][-1] + 1) if blocks[block].size else None
             if rows is not None:
-                frame[rows] = self._digitize(mean[rows], generators[block])
+                offset_dn = self._fixed_pattern["offset_dn"][rows]
+                frame[rows] = self._digitize(mean[rows], offset_dn, generators[block])
 
         list(_row_pool().map(convert, range(_ROW_BLOCKS)))
         return frame
@@ -331,13 +319,11 @@ class Sensor:
         if self.config.oecf.model == "linear":
             return linear_dn
         top = self.max_dn - self.config.adc_offset_dn
-        strength = self.config.oecf.strength
-        normalized = linear_dn / top
-        # Below the offset (negative read noise) the curve continues with its slope at zero, so
-        # dark frames stay unbiased (thesis Fig. 10.3: negative dark-subtracted values occur).
-        return top * (1 + strength) * normalized / (1 + strength * np.maximum(normalized, 0))
+        return knee_oecf(linear_dn, top, self.config.oecf.strength)
 
-    def _digitize(self, mean_electrons: np.ndarray, generator: np.random.Generator) -> np.ndarray:
+    def _digitize(
+        self, mean_electrons: np.ndarray, offset_dn: np.ndarray, generator: np.random.Generator
+    ) -> np.ndarray:
         config = self.config
         signal_dn = generator.poisson(mean_electrons).astype(np.float32)
         np.minimum(signal_dn, config.full_well_e, out=signal_dn)
@@ -346,7 +332,7 @@ class Sensor:
         read_dn *= config.read_noise_dn
         signal_dn += read_dn
         digital = self.oecf(signal_dn)
-        digital += config.adc_offset_dn
+        digital += offset_dn
         np.rint(digital, out=digital)
         return np.clip(digital, 0, self.max_dn, out=digital).astype(np.uint16)
 

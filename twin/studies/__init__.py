@@ -8,6 +8,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
         "camchar": ["run_camchar"],
+        "camchar_cameras": ["run_camchar_cameras"],
         "camera_bench": ["run_camera_report"],
         "demo": ["run_demo"],
         "dome": ["run_dome_study"],

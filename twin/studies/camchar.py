@@ -8,12 +8,12 @@ from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
-from matplotlib.figure import Figure
 from matplotlib.image import imsave
 
 from recon.camera_char import estimate_response
 from recon.metrics import peak_relative_rmse
 from recon.spectra import DEFAULT_GRID
+from twin.studies.camchar_figures import response_curves_figure
 from twin.studies.camchar_scenes import ChartScenario, render_chart_photo
 
 __all__ = ["run_camchar"]
@@ -42,25 +42,12 @@ def run_camchar(scenario: ChartScenario, out_dir: Path, *, seed: int = 0) -> dic
         out_dir / "chart_photo.png",
         np.clip(photo.image / np.percentile(photo.image, 99.5), 0, 1) ** (1 / 2.2),
     )
-    figure = Figure(figsize=(8, 4.5))
-    axes = figure.subplots()
-    for channel, colour_name in enumerate(("tab:red", "tab:green", "tab:blue")):
-        truth = photo.true_response[:, channel]
-        axes.plot(
-            wavelengths, truth / photo.true_response.max(), color=colour_name, lw=2.5, alpha=0.4
-        )
-        for estimate, style in ((basic, ":"), (extended, "-")):
-            scale = np.sum(estimate * photo.true_response) / np.sum(estimate * estimate)
-            axes.plot(
-                wavelengths,
-                scale * estimate[:, channel] / photo.true_response.max(),
-                style,
-                color=colour_name,
-            )
-    axes.set_xlabel("wavelength [nm]")
-    axes.set_ylabel("relative response")
-    axes.set_title(f"{scenario.camera}: truth (wide), basic (dotted), extended (solid)")
-    figure.tight_layout()
+    figure = response_curves_figure(
+        wavelengths,
+        photo.true_response,
+        {"extended": extended, "basic": basic},
+        f"{scenario.camera}: truth (wide), extended and basic estimates",
+    )
     figure.savefig(out_dir / "responses.png", dpi=110)
     summary = {
         "scenario": asdict(scenario),

@@ -3,7 +3,8 @@
 What a rig builder checks before buying: where the camera saturates and how noisy it is (photon
 transfer, EMVA 1288), what its dark frames look like at long exposure (thesis 3.3 and
 Fig. 10.2d), and how much the HMI lamp's 15 Hz line flicker (thesis 3.2.2) spreads frames of a
-white target in the 550 nm LCTF band for each exposure time.
+white target in the 550 nm LCTF band for each exposure time (monochrome cameras whose exposure
+range covers the sweep, 20 to 300 ms).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ __all__ = ["run_camera_report"]
 
 _WAVELENGTH_NM = 550.0
 _READOUT_S = 0.130  # filter switching and image download per frame (thesis 4.1.1)
+_FLICKER_EXPOSURES_S = (0.02, 0.3)  # the sweep, around the multiples of 1/15 s
 
 
 def _photon_transfer(sensor: Sensor, rng: np.random.Generator, exposure_s: float) -> dict:
@@ -54,7 +56,9 @@ def _flicker_sweep(sensor: Sensor, rng: np.random.Generator) -> dict:
     lamp = HMILamp()
     band = LiquidCrystalTunableFilter.varispec("VS-10").transmission(FINE_GRID)
     band = band.row(f"lctf_{_WAVELENGTH_NM:g}nm")
-    exposures_s = np.union1d(np.linspace(0.02, 0.3, 57), np.arange(1, 5) / lamp.flicker_hz)
+    exposures_s = np.union1d(
+        np.linspace(*_FLICKER_EXPOSURES_S, 57), np.arange(1, 5) / lamp.flicker_hz
+    )
     # Place the white target so that the longest exposure fills 60 % of saturation.
     rates_at_1m = white_reference_rates(sensor, lamp, band, distance_m=1.0)[:, 0]
     fill = 0.6 * sensor.saturation_capacity_e / (rates_at_1m.sum() * exposures_s.max())
@@ -91,8 +95,12 @@ def run_camera_report(
     long_s = min(300.0, sensor.config.exposure_range_s[1])
     dark = Sensor(camera).mean_dark_electrons(long_s)
 
-    figure = Figure(figsize=(15, 4.5))
-    axes = figure.subplots(1, 3 if not sensor.is_colour else 2)
+    low, high = sensor.config.exposure_range_s
+    sweep_flicker = (
+        not sensor.is_colour and low <= _FLICKER_EXPOSURES_S[0] <= _FLICKER_EXPOSURES_S[1] <= high
+    )
+    figure = Figure(figsize=(15 if sweep_flicker else 10, 4.5))
+    axes = figure.subplots(1, 3 if sweep_flicker else 2)
     axes[0].plot(transfer["mean_dn"] - transfer["mean_dn"][0], transfer["variance_dn2"], ".")
     axes[0].set_xlabel("mean signal above dark [DN]")
     axes[0].set_ylabel("temporal variance [DN$^2$]")
@@ -112,7 +120,12 @@ def run_camera_report(
         "dark_current_e_per_s": sensor.dark_current_e_per_s,
         "outputs": ["camera_report.png", "summary.json"],
     }
-    if not sensor.is_colour:
+    if not sensor.is_colour and not sweep_flicker:
+        summary["flicker"] = (
+            f"not simulated: the sweep needs {_FLICKER_EXPOSURES_S[0]:g} to "
+            f"{_FLICKER_EXPOSURES_S[1]:g} s exposures, the camera takes {low:g} to {high:g} s"
+        )
+    if sweep_flicker:
         flicker = _flicker_sweep(Sensor(camera, roi=(32, 32)), rng)
         exposures_ms = 1000 * flicker["exposures_s"]
         axes[2].plot(exposures_ms, 100 * flicker["predicted_relative_spread"], label="lamp model")

@@ -38,19 +38,6 @@ def store(pristine, tmp_path):
     return path
 
 
-def _truncate(file):
-    file.write_bytes(file.read_bytes()[:7])
-
-
-def _flip(file):
-    data = bytearray(file.read_bytes())
-    data[len(data) // 2] ^= 0x04
-    file.write_bytes(bytes(data))
-
-
-DAMAGE = {"deleted": lambda file: file.unlink(), "truncated": _truncate, "flipped": _flip}
-
-
 def test_a_healthy_store_checks_clean_with_checksums(store):
     report = BTFStore.open(store).check()
     assert report.healthy and report.complete and report.checksums == "yes"
@@ -58,15 +45,14 @@ def test_a_healthy_store_checks_clean_with_checksums(store):
     assert report.provenance["material"] == "colorchecker16"
 
 
-@pytest.mark.parametrize("damage", DAMAGE)
 def test_a_damaged_pair_is_named_and_never_read_as_numbers(store, damage):
-    DAMAGE[damage](store / "reflectance/c/2/0/0/0")
+    damage(store / "reflectance/c/2/0/0/0")
     btf = BTFStore.open(store)
     report = btf.check()
     assert [(p.item, p.key, p.units) for p in report.problems] == [
         ("pair 2", "reflectance/c/2/0/0/0", (2,))
     ]
-    assert report.problems[0].problem == ("missing" if damage == "deleted" else "corrupt")
+    assert report.problems[0].problem == ("missing" if damage.kind == "deleted" else "corrupt")
     # A deleted chunk would read as NaN, a flipped byte as other numbers: both raise instead.
     with pytest.raises(SpectwinDataError, match="pair 2"):
         btf.read_pair(2)
@@ -77,9 +63,8 @@ def test_a_damaged_pair_is_named_and_never_read_as_numbers(store, damage):
     np.testing.assert_array_equal(btf.read_pair(1), BTFStore.open(store).read_pair(1))
 
 
-@pytest.mark.parametrize("damage", DAMAGE)
 def test_a_resumed_run_finds_the_damaged_pairs_pending_again(store, damage):
-    DAMAGE[damage](store / "reflectance/c/1/0/0/0")
+    damage(store / "reflectance/c/1/0/0/0")
     btf = BTFStore.open(store, writable=True)
     assert [p.key for p in btf.prepare_resume()] == ["reflectance/c/1/0/0/0"]
     assert btf.pending_pairs() == [1] and not btf.complete
@@ -95,8 +80,8 @@ def test_a_deleted_written_flag_contradicts_complete(store):
     assert report.damage() == "marked complete, but the progress flag of pair 3 is not set"
 
 
-def test_a_corrupt_written_flag_is_named_and_the_pair_pending(store):
-    _flip(store / "written/c/0")
+def test_a_corrupt_written_flag_is_named_and_the_pair_pending(store, chunk_damage):
+    chunk_damage["flipped"](store / "written/c/0")
     btf = BTFStore.open(store)  # opening still works: check() can report
     report = btf.check()
     assert report.pending == [0] and report.problems[0].key == "written/c/0"
@@ -106,11 +91,11 @@ def test_a_corrupt_written_flag_is_named_and_the_pair_pending(store):
         btf.pending_pairs()
 
 
-def test_a_damaged_compressed_form_is_reported_without_a_pair(store):
+def test_a_damaged_compressed_form_is_reported_without_a_pair(store, chunk_damage):
     btf = BTFStore.open(store, writable=True)
     save_compressed(btf, compress_btf(btf.read(), btf.grid, n_brightness=2, n_spectral=3))
     chunk = next(path for path in sorted((store / "pca").rglob("c/*")) if path.is_file())
-    _flip(chunk)
+    chunk_damage["flipped"](chunk)
     report = BTFStore.open(store).check()
     assert [p.item for p in report.problems] == ["compressed form (pca/)"]
     assert report.problems[0].units == () and report.damaged_units == []

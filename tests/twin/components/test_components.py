@@ -6,7 +6,14 @@ import pytest
 from scipy import integrate, special
 
 from recon.errors import SpectwinInputError
-from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid, band_integrals, to_colour
+from recon.spectra import (
+    DEFAULT_GRID,
+    SampledSpectra,
+    WavelengthGrid,
+    band_integrals,
+    resample,
+    to_colour,
+)
 from twin.components.detectors import CCDQuantumEfficiency, rgb_camera_response
 from twin.components.lamps import (
     FINE_GRID,
@@ -18,7 +25,11 @@ from twin.components.lamps import (
     planck_spectral_radiance,
 )
 from twin.components.lctf import LiquidCrystalTunableFilter
-from twin.components.targets import colorchecker_reflectances, zenith_white_reflectance
+from twin.components.targets import (
+    camera_chart_reflectances,
+    colorchecker_reflectances,
+    zenith_white_reflectance,
+)
 
 VISIBLE = WavelengthGrid.regular(360, 780, 1)
 
@@ -222,6 +233,22 @@ def test_colorchecker_sources_agree():
     assert np.median(np.abs(ohta.values - isetbio.values)) < 0.02
 
 
+def test_the_camera_chart_holds_the_same_240_measured_fields_on_any_grid():
+    fine = camera_chart_reflectances(WavelengthGrid.regular(380, 780, 5))
+    coarse = camera_chart_reflectances(WavelengthGrid.regular(380, 780, 10))
+    assert fine.values.shape == (240, 81) and coarse.values.shape == (240, 41)
+    assert fine.names == coarse.names and len(set(fine.names)) == 240
+    kinds = [name.split()[0] for name in fine.names]
+    assert (kinds.count("colorchecker"), kinds.count("esser")) == (24, 31)
+    assert np.all((fine.values >= 0) & (fine.values <= 1))
+    # The 10 nm fields are the cell means of the 5 nm ones.
+    means = resample(fine, coarse.grid, method="box", out_of_range="clamp").values
+    np.testing.assert_allclose(np.clip(means, 0, 1), coarse.values, atol=1e-12)
+    # Every field is measured, not a copy of another: no two within 0.5 % reflectance (RMS).
+    distances = np.sqrt(((fine.values[:, None] - fine.values[None]) ** 2).mean(axis=2))
+    assert np.min(distances + np.eye(240)) > 0.005
+
+
 def test_irradiance_follows_the_inverse_square_law():
     intensity = QTHLamp().intensity(DEFAULT_GRID)
     np.testing.assert_allclose(irradiance_at(intensity, 2.0).values, intensity.values / 4)
@@ -240,6 +267,7 @@ def test_irradiance_follows_the_inverse_square_law():
         (lambda: LiquidCrystalTunableFilter(band_centres_nm=(500.0, 490.0)), "band_centres_nm"),
         (lambda: rgb_camera_response("Kodak 14n", DEFAULT_GRID), "camera"),
         (lambda: colorchecker_reflectances(DEFAULT_GRID, source="nope"), "source"),
+        (lambda: camera_chart_reflectances(VISIBLE), "380-780 nm"),
         (lambda: irradiance_at(QTHLamp().intensity(DEFAULT_GRID), 0.0), "distance_m"),
     ],
 )

@@ -126,8 +126,8 @@ def test_sessions_switch_the_step_led_on_alone(tmp_path):
     leds = SimLedArray(rig, 198)
     original_set = leds.set
 
-    def record(pattern):
-        original_set(pattern)
+    def record(pattern, current_ma=None):
+        original_set(pattern, current_ma)
         patterns.append(np.flatnonzero(rig.led_pattern).tolist())
 
     leds.set = record

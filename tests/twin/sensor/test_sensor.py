@@ -6,10 +6,10 @@ import math
 import numpy as np
 import pytest
 from emva1288.process.data import Data1288
-from emva1288.process.results import Results1288
 from emva1288.process.routines import get_int_imgs
 from scipy import constants
 
+from recon.emva.analysis import run_results1288
 from recon.errors import SpectwinInputError
 from recon.radiometric.demosaic import demosaic
 from recon.spectra import SampledSpectra, WavelengthGrid
@@ -27,15 +27,6 @@ def white_target_part_rates(sensor, lamp, band_nm):
     """Photo-electrons per second of each lamp part: Zenith white, HMI at 2 m, one VS-10 band."""
     band = VS10_BANDS.row(f"lctf_{band_nm:g}nm")
     return white_reference_rates(sensor, lamp, band, distance_m=2.0)[:, 0]
-
-
-@pytest.fixture(autouse=True)
-def _emva1288_on_numpy_2(monkeypatch):
-    """emva1288 1.0.2 still calls ``np.asfarray``, which NumPy 2 removed: restore the alias."""
-    if not hasattr(np, "asfarray"):
-        monkeypatch.setattr(
-            np, "asfarray", lambda a, dtype=float: np.asarray(a, dtype=dtype), raising=False
-        )
 
 
 def _photons_per_pixel(sensor: Sensor, irradiance_w_m2: float, exposure_s: float) -> float:
@@ -94,7 +85,7 @@ def photon_transfer():
             "spatial": {exposure_s: spatial},
         }
     )
-    return sensor, eta, Results1288(data.data, pixel_area=sensor.config.pixel_pitch_um**2)
+    return sensor, eta, run_results1288(data.data)  # the package, on NumPy 2 too
 
 
 def test_emva1288_recovers_the_system_gain(photon_transfer):
