@@ -37,9 +37,12 @@ References
 
 from __future__ import annotations
 
+import json
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import drjit as dr
+import mitsuba as mi
 import numpy as np
 
 from recon.errors import SpectwinInputError
@@ -124,9 +127,7 @@ class PinholeRays:
         return side, side
 
     def rays(self, column, row):
-        import drjit as dr
-        import mitsuba as mi
-
+        """Rays through the continuous pixel positions ``column``, ``row`` (Dr.Jit arrays)."""
         offset = (self.pixels - (self.window or self.pixels)) // 2
         focal = _scalar(self.pixels / 2 / self.tan_half_fov)
         centre = _scalar(self.pixels / 2 - offset)
@@ -154,8 +155,7 @@ class ParallelCamera:
         return self.texels, self.texels
 
     def rays(self, column, row):
-        import mitsuba as mi
-
+        """Rays through the continuous texel positions ``column``, ``row`` (Dr.Jit arrays)."""
         scale = _scalar(2 * self.half_m / self.texels)
         half = _scalar(self.half_m)
         view = _vector(self.view)
@@ -166,28 +166,16 @@ class ParallelCamera:
 def _vector(values: np.ndarray, kind=None):
     """A 3-vector as an opaque Dr.Jit value: a kernel input, not a constant compiled into the
     kernel, so that every view and light runs the same compiled kernel."""
-    import drjit as dr
-    import mitsuba as mi
-
     return dr.opaque(kind or mi.Vector3f, [float(value) for value in values])
 
 
 def _scalar(value: float):
-    import drjit as dr
-    import mitsuba as mi
-
+    """A number as an opaque Dr.Jit value (a kernel input, as :func:`_vector`)."""
     return dr.opaque(mi.Float, float(value))
-
-
-def _unit_bsdf_key(part: SurfacePart) -> tuple[str, float | None]:
-    kind = "conductor" if part.conductor is not None else "diffuse"
-    return kind if part.roughness is None else kind + "-rough", part.roughness
 
 
 def _conductor_index(part: SurfacePart) -> tuple[np.ndarray, np.ndarray]:
     """Real and imaginary index ``(n_nodes,)`` of a part's metal (Mitsuba's tabulated data)."""
-    import mitsuba as mi
-
     parameters = mi.traverse(mi.load_dict(part_bsdf(part)))
     return tuple(
         np.interp(
@@ -213,15 +201,13 @@ class NodeScene:
         if not parts:
             raise SpectwinInputError("parts: expected at least one surface part")
         activate()
-        import drjit as dr
-        import mitsuba as mi
-
-        unit_bsdfs: dict[tuple[str, float | None], object] = {}
+        unit_bsdfs: dict[str, object] = {}  # parts with the same lobes share one BSDF
         entries: dict[str, object] = {"type": "scene"}
         for part in parts:
-            key = _unit_bsdf_key(part)
+            unit = part_bsdf(part, unit=True)
+            key = json.dumps(unit, sort_keys=True)
             if key not in unit_bsdfs:
-                unit_bsdfs[key] = mi.load_dict(part_bsdf(part, unit=True))
+                unit_bsdfs[key] = mi.load_dict(unit)
             entries[part.name] = mitsuba_shape(part, bsdf=unit_bsdfs[key])
         self._scene = mi.load_dict(entries)
         names = [part.name for part in parts]
@@ -237,9 +223,8 @@ class NodeScene:
             ]
         )
         """Lambertian reflectance of each part at the nodes ``(n_parts, n_nodes)``."""
-        metals = [part for part in parts if part.conductor is not None]
         self._metal_index = None
-        if metals:
+        if any(part.conductor is not None for part in parts):
             eta = np.zeros((len(parts), NODES_NM.size))
             k = np.zeros_like(eta)
             for index, part in enumerate(parts):
@@ -292,9 +277,6 @@ class NodeScene:
     def _render_pass(self, camera, light, samples, per_pass, first, seed, bounces) -> np.ndarray:
         """The sums over ``per_pass`` samples (from sample ``first`` on) of every pixel's node
         radiance, ``(H * W, n_nodes)``."""
-        import drjit as dr
-        import mitsuba as mi
-
         height, width = camera.shape
         lane = dr.arange(mi.UInt32, height * width * per_pass)
         pixel = lane // per_pass
@@ -322,9 +304,6 @@ class NodeScene:
 
     def _trace(self, ray, light, rng, bounces) -> list:
         """Node radiance of each lane's path (list of ``n_nodes`` Float arrays)."""
-        import drjit as dr
-        import mitsuba as mi
-
         scene = self._scene
         part_of = mi.UInt32(self._part_of)
         reflectance = mi.Float(self.reflectance.ravel().astype(np.float32))
@@ -373,8 +352,6 @@ class NodeScene:
     def _light_sample(self, si, light, active):
         """Direction to the light in the local frame, the light's factor (inverse square
         distance for a point, one for a distant light) and whether the light is visible."""
-        import drjit as dr
-        import mitsuba as mi
 
         if isinstance(light, PointLight):
             position = _vector(light.position_m, mi.Point3f)
@@ -393,8 +370,6 @@ class NodeScene:
         Fresnel reflectance at the half vector for a metal (as Mitsuba's ``roughconductor``)."""
         if self._metal_index is None:
             return [1.0] * NODES_NM.size
-        import drjit as dr
-        import mitsuba as mi
 
         eta, k, is_metal = self._metal_index
         count = NODES_NM.size
