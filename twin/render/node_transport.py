@@ -263,24 +263,23 @@ class NodeScene:
             raise SpectwinInputError(f"bounces: expected 0 or more, got {bounces}")
         samples = rendered_spp(spp)
         height, width = camera.shape
-        passes = max(1, samples * height * width // _MAX_LANES)
-        while samples % passes:
-            passes += 1
-        per_pass = samples // passes
-        total = np.zeros((height * width, NODES_NM.size), np.float32)
-        for index in range(passes):
-            total += self._render_pass(
-                camera, light, samples, per_pass, index * per_pass, seed, bounces
-            )
-        return (total / samples).reshape(height, width, NODES_NM.size)
+        per_launch = max(1, _MAX_LANES // samples)
+        radiance = [
+            self._render_pixels(camera, light, seed, bounces, first, per_launch, samples)
+            for first in range(0, height * width, per_launch)
+        ]
+        return np.concatenate(radiance).reshape(height, width, NODES_NM.size)
 
-    def _render_pass(self, camera, light, samples, per_pass, first, seed, bounces) -> np.ndarray:
-        """The sums over ``per_pass`` samples (from sample ``first`` on) of every pixel's node
-        radiance, ``(H * W, n_nodes)``."""
+    def _render_pixels(self, camera, light, seed, bounces, first, count, samples) -> np.ndarray:
+        """Mean node radiance ``(n, n_nodes)`` of ``samples`` stratified samples in each of the
+        ``count`` pixels (fewer at the image's end) from flat index ``first`` on. The random
+        numbers of a sample depend on the seed, the pixel and the sample's index alone."""
         height, width = camera.shape
-        lane = dr.arange(mi.UInt32, height * width * per_pass)
-        pixel = lane // per_pass
-        sample = lane - pixel * per_pass + dr.opaque(mi.UInt32, first)
+        count = min(count, height * width - first)
+        lane = dr.arange(mi.UInt32, count * samples)
+        slot = lane // samples
+        sample = lane - slot * samples
+        pixel = slot + dr.opaque(mi.UInt32, first)
         row = pixel // width
         column = pixel - row * width
         rng = mi.PCG32(
@@ -296,11 +295,10 @@ class NodeScene:
             mi.Float(row) + (stratum_y + rng.next_float32()) / strata,
         )
         nodes = self._trace(ray, light, rng, bounces)
-        count = NODES_NM.size
-        sums = dr.zeros(mi.Float, height * width * count)
+        means = dr.zeros(mi.Float, count * NODES_NM.size)
         for n, value in enumerate(nodes):
-            dr.scatter_add(sums, value, pixel * count + n)
-        return np.asarray(sums).reshape(height * width, count)
+            dr.scatter_add(means, value * (1.0 / samples), slot * NODES_NM.size + n)
+        return np.asarray(means).reshape(count, NODES_NM.size)
 
     def _trace(self, ray, light, rng, bounces) -> list:
         """Node radiance of each lane's path (list of ``n_nodes`` Float arrays)."""
