@@ -11,9 +11,11 @@ Layout of ``<name>.capture.zarr`` (ARCHITECTURE.md, "Stores"):
 - ``progress``: one flag per plan step, set only after the step's frame and index are written.
 
 A simulated capture holds :data:`INDEX_CHUNK_FRAMES` frames per chunk of the index and the
-flags; a real or replayed one one frame per chunk (its frames cannot be taken again, so a
-damaged chunk must cost one frame, and a real rig takes a minute per direction pair, beside
-which writing chunks costs nothing).
+flags and compresses its frames with Zstd level 1 (a noisy 256 px frame: 0.36 ms to 84 % of its
+size, against 1.6 ms to 75 % at Zstd's default level 3); a real or replayed one keeps one frame
+per chunk of the index and the default level (its frames cannot be taken again, so a damaged
+chunk must cost one frame, and a real rig takes a minute per direction pair, beside which
+writing chunks costs nothing).
 
 Frames have one chunk per frame, so writers that own disjoint sets of steps write disjoint
 chunks: the workers of a distributed capture (``twin.devices.cluster``) write their frames
@@ -68,6 +70,7 @@ __all__ = ["FRAME_KINDS", "INDEX_CHUNK_FRAMES", "CaptureStore", "FrameRecord"]
 
 INDEX_CHUNK_FRAMES = 1024
 """Frames (steps) per chunk of the index fields and the progress flags of a simulated capture."""
+_SIMULATED_FRAME_LEVEL = 1  # Zstd level of simulated frames (real ones: Zstd's default, 3)
 
 FRAME_KINDS = ("dark", "white", "chart", "sample", "oecf", "alignment")
 _STRING_FIELDS = ("kind", "status")
@@ -165,6 +168,7 @@ class CaptureStore:
         shutil.rmtree(building, ignore_errors=True)
         group = zarr.open_group(str(building), mode="w-", zarr_format=3)
         per_chunk = INDEX_CHUNK_FRAMES if backend == "sim" else 1
+        frame_level = _SIMULATED_FRAME_LEVEL if backend == "sim" else 0
         for camera, (height, width) in cameras.items():
             count = sum(step["camera"] == camera for step in plan)
             group.create_array(
@@ -172,7 +176,7 @@ class CaptureStore:
                 shape=(count, height, width),
                 chunks=(1, height, width),
                 dtype="uint16",
-                compressors=checksummed_compressors(),
+                compressors=checksummed_compressors(frame_level),
             )
             index = f"index/{camera}"
             block = min(count, per_chunk)
