@@ -27,12 +27,12 @@ import time
 import numpy as np
 
 from benchmarks.common import machine_description
+from twin.dome.exposure_plan import band_schedules
 from twin.dome.setup import THESIS_LONGEST_BAND_S, dome_setup
 from twin.gonio.capture_time import band_exposures_s, move_seconds, order_pairs
 from twin.rigs.gonio_kinematics import solve_pairs
 from twin.rigs.rig_config import GonioConfig, load_rig
 from twin.sensor.model import Sensor
-from twin.studies.dome import band_schedules
 
 THESIS_TOTAL_H = 134.9
 FACTORS = (0.9, 1.0, 1.1)

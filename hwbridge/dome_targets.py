@@ -30,7 +30,7 @@ def stage_angle_deg(
     ----------
     target
         ``{"angle_deg": a}`` for an angle, or ``{"view_id": k}`` for stage position ``k`` of a
-        capture plan (:func:`hwbridge.plans.dome_run`), which is ``k * step_deg``.
+        capture plan (:func:`hwbridge.dome_plans.dome_run`), which is ``k * step_deg``.
     step_deg
         The turn between two stage positions (15 deg on the dome).
     range_deg

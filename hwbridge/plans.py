@@ -3,7 +3,7 @@
 A step is a plain dict (JSON-able, stored in the capture store's attributes) with the camera that
 takes the frame, the frame kind, the exposure and whatever must be set before: filter band,
 light, view (rig pose). Builders make the procedures of the thesis; ``estimate_duration_s`` gives
-a dry run's duration.
+a dry run's duration. The dome's procedures are in :mod:`hwbridge.dome_plans`.
 
 References
 ----------
@@ -23,16 +23,20 @@ from hwbridge.errors import BridgeInputError
 __all__ = [
     "chart_photographs",
     "dark_series",
-    "dome_run",
     "estimate_duration_s",
     "gonio_sample_run",
+    "plan_step",
     "plan_start_times_s",
     "response_curve_series",
     "white_reference_run",
 ]
 
 
-def _step(camera: str, kind: str, exposure_s: float, **settings: float | int) -> dict[str, object]:
+def plan_step(
+    camera: str, kind: str, exposure_s: float, **settings: float | int
+) -> dict[str, object]:
+    """One step: ``camera`` takes a frame of ``kind`` at ``exposure_s`` after ``settings`` (view,
+    light, band, ...) are set; a non-positive or non-finite exposure is refused."""
     if not np.isfinite(exposure_s) or exposure_s <= 0:
         raise BridgeInputError(f"exposure_s: expected a positive exposure, got {exposure_s}")
     return {"camera": camera, "kind": kind, "exposure_s": float(exposure_s), **settings}
@@ -45,7 +49,7 @@ def dark_series(
     if frames_per_exposure < 1:
         raise BridgeInputError("frames_per_exposure: expected at least one frame")
     return [
-        _step(camera, "dark", t, light_id=-1)
+        plan_step(camera, "dark", t, light_id=-1)
         for t in exposures_s
         for _ in range(frames_per_exposure)
     ]
@@ -55,7 +59,7 @@ def response_curve_series(
     camera: str, exposures_s: Iterable[float], *, light_id: int = 0
 ) -> list[dict]:
     """One frame of a static scene per exposure time, for the response curve (Robertson)."""
-    return [_step(camera, "oecf", t, light_id=light_id) for t in exposures_s]
+    return [plan_step(camera, "oecf", t, light_id=light_id) for t in exposures_s]
 
 
 def gonio_sample_run(
@@ -72,7 +76,7 @@ def gonio_sample_run(
             f"band_exposures_s: expected {len(bands)} exposures, got {len(exposures)}"
         )
     return [
-        _step(camera, "sample", t, view_id=int(view), band_nm=float(band), light_id=0)
+        plan_step(camera, "sample", t, view_id=int(view), band_nm=float(band), light_id=0)
         for view in view_ids
         for band, t in zip(bands, exposures, strict=True)
     ]
@@ -83,7 +87,7 @@ def white_reference_run(
 ) -> list[dict]:
     """The white standard through every band before a run, for the factors F'_lambda (3.3)."""
     return [
-        _step(camera, "white", t, band_nm=float(band), light_id=0)
+        plan_step(camera, "white", t, band_nm=float(band), light_id=0)
         for band, t in zip(band_centres_nm, band_exposures_s, strict=True)
     ]
 
@@ -93,47 +97,10 @@ def chart_photographs(
 ) -> list[dict]:
     """Colour-chart photographs, one per light and exposure (thesis 9.3)."""
     return [
-        _step(camera, "chart", t, light_id=int(light)) for light in light_ids for t in exposures_s
+        plan_step(camera, "chart", t, light_id=int(light))
+        for light in light_ids
+        for t in exposures_s
     ]
-
-
-def dome_run(
-    rgb_cameras: list[str],
-    spectral_camera: str,
-    *,
-    stage_positions: int,
-    leds: int,
-    rgb_exposure_s: float,
-    spectral_exposure_s: float,
-    spectral_bands_nm: list[float],
-) -> list[dict]:
-    """The dome procedure (thesis 10.2.2): per stage position an alignment frame with all LEDs on
-    for every camera, then per LED one frame of every RGB camera and one of the spectral camera
-    in the band its schedule gives that (position, LED) (cycled through ``spectral_bands_nm``).
-    The view of a step is its stage position."""
-    if stage_positions < 1 or leds < 1 or not spectral_bands_nm:
-        raise BridgeInputError("dome_run: expected stage positions, LEDs and at least one band")
-    plan, schedule = [], 0
-    for position in range(stage_positions):
-        for camera in [*rgb_cameras, spectral_camera]:
-            exposure = spectral_exposure_s if camera == spectral_camera else rgb_exposure_s
-            plan.append(_step(camera, "alignment", exposure, view_id=position, light_id=-2))
-        for led in range(leds):
-            for camera in rgb_cameras:
-                plan.append(_step(camera, "sample", rgb_exposure_s, view_id=position, light_id=led))
-            band = spectral_bands_nm[schedule % len(spectral_bands_nm)]
-            plan.append(
-                _step(
-                    spectral_camera,
-                    "sample",
-                    spectral_exposure_s,
-                    view_id=position,
-                    light_id=led,
-                    band_nm=float(band),
-                )
-            )
-            schedule += 1
-    return plan
 
 
 def plan_start_times_s(

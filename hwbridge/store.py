@@ -10,6 +10,10 @@ Layout of ``<name>.capture.zarr`` (ARCHITECTURE.md, "Stores"):
   (the monitor spectrum, when the rig has one);
 - ``progress``: one flag per plan step, set only after the step's frame and index are written.
 
+A dome capture (thesis 10.2-10.4) uses the same layout with one group per camera (the RGB
+cameras of the arc and the spectral camera); :mod:`hwbridge.dome_layout` says what its index
+fields and its ``rig`` attribute (camera, LED and stage geometry, the targets) hold.
+
 A simulated capture holds :data:`INDEX_CHUNK_FRAMES` frames per chunk of the index and the
 flags and compresses its frames with Zstd level 1 (a noisy 256 px frame: 0.36 ms to 84 % of its
 size, against 1.6 ms to 75 % at Zstd's default level 3); a real or replayed one keeps one frame
@@ -72,7 +76,7 @@ INDEX_CHUNK_FRAMES = 1024
 """Frames (steps) per chunk of the index fields and the progress flags of a simulated capture."""
 _SIMULATED_FRAME_LEVEL = 1  # Zstd level of simulated frames (real ones: Zstd's default, 3)
 
-FRAME_KINDS = ("dark", "white", "chart", "sample", "oecf", "alignment")
+FRAME_KINDS = ("dark", "white", "chart", "sample", "oecf", "alignment", "geometric")
 _STRING_FIELDS = ("kind", "status")
 _NUMERIC_FIELDS = {
     "light_id": "int32",

@@ -31,104 +31,6 @@ def _frames_and_index(store: CaptureStore):
     return store.frames("k4")[:], index
 
 
-# A driver process that imports the command line and the demo program once, then forks a fresh
-# `spectwin capture` for every request: each capture is a real process of its own (killed,
-# interrupted, refused like any other) that starts in milliseconds instead of seconds of imports,
-# so the test spends its time capturing and interrupting. Requests on stdin, one JSON per line:
-# {"args": [...], "stderr": path} starts a capture and answers {"pid": ...}; {"wait": pid}
-# reaps it and answers {"code": exit code, or -signal}.
-DRIVER = r"""
-import json, os, sys, traceback
-from twin.cli.app import app
-import twin.gonio.sim_session  # noqa: F401 (the demo program's imports)
-
-for line in sys.stdin:
-    request = json.loads(line)
-    if "wait" in request:
-        _, status = os.waitpid(request["wait"], 0)
-        print(json.dumps({"code": os.waitstatus_to_exitcode(status)}), flush=True)
-        continue
-    pid = os.fork()
-    if pid == 0:
-        os.dup2(os.open(request["stderr"], os.O_WRONLY | os.O_CREAT | os.O_TRUNC), 2)
-        os.dup2(os.open(os.devnull, os.O_WRONLY), 1)
-        code = 0
-        try:
-            app(request["args"], prog_name="spectwin")
-        except SystemExit as end:
-            code = end.code if isinstance(end.code, int) else 1
-        except BaseException:
-            traceback.print_exc()
-            code = 99
-        sys.stderr.flush()
-        os._exit(code)
-    print(json.dumps({"pid": pid}), flush=True)
-"""
-ROOT = Path(__file__).resolve().parents[2]
-
-
-class _Captures:
-    """`spectwin capture` processes forked by the driver."""
-
-    def __init__(self, folder: Path):
-        environment = os.environ | {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
-        self._driver = subprocess.Popen(
-            [sys.executable, "-c", DRIVER],
-            stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE,
-            text=True,
-            cwd=ROOT,
-            env=environment,
-        )
-        self._folder, self._count, self._live = folder, 0, set()
-
-    def _ask(self, request: dict) -> dict:
-        self._driver.stdin.write(json.dumps(request) + "\n")
-        self._driver.stdin.flush()
-        return json.loads(self._driver.stdout.readline())
-
-    def start(self, args: list[str]) -> tuple[int, Path]:
-        self._count += 1
-        stderr = self._folder / f"capture{self._count}.stderr"
-        pid = self._ask({"args": args, "stderr": str(stderr)})["pid"]
-        self._live.add(pid)
-        return pid, stderr
-
-    def wait(self, pid: int) -> int:
-        self._live.discard(pid)
-        return self._ask({"wait": pid})["code"]
-
-    def close(self) -> None:
-        for pid in self._live:  # left running (or stopped) by a failed check
-            os.kill(pid, signal.SIGKILL)
-        self._driver.stdin.close()
-        self._driver.wait(timeout=30)
-
-
-def _lock_names(path: Path, pid: int, inside: bool = False) -> bool:
-    """Whether the store's lock file (inside it, or beside it while it is created, unless
-    ``inside``) names pid."""
-    lock_files = [path / ".writer.lock"]
-    if not inside:
-        lock_files.append(path.with_name(f".{path.name}.writer.lock"))
-    for lock_file in lock_files:
-        try:
-            if json.loads(lock_file.read_text())["pid"] == pid:
-                return True
-        except (OSError, ValueError, KeyError):
-            pass
-    return False
-
-
-def _running(pid: int) -> bool:
-    """Whether process ``pid`` runs (has not ended; a child not yet reaped is a zombie)."""
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except (FileNotFoundError, IndexError):
-        return False
-    return state not in ("Z", "X")
-
-
 def _check_done_steps(path: Path, reference_frames: np.ndarray) -> int:
     """Every step flagged done holds the uninterrupted run's frame; returns how many are done."""
     store = CaptureStore.open(path)
@@ -150,7 +52,9 @@ def _check_complete(path: Path, reference_frames: np.ndarray, reference_index: d
     assert not (path / ".writer.lock").exists()
 
 
-def test_20_sigkills_and_5_sigints_at_random_moments_resume_to_the_uninterrupted_frames(tmp_path):
+def test_20_sigkills_and_5_sigints_at_random_moments_resume_to_the_uninterrupted_frames(
+    tmp_path, capture_kit
+):
     """Captures of the demo program, each stopped at a seeded random moment by SIGKILL (20) or
     SIGINT (5) and continued with --resume until complete (then begun afresh); in every capture,
     at a random moment, a second writer is started (with the first held by SIGSTOP, so that it
@@ -164,7 +68,7 @@ def test_20_sigkills_and_5_sigints_at_random_moments_resume_to_the_uninterrupted
     signals = [signal.SIGKILL] * 20 + [signal.SIGINT] * 5
     rng.shuffle(signals)
     delivered = {signal.SIGKILL: 0, signal.SIGINT: 0}
-    captures = _Captures(tmp_path)
+    captures = capture_kit.processes
     refused = completed = progressed = 0
     started = time.monotonic()
     try:
@@ -174,14 +78,15 @@ def test_20_sigkills_and_5_sigints_at_random_moments_resume_to_the_uninterrupted
             args += ["--resume"] if path.exists() else ["--seed", str(SEED)]
             pid, stderr = captures.start(args)
             deadline = time.monotonic() + 60
-            while not _lock_names(path, pid) and _running(pid):
+            while not capture_kit.lock_names(path, pid) and capture_kit.running(pid):
                 assert time.monotonic() < deadline, stderr.read_text()
                 time.sleep(0.005)
             moment = rng.uniform(0.0, 1.5)
             second_at = rng.uniform(0.0, moment)
             time.sleep(second_at)
             os.kill(pid, signal.SIGSTOP)
-            if _lock_names(path, pid) and (owner := lock_owner(path)) and owner.pid == pid:
+            held = capture_kit.lock_names(path, pid)
+            if held and (owner := lock_owner(path)) and owner.pid == pid:
                 second_args = ["capture", str(path)] + (["--resume"] if path.exists() else [])
                 second, second_stderr = captures.start(second_args)
                 assert captures.wait(second) == 1, second_stderr.read_text()
@@ -308,12 +213,13 @@ def test_a_second_session_on_a_store_being_written_is_refused_and_writes_nothing
     assert not (tmp_path / "new.capture.zarr").exists()
 
 
-def test_the_stale_lock_of_a_killed_session_is_taken_over(tmp_path):
+def test_the_stale_lock_of_a_killed_session_is_taken_over(tmp_path, capture_kit):
     path = tmp_path / "stale.capture.zarr"
     command = [sys.executable, "-m", "twin.gonio.sim_session", str(path), str(SEED)]
-    process = subprocess.Popen(command, cwd=ROOT, stderr=subprocess.DEVNULL)
+    process = subprocess.Popen(command, cwd=capture_kit.root, stderr=subprocess.DEVNULL)
     deadline = time.monotonic() + 120
-    while not (path / "progress").exists() or not _lock_names(path, process.pid, inside=True):
+    lock_names = capture_kit.lock_names
+    while not (path / "progress").exists() or not lock_names(path, process.pid, inside=True):
         assert time.monotonic() < deadline and process.poll() is None
         time.sleep(0.01)
     process.kill()
@@ -358,23 +264,9 @@ def test_bad_sessions_are_refused_and_overwrite_nothing(tmp_path):
         run_session(tmp_path / "x.zarr", demo_plan(), cameras={}, rig={}, backend="sim", seed=0)
 
 
-def test_dome_white_and_chart_plans():
-    from hwbridge.plans import chart_photographs, dome_run, white_reference_run
+def test_white_and_chart_plans():
+    from hwbridge.plans import chart_photographs, white_reference_run
 
-    plan = dome_run(
-        ["rgb0", "rgb1"],
-        "k4",
-        stage_positions=2,
-        leds=3,
-        rgb_exposure_s=0.05,
-        spectral_exposure_s=0.2,
-        spectral_bands_nm=[450.0, 550.0],
-    )
-    per_position = 3 + 3 * 3  # alignment frames of 3 cameras, then 3 LEDs x 3 cameras
-    assert len(plan) == 2 * per_position
-    spectral = [step for step in plan if step["camera"] == "k4" and step["kind"] == "sample"]
-    assert [step["band_nm"] for step in spectral] == [450.0, 550.0, 450.0, 550.0, 450.0, 550.0]
-    assert {step["view_id"] for step in plan} == {0, 1}
     white = white_reference_run("k4", [400.0, 410.0], [1.0, 0.8])
     assert [step["kind"] for step in white] == ["white", "white"]
     assert len(chart_photographs("rgb0", [0.01, 0.02], [0, 1, 2])) == 6

@@ -79,7 +79,9 @@ def estimate(
     rig: Annotated[str, typer.Argument(help="Rig file in scenes/rigs (gonio, dome) or a path.")],
     as_json: JsonFlag = False,
 ) -> None:
-    """Estimate the capture time of one material on a rig (thesis 4.1.1 and 10.2.2)."""
+    """Estimate the capture time of one material on a rig (thesis 4.1.1 and 10.2.2): the dome's
+    from its calibration and run plans (HDR sets and scheduled bands per LED, cameras in
+    parallel), against the thesis's figures."""
     from twin.rigs.rig_config import GonioConfig, load_rig
 
     config = load_rig(rig)
@@ -89,17 +91,10 @@ def estimate(
         with console.status("solving the kinematics of every direction pair"):
             summary = estimate_gonio(config).as_dict()
     else:
-        from twin.rigs.dome_geometry import dome_capture_seconds
+        from twin.dome.capture_time import estimate_dome
 
-        total_s = dome_capture_seconds(config)
-        summary = {
-            "stage_positions": config.rotation_stage_positions,
-            "leds": config.led_count,
-            "rgb_cameras": len(config.rgb_camera_polar_deg),
-            "frames_per_camera": config.rotation_stage_positions * (config.led_count + 1),
-            "total_s": total_s,
-            "total_h": total_s / 3600,
-        }
+        with console.status("timing the dome's calibration and run plans"):
+            summary = estimate_dome(config).as_dict()
     summary = {"rig": config.name, **summary}
     print_summary(
         summary, f"capture time: {config.name}", as_json, skip=("rig", "band_exposures_s")

@@ -63,6 +63,11 @@ class Program(StrEnum):
     demo = "demo"
     gonio_calibration = "gonio-calibration"
     gonio_run = "gonio-run"
+    dome_calibration = "dome-calibration"
+    dome_run = "dome-run"
+
+
+_DOME = {Program.dome_calibration, Program.dome_run}
 
 
 class Layout(StrEnum):
@@ -73,16 +78,33 @@ class Layout(StrEnum):
 # The capture options that only some programs use (the others refuse them).
 _PROGRAM_OPTIONS = {
     "calibration": {Program.gonio_run},
-    "material": {Program.gonio_run},
+    "material": {Program.gonio_run, Program.dome_run},
     "pixels": {Program.gonio_run},
     "window": {Program.gonio_run},
-    "spp": {Program.gonio_run},
-    "fault_rate": {Program.demo},
+    "spp": {Program.gonio_run, *_DOME},
+    "fault_rate": {Program.demo, *_DOME},
+    "stage_positions": {Program.dome_run},
+    "leds": _DOME,
+    "rgb_cameras": _DOME,
+    "texels": _DOME,
+    "dark_frames": {Program.dome_calibration},
 }
 # Options a --dry-run (which captures nothing) refuses.
 _CAPTURE_ONLY = ("seed", "resume", "fault_rate", "workers", "scheduler")
 # Settings a resumed capture reads from its store (given ones must agree).
-_STORED = ("program", "seed", "material", "pixels", "window", "spp")
+_STORED = (
+    "program",
+    "seed",
+    "material",
+    "pixels",
+    "window",
+    "spp",
+    "stage_positions",
+    "leds",
+    "rgb_cameras",
+    "texels",
+    "dark_frames",
+)
 
 
 def _given(ctx: typer.Context, name: str) -> bool:
@@ -122,13 +144,17 @@ def _stored_settings(ctx: typer.Context, store: Path, given: dict[str, object]) 
     line must agree with the store's value."""
     from hwbridge.lock import lock_owner
     from hwbridge.store import CaptureStore
+    from twin.dome.programs import stored_dome_settings
     from twin.gonio.capture import stored_settings
 
     if not store.exists():
         if lock_owner(store) is None:
             fail(f"{store} does not exist: start the capture without --resume")
     else:
-        stored = stored_settings(CaptureStore.open(store))
+        capture = CaptureStore.open(store)
+        stored = stored_settings(capture)  # refuses stores spectwin capture did not make
+        if str(stored["program"]).startswith("dome-"):
+            stored = stored_dome_settings(capture)
         if stored["program"] not in {p.value for p in Program}:
             fail(f"{store}: made by program {stored['program']!r}, which capture does not know")
         stored["program"] = Program(stored["program"])
@@ -156,12 +182,34 @@ def _program_of(
     material: str,
     pixels: int,
     window: int | None,
-    spp: int,
+    spp: int | None,
     seed: int,
     fault_rate: float,
     dry_run: bool,
+    dome: dict[str, object],
 ):
     """The capture program, every setting checked (nothing is written)."""
+    if program in _DOME:
+        from twin.dome.programs import (
+            DEFAULT_SPP,
+            DomeCaptureSize,
+            dome_calibration_program,
+            dome_run_program,
+        )
+
+        size = DomeCaptureSize(
+            dome["stage_positions"],
+            dome["leds"],
+            dome["rgb_cameras"],
+            dome["texels"],
+            DEFAULT_SPP if spp is None else spp,
+        )
+        if program is Program.dome_run:
+            return dome_run_program(material, size=size, seed=seed, fault_rate=fault_rate), {}
+        calibration_program = dome_calibration_program(
+            size=size, dark_frames=dome["dark_frames"], seed=seed, fault_rate=fault_rate
+        )
+        return calibration_program, {}
     if program is Program.demo:
         from twin.gonio.sim_session import demo_program
 
@@ -172,6 +220,7 @@ def _program_of(
         return gonio_calibration_program(seed=seed), {}
     from recon.calibration.gonio import GonioCalibration
     from twin.gonio.capture import gonio_measurement_program
+    from twin.gonio.render import GONIO_SPP
 
     if window is not None and window > pixels:
         fail(f"--window {window} is larger than --pixels {pixels}; expected at most {pixels}")
@@ -193,7 +242,12 @@ def _program_of(
         _, exposures_s = band_exposures_s(load_rig("gonio"))
         notes["exposures"] = "the rig model's band plan (no --calibration given)"
     built = gonio_measurement_program(
-        exposures_s, material=material, pixels=pixels, window=window, spp=spp, seed=seed
+        exposures_s,
+        material=material,
+        pixels=pixels,
+        window=window,
+        spp=GONIO_SPP if spp is None else spp,
+        seed=seed,
     )
     return built, notes
 
@@ -228,7 +282,10 @@ def capture(
         typer.Option(
             help="demo: darks + 2 pairs x 33 bands of the white standard; gonio-calibration: "
             "darks, response series, white standard; gonio-run: a measurement run "
-            "(needs --calibration). With --resume: the store's."
+            "(needs --calibration); dome-calibration: the dome's darks, response series, white "
+            "standard under the LEDs, checkerboard frames; dome-run: the dome's measurement of "
+            "a material (HDR sets and scheduled spectral bands per stage position and LED). "
+            "With --resume: the store's."
         ),
     ] = Program.demo,
     calibration: Annotated[
@@ -239,7 +296,7 @@ def capture(
         ),
     ] = None,
     material: Annotated[
-        str, typer.Option(help="gonio-run: material on the holder (scenes/materials).")
+        str, typer.Option(help="gonio-run, dome-run: material on the holder (scenes/materials).")
     ] = "colorchecker16",
     pixels: Annotated[
         int,
@@ -259,14 +316,43 @@ def capture(
         ),
     ] = None,
     spp: Annotated[
-        int,
+        int | None,
         typer.Option(
             min=1,
             max=65536,
-            help="gonio-run: samples per pixel of the renders (stratified; twin.gonio.render."
-            "GONIO_SPP).",
+            help="gonio-run, dome programs: samples per pixel of the renders (gonio-run: 16 "
+            "stratified, twin.gonio.render.GONIO_SPP; dome programs: 64).",
         ),
-    ] = 16,
+    ] = None,
+    stage_positions: Annotated[
+        int,
+        typer.Option(min=1, max=24, help="dome-run: the first stage positions (15 deg steps)."),
+    ] = 24,
+    leds: Annotated[
+        int, typer.Option(min=1, max=198, help="dome programs: LEDs, spread over the dome.")
+    ] = 198,
+    rgb_cameras: Annotated[
+        int,
+        typer.Option(min=1, max=11, help="dome programs: RGB cameras, spread over the arc."),
+    ] = 11,
+    texels: Annotated[
+        int,
+        typer.Option(
+            min=4,
+            max=1024,
+            help="dome programs: texels across a 4 cm sample, one Bayer quad each; sets the "
+            "frame size (64: 264 x 264 px windows).",
+        ),
+    ] = 64,
+    dark_frames: Annotated[
+        int,
+        typer.Option(
+            min=1,
+            max=10000,
+            help="dome-calibration: dark frames per exposure time of the spectral camera "
+            "(thesis 10.3: 200).",
+        ),
+    ] = 200,
     seed: Annotated[
         int,
         typer.Option(
@@ -292,14 +378,15 @@ def capture(
         typer.Option(
             min=0.0,
             max=MAX_FAULT_RATE,
-            help="demo: injected device faults per device call (each is retried 3 times).",
+            help="demo, dome programs: injected device faults per device call (each is retried "
+            "3 times).",
         ),
     ] = 0.0,
     workers: WorkersOption = 1,
     scheduler: SchedulerOption = None,
     as_json: JsonFlag = False,
 ) -> None:
-    """Capture a simulated gonioreflectometer session into a capture store (resumable).
+    """Capture a simulated gonioreflectometer or dome session into a capture store (resumable).
 
     One writer per store: a second capture, resume or process of the same store is refused
     while the first runs. Ctrl-C (or SIGTERM) stops after the current frame and says how to
@@ -309,6 +396,9 @@ def capture(
     by view; the frames are bit-identical to a capture in one process.
 
     Example: spectwin capture out/run.capture.zarr --program gonio-run --calibration cal.json
+
+    A reduced dome capture: spectwin capture out/lego.capture.zarr --program dome-run
+    --material lego --stage-positions 2 --leds 24 --rgb-cameras 3 --texels 64
     """
     from hwbridge.errors import SessionInterrupted
     from hwbridge.lock import require_new_store
@@ -316,6 +406,13 @@ def capture(
     if dry_run:
         _refuse_capture_only(ctx)
     exposures_s = None
+    dome = {
+        "stage_positions": stage_positions,
+        "leds": leds,
+        "rgb_cameras": rgb_cameras,
+        "texels": texels,
+        "dark_frames": dark_frames,
+    }
     if resume:
         given = {
             "program": program,
@@ -324,12 +421,16 @@ def capture(
             "pixels": pixels,
             "window": window,
             "spp": spp,
+            **dome,
         }
         stored = _stored_settings(ctx, store, given)
         program, seed = stored.get("program", program), stored.get("seed", seed)
         if program is Program.gonio_run and stored:
             material, pixels, window = stored["material"], stored["pixels"], stored["window"]
             spp, exposures_s = stored["spp"], stored["exposures_s"]
+        if program in _DOME and stored:
+            material, spp = stored.get("material", material), stored["spp"]
+            dome = {name: stored.get(name, value) for name, value in dome.items()}
     _refuse_unused(ctx, program)
     built, notes = _program_of(
         program,
@@ -342,6 +443,7 @@ def capture(
         seed=seed,
         fault_rate=fault_rate,
         dry_run=dry_run,
+        dome=dome,
     )
     summary: dict[str, object] = {"store": str(store)}
     if dry_run:
@@ -358,14 +460,17 @@ def capture(
         with dask_client(workers, scheduler) as client:
             summary["cluster"] = cluster_description(client)
             result = built.run(store, resume=resume, show_progress=not as_json, client=client)
-        index = result.index(result.attrs["plan"][0]["camera"])
+        cameras = dict.fromkeys(step["camera"] for step in result.attrs["plan"])
+        indexes = [result.index(camera, ["kind", "status"]) for camera in cameras]
         recaptured = [
             f"{problem.item}: {problem.key} was {problem.problem}" for problem in result.recaptured
         ]
         summary |= {
             "complete": result.complete,
-            "frames": dict(Counter(index["kind"].tolist())),
-            "frames_with_faults": int(sum(status != "ok" for status in index["status"])),
+            "frames": dict(sum((Counter(index["kind"].tolist()) for index in indexes), Counter())),
+            "frames_with_faults": int(
+                sum(status != "ok" for index in indexes for status in index["status"])
+            ),
             "recaptured_frames": len(recaptured),
         }
         if as_json:

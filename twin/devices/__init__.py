@@ -8,6 +8,6 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     submod_attrs={
         "cluster": ["dask_client", "run_capture", "run_process"],
         "dome_devices": ["DomeDevices"],
-        "sim_devices": ["SimGonioDevices", "VirtualRig"],
+        "sim_devices": ["SimDomeDevices", "SimGonioDevices", "VirtualRig"],
     },
 )

@@ -8,8 +8,8 @@ fresh :class:`~twin.devices.sim_devices.VirtualRig`; ``backend="real"`` the driv
 (:class:`~hwbridge.drivers.apt_rotation_stage.AptRotationStage`), the LEDs on DMX512 decoders
 behind an Enttec DMX USB Pro (:class:`~hwbridge.drivers.dmx_led_array.DmxLedArray`) and the
 VariSpec LCTF (:class:`~hwbridge.drivers.varispec.VariSpec`). Both backends pass the same
-contract tests, so a plan (:func:`hwbridge.plans.dome_run`) runs on either unchanged. The cameras
-are the caller's (GenICam cameras on the real dome), handed over as they are.
+contract tests, so a plan (:func:`hwbridge.dome_plans.dome_run`) runs on either unchanged. The
+cameras are the caller's (GenICam cameras on the real dome), handed over as they are.
 """
 
 from __future__ import annotations

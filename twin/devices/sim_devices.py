@@ -14,8 +14,11 @@ The dome's rotation stage (:class:`SimRotationStage`) and LEDs (:class:`SimLedAr
 requests as the real drivers do (:mod:`hwbridge.dome_targets`) and pass the same contract tests.
 
 :class:`SimGonioDevices` is the recipe of the gonioreflectometer's devices: plain data that builds
-them over a fresh :class:`VirtualRig` when called, in the process that runs the steps; the dome's
-is :class:`twin.devices.dome_devices.DomeDevices`, simulated or real.
+them over a fresh :class:`VirtualRig` when called, in the process that runs the steps.
+:class:`SimDomeDevices` is the simulated dome's, cameras included (their signals read the stage,
+LEDs and filter of the same rig: rendered captures, ``twin.dome``);
+:class:`twin.devices.dome_devices.DomeDevices` builds the dome's stage, LEDs and filter,
+simulated or real, for cameras of the caller's.
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ from twin.sensor.model import Sensor
 __all__ = [
     "Signal",
     "SimCamera",
+    "SimDomeDevices",
     "SimGonioDevices",
     "SimLamp",
     "SimLedArray",
@@ -60,6 +64,7 @@ class VirtualRig:
     led_current_ma: float = 0.0
     stage_deg: float = 0.0
     clock_s: float = 0.0  # start of the current exposure (set by the camera for each step)
+    step: int = -1  # the plan step being taken (set by the camera), for what the plan places
     fault_rate: float = 0.0
     fault_rng: np.random.Generator | None = None
 
@@ -276,7 +281,8 @@ class SimSpectrometer:
 
 
 class SimPositioner:
-    """The gonioreflectometer's robot and rail, addressed by view (direction pair) index."""
+    """The gonioreflectometer's robot and rail, addressed by view (direction pair) index, or the
+    dome's rotation stage, addressed by stage position."""
 
     def __init__(self, rig: VirtualRig, views: int, *, name: str = "goniometer"):
         self.name, self._rig, self._views = name, rig, views
@@ -343,10 +349,12 @@ class SimCamera:
         self._shutter_open = bool(open_)
 
     def set_step(self, seed: int, step: int) -> None:
-        """Derive the noise and the exposure start of the next frame from the plan step."""
+        """Derive the noise and the exposure start of the next frame from the plan step, and
+        tell the rig which step it is (a dome signal reads what the plan put on the holder)."""
         self._rng = np.random.default_rng([seed, step])
         self._start_s = float(self._start_times_s[step])
         self._rig.clock_s = self._start_s
+        self._rig.step = int(step)
 
     def snap(self) -> tuple[np.ndarray, dict[str, Any]]:
         self._rig.maybe_fail(f"{self.name}.snap")
@@ -354,8 +362,9 @@ class SimCamera:
             electrons = np.asarray(
                 self._signal(self._rig, self._start_s, self._exposure_s), np.float32
             )
-        else:
-            electrons = np.zeros(self.frame_shape, np.float32)
+        else:  # shutter closed: dark signal only (R, G, B planes for a colour sensor)
+            channels = (3,) if self._sensor.is_colour else ()
+            electrons = np.zeros((*self.frame_shape, *channels), np.float32)
         frame = self._sensor.capture(electrons, self._exposure_s, self._rng)
         return frame, {"timestamp": time.time(), "exposure_s": self._exposure_s}
 
@@ -416,4 +425,53 @@ class SimGonioDevices:
             tunable_filter=SimTunableFilter(rig),
             positioner=SimPositioner(rig, self.views),
             monitor=SimSpectrometer(rig, HMILamp(), DEFAULT_GRID),
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class SimDomeDevices:
+    """The simulated LED dome's devices for one plan, as a recipe (it pickles, like
+    :class:`SimGonioDevices`).
+
+    Calling it builds, over a fresh :class:`VirtualRig`, one camera per entry of ``cameras``
+    (its sensor fed by its signal, exposure ``k`` starting at ``start_times_s[k]``), the tunable
+    filter in front of the spectral camera, the rotation stage (:class:`SimRotationStage`) and
+    the array of ``led_count`` LEDs (:class:`SimLedArray`, at full scale unless a step asks for
+    another current).
+
+    Attributes
+    ----------
+    cameras
+        ``(camera id, sensor, signal)`` of every camera of the plan.
+    start_times_s
+        Exposure start of every plan step (:func:`hwbridge.dome_plans.dome_start_times_s`).
+    step_deg
+        The stage's turn between two stage positions.
+    led_count, led_full_scale_ma
+        Number of LEDs and the current at which they emit their nominal intensity.
+    fault_rate, fault_seed
+        Injected device faults per call and the seed of their draws (``[fault_seed, 99]``).
+    """
+
+    cameras: tuple[tuple[str, Sensor, Signal], ...]
+    start_times_s: np.ndarray
+    step_deg: float
+    led_count: int
+    led_full_scale_ma: float = 700.0
+    fault_rate: float = 0.0
+    fault_seed: int = 0
+
+    def __call__(self) -> SessionDevices:
+        rig = VirtualRig(
+            fault_rate=self.fault_rate, fault_rng=np.random.default_rng([self.fault_seed, 99])
+        )
+        return SessionDevices(
+            cameras={
+                camera_id: SimCamera(rig, sensor, signal, self.start_times_s, name=camera_id)
+                for camera_id, sensor, signal in self.cameras
+            },
+            tunable_filter=SimTunableFilter(rig),
+            positioner=SimRotationStage(rig, step_deg=self.step_deg),
+            leds=SimLedArray(rig, self.led_count, max_current_ma=self.led_full_scale_ma),
+            led_count=self.led_count,
         )

@@ -50,6 +50,7 @@ from recon.spectra import WavelengthGrid
 from twin.components.lamps import FINE_GRID
 from twin.components.targets import zenith_white_reflectance
 from twin.dome.capture import THESIS_BANDS_NM, DomeCameras, dome_cameras
+from twin.dome.exposure_plan import rgb_response_series_s, spectral_response_series_s
 from twin.materials.textures import TextureTruth
 from twin.render.truth import band_passbands, texture_truth
 from twin.rigs.hemisphere import direction
@@ -182,7 +183,7 @@ def dome_setup(
     # offset for the brightest field: the low-SNR range and the long reference exposures.
     # (evenly spaced, so no two ratios are powers of one factor: see
     # recon.radiometric.response_curve)
-    series_t = np.linspace(0.02, 15000.0 / (chart_bands[..., _SERIES_BAND].max()), 12)
+    series_t = spectral_response_series_s(float(chart_bands[..., _SERIES_BAND].max()))
     series = np.stack(
         [cameras.band_frame(chart_bands[..., _SERIES_BAND], float(t), rng) for t in series_t]
     )
@@ -199,7 +200,7 @@ def dome_setup(
         sigma_px=2.0,
         bit_depth=cameras.spectral.config.bit_depth,
     )
-    rgb_series_t = np.geomspace(1e-3, 3.0, 14) * (1 + 0.1 * (np.arange(14) % 3))
+    rgb_series_t = rgb_response_series_s()
     chart_rgb = cos_i * chart.weights[0] @ rgb_basis
     hdr_set = np.array(THESIS_RGB_EXPOSURES_S)
     rgb = calibrate_rgb_camera(

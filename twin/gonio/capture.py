@@ -50,7 +50,13 @@ from recon.spectra import DEFAULT_GRID
 from twin.components.lamps import HMILamp
 from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.components.targets import zenith_white_reflectance
-from twin.devices.cluster import run_capture
+from twin.devices.programs import (
+    ProgramCapture,
+    check_exposures,
+    check_fault_rate,
+    check_seed,
+    is_whole,
+)
 from twin.devices.sim_devices import SimGonioDevices, VirtualRig
 from twin.gonio.capture_time import estimate_plan_s
 from twin.gonio.render import GONIO_SPP, gonio_camera, pose_matrix
@@ -190,42 +196,22 @@ def check_capture_settings(
     """
     camera = Sensor(config.camera.definition).config
     side = min(camera.width, camera.height)
-    if not _is_whole(pixels) or not 1 <= pixels <= side:
+    if not is_whole(pixels) or not 1 <= pixels <= side:
         raise SpectwinInputError(
             f"pixels: expected 1..{side} pixels across the field of the {camera.name} (its "
             f"sensor has {camera.width}x{camera.height}), got {pixels}"
         )
-    if window is not None and (not _is_whole(window) or not 1 <= window <= pixels):
+    if window is not None and (not is_whole(window) or not 1 <= window <= pixels):
         raise SpectwinInputError(
             f"window: expected a read-out window of 1..{pixels} pixels (at most pixels, "
             f"{pixels}), got {window}"
         )
-    if not _is_whole(spp) or spp < 1:
+    if not is_whole(spp) or spp < 1:
         raise SpectwinInputError(f"spp: expected at least 1 sample per pixel, got {spp}")
 
 
-def _is_whole(value: object) -> bool:
-    return isinstance(value, int | np.integer) and not isinstance(value, bool)
-
-
-def _check_seed(seed: object) -> None:
-    if not _is_whole(seed) or seed < 0:
-        raise SpectwinInputError(f"seed: expected a whole number >= 0, got {seed}")
-
-
-def _check_exposures(plan: list[dict], sensor: Sensor) -> None:
-    low, high = sensor.config.exposure_range_s
-    outside = sorted({step["exposure_s"] for step in plan if not low <= step["exposure_s"] <= high})
-    if outside:
-        shown = ", ".join(f"{value:g}" for value in outside[:5])
-        raise SpectwinInputError(
-            f"exposures: the plan has exposures ({shown} s) outside the {sensor.config.name}'s "
-            f"range {low:g}..{high:g} s"
-        )
-
-
 @dataclass(frozen=True, eq=False)
-class CaptureProgram:
+class CaptureProgram(ProgramCapture):
     """A capture program of the simulated gonioreflectometer, checked and ready to run.
 
     Attributes
@@ -252,12 +238,9 @@ class CaptureProgram:
     poses: dict[int, GonioPose]
 
     def __post_init__(self) -> None:
-        _check_seed(self.seed)
-        if not 0.0 <= self.devices.fault_rate <= 1.0:  # also refuses nan
-            raise SpectwinInputError(
-                f"fault_rate: expected a probability in [0, 1], got {self.devices.fault_rate}"
-            )
-        _check_exposures(self.plan, self.devices.sensor)
+        check_seed(self.seed)
+        check_fault_rate(self.devices.fault_rate)
+        check_exposures(self.plan, {self.devices.camera_id: self.devices.sensor})
 
     def dry_run(self) -> dict[str, object]:
         """The plan in numbers, capturing nothing: steps, frames per camera and per kind,
@@ -285,27 +268,6 @@ class CaptureProgram:
             "estimated_duration_h": duration_s / 3600,
             "storage_mb": storage / 1e6,
         }
-
-    def run(
-        self,
-        store: str | Path,
-        *,
-        resume: bool = False,
-        show_progress: bool = False,
-        client: Client | None = None,
-    ) -> CaptureStore:
-        """Capture the plan into ``store`` (or continue it), in this process or over
-        ``client``'s cluster (:func:`twin.devices.cluster.run_capture`)."""
-        return run_capture(
-            Path(store),
-            self.plan,
-            self.devices,
-            rig=self.rig,
-            seed=self.seed,
-            resume=resume,
-            show_progress=show_progress,
-            client=client,
-        )
 
 
 def stored_settings(store: CaptureStore) -> dict[str, Any]:
@@ -355,7 +317,7 @@ def gonio_calibration_program(
     """
     config = load_rig("gonio")
     check_capture_settings(config, pixels=pixels, spp=spp)
-    _check_seed(seed)
+    check_seed(seed)
     if not 0.0 < white_fill < 1.0:
         raise SpectwinInputError(
             f"white_fill: expected a fraction of saturation in (0, 1), got {white_fill}"
@@ -432,7 +394,7 @@ def gonio_measurement_program(
     """
     config = load_rig("gonio")
     check_capture_settings(config, pixels=pixels, window=window, spp=spp)
-    _check_seed(seed)
+    check_seed(seed)
     lctf = LiquidCrystalTunableFilter.varispec(config.camera.filter)
     bands = np.asarray(lctf.band_centres_nm, np.float64)
     exposures = np.asarray(exposures_s, np.float64)

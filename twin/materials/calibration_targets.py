@@ -1,5 +1,6 @@
 """Calibration targets as surfaces in the sample frame: the Zenith white standard (thesis 3.3,
-Eq. 3.3) and colour charts (the ColorChecker; the Esser test chart of ``recon/data``).
+Eq. 3.3), colour charts (the ColorChecker; the Esser test chart of ``recon/data``) and the
+printed checkerboard of the dome's geometric calibration (OpenCV's chessboard pattern).
 
 Patches are separate flat parts with their measured reflectance, on a black card, laid out row
 by row from the top left; the parts are named ``patch_<index>`` in the chart's order.
@@ -10,7 +11,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import trimesh
 
+from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra
 from twin.components.lamps import FINE_GRID
 from twin.components.targets import (
@@ -21,9 +24,17 @@ from twin.components.targets import (
 from twin.materials.geometry import box
 from twin.materials.surfaces import SurfacePart
 
-__all__ = ["chart_parts", "colorchecker_chart", "esser_chart", "zenith_white_target"]
+__all__ = [
+    "chart_parts",
+    "checkerboard_corners",
+    "checkerboard_target",
+    "colorchecker_chart",
+    "esser_chart",
+    "zenith_white_target",
+]
 
 _CARD_THICKNESS_M = 0.001
+_PRINT_THICKNESS_M = 0.00002
 
 
 def zenith_white_target(size_m: float = 0.05) -> list[SurfacePart]:
@@ -71,3 +82,50 @@ def colorchecker_chart(size_m: float = 0.05) -> list[SurfacePart]:
 def esser_chart(size_m: float = 0.05) -> list[SurfacePart]:
     """The Esser test chart's 113 measured patches (``esser_reflectances``), 11 columns."""
     return chart_parts(esser_reflectances(FINE_GRID, out_of_range="clamp"), 11, size_m)
+
+
+def checkerboard_target(
+    columns: int = 9, rows: int = 8, square_m: float = 0.005, margin_m: float = 0.003
+) -> list[SurfacePart]:
+    """A checkerboard of ``columns x rows`` squares of ``square_m`` printed on a white card with a
+    ``margin_m`` border, centred, the print's top at z = 0 (target frame). The square at the
+    corner of negative x and positive y is black. With an odd and an even side it has no
+    symmetry that maps black onto black, so its orientation in an image is unambiguous.
+    """
+    if columns < 3 or rows < 3 or not square_m > 0 or margin_m < 0:
+        raise SpectwinInputError(
+            f"checkerboard: expected at least 3 x 3 squares of positive size, got {columns} x "
+            f"{rows} of {square_m} m"
+        )
+    width, height = columns * square_m, rows * square_m
+    card_z = -_PRINT_THICKNESS_M - _CARD_THICKNESS_M / 2
+    card = box((0, 0, card_z), (width + 2 * margin_m, height + 2 * margin_m, _CARD_THICKNESS_M))
+    squares = [
+        box(
+            (
+                -width / 2 + (column + 0.5) * square_m,
+                height / 2 - (row + 0.5) * square_m,
+                -_PRINT_THICKNESS_M / 2,
+            ),
+            (square_m, square_m, _PRINT_THICKNESS_M),
+        )
+        for row in range(rows)
+        for column in range(columns)
+        if (row + column) % 2 == 0
+    ]
+    white = SampledSpectra(FINE_GRID, np.full(FINE_GRID.size, 0.85))
+    black = SampledSpectra(FINE_GRID, np.full(FINE_GRID.size, 0.03))
+    return [
+        SurfacePart("checker_card", card, white),
+        SurfacePart("checker_print", trimesh.util.concatenate(squares), black),
+    ]
+
+
+def checkerboard_corners(columns: int = 9, rows: int = 8, square_m: float = 0.005) -> np.ndarray:
+    """The inner corners ``((rows - 1) * (columns - 1), 3)`` of :func:`checkerboard_target`'s
+    board in the target frame, row by row from negative x and positive y (OpenCV's order for a
+    pattern of ``(columns - 1, rows - 1)`` corners)."""
+    column, row = np.meshgrid(np.arange(1, columns), np.arange(1, rows))
+    x = (column.ravel() - columns / 2) * square_m
+    y = (rows / 2 - row.ravel()) * square_m
+    return np.column_stack([x, y, np.zeros_like(x)])

@@ -15,7 +15,7 @@ from scipy.spatial.transform import Rotation
 from twin.rigs.hemisphere import direction
 from twin.rigs.rig_config import DomeConfig
 
-__all__ = ["DomeGeometry", "dome_geometry", "dome_capture_seconds", "to_sample_frame"]
+__all__ = ["DomeGeometry", "dome_geometry", "to_sample_frame"]
 
 
 @dataclass(frozen=True)
@@ -55,12 +55,3 @@ def dome_geometry(config: DomeConfig) -> DomeGeometry:
 def to_sample_frame(world_directions: np.ndarray, stage_deg: float) -> np.ndarray:
     """World directions seen in the frame of a sample turned by ``stage_deg`` about z."""
     return Rotation.from_euler("z", -stage_deg, degrees=True).apply(world_directions)
-
-
-def dome_capture_seconds(config: DomeConfig) -> float:
-    """Capture time of one material: per stage position a turn, one alignment frame with all
-    LEDs, then one frame per LED on all cameras in parallel (thesis 10.2.2)."""
-    timing = config.timing
-    frame_s = max(timing.rgb_exposure_s, timing.spectral_exposure_s) + timing.frame_overhead_s
-    per_position = timing.rotation_s + (1 + config.led_count) * frame_s
-    return config.rotation_stage_positions * per_position

@@ -168,7 +168,11 @@ def _header(fit: FittedSensor, config: CameraConfig, source: str) -> list[str]:
         "pixels, no transfer gradient, no mosaic. The exposure range is the measured one, the "
         "sensor size that of the measured frames.",
     ]
-    return [line for paragraph in paragraphs for line in textwrap.wrap(paragraph, 97)]
+    return [
+        line
+        for paragraph in paragraphs  # a path stays whole on its line, however long
+        for line in textwrap.wrap(paragraph, 97, break_long_words=False, break_on_hyphens=False)
+    ]
 
 
 def write_fitted_camera(

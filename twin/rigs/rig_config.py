@@ -119,13 +119,14 @@ class DomeRing(StrictModel):
 
 
 class DomeTimingConfig(StrictModel):
-    """Per rotation-stage position: turn, one all-LED alignment frame, then one frame per LED on
-    all cameras in parallel (thesis 10.2.2)."""
+    """What the dome spends besides exposing (the exposures come from the capture plans,
+    :mod:`hwbridge.dome_plans`): turning the stage to the next position, switching LEDs, and per
+    frame the RGB camera's read-out and the spectral camera's filter switch and download."""
 
     rotation_s: NonNegative
-    rgb_exposure_s: Positive
-    spectral_exposure_s: Positive
-    frame_overhead_s: NonNegative
+    led_switch_s: NonNegative
+    rgb_frame_overhead_s: NonNegative
+    spectral_frame_overhead_s: NonNegative
 
 
 class DomeConfig(StrictModel):

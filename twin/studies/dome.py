@@ -37,7 +37,6 @@ from scipy import ndimage
 from recon.baselines import dong_2016, spectral_a_plus
 from recon.errors import SpectwinInputError
 from recon.metrics import relative_error
-from recon.scheduling.dome_schedule import THESIS_RGB_EXPOSURES_S, fewest_images, schedule_bands
 from recon.spectralize.appearance import appearance_neighbours, appearance_points
 from recon.spectralize.solve import dynamic_scale
 from twin.components.targets import zenith_white_reflectance
@@ -49,6 +48,7 @@ from twin.dome.capture_study import (
     simulate_capture,
     sphere_lit_spectra,
 )
+from twin.dome.exposure_plan import band_schedules
 from twin.dome.setup import (
     BAND_GRID,
     CALIBRATION_LIGHT,
@@ -71,7 +71,6 @@ __all__ = [
     "P_DYN",
     "SINGLE_IMAGE_LEDS",
     "SingleImage",
-    "band_schedules",
     "comparison",
     "cross_check",
     "exposure_comparison",
@@ -95,40 +94,6 @@ _SPHERE_LEDS = tuple(range(0, 198, 11))  # 18 of the 198 LEDs stand for all of t
 def schedules(setup: DomeSetup) -> dict[str, dict]:
     """The 8-image and the 10-image schedule (noisiest bands twice, as many as fit) of the plan."""
     return band_schedules(setup.exposures_s)
-
-
-def band_schedules(exposures_s: np.ndarray) -> dict[str, dict]:
-    """:func:`schedules` of any ``(30,)`` band exposures (e.g. a plan with another longest band,
-    ``benchmarks/capture_time_sensitivity.py``)."""
-    exposures = np.asarray(exposures_s, np.float64)
-    noisiest = np.argsort(-exposures)
-    repeats = 0
-    while (
-        fewest_images(exposures, repeat_bands=noisiest[: repeats + 1]).n_images <= 10
-        and repeats < exposures.size
-    ):
-        repeats += 1
-    plans = {
-        "8_images": schedule_bands(exposures, 8),
-        "fewest_images": fewest_images(exposures),
-        "10_images": schedule_bands(
-            exposures, 10, repeat_bands=noisiest[:repeats], image_limit_s=exposures.max()
-        ),
-    }
-    out = {
-        name: {
-            "images": [list(map(int, image)) for image in plan.images],
-            "n_images": plan.n_images,
-            "total_s": plan.total_s,
-            "increase_pct": 100 * plan.increase,
-            "optimal": plan.optimal,
-        }
-        for name, plan in plans.items()
-    }
-    out["10_images"]["repeated_bands_nm"] = THESIS_BANDS_NM[noisiest[:repeats]].tolist()
-    out["band_exposures_sum_s"] = float(exposures.sum())
-    out["rgb_set_s"] = float(sum(THESIS_RGB_EXPOSURES_S))
-    return out
 
 
 @dataclass(frozen=True)

@@ -4,8 +4,9 @@ both (twin.devices.dome_devices)."""
 import numpy as np
 import pytest
 
+from hwbridge.dome_plans import DomeCameraIds, DomeExposures, dome_run
 from hwbridge.errors import BridgeInputError
-from hwbridge.plans import chart_photographs, dome_run, plan_start_times_s
+from hwbridge.plans import chart_photographs, plan_start_times_s
 from hwbridge.session import run_session
 from twin.components.lamps import HMILamp
 from twin.devices.dome_devices import DomeDevices
@@ -46,14 +47,16 @@ def _record_sets(device, calls):
 def test_a_dome_plan_runs_on_the_simulated_and_the_real_devices(tmp_path, backend):
     if backend == "real":
         pytest.importorskip("thorlabs_apt_protocol")  # the stage driver's extra
+    exposures = DomeExposures(  # one RGB exposure, one band per LED
+        rgb_hdr_s=(0.05,),
+        bands_nm=(450.0, 550.0),
+        band_s=(0.1, 0.1),
+        schedule=((0,), (1,)),
+        all_leds_s={"rgb0": 0.05, "k4": 0.1},
+        reference_band_nm=550.0,
+    )
     plan = dome_run(
-        ["rgb0"],
-        "k4",
-        stage_positions=2,
-        leds=3,
-        rgb_exposure_s=0.05,
-        spectral_exposure_s=0.1,
-        spectral_bands_nm=[450.0, 550.0],
+        DomeCameraIds(("rgb0",), "k4"), exposures, stage_positions=[0, 1], leds=[0, 1, 2]
     )
     ports = EMULATED_PORTS if backend == "real" else {}
     recipe = DomeDevices.for_rig(
