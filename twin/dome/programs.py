@@ -279,6 +279,7 @@ class DomeCaptureProgram(ProgramCapture):
             "leds": len({s.get("light_id", -1) for s in self.plan} - {-1, -2}),
             "renders": len(renders),
             "frame_size": f"{side} x {side} px",
+            "spp": self.rig["spp"],
             "estimated_duration_s": duration_s,
             "estimated_duration_h": duration_s / 3600,
             "storage_mb": len(self.plan) * per_frame / 1e6,

@@ -244,7 +244,8 @@ class CaptureProgram(ProgramCapture):
 
     def dry_run(self) -> dict[str, object]:
         """The plan in numbers, capturing nothing: steps, frames per camera and per kind,
-        views, frame size, the estimated duration (the rig's timing,
+        views, frame size, samples per pixel of the renders (where it renders), the estimated
+        duration (the rig's timing,
         :func:`twin.gonio.capture_time.estimate_plan_s`) and the storage the frames and their
         index take uncompressed (the store compresses them)."""
         devices = self.devices()
@@ -264,6 +265,7 @@ class CaptureProgram(ProgramCapture):
             "kinds": dict(Counter(step["kind"] for step in self.plan)),
             "views": len({step.get("view_id", -1) for step in self.plan} - {-1}),
             "frame_size": f"{height} x {width} px",
+            **({"spp": self.rig["spp"]} if "spp" in self.rig else {}),
             "estimated_duration_s": duration_s,
             "estimated_duration_h": duration_s / 3600,
             "storage_mb": storage / 1e6,
