@@ -1,4 +1,4 @@
-"""Capture programs of the simulated LED dome (thesis 10.2-10.4), rendered by Mitsuba.
+"""Capture programs of the simulated LED dome (thesis 10.2-10.4), every frame rendered.
 
 Two programs, as on the real rig (plans: :mod:`hwbridge.dome_plans`; store layout:
 :mod:`hwbridge.dome_layout`):

@@ -1,7 +1,7 @@
 """Light transport of a rig scene at wavelength nodes, with the spectra in closed form.
 
-The rigs light a sample with one lamp (a point source, or a distant light for the truth) and
-photograph it through narrow bands. Every light path's contribution is a geometric factor times
+The rigs light a sample with one lamp (a point source, or a distant light for the truth), or
+with LEDs that share one spectrum (the dome), and photograph it through narrow bands. Every light path's contribution is a geometric factor times
 the spectral factors of the surfaces it meets: a Lambertian base contributes its reflectance
 :math:`\\rho_k(\\lambda)`, the dielectric coating of a glossy part (constant index 1.5) a factor
 independent of wavelength, a metal its Fresnel reflectance. The materials' reflectances are
@@ -20,7 +20,8 @@ paths: tens of percent of Monte Carlo noise per pixel and band at 64 samples, wh
 leave none.
 
 The integrator is matched to the scene: direct lighting by emitter sampling (one shadow ray to
-the delta light), the bounces by sampling the BSDF, pixel positions stratified on a grid of
+the delta light; to every lamp of a group of point lights at the first surface, to one lamp
+chosen at random after a bounce), the bounces by sampling the BSDF, pixel positions stratified on a grid of
 :func:`twin.render.spectra.rendered_spp` samples. Random numbers come from a PCG32 stream per
 pixel seeded by ``seed``: the same seed gives the same image whatever the thread count.
 
