@@ -1,13 +1,13 @@
 """Light transport of a rig scene at wavelength nodes, with the spectra in closed form.
 
 The rigs light a sample with one lamp (a point source, or a distant light for the truth), or
-with LEDs that share one spectrum (the dome), and photograph it through narrow bands. Every light path's contribution is a geometric factor times
-the spectral factors of the surfaces it meets: a Lambertian base contributes its reflectance
-:math:`\\rho_k(\\lambda)`, the dielectric coating of a glossy part (constant index 1.5) a factor
-independent of wavelength, a metal its Fresnel reflectance. The materials' reflectances are
-designed on ``MATERIAL_GRID`` (380-780 nm every 5 nm, linear in between and constant beyond,
-:mod:`twin.materials.builders`), so a path that meets one Lambertian surface is exactly linear
-between those nodes.
+with LEDs that share one spectrum (the dome), and photograph it through narrow bands. Every
+light path's contribution is a geometric factor times the spectral factors of the surfaces it
+meets: a Lambertian base contributes its reflectance :math:`\\rho_k(\\lambda)`, the dielectric
+coating of a glossy part (constant index 1.5) a factor independent of wavelength, a metal its
+Fresnel reflectance. The materials' reflectances are designed on ``MATERIAL_GRID`` (380-780 nm
+every 5 nm, linear in between and constant beyond, :mod:`twin.materials.builders`), so a path
+that meets one Lambertian surface is exactly linear between those nodes.
 
 :class:`NodeScene` therefore traces each path once and evaluates its spectrum at the 81 nodes:
 Mitsuba's BSDFs give the geometric factors of each lobe (the parts carry stand-in BSDFs of unit
@@ -21,9 +21,10 @@ leave none.
 
 The integrator is matched to the scene: direct lighting by emitter sampling (one shadow ray to
 the delta light; to every lamp of a group of point lights at the first surface, to one lamp
-chosen at random after a bounce), the bounces by sampling the BSDF, pixel positions stratified on a grid of
-:func:`twin.render.spectra.rendered_spp` samples. Random numbers come from a PCG32 stream per
-pixel seeded by ``seed``: the same seed gives the same image whatever the thread count.
+chosen at random after a bounce), the bounces by sampling the BSDF, pixel positions stratified
+on a grid of :func:`twin.render.spectra.rendered_spp` samples. Random numbers come from a PCG32
+stream per pixel seeded by ``seed``: the same seed gives the same image whatever the thread
+count.
 
 References
 ----------
