@@ -9,7 +9,7 @@ import json
 import time
 
 from benchmarks.common import machine_description, peak_rss_mib
-from twin.dome.render import dome_rates
+from twin.dome.render import DOME_SPP, dome_rates
 from twin.gonio.render import GONIO_SPP, GonioScene
 from twin.materials import load_material
 from twin.render.variant import activate
@@ -45,7 +45,7 @@ def main() -> None:
                 _best_of(lambda s=spp, scene=scene: scene.part_rates(pose, pixels=256, spp=s)),
                 3,
             )
-        results[f"dome_rgb_frame_256px_{name}_spp64_s"] = round(
+        results[f"dome_rgb_frame_256px_{name}_spp{DOME_SPP}_s"] = round(
             _best_of(
                 lambda m=material: dome_rates(dome, m, stage_deg=0, led=120, camera=6, pixels=256)
             ),

@@ -320,8 +320,8 @@ def capture(
         typer.Option(
             min=1,
             max=65536,
-            help="gonio-run, dome programs: samples per pixel of the renders (gonio-run: 16 "
-            "stratified, twin.gonio.render.GONIO_SPP; dome programs: 64).",
+            help="gonio-run, dome programs: samples per pixel of the renders (default 16 "
+            "stratified: twin.gonio.render.GONIO_SPP, twin.dome.render.DOME_SPP).",
         ),
     ] = None,
     stage_positions: Annotated[

@@ -1,13 +1,13 @@
 """Light transport of a rig scene at wavelength nodes, with the spectra in closed form.
 
-The rigs light a sample with one lamp (a point source, or a distant light for the truth) and
-photograph it through narrow bands. Every light path's contribution is a geometric factor times
-the spectral factors of the surfaces it meets: a Lambertian base contributes its reflectance
-:math:`\\rho_k(\\lambda)`, the dielectric coating of a glossy part (constant index 1.5) a factor
-independent of wavelength, a metal its Fresnel reflectance. The materials' reflectances are
-designed on ``MATERIAL_GRID`` (380-780 nm every 5 nm, linear in between and constant beyond,
-:mod:`twin.materials.builders`), so a path that meets one Lambertian surface is exactly linear
-between those nodes.
+The rigs light a sample with one lamp (a point source, or a distant light for the truth), or
+with LEDs that share one spectrum (the dome), and photograph it through narrow bands. Every
+light path's contribution is a geometric factor times the spectral factors of the surfaces it
+meets: a Lambertian base contributes its reflectance :math:`\\rho_k(\\lambda)`, the dielectric
+coating of a glossy part (constant index 1.5) a factor independent of wavelength, a metal its
+Fresnel reflectance. The materials' reflectances are designed on ``MATERIAL_GRID`` (380-780 nm
+every 5 nm, linear in between and constant beyond, :mod:`twin.materials.builders`), so a path
+that meets one Lambertian surface is exactly linear between those nodes.
 
 :class:`NodeScene` therefore traces each path once and evaluates its spectrum at the 81 nodes:
 Mitsuba's BSDFs give the geometric factors of each lobe (the parts carry stand-in BSDFs of unit
@@ -20,9 +20,11 @@ paths: tens of percent of Monte Carlo noise per pixel and band at 64 samples, wh
 leave none.
 
 The integrator is matched to the scene: direct lighting by emitter sampling (one shadow ray to
-the delta light), the bounces by sampling the BSDF, pixel positions stratified on a grid of
-:func:`twin.render.spectra.rendered_spp` samples. Random numbers come from a PCG32 stream per
-pixel seeded by ``seed``: the same seed gives the same image whatever the thread count.
+the delta light; to every lamp of a group of point lights at the first surface, to one lamp
+chosen at random after a bounce), the bounces by sampling the BSDF, pixel positions stratified
+on a grid of :func:`twin.render.spectra.rendered_spp` samples. Random numbers come from a PCG32
+stream per pixel seeded by ``seed``: the same seed gives the same image whatever the thread
+count.
 
 References
 ----------
@@ -60,6 +62,7 @@ __all__ = [
     "ParallelCamera",
     "PinholeRays",
     "PointLight",
+    "PointLights",
     "node_weights",
 ]
 
@@ -92,6 +95,15 @@ class PointLight:
     ``position_m`` in the scene's frame."""
 
     position_m: np.ndarray
+
+
+@dataclass(frozen=True)
+class PointLights:
+    """Isotropic point lamps of unit intensity each (W/sr per nm, every wavelength) at the rows
+    of ``positions_m`` ``(n, 3)`` in the scene's frame, lit together: the transport is the sum
+    of theirs, every lamp sampled at every path vertex (no light-selection noise)."""
+
+    positions_m: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -235,7 +247,7 @@ class NodeScene:
     def transport(
         self,
         camera: PinholeRays | ParallelCamera,
-        light: PointLight | DistantLight,
+        light: PointLight | PointLights | DistantLight,
         *,
         spp: int = 4,
         seed: int = 0,
@@ -249,7 +261,7 @@ class NodeScene:
         camera
             Where the rays start and go (:class:`PinholeRays`, :class:`ParallelCamera`).
         light
-            The scene's one light.
+            The scene's light (or lights of one spectrum, :class:`PointLights`).
         spp
             Samples per pixel, stratified: rounded up to a power of 4
             (:func:`twin.render.spectra.rendered_spp`).
@@ -318,14 +330,10 @@ class NodeScene:
             part = dr.gather(mi.UInt32, part_of, dr.reinterpret_array(mi.UInt32, si.shape), active)
             rho = [dr.gather(mi.Float, reflectance, part * count + n, active) for n in range(count)]
             bsdf = si.bsdf()
-            to_light, factor, visible = self._light_sample(si, light, active)
-            lit = [
-                dr.select(visible, bsdf.eval(ctx, si, to_light, visible)[0], 0.0) * factor
-                for ctx in lobes
-            ]
-            glossy = self._glossy_spectrum(si, to_light, part, active)
+            chooser = rng if depth > 0 else None  # light after a bounce: one lamp of a group
+            diffuse, glossy = self._direct(si, bsdf, part, light, active, lobes, chooser)
             for n in range(count):
-                radiance[n] += throughput[n] * (lit[0] * rho[n] + lit[1] * glossy[n])
+                radiance[n] += throughput[n] * (diffuse * rho[n] + glossy[min(n, len(glossy) - 1)])
             if depth == bounces:
                 break
             sampled, _ = bsdf.sample(
@@ -340,34 +348,73 @@ class NodeScene:
                 dr.select(active, bsdf.eval(ctx, si, sampled.wo, active)[0] / sampled.pdf, 0.0)
                 for ctx in lobes
             ]
-            glossy = self._glossy_spectrum(si, sampled.wo, part, active)
+            glossy = self._glossy_spectrum(si, sampled.wo, part, active) or [1.0]
             for n in range(count):
-                throughput[n] *= weight[0] * rho[n] + weight[1] * glossy[n]
+                throughput[n] *= weight[0] * rho[n] + weight[1] * glossy[min(n, len(glossy) - 1)]
             si = scene.ray_intersect(si.spawn_ray(si.to_world(sampled.wo)), active)
             active &= si.is_valid()
         return radiance
 
-    def _light_sample(self, si, light, active):
-        """Direction to the light in the local frame, the light's factor (inverse square
-        distance for a point, one for a distant light) and whether the light is visible."""
-
+    def _direct(self, si, bsdf, part, light, active, lobes, chooser=None):
+        """Light arriving straight from the lamps, summed over them: the diffuse lobe's
+        geometric factor and the glossy lobe's value at the nodes (one value for all nodes
+        where no metal is in the scene). With a random ``chooser`` (PCG32) a group of
+        :class:`PointLights` is sampled by one lamp chosen uniformly, its light times their
+        number: unbiased, for the weak light after a bounce."""
+        if isinstance(light, DistantLight):
+            return self._lit(si, bsdf, part, active, lobes, direction=_vector(light.direction))
         if isinstance(light, PointLight):
             position = _vector(light.position_m, mi.Point3f)
+            return self._lit(si, bsdf, part, active, lobes, position=position)
+        positions = mi.Float(np.asarray(light.positions_m, np.float32).ravel())
+        lamps = dr.opaque(mi.UInt32, len(light.positions_m))
+        if chooser is not None:
+            index = dr.minimum(mi.UInt32(chooser.next_float32() * mi.Float(lamps)), lamps - 1)
+            position = dr.gather(mi.Point3f, positions, index)
+            diffuse, glossy = self._lit(si, bsdf, part, active, lobes, position=position)
+            scale = mi.Float(lamps)
+            return diffuse * scale, [value * scale for value in glossy]
+
+        def add_lamp(index, diffuse, glossy):
+            position = dr.gather(mi.Point3f, positions, index)
+            lit_diffuse, lit_glossy = self._lit(si, bsdf, part, active, lobes, position=position)
+            summed = [a + b for a, b in zip(glossy, lit_glossy, strict=True)]
+            return index + 1, diffuse + lit_diffuse, summed
+
+        width = dr.width(active)
+        nodes = 1 if self._metal_index is None else NODES_NM.size
+        state = (dr.zeros(mi.UInt32, width), dr.zeros(mi.Float, width))
+        state += ([dr.zeros(mi.Float, width) for _ in range(nodes)],)
+        _, diffuse, glossy = dr.while_loop(
+            state, lambda index, *_: index < lamps, add_lamp, label="lamps"
+        )
+        return diffuse, glossy
+
+    def _lit(self, si, bsdf, part, active, lobes, *, position=None, direction=None):
+        """:meth:`_direct` of one lamp: a point lamp at ``position`` (factor the inverse square
+        distance) or a distant one towards ``direction`` (factor one), if visible."""
+        if position is not None:
             offset = position - si.p
             distance_squared = dr.squared_norm(offset)
             direction = offset * dr.rsqrt(distance_squared)
             shadow, factor = si.spawn_ray_to(position), dr.rcp(distance_squared)
         else:
-            direction = _vector(light.direction)
             shadow, factor = si.spawn_ray(direction), 1.0
         visible = active & ~self._scene.ray_test(shadow, active)
-        return si.to_local(direction), factor, visible
+        to_light = si.to_local(direction)
+        diffuse, glossy = (
+            dr.select(visible, bsdf.eval(ctx, si, to_light, visible)[0], 0.0) * factor
+            for ctx in lobes
+        )
+        spectrum = self._glossy_spectrum(si, to_light, part, active)
+        return diffuse, [glossy * value for value in spectrum] if spectrum else [glossy]
 
-    def _glossy_spectrum(self, si, wo, part, active) -> list:
+    def _glossy_spectrum(self, si, wo, part, active) -> list | None:
         """Spectral factor of the glossy lobe at the nodes: one for a dielectric coating, the
-        Fresnel reflectance at the half vector for a metal (as Mitsuba's ``roughconductor``)."""
+        Fresnel reflectance at the half vector for a metal (as Mitsuba's ``roughconductor``);
+        ``None`` (one at every node) in a scene without metal."""
         if self._metal_index is None:
-            return [1.0] * NODES_NM.size
+            return None
 
         eta, k, is_metal = self._metal_index
         count = NODES_NM.size

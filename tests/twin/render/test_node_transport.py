@@ -19,6 +19,9 @@ from twin.render.node_transport import (
     DistantLight,
     NodeScene,
     ParallelCamera,
+    PinholeRays,
+    PointLight,
+    PointLights,
     node_weights,
 )
 from twin.render.scene import render_view
@@ -139,3 +142,31 @@ def test_a_seed_gives_the_same_image_on_any_number_of_threads():
     again = scene.part_rates(pose, pixels=48, spp=16, seed=3)
     np.testing.assert_array_equal(one, again)
     assert not np.array_equal(one, scene.part_rates(pose, pixels=48, spp=16, seed=4))
+
+
+@pytest.mark.render
+def test_a_group_of_point_lights_renders_as_the_sum_of_its_lamps():
+    """The Lego bricks on the holder under three lamps at once against the sum of three
+    one-lamp renders: equal (float rounding) in the direct light, where every lamp is sampled;
+    with a bounce, where one lamp is chosen at random, equal in the image's mean to 1.5 %
+    (measured 0.4 %: the random choice's noise in the light after a bounce)."""
+    scene = NodeScene(holder_parts() + list(load_material("lego").parts))
+    camera = PinholeRays(
+        np.array([0.0, 0.0, 1.0]),
+        np.array([-1.0, 0, 0]),
+        np.array([0, 1.0, 0]),
+        np.array([0, 0, -1.0]),
+        0.05,
+        32,
+    )
+    lamps = np.array([[0.3, 0.2, 0.8], [-0.4, 0.1, 0.7], [0.0, -0.5, 0.6]])
+    for bounces in (0, 1):
+        group = scene.transport(camera, PointLights(lamps), spp=16, seed=3, bounces=bounces)
+        single = sum(
+            scene.transport(camera, PointLight(lamp), spp=16, seed=3, bounces=bounces)
+            for lamp in lamps
+        )
+        if bounces == 0:
+            np.testing.assert_allclose(group, single, rtol=1e-5, atol=1e-6 * single.max())
+        else:
+            assert group.mean() == pytest.approx(single.mean(), rel=0.015)
