@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from collections import Counter
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -61,9 +61,6 @@ from twin.materials import available_materials, load_material
 from twin.rigs.dome_geometry import dome_geometry
 from twin.rigs.rig_config import DomeConfig, load_rig
 from twin.sensor.model import Sensor
-
-if TYPE_CHECKING:
-    pass
 
 __all__ = [
     "DEFAULT_SPP",
