@@ -31,19 +31,23 @@ def timed(function: Callable[[], Result]) -> tuple[Result, float]:
 
 
 def add_dome_size_arguments(parser: argparse.ArgumentParser) -> None:
-    """The reduced dome capture's size as options, 2 x 24 x 3 at 64 texels and 64 spp by
-    default (``twin.dome.programs.DomeCaptureSize``)."""
+    """The reduced dome capture's size as options, 2 x 24 x 3 at 64 texels by default, at the
+    capture's own samples per pixel unless ``--spp`` is given
+    (``twin.dome.programs.DomeCaptureSize``)."""
     for name, default in (
         ("--stage-positions", 2),
         ("--leds", 24),
         ("--rgb-cameras", 3),
         ("--texels", 64),
-        ("--spp", 64),
+        ("--spp", None),
     ):
         parser.add_argument(name, type=int, default=default)
 
 
 def dome_size_settings(arguments: argparse.Namespace) -> dict[str, int]:
-    """The options of :func:`add_dome_size_arguments`, by ``DomeCaptureSize``'s field names."""
+    """The options of :func:`add_dome_size_arguments` that are set, by ``DomeCaptureSize``'s
+    field names."""
     names = ("stage_positions", "leds", "rgb_cameras", "texels", "spp")
-    return {name: getattr(arguments, name) for name in names}
+    return {
+        name: getattr(arguments, name) for name in names if getattr(arguments, name) is not None
+    }

@@ -2,9 +2,10 @@
 
 Renders (Mitsuba, wall time recorded; ``spectwin capture --dry-run`` says how long the real rig
 takes) a ``dome-calibration`` and a ``dome-run`` of ``--material`` at ``--stage-positions`` x
-``--leds`` x ``--rgb-cameras``, ``--texels`` and ``--spp`` (default 2 x 24 x 3 at 64 texels, 64
-spp), then times ``calibrate_dome`` and ``process_dome`` with numpy's BLAS held to ``--threads``
-threads, and evaluates the BTF against the twin's truth (Eq. 6.8, Delta E94; not timed).
+``--leds`` x ``--rgb-cameras``, ``--texels`` and ``--spp`` (default 2 x 24 x 3 at 64 texels and
+the capture's spp), then times ``calibrate_dome`` and ``process_dome`` with numpy's BLAS held to
+``--threads`` threads, and evaluates the BTF against the twin's truth (Eq. 6.8, Delta E94; not
+timed).
 
 Run: .venv/bin/python -m benchmarks.dome_processing [--out DIR] [--threads 2]
 (``--out`` keeps the stores; an existing capture there is reused.)

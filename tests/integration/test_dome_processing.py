@@ -32,7 +32,7 @@ pytestmark = pytest.mark.render
 
 ROOT = Path(__file__).resolve().parents[2]
 SEED = 11
-SIZE = DomeCaptureSize(stage_positions=2, leds=5, rgb_cameras=3, texels=32, spp=64)
+SIZE = DomeCaptureSize(stage_positions=2, leds=5, rgb_cameras=3, texels=32)
 MATERIALS = ("colorchecker16", "lego")
 
 NO_RENDERER = textwrap.dedent(

@@ -185,7 +185,7 @@ def _program_of(
     material: str,
     pixels: int,
     window: int | None,
-    spp: int,
+    spp: int | None,
     seed: int,
     fault_rate: float,
     dry_run: bool,
@@ -194,13 +194,18 @@ def _program_of(
     """The capture program, every setting checked (nothing is written)."""
     if program in _DOME:
         from twin.dome.programs import (
+            DEFAULT_SPP,
             DomeCaptureSize,
             dome_calibration_program,
             dome_run_program,
         )
 
         size = DomeCaptureSize(
-            dome["stage_positions"], dome["leds"], dome["rgb_cameras"], dome["texels"], spp
+            dome["stage_positions"],
+            dome["leds"],
+            dome["rgb_cameras"],
+            dome["texels"],
+            DEFAULT_SPP if spp is None else spp,
         )
         if program is Program.dome_run:
             return dome_run_program(material, size=size, seed=seed, fault_rate=fault_rate), {}
@@ -218,6 +223,7 @@ def _program_of(
         return gonio_calibration_program(seed=seed), {}
     from recon.calibration.gonio import GonioCalibration
     from twin.gonio.capture import gonio_measurement_program
+    from twin.gonio.render import GONIO_SPP
 
     if window is not None and window > pixels:
         fail(f"--window {window} is larger than --pixels {pixels}; expected at most {pixels}")
@@ -239,7 +245,12 @@ def _program_of(
         _, exposures_s = band_exposures_s(load_rig("gonio"))
         notes["exposures"] = "the rig model's band plan (no --calibration given)"
     built = gonio_measurement_program(
-        exposures_s, material=material, pixels=pixels, window=window, spp=spp, seed=seed
+        exposures_s,
+        material=material,
+        pixels=pixels,
+        window=window,
+        spp=GONIO_SPP if spp is None else spp,
+        seed=seed,
     )
     return built, notes
 
@@ -308,11 +319,14 @@ def capture(
         ),
     ] = None,
     spp: Annotated[
-        int,
+        int | None,
         typer.Option(
-            min=1, max=65536, help="gonio-run, dome programs: samples per pixel of the renders."
+            min=1,
+            max=65536,
+            help="gonio-run, dome programs: samples per pixel of the renders (default 16 "
+            "stratified: twin.gonio.render.GONIO_SPP, twin.dome.render.DOME_SPP).",
         ),
-    ] = 64,
+    ] = None,
     stage_positions: Annotated[
         int,
         typer.Option(min=1, max=24, help="dome-run: the first stage positions (15 deg steps)."),

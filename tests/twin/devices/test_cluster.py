@@ -208,11 +208,16 @@ def test_workers_of_one_session_fill_disjoint_steps_of_one_store(tmp_path):
     coordinator = open_session_store(path, plan, devices(), rig={}, backend="sim", seed=1)
     tasks = view_tasks(plan, coordinator.pending_steps())
     assert [len(task) for task in tasks] == [6, 33, 33]
-    for task in tasks[::-1]:  # each "worker" opens the store and builds its own devices
-        capture_steps(CaptureStore.open(path), task, devices(), seed=1, check_complete=False)
+    for task in tasks[::-1]:  # each "worker" opens the store, builds its own devices, writes
+        # its frames and returns their records; the coordinator writes index and flags
+        taken = capture_steps(CaptureStore.open(path), task, devices(), seed=1, record=False)
+        assert [step for step, _ in taken] == task
+        assert set(task) <= set(coordinator.pending_steps())  # frames written, not yet recorded
+        steps, records = zip(*taken, strict=True)
+        coordinator.write_index(steps, records)
+        coordinator.mark_done(steps, check_complete=False)
     assert not coordinator.complete and coordinator.pending_steps() == []
     assert coordinator.refresh_complete() and coordinator.complete
-    assert coordinator.one_chunk_per_frame
     assert list(coordinator.index("k4")["kind"]) == [step["kind"] for step in plan]
 
 
