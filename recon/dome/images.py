@@ -143,7 +143,11 @@ def white_balanced_rgb(
     in the order of the calibration's exposure set (module docstring). Texels saturated in
     every exposure (highlights) are NaN."""
     image = rgb_linear_image(calibration.rgb[camera], frames)
-    texture = extract_texture(image, corners_xy, resolution=grid.texels)
+    saturated = ~np.isfinite(image)
+    texture = extract_texture(np.where(saturated, 0.0, image), corners_xy, resolution=grid.texels)
+    if saturated.any():  # a texel that samples a pixel saturated in every exposure is one too
+        touched = extract_texture(saturated.astype(float), corners_xy, resolution=grid.texels)
+        texture = np.where(touched > 0, np.nan, texture)
     white = calibration.rgb_white[camera][calibration.led_index(led)]
     return texture / (white * grid.irradiance(led_position_m)[..., None])
 
