@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 from distributed import Client, LocalCluster
 
-from benchmarks.common import machine_description
+from benchmarks.common import machine_description, timed
 from hwbridge.store import CaptureStore
 from recon.calibration.gonio import GonioCalibration
 from recon.calibration.spectral import HMI_FLICKER_PERIOD_S
@@ -45,12 +45,6 @@ from twin.materials import load_material
 from twin.render.variant import activate
 from twin.rigs.hemisphere import SATTLER_RINGS
 from twin.rigs.rig_config import load_rig
-
-
-def _timed(function):
-    started = time.perf_counter()
-    result = function()
-    return result, round(time.perf_counter() - started, 2)
 
 
 def _cpu_s() -> float:
@@ -142,9 +136,9 @@ def main() -> None:
         )
 
     cpu_s = _cpu_s()
-    serial, serial_s = _timed(lambda: capture("serial", None))
+    serial, serial_s = timed(lambda: capture("serial", None))
     serial_cpu_s = _cpu_s() - cpu_s
-    serial_btf, serial_process_s = _timed(lambda: process("serial", None))
+    serial_btf, serial_process_s = timed(lambda: process("serial", None))
     frames = serial.frames(CAMERA_ID).shape[0]
     results["frames"] = frames
     results["serial"] = {
@@ -162,9 +156,9 @@ def main() -> None:
         with _cluster(workers) as client:
             start_s = round(time.perf_counter() - started, 2)
             before = client.run(_cpu_s)
-            cluster, cluster_s = _timed(lambda name=name, client=client: capture(name, client))
+            cluster, cluster_s = timed(lambda name=name, client=client: capture(name, client))
             busy_s = sum(client.run(_cpu_s).values()) - sum(before.values())
-            btf, process_s = _timed(lambda name=name, client=client: process(name, client))
+            btf, process_s = timed(lambda name=name, client=client: process(name, client))
         results["clusters"].append(
             {
                 "workers": workers,

@@ -21,8 +21,13 @@ import tempfile
 import time
 from pathlib import Path
 
-from benchmarks.common import machine_description, peak_rss_mib
-from twin.dome.programs import DEFAULT_SPP, DomeCaptureSize, dome_run_program
+from benchmarks.common import (
+    add_dome_size_arguments,
+    dome_size_settings,
+    machine_description,
+    peak_rss_mib,
+)
+from twin.dome.programs import DomeCaptureSize, dome_run_program
 
 
 def _cpu_s() -> float:
@@ -37,24 +42,14 @@ def _size_mb(path: Path) -> float:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--materials", nargs="+", default=["colorchecker16", "lego"])
-    parser.add_argument("--stage-positions", type=int, default=2)
-    parser.add_argument("--leds", type=int, default=24)
-    parser.add_argument("--rgb-cameras", type=int, default=3)
-    parser.add_argument("--texels", type=int, default=64)
-    parser.add_argument("--spp", type=int, default=DEFAULT_SPP)
+    add_dome_size_arguments(parser)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, default=None, help="Keep the stores here.")
     arguments = parser.parse_args()
-    size = DomeCaptureSize(
-        arguments.stage_positions,
-        arguments.leds,
-        arguments.rgb_cameras,
-        arguments.texels,
-        arguments.spp,
-    )
+    size = DomeCaptureSize(**dome_size_settings(arguments))
     folder = arguments.out or Path(tempfile.mkdtemp(prefix="dome_capture_"))
     folder.mkdir(parents=True, exist_ok=True)
-    warm = DomeCaptureSize(1, 1, 1, arguments.texels, arguments.spp)
+    warm = DomeCaptureSize(1, 1, 1, size.texels, size.spp)
     dome_run_program(arguments.materials[0], size=warm).run(folder / "warm.capture.zarr")
     results = {}
     for material in arguments.materials:

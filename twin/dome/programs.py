@@ -347,6 +347,7 @@ def _program(
         "led_current_ma": LED_FULL_SCALE_MA,
         "led_spectrum": _spectrum(PhosphorWhiteLED().intensity(FINE_GRID).values),
         "white_reflectance": _spectrum(zenith_white_reflectance(FINE_GRID).values),
+        "rgb_response": _spectrum(Sensor(config.rgb_camera).electron_responses(FINE_GRID).values),
         "geometry": geometry_metadata(
             config, parts.cameras.all, frame, stage_views=views, tilts_deg=tilts
         ),
@@ -381,7 +382,11 @@ def dome_run_program(
         material=material,
         seed=seed,
         fault_rate=fault_rate,
-        settings={"material": material, "stage_positions": size.stage_positions},
+        settings={
+            "material": material,
+            "sample_size_m": load_material(material).size_m,
+            "stage_positions": size.stage_positions,
+        },
     )
 
 
