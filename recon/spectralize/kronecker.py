@@ -96,18 +96,15 @@ def _equal_shifts(shifts: np.ndarray, columns: list) -> list[tuple[float, list]]
     return runs
 
 
-def _compressed(block: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray]:
-    """Right-hand sides ``block`` (n, c) of one matrix as ``block @ W`` with orthonormal
-    ``W`` (c, r): the directions whose singular value exceeds ``rtol`` times the largest.
-    The dropped part is below the solver tolerance, so solving ``r`` systems instead of ``c``
-    changes nothing measurable; with point spectra the ``K - 3`` metameric-black columns share
-    one matrix and their data has the (often low) rank of the measured spectra."""
-    gram = block.T @ block
+def _compressed(gram: np.ndarray, rtol: float) -> np.ndarray:
+    """Orthonormal directions ``W`` (c, r) that keep of right-hand sides with Gram matrix
+    ``gram`` (c, c) of one matrix the part whose singular value exceeds ``rtol`` times the
+    largest. The dropped part is below the solver tolerance, so solving ``r`` systems instead
+    of ``c`` changes nothing measurable; with point spectra the ``K - 3`` metameric-black
+    columns share one matrix and their data has the (often low) rank of the measured spectra."""
     energies, directions = np.linalg.eigh(gram)
     singular = np.sqrt(np.clip(energies, 0.0, None))
-    keep = singular > rtol * max(float(singular.max()), np.finfo(float).tiny)
-    weights = directions[:, keep]
-    return block @ weights, weights
+    return directions[:, singular > rtol * max(float(singular.max()), np.finfo(float).tiny)]
 
 
 def _column_norms(block: np.ndarray) -> np.ndarray:
@@ -133,34 +130,41 @@ def _block_cg(
     column and whether all converged."""
     solution = np.array(start, dtype=np.float64)
     iterations = np.zeros(rhs.shape[1], dtype=int)
-    residual = rhs - (spatial @ solution + solution * shifts)
+    shifted = bool(np.any(shifts))
+    residual = rhs - spatial @ solution
+    if shifted:
+        residual -= solution * shifts
     columns = np.flatnonzero(_column_norms(residual) > bound)
     current, residual = solution[:, columns], residual[:, columns]
-    direction = preconditioned = preconditioner(residual, columns)
+    preconditioned = preconditioner(residual, columns)
+    direction = preconditioned.copy()
     product = np.einsum("ij,ij->j", residual, preconditioned)
+    # Updates run in place (``image`` and ``direction`` hold their step-scaled values), since
+    # every fresh (n, c) array costs page faults at a megapixel.
     for _ in range(max_iterations):
         if not columns.size:
             break
         image = spatial @ direction
-        image += direction * shifts[columns]
+        if shifted:
+            image += direction * shifts[columns]
         step = product / np.einsum("ij,ij->j", direction, image)
-        current += step * direction
-        previous = residual
-        residual = residual - step * image
+        direction *= step
+        current += direction
+        image *= step
+        residual -= image
         iterations[columns] += 1
         active = _column_norms(residual) > bound
         if not active.all():  # retire the converged columns
             solution[:, columns[~active]] = current[:, ~active]
             columns, current, residual = columns[active], current[:, active], residual[:, active]
-            previous, direction, product = (
-                previous[:, active],
-                direction[:, active],
-                product[active],
-            )
+            image, direction = image[:, active], direction[:, active]
+            product, step = product[active], step[active]
         preconditioned = preconditioner(residual, columns)
         following = np.einsum("ij,ij->j", residual, preconditioned)
-        beta = (following - np.einsum("ij,ij->j", previous, preconditioned)) / product
-        direction = preconditioned + np.maximum(beta, 0.0) * direction
+        # Polak-Ribiere: (r_new - r_old) . z_new / (r_old . z_old), with r_new - r_old = -image.
+        beta = np.maximum(-np.einsum("ij,ij->j", image, preconditioned) / product, 0.0)
+        direction *= beta / step
+        direction += preconditioned
         product = following
     solution[:, columns] = current
     return solution, iterations, not columns.size
@@ -209,10 +213,13 @@ def solve_kronecker_sum(
     info : KroneckerSolveInfo
     """
     shifts, basis = np.linalg.eigh(spectral)
-    rotated_rhs = rhs @ basis
-    rotated = np.zeros_like(rotated_rhs) if initial is None else initial @ basis
+    # Each run of equal shifts is solved on its compressed directions, columns of
+    # ``projections`` (K, r) in the band space: the right-hand sides ``C @ projection`` and
+    # their Gram matrix come from C's own, so C (n, K) is never rotated as a whole.
+    gram = basis.T @ (rhs.T @ rhs) @ basis
     diagonal = spatial.diagonal()
     iterations = np.zeros(rhs.shape[1], dtype=int)
+    solution = np.zeros_like(rhs)
     hierarchies, solves, pending = 0, 0, []
     # Single-threaded BLAS: CG's many short dot products slow down badly with thread hand-offs.
     with (
@@ -223,18 +230,15 @@ def solve_kronecker_sum(
         # Jacobi groups come first, so that they iterate while the hierarchies are built.
         for group_shift, members in _shift_groups(shifts, float(np.mean(diagonal))):
             # One block per group: each run of equal shifts compressed to its numerical rank.
-            runs = [
-                (run, *_compressed(rotated_rhs[:, run], rtol))
-                for _, run in _equal_shifts(shifts, members)
-            ]
-            block = np.hstack([compressed for _, compressed, _ in runs])
-            start = (
-                np.zeros_like(block)
-                if initial is None
-                else np.hstack([rotated[:, run] @ weights for run, _, weights in runs])
-            )
+            runs = []
+            for _, run in _equal_shifts(shifts, members):
+                weights = _compressed(gram[np.ix_(run, run)], rtol)
+                runs.append((run, weights.shape[1], basis[:, run] @ weights))
+            projection = np.hstack([projection for _, _, projection in runs])
+            block = rhs @ projection
+            start = np.zeros_like(block) if initial is None else initial @ projection
             block_shifts = np.concatenate(
-                [np.full(w.shape[1], max(shifts[run[0]], 0.0)) for run, _, w in runs]
+                [np.full(width, max(shifts[run[0]], 0.0)) for run, width, _ in runs]
             )
             # The group's relative residual, shared equally among its columns.
             bound = rtol * float(np.linalg.norm(block)) / np.sqrt(block.shape[1])
@@ -245,7 +249,10 @@ def solve_kronecker_sum(
                     (spatial + group_shift * sparse.identity(len(diagonal))).tocsr()
                 )
                 hierarchies += 1
-            parts = [p for p in np.array_split(np.arange(block.shape[1]), _PARTS) if p.size]
+            # Interleaved, so that both parts get large and small right-hand sides alike.
+            parts = [
+                np.arange(i, block.shape[1], _PARTS) for i in range(min(_PARTS, block.shape[1]))
+            ]
             futures = [
                 pool.submit(
                     _block_cg,
@@ -261,19 +268,19 @@ def solve_kronecker_sum(
                 )
                 for part in parts
             ]
-            pending.append((runs, futures, len(members)))
+            pending.append((runs, projection, parts, futures, len(members)))
             solves += block.shape[1]
         converged = True
-        for runs, futures, count in pending:
-            results = [future.result() for future in futures]
-            solved = np.hstack([solution for solution, _, _ in results])
-            counts = np.concatenate([steps for _, steps, _ in results])
-            converged &= all(done for _, _, done in results)
+        for runs, projection, parts, futures, count in pending:
+            solved = np.empty((rhs.shape[0], projection.shape[1]))
+            counts = np.empty(projection.shape[1], dtype=int)
+            for part, future in zip(parts, futures, strict=True):
+                solved[:, part], counts[part], done = future.result()
+                converged &= done
+            solution += solved @ projection.T
             offset = 0
-            for run, _, weights in runs:
-                width = weights.shape[1]
-                rotated[:, run] = solved[:, offset : offset + width] @ weights.T
+            for run, width, _ in runs:
                 iterations[run] = counts[offset : offset + width].max(initial=0)
                 offset += width
             advance(count)
-    return rotated @ basis.T, KroneckerSolveInfo(iterations, shifts, hierarchies, solves, converged)
+    return solution, KroneckerSolveInfo(iterations, shifts, hierarchies, solves, converged)

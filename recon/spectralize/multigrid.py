@@ -78,12 +78,25 @@ class BlockVCycle:
             return self.coarse_inverse @ rhs
         level = self.levels[depth]
         x = level.damped_inverse_diagonal * rhs
-        for _ in range(_SWEEPS - 1):
-            x += level.damped_inverse_diagonal * (rhs - level.matrix @ x)
-        x += level.prolongator @ self._cycle(depth + 1, level.restrictor @ (rhs - level.matrix @ x))
-        for _ in range(_SWEEPS):
-            x += level.damped_inverse_diagonal * (rhs - level.matrix @ x)
+        _smooth(level, rhs, x, _SWEEPS - 1)
+        x += level.prolongator @ self._cycle(depth + 1, level.restrictor @ _residual(level, rhs, x))
+        _smooth(level, rhs, x, _SWEEPS)
         return x
+
+
+def _smooth(level: _Level, rhs: np.ndarray, x: np.ndarray, sweeps: int) -> None:
+    """``sweeps`` l1-Jacobi steps on ``x`` in place."""
+    for _ in range(sweeps):
+        correction = _residual(level, rhs, x)
+        correction *= level.damped_inverse_diagonal
+        x += correction
+
+
+def _residual(level: _Level, rhs: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """:math:`b - A_k x` in the array of the product (each fresh tall array costs page faults)."""
+    residual = level.matrix @ x
+    np.subtract(rhs, residual, out=residual)
+    return residual
 
 
 def _smoothed_prolongator(
