@@ -241,11 +241,14 @@ def appearance_neighbours(
     found = np.empty(in_order.shape, dtype=np.int32 if n < 2**31 else np.int64)
     found[order] = in_order
     pixels = np.arange(n, dtype=found.dtype)
-    # Drop each pixel itself (the first hit, unless duplicate points came first).
-    is_self = found == pixels[:, None]
-    drop = np.where(is_self.any(axis=1), np.argmax(is_self, axis=1), candidates)
-    keep = np.arange(candidates + 1)[None, :] != drop[:, None]
-    nearest = found[keep].reshape(n, candidates)
+    # Drop each pixel itself: the first hit, unless duplicate points came first.
+    if np.array_equal(found[:, 0], pixels):
+        nearest = found[:, 1:]
+    else:
+        is_self = found == pixels[:, None]
+        drop = np.where(is_self.any(axis=1), np.argmax(is_self, axis=1), candidates)
+        keep = np.arange(candidates + 1)[None, :] != drop[:, None]
+        nearest = found[keep].reshape(n, candidates)
     neighbours = _apply_link_rule(nearest, k)
     first = np.repeat(pixels, k)
     second = neighbours.ravel()
