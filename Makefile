@@ -12,4 +12,4 @@ test: bootstrap
 	$(VENV_BIN)/python -m pytest -q
 
 lint: bootstrap
-	$(VENV_BIN)/ruff check twin recon hwbridge tests benchmarks
+	$(VENV_BIN)/ruff check .

@@ -2,5 +2,6 @@
 materials (``materials/``).
 
 The files ship inside the installed package and are read through :mod:`importlib.resources`
-(:func:`twin.rigs.yaml_config.scene_folder`); a user's own YAML file is given to the commands by path.
+(:func:`twin.rigs.yaml_config.scene_folder`); a user's own YAML file is given to the commands by
+path.
 """
