@@ -170,6 +170,32 @@ def _block_cg(
     return solution, iterations, not columns.size
 
 
+def _solve_part(
+    spatial: sparse.csr_matrix,
+    rhs: np.ndarray,
+    initial: np.ndarray | None,
+    projection: np.ndarray,
+    shifts: np.ndarray,
+    cycle: BlockVCycle | None,
+    bound: float,
+    max_iterations: int,
+) -> tuple[np.ndarray, np.ndarray, bool]:
+    """One thread's share of a group: the right-hand sides ``rhs @ projection``, conjugate
+    gradients on them (multigrid ``cycle``, or Jacobi where it is ``None``) and the solution's
+    part in band space, ``(n, K)``; with the iterations per column and whether all converged."""
+    block = rhs @ projection
+    start = np.zeros_like(block) if initial is None else initial @ projection
+    if cycle is None:
+        jacobi = spatial.diagonal()[:, None] + shifts[None, :]
+        preconditioner = lambda r, c: r / jacobi[:, c]  # noqa: E731
+    else:
+        preconditioner = lambda r, _c: cycle(r)  # noqa: E731
+    solved, iterations, done = _block_cg(
+        spatial, shifts, block, start, preconditioner, bound, max_iterations
+    )
+    return solved @ projection.T, iterations, done
+
+
 def solve_kronecker_sum(
     spatial: sparse.csr_matrix,
     spectral: np.ndarray,
@@ -213,13 +239,14 @@ def solve_kronecker_sum(
     info : KroneckerSolveInfo
     """
     shifts, basis = np.linalg.eigh(spectral)
-    # Each run of equal shifts is solved on its compressed directions, columns of
-    # ``projections`` (K, r) in the band space: the right-hand sides ``C @ projection`` and
-    # their Gram matrix come from C's own, so C (n, K) is never rotated as a whole.
-    gram = basis.T @ (rhs.T @ rhs) @ basis
-    diagonal = spatial.diagonal()
+    # Each run of equal shifts is solved on its compressed directions, columns of a
+    # ``projection`` (K, r) in band space: the threads form their right-hand sides
+    # ``C @ projection`` themselves, and the Gram matrix of C serves the compression and the
+    # stopping bounds, so C (n, K) is never rotated as a whole.
+    gram = rhs.T @ rhs
+    rotated_gram = basis.T @ gram @ basis
+    mean_diagonal = float(np.mean(spatial.diagonal()))
     iterations = np.zeros(rhs.shape[1], dtype=int)
-    solution = np.zeros_like(rhs)
     hierarchies, solves, pending = 0, 0, []
     # Single-threaded BLAS: CG's many short dot products slow down badly with thread hand-offs.
     with (
@@ -228,56 +255,52 @@ def solve_kronecker_sum(
         ThreadPoolExecutor(_PARTS) as pool,
     ):
         # Jacobi groups come first, so that they iterate while the hierarchies are built.
-        for group_shift, members in _shift_groups(shifts, float(np.mean(diagonal))):
+        for group_shift, members in _shift_groups(shifts, mean_diagonal):
             # One block per group: each run of equal shifts compressed to its numerical rank.
             runs = []
             for _, run in _equal_shifts(shifts, members):
-                weights = _compressed(gram[np.ix_(run, run)], rtol)
+                weights = _compressed(rotated_gram[np.ix_(run, run)], rtol)
                 runs.append((run, weights.shape[1], basis[:, run] @ weights))
             projection = np.hstack([projection for _, _, projection in runs])
-            block = rhs @ projection
-            start = np.zeros_like(block) if initial is None else initial @ projection
             block_shifts = np.concatenate(
                 [np.full(width, max(shifts[run[0]], 0.0)) for run, width, _ in runs]
             )
             # The group's relative residual, shared equally among its columns.
-            bound = rtol * float(np.linalg.norm(block)) / np.sqrt(block.shape[1])
-            if group_shift is None:
-                jacobi = diagonal[:, None] + block_shifts[None, :]
-            else:
+            block_energy = float(np.einsum("kr,kl,lr->", projection, gram, projection))
+            bound = rtol * np.sqrt(max(block_energy, 0.0) / projection.shape[1])
+            cycle = None
+            if group_shift is not None:
                 cycle = BlockVCycle(
-                    (spatial + group_shift * sparse.identity(len(diagonal))).tocsr()
+                    (spatial + group_shift * sparse.identity(spatial.shape[0])).tocsr()
                 )
                 hierarchies += 1
             # Interleaved, so that both parts get large and small right-hand sides alike.
-            parts = [
-                np.arange(i, block.shape[1], _PARTS) for i in range(min(_PARTS, block.shape[1]))
-            ]
+            width = projection.shape[1]
+            parts = [np.arange(i, width, _PARTS) for i in range(min(_PARTS, width))]
             futures = [
                 pool.submit(
-                    _block_cg,
+                    _solve_part,
                     spatial,
+                    rhs,
+                    initial,
+                    projection[:, part],
                     block_shifts[part],
-                    block[:, part],
-                    start[:, part],
-                    (lambda r, c, d=jacobi[:, part]: r / d[:, c])
-                    if group_shift is None
-                    else (lambda r, _c, m=cycle: m(r)),
+                    cycle,
                     bound,
                     max_iterations,
                 )
                 for part in parts
             ]
-            pending.append((runs, projection, parts, futures, len(members)))
-            solves += block.shape[1]
+            pending.append((runs, parts, futures, len(members)))
+            solves += width
+        solution = np.zeros_like(rhs)
         converged = True
-        for runs, projection, parts, futures, count in pending:
-            solved = np.empty((rhs.shape[0], projection.shape[1]))
-            counts = np.empty(projection.shape[1], dtype=int)
+        for runs, parts, futures, count in pending:
+            counts = np.empty(sum(width for _, width, _ in runs), dtype=int)
             for part, future in zip(parts, futures, strict=True):
-                solved[:, part], counts[part], done = future.result()
+                share, counts[part], done = future.result()
+                solution += share
                 converged &= done
-            solution += solved @ projection.T
             offset = 0
             for run, width, _ in runs:
                 iterations[run] = counts[offset : offset + width].max(initial=0)
