@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 from scipy import ndimage
 
+from hwbridge.store import CaptureStore
 from recon.baselines import dong_2016, spectral_a_plus
 from recon.errors import SpectwinInputError
 from recon.metrics import relative_error
@@ -49,6 +50,7 @@ from twin.dome.capture_study import (
     sphere_lit_spectra,
 )
 from twin.dome.exposure_plan import band_schedules
+from twin.dome.programs import DomeCaptureSize
 from twin.dome.setup import (
     BAND_GRID,
     CALIBRATION_LIGHT,
@@ -64,6 +66,7 @@ from twin.rigs.dome_geometry import dome_geometry
 from twin.rigs.hemisphere import direction
 from twin.sensor.white_reference import equalized_exposures_s
 from twin.studies import dome_figures
+from twin.studies.dome_stores import capture_study_stores, store_capture, store_exposure_ratio
 
 __all__ = [
     "DOME_MATERIALS",
@@ -193,6 +196,48 @@ def multi_image(
             "without_spectral_data": errors.summary(slice(10, 20)),
         },
     )
+
+
+STORE_CAPTURE = DomeCaptureSize(stage_positions=1, leds=10, rgb_cameras=3, texels=16)
+"""The study's dome captures by default: one stage position, 10 LEDs spread over the dome (the
+10-image band schedule once), the RGB cameras at 0, 37.5 and 75 degrees and the spectral camera,
+16 texels (a Bayer quad per texel of a 4 cm sample), 64 spp: about 45 renders a material."""
+
+
+def multi_image_from_stores(
+    setup: DomeSetup,
+    run: CaptureStore,
+    calibration: CaptureStore,
+    texels: int,
+    rng: np.random.Generator,
+    *,
+    step: Callable[[str], None] = lambda name: None,
+) -> dict[str, dict[str, dict[str, float]]]:
+    """10.4.2 on a ``dome-run`` store (:mod:`twin.studies.dome_stores`): the images of the RGB
+    camera nearest the spectral camera with the bands the schedule gave their LEDs, the other
+    RGB cameras' images without spectral data, reconstructed jointly (Eq. 10.12); and the same
+    images, LEDs and bands taken by the analytic path (:func:`simulate_capture`), for
+    comparison. Errors per group of images and per RGB camera."""
+    images = store_capture(setup, run, calibration, texels, step=step)
+    step("the same images by the analytic path")
+    analytic = simulate_capture(setup, images.truth, images.light_dirs, images.bands_per_image, rng)
+    with_bands = [i for i, bands in enumerate(images.bands_per_image) if bands]
+    paired = images.cameras[with_bands[0]]
+    groups = {
+        "with_spectral_data": [i for i, c in enumerate(images.cameras) if c == paired],
+        "without_spectral_data": [i for i, c in enumerate(images.cameras) if c != paired],
+    } | {
+        camera: [i for i, c in enumerate(images.cameras) if c == camera]
+        for camera in dict.fromkeys(images.cameras)
+    }
+    out: dict[str, dict[str, dict[str, float]]] = {}
+    for name, capture in (("stores", images.capture), ("analytic", analytic)):
+        errors = ReconstructionErrors.of(
+            reconstruct_capture(setup, capture, p_dyn=P_DYN), capture.truth
+        )
+        out[name] = {group: errors.summary(indices) for group, indices in groups.items()}
+    out["images"] = {"leds": images.leds, "cameras": images.cameras, "paired_camera": paired}
+    return out
 
 
 def metamer_diagnosis(setup: DomeSetup, capture: DomeCapture) -> dict[str, float]:
@@ -390,15 +435,47 @@ def _errors_of(result: SingleImage) -> dict[str, np.ndarray]:
     }
 
 
+def _store_experiments(
+    folder: Path,
+    materials: Sequence[str],
+    capture: DomeCaptureSize,
+    setup: DomeSetup,
+    rng: np.random.Generator,
+    *,
+    seed: int,
+    step: Callable[[str], None],
+) -> dict:
+    """The store path of :func:`run_dome_study`: per material its ``dome-run`` store, one
+    calibration store, the multi-image experiment and the 10.5 exposure totals."""
+    folder.mkdir(parents=True, exist_ok=True)
+    result: dict = {"capture": capture.__dict__, "folder": str(folder), "materials": {}}
+    for material in materials:
+        step(f"{material}: capturing the dome stores")
+        run, calibration = capture_study_stores(folder, material, capture, seed=seed, dark_frames=8)
+        result["materials"][material] = multi_image_from_stores(
+            setup, run, calibration, capture.texels, rng, step=step
+        )
+    result["exposure_10_5"] = store_exposure_ratio(run, calibration)
+    return result
+
+
 def run_dome_study(
     out: str | Path,
     *,
     texels: int = 32,
     materials: Sequence[str] = DOME_MATERIALS,
     seed: int = 0,
+    stores: Path | None = None,
+    capture: DomeCaptureSize | None = STORE_CAPTURE,
     step: Callable[[str], None] = lambda name: None,
 ) -> dict:
-    """Run every experiment of :mod:`twin.studies.dome`, write the JSON and figures to ``out``."""
+    """Run every experiment of :mod:`twin.studies.dome`, write the JSON and figures to ``out``.
+
+    With ``capture`` (the default), the 10.4.2 multi-image experiment and the 10.5 exposure
+    totals are also taken from dome capture stores in ``stores`` (default ``out/stores``),
+    captured at that size where missing (:func:`multi_image_from_stores`), and reported under
+    ``"stores"`` next to the analytic path's numbers for the same images; ``None`` skips them.
+    """
     unknown = sorted(set(materials) - set(DOME_MATERIALS))
     if unknown or not materials:
         raise SpectwinInputError(
@@ -447,6 +524,16 @@ def run_dome_study(
                 "metamer_diagnosis": metamer_diagnosis(per_pixel, per_pixel_single.captures[0]),
             },
         }
+    if capture is not None:
+        metrics["stores"] = _store_experiments(
+            Path(stores) if stores is not None else out / "stores",
+            materials,
+            capture,
+            dome_setup(capture.texels, texel_px=PER_PIXEL_TEXEL_PX, seed=seed),
+            rng,
+            seed=seed,
+            step=step,
+        )
     step("exposure comparison (one Bayer quad per texel) and cross-check")
     metrics["exposure_10_5"] = exposure_comparison(per_pixel, "colorchecker16", rng)
     check = cross_check(setup_for("colorchecker16"), rng)
