@@ -73,12 +73,15 @@ __all__ = [
     "PER_PIXEL_TEXEL_PX",
     "P_DYN",
     "SINGLE_IMAGE_LEDS",
+    "STORE_CAPTURE",
+    "STORE_TEXEL_PX",
     "SingleImage",
     "comparison",
     "cross_check",
     "exposure_comparison",
     "metamer_diagnosis",
     "multi_image",
+    "multi_image_from_stores",
     "run_dome_study",
     "schedules",
     "single_image",
@@ -198,10 +201,11 @@ def multi_image(
     )
 
 
-STORE_CAPTURE = DomeCaptureSize(stage_positions=1, leds=10, rgb_cameras=3, texels=16)
+STORE_CAPTURE = DomeCaptureSize(stage_positions=1, leds=10, rgb_cameras=3, texels=32)
 """The study's dome captures by default: one stage position, 10 LEDs spread over the dome (the
 10-image band schedule once), the RGB cameras at 0, 37.5 and 75 degrees and the spectral camera,
-16 texels (a Bayer quad per texel of a 4 cm sample), 64 spp: about 45 renders a material."""
+32 texels (a Bayer quad per texel of a 4 cm sample), 64 spp: about 45 renders a material. The
+study evaluates them at half that (:data:`STORE_TEXEL_PX`)."""
 
 
 def multi_image_from_stores(
@@ -427,6 +431,10 @@ DOME_MATERIALS = ("lego", "wallpaper", "colorchecker16", "red_fabric")
 PER_PIXEL_TEXEL_PX = 2
 """Camera pixels across a texel in the per-pixel regime (module description)."""
 
+STORE_TEXEL_PX = 2 * PER_PIXEL_TEXEL_PX
+"""Camera pixels across a study texel of the store path: 2 x 2 Bayer quads, so that resampling
+the rectified frames does not blur the texels (:mod:`twin.studies.dome_stores`)."""
+
 
 def _errors_of(result: SingleImage) -> dict[str, np.ndarray]:
     return {
@@ -448,12 +456,18 @@ def _store_experiments(
     """The store path of :func:`run_dome_study`: per material its ``dome-run`` store, one
     calibration store, the multi-image experiment and the 10.5 exposure totals."""
     folder.mkdir(parents=True, exist_ok=True)
-    result: dict = {"capture": capture.__dict__, "folder": str(folder), "materials": {}}
+    result: dict = {
+        "capture": capture.__dict__,
+        "texels": capture.texels // 2,
+        "pixels_per_texel": STORE_TEXEL_PX,
+        "folder": str(folder),
+        "materials": {},
+    }
     for material in materials:
         step(f"{material}: capturing the dome stores")
         run, calibration = capture_study_stores(folder, material, capture, seed=seed, dark_frames=8)
         result["materials"][material] = multi_image_from_stores(
-            setup, run, calibration, capture.texels, rng, step=step
+            setup, run, calibration, capture.texels // 2, rng, step=step
         )
     result["exposure_10_5"] = store_exposure_ratio(run, calibration)
     return result
@@ -529,7 +543,7 @@ def run_dome_study(
             Path(stores) if stores is not None else out / "stores",
             materials,
             capture,
-            dome_setup(capture.texels, texel_px=PER_PIXEL_TEXEL_PX, seed=seed),
+            dome_setup(capture.texels // 2, texel_px=STORE_TEXEL_PX, seed=seed),
             rng,
             seed=seed,
             step=step,

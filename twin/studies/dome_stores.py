@@ -16,8 +16,10 @@ The study's store path takes its images where a real dome's processing would: fr
    under the calibration LED, scaled to the image's LED by the white in the reference band,
    times the white's reflectance, thesis 10.3). The holder's marks are found in each camera's
    alignment frame (:func:`recon.registration.border.register_frame`, thesis 4.1.2) and the
-   material's square is resampled onto ``texels x texels`` texels
-   (:func:`recon.registration.border.extract_texture`).
+   material's square is resampled (:func:`recon.registration.border.extract_texture`) at the
+   capture's own resolution and averaged onto ``texels x texels`` texels, a divisor of the
+   capture's: two capture texels (Bayer quads at the rig's centre) across a study texel keep
+   the bilinear resampling's blur off the texel values.
 
 Images: per stage position and LED one image seen by the RGB camera nearest the spectral camera,
 with the bands the schedule gives that LED, and one per other RGB camera, without spectral data
@@ -37,7 +39,7 @@ import numpy as np
 from hwbridge.dome_layout import SPECTRAL_CAMERA, camera_steps
 from hwbridge.session import capture_steps, locked_session_store
 from hwbridge.store import CaptureStore
-from recon.calibration.dome import RgbCameraCalibration, SpectralCameraCalibration
+from recon.calibration.dome import RgbCameraCalibration, SpectralCameraCalibration, texel_mean
 from recon.errors import SpectwinInputError
 from recon.radiometric.demosaic import bin_quads
 from recon.registration.border import MarksNotFoundError, extract_texture, register_frame
@@ -199,6 +201,15 @@ def store_capture(
             f"stores {run.path}, {calibration.path}: expected a dome-run and a dome-calibration "
             "store"
         )
+    if texels < 1 or rig["texels"] % texels:
+        raise SpectwinInputError(
+            f"texels: expected a divisor of the capture's {rig['texels']} texels, got {texels}"
+        )
+
+    def resampled(image: np.ndarray, corners: np.ndarray) -> np.ndarray:
+        fine = extract_texture(image, corners, resolution=rig["texels"])
+        return texel_mean(fine, rig["texels"] // texels)
+
     geometry = rig["geometry"]
     rgb_cameras = sorted(c for c in geometry["cameras"] if c != SPECTRAL_CAMERA)
     spectral_at = np.asarray(geometry["cameras"][SPECTRAL_CAMERA]["position_m"])
@@ -242,7 +253,7 @@ def store_capture(
                 ratio = convert.rgb.hdr(sample[first : first + hdr_sets]) / convert.rgb.hdr(
                     leds_white[whites]
                 )
-                rgb.append(extract_texture(ratio, corners, resolution=texels))
+                rgb.append(resampled(ratio, corners))
                 lights.append(_sample_frame(run, view, geometry["led_positions_m"][led]))
                 seen_from.append(
                     _sample_frame(run, view, geometry["cameras"][camera]["position_m"])
@@ -270,7 +281,7 @@ def store_capture(
                 white_band[band] * led_scale
             )
             image = images.index((view, led, paired))
-            values = extract_texture(rho * white_rho[band], corners, resolution=texels)
+            values = resampled(rho * white_rho[band], corners)
             band_images.append(BandImage(image, band, values, float(sigma[band])))
             spectral_s += float(settings["exposure_s"])
     truth = texture_truth(rig["material"], np.array(lights), np.array(seen_from), texels=texels)
