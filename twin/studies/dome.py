@@ -583,5 +583,7 @@ def run_dome_study(
     dome_figures.write_comparison(metrics, out / "fig10_23_comparison.png")
     dome_figures.write_cross_check(check, out / "fig10_4_cross_check.png")
     dome_figures.write_exposure_vs_error(metrics["exposure_10_5"], out / "exposure_vs_error.png")
+    if "stores" in metrics:
+        dome_figures.write_store_comparison(metrics["stores"], out / "stores_vs_analytic.png")
     (out / "dome_study.json").write_text(dumps(metrics))
     return metrics
