@@ -14,6 +14,8 @@
   error (10.5: 7.5 s instead of 226 s).
 - :func:`cross_check`: Fig. 10.4, RGB predicted from a calibrated spectral image versus RGB
   measured, per colour-checker field.
+- :func:`multi_image_from_stores`: 10.4.2 on rendered dome capture stores
+  (:mod:`twin.studies.dome_stores`), next to the analytic path taking the same images.
 - :func:`run_dome_study`: all of them, written to ``dome_study.json`` with the figures of
   :mod:`twin.studies.dome_figures`.
 
