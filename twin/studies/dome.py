@@ -471,7 +471,9 @@ def _store_experiments(
         result["materials"][material] = multi_image_from_stores(
             setup, run, calibration, capture.texels // 2, rng, step=step
         )
-    result["exposure_10_5"] = store_exposure_ratio(run, calibration)
+    result["exposure_10_5"] = store_exposure_ratio(
+        run, calibration, max_dn=setup.cameras.spectral.max_dn
+    )
     return result
 
 

@@ -301,11 +301,14 @@ def store_capture(
     )
 
 
-def store_exposure_ratio(run: CaptureStore, calibration: CaptureStore) -> dict[str, float]:
+def store_exposure_ratio(
+    run: CaptureStore, calibration: CaptureStore, *, max_dn: int
+) -> dict[str, float]:
     """Thesis 10.5's exposure totals from the stores: the hybrid image (the run's HDR set and
     every band at the run's exposures, one after the other) against spectral-only band frames
     that bring the white standard facing the LED to 80 % of the spectral camera's range (its
-    white frames through every band under the calibration LED, dark-subtracted)."""
+    white frames through every band under the calibration LED, dark-subtracted); ``max_dn`` is
+    the spectral camera's largest raw value."""
     rig, cal_rig = run.attrs["rig"], calibration.attrs["rig"]
     led = int(cal_rig["calibration_led"])
     cos_i = float(np.asarray(cal_rig["geometry"]["led_positions_m"][led])[2]) / float(
@@ -313,13 +316,12 @@ def store_exposure_ratio(run: CaptureStore, calibration: CaptureStore) -> dict[s
     )
     times, darks = _mean_darks(calibration, SPECTRAL_CAMERA)
     frames, steps = _frames(calibration, SPECTRAL_CAMERA, kind="white", light_id=led)
-    full_scale = 2.0 ** int(cal_rig.get("spectral_bit_depth", 12)) - 1
     reference = {}
     for frame, settings in zip(frames, steps, strict=True):
         dark = darks[np.argmin(np.abs(times - settings["exposure_s"]))]
         centre = slice(frame.shape[0] // 2 - 4, frame.shape[0] // 2 + 4)
         rate = float((frame - dark)[centre, centre].mean()) / settings["exposure_s"] / cos_i
-        headroom = full_scale - float(dark[centre, centre].mean())
+        headroom = max_dn - float(dark[centre, centre].mean())
         reference[settings["band_nm"]] = 0.8 * headroom / rate
     hybrid_s = sum(rig["rgb_exposures_s"]) + sum(rig["band_exposures_s"])
     reference_s = sum(reference.values())

@@ -83,7 +83,7 @@ def test_store_exposure_totals_are_thesis_10_5(stores, setup):
     the camera model's white rates), within 2 % (measured 0.5 %: the white's render scatter and
     shot noise over the 8 x 8 patch); the hybrid total is the stored HDR set plus the stored band
     exposures; about 1.5 orders of magnitude apart, as the thesis found (226 s against 7.5 s)."""
-    ratio = store_exposure_ratio(*stores)
+    ratio = store_exposure_ratio(*stores, max_dn=setup.cameras.spectral.max_dn)
     hybrid = sum(THESIS_RGB_EXPOSURES_S) + float(setup.exposures_s.sum())
     reference = float(_reference_exposures(setup).sum())
     assert ratio["reference_total_s"] == pytest.approx(reference, rel=0.02)
