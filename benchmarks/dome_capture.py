@@ -2,11 +2,12 @@
 
 A ``dome-run`` of each material (default: the colour checker and the Lego bricks) at the reduced
 size ``--stage-positions`` x ``--leds`` x ``--rgb-cameras`` (default 2 x 24 x 3, and the spectral
-camera) at ``--texels`` (64: 264 x 264 px frames) and ``--spp`` (64), in this process
-(Mitsuba renders on every core). Reports per material the wall time, the CPU time, the frames
-and renders, the time per render and frame, the store's size on disk and the estimated time of
-the same capture on the real rig (the plan's timing). A tiny capture first fills Dr.Jit's kernel
-cache, so the timings do not pay for compiling the kernels.
+camera) at ``--texels`` (64: 264 x 264 px frames) and ``--spp`` (default the capture's own,
+:data:`twin.dome.programs.DEFAULT_SPP`), in this process (renders on every core). Reports per
+material the wall time, the CPU time, the frames and renders, the time per render and frame,
+the store's size on disk and the estimated time of the same capture on the real rig (the plan's
+timing). A capture of one stage position, LED and RGB camera at the same frame size and spp
+first fills Dr.Jit's kernel cache, so the timings do not pay for compiling the kernels.
 
 Run: .venv/bin/python -m benchmarks.dome_capture [--materials lego ...] [--out DIR]
 """
@@ -20,7 +21,12 @@ import tempfile
 import time
 from pathlib import Path
 
-from benchmarks.common import machine_description, peak_rss_mib
+from benchmarks.common import (
+    add_dome_size_arguments,
+    dome_size_settings,
+    machine_description,
+    peak_rss_mib,
+)
 from twin.dome.programs import DomeCaptureSize, dome_run_program
 
 
@@ -36,24 +42,14 @@ def _size_mb(path: Path) -> float:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--materials", nargs="+", default=["colorchecker16", "lego"])
-    parser.add_argument("--stage-positions", type=int, default=2)
-    parser.add_argument("--leds", type=int, default=24)
-    parser.add_argument("--rgb-cameras", type=int, default=3)
-    parser.add_argument("--texels", type=int, default=64)
-    parser.add_argument("--spp", type=int, default=64)
+    add_dome_size_arguments(parser)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, default=None, help="Keep the stores here.")
     arguments = parser.parse_args()
-    size = DomeCaptureSize(
-        arguments.stage_positions,
-        arguments.leds,
-        arguments.rgb_cameras,
-        arguments.texels,
-        arguments.spp,
-    )
+    size = DomeCaptureSize(**dome_size_settings(arguments))
     folder = arguments.out or Path(tempfile.mkdtemp(prefix="dome_capture_"))
     folder.mkdir(parents=True, exist_ok=True)
-    warm = DomeCaptureSize(1, 1, 1, 8, 4)
+    warm = DomeCaptureSize(1, 1, 1, size.texels, size.spp)
     dome_run_program(arguments.materials[0], size=warm).run(folder / "warm.capture.zarr")
     results = {}
     for material in arguments.materials:

@@ -12,24 +12,17 @@ from __future__ import annotations
 import argparse
 import json
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 
-from benchmarks.common import machine_description, peak_rss_mib
+from benchmarks.common import machine_description, peak_rss_mib, timed
 from recon.btf.compression import compress_btf
 from recon.btf.processing import process_gonio
 from recon.calibration.gonio import calibrate_gonio
 from twin.gonio.capture import CAMERA_ID, run_gonio_calibration, run_gonio_measurement
 from twin.render.variant import activate
 from twin.studies.demo import DEMO_RINGS
-
-
-def _timed(function):
-    started = time.perf_counter()
-    result = function()
-    return result, round(time.perf_counter() - started, 2)
 
 
 def main() -> None:
@@ -42,17 +35,17 @@ def main() -> None:
     root = arguments.out or Path(tempfile.mkdtemp(prefix="spectwin-bench-"))
     results: dict[str, object] = {"machine": machine_description(), "variant": report.as_dict()}
 
-    calibration_store, seconds = _timed(lambda: run_gonio_calibration(root / "cal.capture.zarr"))
+    calibration_store, seconds = timed(lambda: run_gonio_calibration(root / "cal.capture.zarr"))
     frames = calibration_store.frames(CAMERA_ID).shape[0]
     results["calibration_session"] = {
         "frames": frames,
         "s": seconds,
         "frames_per_s": round(frames / seconds, 1),
     }
-    calibration, seconds = _timed(lambda: calibrate_gonio(root / "cal.capture.zarr"))
+    calibration, seconds = timed(lambda: calibrate_gonio(root / "cal.capture.zarr"))
     results["calibrate_s"] = seconds
 
-    run, seconds = _timed(
+    run, seconds = timed(
         lambda: run_gonio_measurement(
             root / "run.capture.zarr",
             calibration.planned_exposure_s,
@@ -68,13 +61,13 @@ def main() -> None:
         "s": seconds,
         "frames_per_s": round(frames / seconds, 1),
     }
-    btf, seconds = _timed(
+    btf, seconds = timed(
         lambda: process_gonio(run, calibration, root / "cc.btf.zarr", texels=arguments.texels)
     )
     results["process"] = {"texels": arguments.texels, "s": seconds}
     reflectance = np.asarray(btf.reflectance())
     for layout in ("per_band", "joint"):
-        compressed, seconds = _timed(
+        compressed, seconds = timed(
             lambda layout=layout: compress_btf(reflectance, btf.grid, layout=layout)
         )
         results[f"compress_{layout}"] = {

@@ -9,8 +9,8 @@ import json
 import time
 
 from benchmarks.common import machine_description, peak_rss_mib
-from twin.dome.render import dome_rates
-from twin.gonio.render import gonio_part_rates
+from twin.dome.render import DOME_SPP, dome_rates
+from twin.gonio.render import GONIO_SPP, GonioScene
 from twin.materials import load_material
 from twin.render.variant import activate
 from twin.rigs.gonio_kinematics import solve_pairs
@@ -37,14 +37,15 @@ def main() -> None:
     results["gonio_kinematics_6561_pairs_s"] = round(time.perf_counter() - started, 2)
     for name in ("colorchecker16", "red_fabric"):
         material = load_material(name)
-        for spp in (64, 256):
+        started = time.perf_counter()
+        scene = GonioScene(gonio, material)
+        results[f"gonio_scene_{name}_s"] = round(time.perf_counter() - started, 2)
+        for spp in (GONIO_SPP, 64, 256):
             results[f"gonio_pair_33_bands_256px_{name}_spp{spp}_s"] = round(
-                _best_of(
-                    lambda m=material, s=spp: gonio_part_rates(gonio, pose, m, pixels=256, spp=s)
-                ),
-                2,
+                _best_of(lambda s=spp, scene=scene: scene.part_rates(pose, pixels=256, spp=s)),
+                3,
             )
-        results[f"dome_rgb_frame_256px_{name}_spp64_s"] = round(
+        results[f"dome_rgb_frame_256px_{name}_spp{DOME_SPP}_s"] = round(
             _best_of(
                 lambda m=material: dome_rates(dome, m, stage_deg=0, led=120, camera=6, pixels=256)
             ),

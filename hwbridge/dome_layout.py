@@ -52,7 +52,9 @@ Attributes
       ``led_current_ma`` (the drive current of every lit frame);
     - ``led_spectrum`` and ``white_reflectance``: ``{"wavelengths_nm": [...], "values": [...]}``,
       the LEDs' radiant intensity at that current (W sr^-1 nm^-1) and the white standard's
-      reflectance factor;
+      reflectance factor; ``rgb_response`` likewise with three rows of values (R, G, B): the RGB
+      cameras' relative spectral response, as their characterization gives it (thesis chapter 9);
+    - ``sample_size_m`` (a run): the side of the material's square, centred on the plate;
     - ``geometry`` (metres, world frame: origin at the sample centre on the stage, z up; the
       sample frame is the world turned about z by the stage angle):
 
@@ -62,8 +64,8 @@ Attributes
         ``scenes/cameras``), ``mosaic``, ``arc_index`` (RGB), ``position_m``,
         ``rotation_world_to_camera`` and ``camera_matrix`` (OpenCV conventions: x right, y
         down, z forward, pixel centres at integer coordinates, for the stored window),
-        ``distortion`` (OpenCV's five coefficients), ``frame_px`` (rows, columns),
-        ``pixel_pitch_m`` at the rig centre and
+        ``distortion`` (OpenCV's five coefficients), ``bit_depth``, ``frame_px`` (rows,
+        columns), ``pixel_pitch_m`` at the rig centre and
         ``marker_corners_xy`` (per stage position the capture uses, the nominal image points of
         the holder's registration corners);
       - ``holder``: ``registration_corners_m`` ``(4, 3)`` in the sample frame, in the order of

@@ -49,10 +49,11 @@ __all__ = [
 ]
 
 
-def checksummed_compressors() -> tuple[ZstdCodec, Crc32cCodec]:
-    """The bytes-to-bytes codecs of every new array: Zarr's default Zstd, then CRC-32C over the
-    compressed bytes (``create_array(..., compressors=checksummed_compressors())``)."""
-    return ZstdCodec(level=0, checksum=False), Crc32cCodec()
+def checksummed_compressors(level: int = 0) -> tuple[ZstdCodec, Crc32cCodec]:
+    """The bytes-to-bytes codecs of every new array: Zstd (at ``level``; 0 is Zstd's default,
+    3), then CRC-32C over the compressed bytes
+    (``create_array(..., compressors=checksummed_compressors())``)."""
+    return ZstdCodec(level=level, checksum=False), Crc32cCodec()
 
 
 def has_checksums(array: zarr.Array) -> bool:

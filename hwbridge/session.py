@@ -2,7 +2,8 @@
 
 For each pending step: move to the step's view (when it names one), switch its LED on (when an
 LED array is given), tune the filter (when it names a band), set the exposure, take the frame,
-record the lamp monitor, write frame and index, then flag the step done. A session interrupted
+record the lamp monitor; then, for a run of steps of one view at a time, write their frames,
+their index, and flag them done. A session interrupted
 at any moment (crash, SIGKILL, power loss) is continued with ``resume=True``: steps already
 flagged are skipped, a step that was cut short is taken again into the same slot.
 
@@ -18,9 +19,9 @@ recorded in the frame's ``status``.
 
 :func:`run_session` does it all in one process. Its two halves serve a distributed capture
 (``twin.devices.cluster``): :func:`open_session_store` creates (or reopens to resume) the store
-once,
-in the coordinator, and :func:`capture_steps` runs a subset of the steps into it, in a worker that
-owns those steps' chunks.
+once, in the coordinator, and :func:`capture_steps` runs a subset of the steps into it, in a
+worker that writes those steps' frames (one chunk each) and returns their records, which the
+coordinator, the one writer of the index and the flags, records.
 
 One writer per store: :func:`locked_session_store` holds the store's writer lock
 (:mod:`hwbridge.lock`) from before the store is created (or reopened) until the session ends; a
@@ -266,6 +267,51 @@ def locked_session_store(
         yield store
 
 
+_WRITE_STEPS = 64  # most steps held before they are written
+_WRITE_BYTES = 64 << 20  # most frame bytes held
+
+
+class _PendingWrites:
+    """Frames and records taken but not yet written, written together: the frames of a run of
+    consecutive steps in one call (their chunks concurrently), the index and the flags after
+    them, in the order that keeps every step flagged done complete."""
+
+    def __init__(self, store: CaptureStore, *, record: bool, check_complete: bool):
+        self._store, self._record, self._check_complete = store, record, check_complete
+        self._steps: list[int] = []
+        self._frames: list[np.ndarray] = []
+        self._records: list[FrameRecord] = []
+        self._bytes = 0
+        self._pose: tuple[int, int] | None = None
+        # A real frame cannot be taken again: it is written as soon as it is taken.
+        self._most_steps = _WRITE_STEPS if store.attrs.get("backend") == "sim" else 1
+
+    def add(self, step: int, frame: np.ndarray, record: FrameRecord) -> None:
+        self._steps.append(step)
+        self._frames.append(frame)
+        self._records.append(record)
+        self._bytes += frame.nbytes
+        self._pose = (record.view_id, record.light_id)
+
+    def due(self, next_pose: tuple[int, int]) -> bool:
+        """Whether to write before the next step: it moves to another view or light, or enough
+        waits (a real capture's frame never waits)."""
+        return bool(self._steps) and (
+            next_pose != self._pose
+            or len(self._steps) >= self._most_steps
+            or self._bytes >= _WRITE_BYTES
+        )
+
+    def flush(self) -> None:
+        if not self._steps:
+            return
+        self._store.write_frames(self._steps, self._frames)
+        if self._record:
+            self._store.write_index(self._steps, self._records)
+            self._store.mark_done(self._steps, check_complete=self._check_complete)
+        self._steps, self._frames, self._records, self._bytes = [], [], [], 0
+
+
 def capture_steps(
     store: CaptureStore,
     steps: Iterable[int],
@@ -275,10 +321,16 @@ def capture_steps(
     retries: int = 3,
     backoff_s: float = 0.01,
     check_complete: bool = True,
+    record: bool = True,
     advance: Callable[[], None] = lambda: None,
     stop: StopRequest | None = None,
-) -> int:
+) -> list[tuple[int, FrameRecord]]:
     """Capture ``steps`` of the store's plan into their slots and flag each one done.
+
+    The frames of consecutive steps of one view and light are written together (at most 64
+    steps or 64 MiB of a simulated capture; a real one writes every frame when it is taken), then
+    their index, then their flags; a step is flagged done only once its frame and
+    index are written, also when the capture stops or fails on the way.
 
     Parameters
     ----------
@@ -294,18 +346,22 @@ def capture_steps(
     retries, backoff_s
         Retries of a device call that times out or disconnects, and the first wait (doubling).
     check_complete
-        Mark the store complete after its last step (``False`` in the workers of a distributed
-        capture, see :meth:`hwbridge.store.CaptureStore.mark_done`).
+        Mark the store complete after its last step.
+    record
+        Write the index and the flags. ``False`` (a worker of a distributed capture) writes the
+        frames only: its coordinator, the index's one writer, records the returned steps
+        (:meth:`~hwbridge.store.CaptureStore.write_index`,
+        :meth:`~hwbridge.store.CaptureStore.mark_done`).
     advance
         Called after each step (a progress bar).
     stop
         Asked before each step whether to stop there (:class:`SignalStop`); its ``writing()``
-        surrounds the writing of each frame.
+        surrounds the writing of frames, index and flags.
 
     Returns
     -------
-    int
-        The number of steps taken (fewer than ``steps`` when ``stop`` said so).
+    list of (int, FrameRecord)
+        The steps taken and their records (fewer than ``steps`` when ``stop`` said so).
     """
     plan = store.attrs["plan"]
     cameras = devices["cameras"]
@@ -315,66 +371,72 @@ def capture_steps(
     leds = devices.get("leds")
     led_count = devices.get("led_count", 0)
     stop = stop or StopRequest()
-    taken = 0
-    for step in steps:
-        if stop():
-            break
-        settings = plan[step]
-        camera = cameras[settings["camera"]]
-        faults: list[str] = []
-        if settings.get("view_id", -1) != -1:
-            _, seen = _with_retries(
-                lambda s=settings: positioner.set({"view_id": s["view_id"]}),
-                positioner,
-                retries,
-                backoff_s,
+    pending = _PendingWrites(store, record=record, check_complete=check_complete)
+    taken: list[tuple[int, FrameRecord]] = []
+    try:
+        for step in steps:
+            if stop():
+                break
+            settings = plan[step]
+            if pending.due((int(settings.get("view_id", -1)), int(settings.get("light_id", -1)))):
+                with stop.writing():
+                    pending.flush()
+            camera = cameras[settings["camera"]]
+            faults: list[str] = []
+            if settings.get("view_id", -1) != -1:
+                _, seen = _with_retries(
+                    lambda s=settings: positioner.set({"view_id": s["view_id"]}),
+                    positioner,
+                    retries,
+                    backoff_s,
+                )
+                faults += seen
+            if leds is not None and settings.get("light_id", -1) != -1:
+                light = int(settings["light_id"])
+                switch = (
+                    (lambda: leds.set(np.ones(led_count, bool)))
+                    if light == -2
+                    else (lambda led=light: leds.light(led))
+                )
+                _, seen = _with_retries(switch, leds, retries, backoff_s)
+                faults += seen
+            if "band_nm" in settings:
+                _, seen = _with_retries(
+                    lambda s=settings: tunable_filter.set(s["band_nm"]),
+                    tunable_filter,
+                    retries,
+                    backoff_s,
+                )
+                faults += seen
+            camera.set_exposure(settings["exposure_s"])
+            if hasattr(camera, "set_shutter"):
+                camera.set_shutter(settings["kind"] != "dark")
+            if hasattr(camera, "set_step"):
+                camera.set_step(seed, step)
+            (frame, metadata), seen = _with_retries(camera.snap, camera, retries, backoff_s)
+            faults += seen
+            spectrum = None
+            if monitor is not None and settings["kind"] != "dark":
+                _, seen = _with_retries(monitor.trigger, monitor, retries, backoff_s)
+                faults += seen
+                (reading,) = monitor.read().values()
+                spectrum = reading["value"]
+            frame_record = FrameRecord(
+                kind=settings["kind"],
+                exposure_s=settings["exposure_s"],
+                timestamp=float(metadata.get("timestamp", time.time())),
+                light_id=int(settings.get("light_id", -1)),
+                view_id=int(settings.get("view_id", -1)),
+                band_nm=float(settings.get("band_nm", float("nan"))),
+                lamp_monitor=spectrum,
+                status="ok" if not faults else "ok after " + ", ".join(faults),
             )
-            faults += seen
-        if leds is not None and settings.get("light_id", -1) != -1:
-            light = int(settings["light_id"])
-            switch = (
-                (lambda: leds.set(np.ones(led_count, bool)))
-                if light == -2
-                else (lambda led=light: leds.light(led))
-            )
-            _, seen = _with_retries(switch, leds, retries, backoff_s)
-            faults += seen
-        if "band_nm" in settings:
-            _, seen = _with_retries(
-                lambda s=settings: tunable_filter.set(s["band_nm"]),
-                tunable_filter,
-                retries,
-                backoff_s,
-            )
-            faults += seen
-        camera.set_exposure(settings["exposure_s"])
-        if hasattr(camera, "set_shutter"):
-            camera.set_shutter(settings["kind"] != "dark")
-        if hasattr(camera, "set_step"):
-            camera.set_step(seed, step)
-        (frame, metadata), seen = _with_retries(camera.snap, camera, retries, backoff_s)
-        faults += seen
-        spectrum = None
-        if monitor is not None and settings["kind"] != "dark":
-            _, seen = _with_retries(monitor.trigger, monitor, retries, backoff_s)
-            faults += seen
-            (reading,) = monitor.read().values()
-            spectrum = reading["value"]
-        record = FrameRecord(
-            kind=settings["kind"],
-            exposure_s=settings["exposure_s"],
-            timestamp=float(metadata.get("timestamp", time.time())),
-            light_id=int(settings.get("light_id", -1)),
-            view_id=int(settings.get("view_id", -1)),
-            band_nm=float(settings.get("band_nm", float("nan"))),
-            lamp_monitor=spectrum,
-            status="ok" if not faults else "ok after " + ", ".join(faults),
-        )
+            pending.add(step, np.asarray(frame), frame_record)
+            taken.append((step, frame_record))
+            advance()
+    finally:
         with stop.writing():
-            store.write_frame(step, frame, record)
-            store.mark_done(step, check_complete=check_complete)
-        taken += 1
-        advance()
+            pending.flush()
     return taken
 
 

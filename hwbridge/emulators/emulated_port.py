@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import time
 import urllib.parse
+from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import Any, ClassVar, Protocol
 
@@ -30,7 +31,7 @@ class DeviceState(Protocol):
 
 
 @dataclass
-class MessageDeviceState:
+class MessageDeviceState(ABC):
     """A device that answers whole messages: ``respond`` gathers the host's bytes and answers
     each message the subclass finds in them (``_next_message``) with ``_handle``; ``_spoil``
     may turn the answers into a fault's. ``silent`` answers nothing (an unplugged device)."""
@@ -47,13 +48,13 @@ class MessageDeviceState:
             answers += self._handle(*message)
         return self._spoil(bytes(answers))
 
+    @abstractmethod
     def _next_message(self) -> tuple[Any, ...] | None:
         """Take the next whole message out of the inbox (``None``: none yet)."""
-        raise NotImplementedError
 
+    @abstractmethod
     def _handle(self, *message: Any) -> bytes:
         """The answer to one message."""
-        raise NotImplementedError
 
     def _spoil(self, answers: bytes) -> bytes:
         return answers
@@ -74,8 +75,9 @@ class EmulatedPort(SerialBase):
     options: ClassVar[dict[str, str]]
 
     @classmethod
+    @abstractmethod
     def make_state(cls, options: dict[str, str]) -> DeviceState:
-        raise NotImplementedError
+        """The device's state, built from the URL's ``options``."""
 
     def open(self) -> None:
         if self._port is None:

@@ -9,6 +9,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     submod_attrs={
         "capture_io": ["select_frames"],
         "dome": ["calibrate_rgb_camera", "calibrate_spectral_camera"],
+        "dome_capture": ["DomeCalibration", "calibrate_dome"],
         "gonio": ["GonioCalibration", "calibrate_gonio"],
         "spectral": ["plan_exposures", "reflectance", "white_factors"],
     },

@@ -12,10 +12,11 @@ from pathlib import Path
 
 import numpy as np
 
+from hwbridge.dome_layout import camera_steps
 from hwbridge.store import CaptureStore
 from recon.errors import SpectwinInputError
 
-__all__ = ["FrameSelection", "select_frames"]
+__all__ = ["FrameSelection", "plan_frames", "select_frames"]
 
 
 @dataclass(frozen=True)
@@ -64,3 +65,22 @@ def select_frames(
         view_id=index["view_id"][slots],
         backend=store.attrs["backend"],
     )
+
+
+def plan_frames(
+    store: CaptureStore, camera: str, **settings: object
+) -> tuple[np.ndarray, list[dict]]:
+    """The frames ``(n, H, W)`` (float64 DN) of ``camera`` whose plan steps have ``settings``
+    (e.g. ``kind="geometric"``, ``light_id=5``; settings the index lacks, such as a dome's
+    ``tilt_deg``, included), in capture order, and those steps."""
+    plan = store.attrs["plan"]
+    steps = camera_steps(plan, camera)
+    slots = [
+        slot
+        for slot, step in enumerate(steps)
+        if all(plan[step].get(name) == value for name, value in settings.items())
+    ]
+    if not slots:
+        raise SpectwinInputError(f"{store.path}: no frames of camera {camera!r} with {settings}")
+    frames = store.read_frames(camera, slots).astype(np.float64)
+    return frames, [plan[steps[slot]] for slot in slots]

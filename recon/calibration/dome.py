@@ -6,7 +6,8 @@ Spectral camera, in the low-SNR range its short band exposures live in (thesis 1
    :func:`recon.radiometric.dark_frames.average_dark_frames`), interpolated to any exposure time;
 2. the inverse OECF :math:`f` from an exposure series of dark-subtracted, Gaussian-filtered
    frames, offset by 30 so negative values stay on the curve (Eq. 10.4-10.8,
-   :func:`recon.radiometric.response_curve.robertson_filtered`);
+   :func:`recon.radiometric.response_curve.robertson_filtered`), its ends
+   (:data:`CURVE_END_LEVELS`) continued by straight lines;
 3. the sensitivity :math:`E_\\lambda` per band: the linearized response to a white diffuse
    reference lit by the LED, divided by the LED spectrum (and the reference's reflectance).
 
@@ -26,7 +27,7 @@ from __future__ import annotations
 
 import warnings
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from skimage.measure import block_reduce
@@ -39,17 +40,27 @@ from recon.radiometric.hdr import interpolate_curve, merge_hdr
 from recon.radiometric.response_curve import robertson, robertson_filtered
 
 __all__ = [
+    "CURVE_END_LEVELS",
     "DARK_VALUE_OFFSET",
     "RgbCameraCalibration",
     "SpectralCameraCalibration",
     "calibrate_rgb_camera",
     "calibrate_spectral_camera",
     "curve_linearity",
+    "rgb_camera_response",
     "texel_mean",
 ]
 
 DARK_VALUE_OFFSET = 30.0
 """Added to dark-subtracted values before the curve (thesis Fig. 10.3: "offset by 30")."""
+
+CURVE_END_LEVELS = 10
+"""Observed levels at each end of the spectral camera's curve that its straight extension
+replaces. Eq. 10.8 averages :math:`t_i \\tilde x_j` over the samples that land on a level, and
+at the ends of the observed range noise decides which samples do: on a dome calibration
+capture's series (12 frames of the colour checker from 20 ms, 8 dark frames per time) the
+lowest levels, 27-32, came out up to 3 DN above the line through the others, which biased a
+20 ms band frame of a dark field by a third."""
 
 
 def texel_mean(image: np.ndarray, texel_px: int) -> np.ndarray:
@@ -148,6 +159,7 @@ def calibrate_spectral_camera(
     *,
     sigma_px: float,
     bit_depth: int,
+    white_region: np.ndarray | None = None,
 ) -> SpectralCameraCalibration:
     """Low-SNR calibration of the spectral camera (module description, thesis 10.3).
 
@@ -172,6 +184,9 @@ def calibrate_spectral_camera(
         Gaussian filter of the Robertson recovery (Eq. 10.4).
     bit_depth
         The camera's bit depth.
+    white_region
+        ``(H, W)`` bool: the pixels that see the white reference (default: every pixel), whose
+        mean linear rate gives the sensitivity.
     """
     led = np.asarray(led_per_band, np.float64)
     white = np.asarray(white_reflectance, np.float64)
@@ -199,11 +214,21 @@ def calibrate_spectral_camera(
         )
     observed = np.flatnonzero(np.isfinite(curve))
     partial = SpectralCameraCalibration(
-        times, means, extend_curve(curve), (int(observed[0]), int(observed[-1])), np.ones(led.size)
+        times,
+        means,
+        extend_curve(curve, trim_levels=CURVE_END_LEVELS),
+        (int(observed[0]), int(observed[-1])),
+        np.ones(led.size),
     )
+    region = np.ones(frames.shape[1:], bool) if white_region is None else white_region
+    if np.shape(region) != frames.shape[1:] or not np.any(region):
+        raise SpectwinInputError(
+            f"white_region: expected a non-empty mask of the frames' shape {frames.shape[1:]}, "
+            f"got shape {np.shape(region)}"
+        )
     rates = np.array(
         [
-            np.mean(partial.linear_rate(frame, float(t)))
+            np.mean(partial.linear_rate(frame, float(t))[region])
             for frame, t in zip(frames, np.asarray(white_exposure_s), strict=True)
         ]
     )
@@ -223,8 +248,8 @@ class RgbCameraCalibration:
     exposure_s
         ``(n_exposures,)`` the HDR exposure set.
     dark
-        ``(H, W, 3)`` HDR value of the averaged dark frames (the offset's and dark current's
-        share, about 1 % of the white in the red channel).
+        ``(2H, 2W)`` HDR value of the averaged dark frames, per raw pixel (the offset's and
+        dark current's share, about 1 % of the white in the red channel).
     white
         ``(3,)`` dark-subtracted HDR value of the white reference facing the LED.
     """
@@ -234,10 +259,15 @@ class RgbCameraCalibration:
     dark: np.ndarray
     white: np.ndarray
 
+    def linear_mosaic(self, frames: np.ndarray) -> np.ndarray:
+        """Dark-subtracted HDR value per raw pixel ``(2H, 2W)`` (still a Bayer mosaic) from one
+        image's raw exposure set ``(n_exposures, 2H, 2W)`` (Eq. 10.3)."""
+        return merge_hdr(frames, self.exposure_s, self.inverse_response) - self.dark
+
     def hdr(self, frames: np.ndarray) -> np.ndarray:
         """Dark-subtracted HDR RGB per Bayer quad ``(H, W, 3)`` from one image's raw exposure
         set ``(n_exposures, 2H, 2W)``."""
-        return bin_quads(merge_hdr(frames, self.exposure_s, self.inverse_response)) - self.dark
+        return bin_quads(self.linear_mosaic(frames))
 
     def white_balanced(
         self, frames: np.ndarray, cos_incidence: float, *, texel_px: int = 2
@@ -249,21 +279,20 @@ class RgbCameraCalibration:
         return texel_mean(self.hdr(frames), texel_px // 2) / (self.white * cos_incidence)
 
 
-def calibrate_rgb_camera(
+def rgb_camera_response(
     series_frames: np.ndarray,
     series_exposure_s: np.ndarray,
     dark_frames: np.ndarray,
     dark_exposure_s: np.ndarray,
-    white_frames: np.ndarray,
     exposure_s: np.ndarray,
     *,
     bit_depth: int,
 ) -> RgbCameraCalibration:
-    """Calibrate the RGB camera for HDR images taken with the set ``exposure_s``.
+    """Inverse OECF and dark level of the RGB camera for HDR images taken with the set
+    ``exposure_s``, without a white reference (``white`` is one).
 
     Robertson on the raw series ``(m, 2H, 2W)``; dark frames ``(n, 2H, 2W)`` at every time of
-    the HDR set, averaged per time and merged; the white reference's frames
-    ``(n_exposures, 2H, 2W)`` merged and dark-subtracted.
+    the HDR set, averaged per time and merged.
     """
     times = np.asarray(exposure_s, np.float64)
     with _iteration_budget():
@@ -278,8 +307,28 @@ def calibrate_rgb_camera(
     order = np.argsort(times)
     dark = np.empty_like(mean_darks)
     dark[order] = mean_darks
-    partial = RgbCameraCalibration(
-        curve, times, bin_quads(merge_hdr(dark, times, curve)), np.ones(3)
+    return RgbCameraCalibration(curve, times, merge_hdr(dark, times, curve), np.ones(3))
+
+
+def calibrate_rgb_camera(
+    series_frames: np.ndarray,
+    series_exposure_s: np.ndarray,
+    dark_frames: np.ndarray,
+    dark_exposure_s: np.ndarray,
+    white_frames: np.ndarray,
+    exposure_s: np.ndarray,
+    *,
+    bit_depth: int,
+) -> RgbCameraCalibration:
+    """Calibrate the RGB camera for HDR images taken with the set ``exposure_s``:
+    :func:`rgb_camera_response`, and the white reference's frames ``(n_exposures, 2H, 2W)``
+    merged, dark-subtracted and averaged over the frame."""
+    partial = rgb_camera_response(
+        series_frames,
+        series_exposure_s,
+        dark_frames,
+        dark_exposure_s,
+        exposure_s,
+        bit_depth=bit_depth,
     )
-    white = partial.hdr(white_frames).reshape(-1, 3).mean(0)
-    return RgbCameraCalibration(curve, times, partial.dark, white)
+    return replace(partial, white=partial.hdr(white_frames).reshape(-1, 3).mean(0))

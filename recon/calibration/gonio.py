@@ -86,12 +86,17 @@ def dark_model(store: CaptureStore, camera: str) -> DarkModel:
     return DarkModel(times, means)
 
 
-def extend_curve(curve: np.ndarray, *, fit_levels: int = 64) -> np.ndarray:
+def extend_curve(curve: np.ndarray, *, fit_levels: int = 64, trim_levels: int = 0) -> np.ndarray:
     """Fill the NaN ends of an inverse response (levels never observed) by straight lines fitted
     to the ``fit_levels`` outermost observed levels, so dark frames and rare values just
-    outside the observed range still linearize."""
+    outside the observed range still linearize; ``trim_levels`` observed levels at each end
+    are replaced too (ends that few, noise-selected samples reached)."""
     curve = np.asarray(curve, np.float64).copy()
     observed = np.flatnonzero(np.isfinite(curve))
+    if trim_levels:
+        curve[observed[:trim_levels]] = np.nan
+        curve[observed[-trim_levels:]] = np.nan
+        observed = observed[trim_levels:-trim_levels]
     if observed.size < 2 * fit_levels:
         raise SpectwinInputError(
             f"inverse_response: only {observed.size} levels observed; the exposure series must "

@@ -9,5 +9,6 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     submod_attrs={
         "border": ["detect_corners", "extract_texture", "register_frame"],
         "corners": ["refine_corners", "texture_transform"],
+        "sample_plane": ["sample_square_corners"],
     },
 )

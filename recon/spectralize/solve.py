@@ -80,6 +80,7 @@ __all__ = [
 ]
 
 SOLVERS = ("auto", "multigrid", "lsqr", "lsmr")
+_PRIOR_TERMS = (AppearancePriorTerm, SpectralSmoothnessTerm)
 
 
 @dataclass(frozen=True)
@@ -168,12 +169,13 @@ class SpectralizationProblem:
 
     def energy(self, scaled: np.ndarray) -> float:
         """:math:`E` at the scaled image :math:`X = f S`, ``(n_pixels, K)``."""
-        return float(
-            sum(
-                w * np.sum((np.ravel(t.apply(scaled)) - np.ravel(t.target)) ** 2)
-                for t, w in zip(self.terms, self.weights, strict=True)
-            )
-        )
+        energy = 0.0
+        for term, weight in zip(self.terms, self.weights, strict=True):
+            residual = np.ravel(term.apply(scaled))
+            if not isinstance(term, _PRIOR_TERMS):  # the priors' targets are zero
+                residual = residual - np.ravel(term.target)
+            energy += weight * float(residual @ residual)
+        return energy
 
     def operator(self) -> tuple[linalg.LinearOperator, np.ndarray]:
         """:math:`M_E` and :math:`b_E` of Eq. 6.12 (each term's rows scaled by
@@ -577,7 +579,9 @@ def reconstruct(
                 f"shape {initial.shape}"
             )
         scaled_initial = initial.reshape(shape) * problem.scale[:, None]
+    started = time.perf_counter()
     parts = problem.kronecker_parts() if solver in ("auto", "multigrid") else None
+    assembly_s = time.perf_counter() - started
     if solver == "multigrid" and parts is None:
         raise SpectwinInputError(
             "solver='multigrid' needs an energy with point spectra, camera, prior and "
@@ -598,7 +602,7 @@ def reconstruct(
         scaled, iterations, converged = _solve_least_squares(
             problem, used, max_iterations, tol, scaled_initial, progress
         )
-    timings = {**problem.timings_s, "solve": time.perf_counter() - started}
+    timings = {**problem.timings_s, "assembly": assembly_s, "solve": time.perf_counter() - started}
     leading = np.shape(rgb)[:-1]
     return SpectralizationResult(
         spectra=(scaled / problem.scale[:, None]).reshape(*leading, problem.n_bands),

@@ -54,6 +54,38 @@ def test_frames_and_index_land_in_their_plan_slots(tmp_path):
     )
 
 
+@pytest.mark.parametrize(("backend", "per_chunk", "level"), [("sim", 1024, 1), ("real", 1, 0)])
+def test_a_simulated_capture_batches_its_index_and_compresses_frames_faster(
+    tmp_path, backend, per_chunk, level
+):
+    """Simulated frames can be taken again: their index and flags share chunks of 1024 frames
+    and frames get Zstd level 1; a real capture keeps one frame per chunk and Zstd's default."""
+    plan = [{"camera": "k4", "kind": "sample"}] * 2000
+    store = CaptureStore.create(
+        tmp_path / "run.capture.zarr",
+        rig={},
+        backend=backend,
+        seed=0,
+        plan=plan,
+        cameras={"k4": (4, 4)},
+    )
+    store.write_frames(range(1020, 1030), [_frame((4, 4), step) for step in range(10)])
+    store.write_index(range(1020, 1030), [FrameRecord("sample", 0.1, 0.0)] * 10)
+    store.mark_done(range(1020, 1030))
+    assert store.pending_steps() == [*range(1020), *range(1030, 2000)]
+    assert (
+        store.index("k4", ["kind"])["kind"][1018:1032].tolist()
+        == [""] * 2 + ["sample"] * 10 + [""] * 2
+    )
+    assert [int(frame.max()) for frame in store.frames("k4")[1020:1030]] == list(range(10))
+    group = zarr.open_group(str(tmp_path / "run.capture.zarr"), mode="r")
+    assert group["index/k4/kind"].chunks == (per_chunk,) and group["progress"].chunks == (
+        per_chunk,
+    )
+    assert group["frames/k4"].chunks == (1, 4, 4)
+    assert group["frames/k4"].metadata.codecs[1].level == level  # bytes, then Zstd
+
+
 def test_redoing_a_step_overwrites_instead_of_duplicating(tmp_path):
     store = _new(tmp_path)
     record = FrameRecord("dark", 0.1, 1.0)

@@ -105,17 +105,27 @@ def test_a_damaged_frame_chunk_is_named_by_camera_step_and_key(store, damage):
         assert capture.check(verify=False).healthy  # only the checksums find it
 
 
-def test_a_damaged_index_chunk_of_a_done_step_is_found(store, damage):
-    damage(store / "index/k4/exposure_s/c/2")
+def test_a_damaged_index_chunk_of_done_steps_is_found(store, damage):
+    # A simulated capture keeps the index of INDEX_CHUNK_FRAMES frames in one chunk: all five.
+    damage(store / "index/k4/exposure_s/c/0")
     report = CaptureStore.open(store).check()
-    assert [(p.item, p.key) for p in report.problems] == [
-        ("camera k4 step 2 (frame 2)", "index/k4/exposure_s/c/2")
+    assert [(p.item, p.key, p.units) for p in report.problems] == [
+        ("camera k4 step 0 (frame 0)", "index/k4/exposure_s/c/0", (0, 1, 2, 3, 4))
     ]
     if damage.kind == "deleted":  # Zarr reads the fill value: only the check sees it
-        assert np.isnan(CaptureStore.open(store).index("k4", ["exposure_s"])["exposure_s"][2])
+        assert np.isnan(CaptureStore.open(store).index("k4", ["exposure_s"])["exposure_s"]).all()
     else:
         with pytest.raises(StoreDamagedError, match="index/k4/exposure_s cannot be read"):
             CaptureStore.open(store).index("k4")
+
+
+def test_a_damaged_index_chunk_of_a_real_capture_costs_one_frame(tmp_path, damage):
+    path = _capture(tmp_path / "run.capture.zarr", backend="real").path
+    damage(path / "index/k4/exposure_s/c/2")
+    report = CaptureStore.open(path).check()
+    assert [(p.item, p.key, p.units) for p in report.problems] == [
+        ("camera k4 step 2 (frame 2)", "index/k4/exposure_s/c/2", (2,))
+    ]
 
 
 def test_resuming_a_simulated_capture_takes_the_damaged_frames_again(store, pristine, damage):
@@ -168,31 +178,41 @@ def test_resuming_a_real_or_replayed_capture_with_damaged_frames_is_refused(
     assert CaptureStore.open(path).pending_steps() == []  # nothing was changed
 
 
-def test_a_deleted_progress_flag_makes_the_step_pending_and_contradicts_complete(store):
-    (store / "progress/c/2").unlink()
-    capture = CaptureStore.open(store)
+@pytest.mark.parametrize("backend", ["sim", "real"])
+def test_a_deleted_progress_chunk_makes_its_steps_pending_and_contradicts_complete(
+    tmp_path, backend
+):
+    path = _capture(tmp_path / "run.capture.zarr", backend=backend).path
+    lost = [0, 1, 2, 3, 4] if backend == "sim" else [2]  # flags per chunk: 1024 or 1
+    (path / f"progress/c/{lost[0]}").unlink()
+    capture = CaptureStore.open(path)
     report = capture.check()
-    assert report.pending == [2] and report.flags_disagree and not report.healthy
+    assert report.pending == lost and report.flags_disagree and not report.healthy
     assert report.problems == [] and capture.complete  # the attribute alone still says so
-    assert report.damage() == "marked complete, but the progress flag of step 2 is not set"
+    plural = "s" * (len(lost) > 1)
+    assert report.damage().startswith(f"marked complete, but the progress flag{plural} of step")
     capture.prepare_resume()
-    assert not capture.complete and capture.pending_steps() == [2]
+    assert not capture.complete and capture.pending_steps() == lost
 
 
 @pytest.mark.parametrize("backend", ["sim", "real"])
-def test_a_corrupt_progress_flag_only_makes_its_step_pending(tmp_path, backend, chunk_damage):
+def test_a_corrupt_progress_chunk_only_makes_its_steps_pending(tmp_path, backend, chunk_damage):
     path = _capture(tmp_path / "run.capture.zarr", backend=backend).path
-    chunk_damage["flipped"](path / "progress/c/1")
+    chunk = 0 if backend == "sim" else 1
+    lost = [0, 1, 2, 3, 4] if backend == "sim" else [1]
+    chunk_damage["flipped"](path / f"progress/c/{chunk}")
     capture = CaptureStore.open(path)
     report = capture.check()
-    assert report.pending == [1]
+    assert report.pending == lost
     assert [(p.item, p.problem) for p in report.problems] == [
-        ("camera k4 step 1 (frame 1) (progress flag)", "corrupt")
+        (f"camera k4 step {lost[0]} (frame {lost[0]}) (progress flag)", "corrupt")
     ]
-    with pytest.raises(StoreDamagedError, match=r"progress/c/1 is corrupt \(checksum mismatch\)"):
+    with pytest.raises(
+        StoreDamagedError, match=rf"progress/c/{chunk} is corrupt \(checksum mismatch\)"
+    ):
         capture.pending_steps()
-    assert [p.key for p in capture.prepare_resume()] == ["progress/c/1"]  # any backend
-    assert capture.pending_steps() == [1] and not capture.complete
+    assert [p.key for p in capture.prepare_resume()] == [f"progress/c/{chunk}"]  # any backend
+    assert capture.pending_steps() == lost and not capture.complete
 
 
 def test_a_frame_of_zeros_is_written_and_not_taken_for_a_missing_chunk(tmp_path):

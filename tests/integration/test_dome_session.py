@@ -1,8 +1,8 @@
 """Rendered dome captures killed and resumed, and device faults survived (the gonioreflectometer's
 counterparts are in ``test_session.py``).
 
-The capture here is smaller than the reduced capture of the benchmark (one stage position, three
-LEDs, one RGB camera and the spectral camera, 8 texels, 4 samples per pixel: 23 frames from 8
+The capture here is smaller than the reduced capture of the benchmark (two stage positions, two
+LEDs, one RGB camera and the spectral camera, 8 texels, 4 samples per pixel: 26 frames from 12
 renders), so that ten kills and their resumes take well under a minute; the code path is the
 same at any size.
 """
@@ -24,7 +24,7 @@ pytestmark = pytest.mark.render
 
 SEED = 2027
 MATERIAL = "lego"
-SIZE = DomeCaptureSize(stage_positions=1, leds=3, rgb_cameras=1, texels=8, spp=4)
+SIZE = DomeCaptureSize(stage_positions=2, leds=2, rgb_cameras=1, texels=8, spp=4)
 ARGS = [
     "--program",
     "dome-run",
@@ -93,10 +93,11 @@ def _check_done_steps(path, reference) -> tuple[int, int]:
 def test_10_sigkills_at_random_moments_resume_to_the_uninterrupted_store(
     tmp_path, capture_kit, reference
 ):
-    """``spectwin capture --program dome-run`` killed by SIGKILL at ten seeded random moments
-    and continued with ``--resume`` until complete (then begun afresh): after every kill every
-    step flagged done holds the uninterrupted run's frame, and the completed store holds its
-    frames and index (timestamps apart)."""
+    """``spectwin capture --program dome-run`` killed by SIGKILL ten times, at seeded random
+    moments or once it has written the frames of a stage position (a capture writes them
+    together, a stage position at a time), and continued with ``--resume`` until complete
+    (then begun afresh): after every kill every step flagged done holds the uninterrupted run's
+    frame, and the completed store holds its frames and index (timestamps apart)."""
     captures = capture_kit.processes
     path = tmp_path / "killed.capture.zarr"
     rng = np.random.default_rng(SEED)
@@ -110,11 +111,11 @@ def test_10_sigkills_at_random_moments_resume_to_the_uninterrupted_store(
         while not capture_kit.lock_names(path, pid) and capture_kit.running(pid):
             assert time.monotonic() < deadline, stderr.read_text()
             time.sleep(0.005)
-        if kills % 2:  # every other kill once frames are being written, whatever the load
-            while capture_kit.running(pid) and _done_steps(path) == 0:
+        if kills % 2:  # every other kill once it has written a stage position's frames
+            written = _done_steps(path)
+            while capture_kit.running(pid) and _done_steps(path) == written:
                 assert time.monotonic() < deadline, stderr.read_text()
                 time.sleep(0.01)
-            time.sleep(rng.uniform(0.0, 1.0))
         else:
             time.sleep(rng.uniform(0.0, 4.0))
         os.kill(pid, signal.SIGKILL)

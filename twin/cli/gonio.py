@@ -10,6 +10,9 @@ A full twin run at reduced sampling (thesis 3.3 and 4.1)::
     spectwin compress out/cc.btf.zarr --layout joint
     spectwin evaluate out/cc.btf.zarr --figure out/cc_vs_truth.png
     spectwin validate out/cc.btf.zarr --out out/validation
+
+``calibrate``, ``process`` and ``evaluate`` take the dome's stores too
+(:mod:`twin.cli.dome_pipeline`).
 """
 
 from __future__ import annotations
@@ -182,7 +185,7 @@ def _program_of(
     material: str,
     pixels: int,
     window: int | None,
-    spp: int,
+    spp: int | None,
     seed: int,
     fault_rate: float,
     dry_run: bool,
@@ -191,13 +194,18 @@ def _program_of(
     """The capture program, every setting checked (nothing is written)."""
     if program in _DOME:
         from twin.dome.programs import (
+            DEFAULT_SPP,
             DomeCaptureSize,
             dome_calibration_program,
             dome_run_program,
         )
 
         size = DomeCaptureSize(
-            dome["stage_positions"], dome["leds"], dome["rgb_cameras"], dome["texels"], spp
+            dome["stage_positions"],
+            dome["leds"],
+            dome["rgb_cameras"],
+            dome["texels"],
+            DEFAULT_SPP if spp is None else spp,
         )
         if program is Program.dome_run:
             return dome_run_program(material, size=size, seed=seed, fault_rate=fault_rate), {}
@@ -215,6 +223,7 @@ def _program_of(
         return gonio_calibration_program(seed=seed), {}
     from recon.calibration.gonio import GonioCalibration
     from twin.gonio.capture import gonio_measurement_program
+    from twin.gonio.render import GONIO_SPP
 
     if window is not None and window > pixels:
         fail(f"--window {window} is larger than --pixels {pixels}; expected at most {pixels}")
@@ -236,7 +245,12 @@ def _program_of(
         _, exposures_s = band_exposures_s(load_rig("gonio"))
         notes["exposures"] = "the rig model's band plan (no --calibration given)"
     built = gonio_measurement_program(
-        exposures_s, material=material, pixels=pixels, window=window, spp=spp, seed=seed
+        exposures_s,
+        material=material,
+        pixels=pixels,
+        window=window,
+        spp=GONIO_SPP if spp is None else spp,
+        seed=seed,
     )
     return built, notes
 
@@ -305,11 +319,14 @@ def capture(
         ),
     ] = None,
     spp: Annotated[
-        int,
+        int | None,
         typer.Option(
-            min=1, max=65536, help="gonio-run, dome programs: samples per pixel of the renders."
+            min=1,
+            max=65536,
+            help="gonio-run, dome programs: samples per pixel of the renders (default 16 "
+            "stratified: twin.gonio.render.GONIO_SPP, twin.dome.render.DOME_SPP).",
         ),
-    ] = 64,
+    ] = None,
     stage_positions: Annotated[
         int,
         typer.Option(min=1, max=24, help="dome-run: the first stage positions (15 deg steps)."),
@@ -470,27 +487,53 @@ def capture(
     print_summary(summary, "capture (simulated backend)", as_json)
 
 
+def _is_dome(capture) -> bool:
+    """Whether a capture store holds a dome capture (its ``rig["rig"]``)."""
+    return (capture.attrs.get("rig") or {}).get("rig") == "dome"
+
+
 def calibrate(
-    store: Annotated[Path, typer.Argument(help="A gonio-calibration capture store.")],
-    out: Annotated[Path, typer.Option(help="Calibration JSON to write.")] = Path("cal.json"),
+    ctx: typer.Context,
+    store: Annotated[
+        Path, typer.Argument(help="A gonio-calibration or dome-calibration capture store.")
+    ],
+    out: Annotated[
+        Path | None,
+        typer.Option(
+            help="Calibration to write: JSON for the gonioreflectometer (default cal.json), "
+            ".npz for the dome (default dome_cal.npz)."
+        ),
+    ] = None,
     white_fill: Annotated[
         float,
         typer.Option(
-            min=0.01, max=0.99, help="Fraction of the range the white standard should reach."
+            min=0.01,
+            max=0.99,
+            help="gonio: fraction of the range the white standard should reach.",
         ),
     ] = 0.7,
     as_json: JsonFlag = False,
 ) -> None:
-    """Response curve (Robertson), white factors F' (Eq. 3.3) and the exposure plan (Eq. 3.4,
-    multiples of 1/15 s for the HMI lamp) from a calibration capture.
+    """Gonioreflectometer: response curve (Robertson), white factors F' (Eq. 3.3) and the
+    exposure plan (Eq. 3.4, multiples of 1/15 s for the HMI lamp). Dome: every camera's
+    geometry (checkerboard frames, OpenCV), the spectral camera's low-SNR calibration (10.3),
+    the RGB cameras' responses and the white standard under every LED.
 
     Example: spectwin calibrate out/cal.capture.zarr --out out/cal.json
     """
     from hwbridge.store import CaptureStore
     from recon.calibration.gonio import calibrate_gonio
 
-    require_output_file(out)
     capture = CaptureStore.open(store)
+    if _is_dome(capture):
+        from twin.cli.dome_pipeline import calibrate_dome_store
+
+        if _given(ctx, "white_fill"):
+            fail("--white-fill is not used by a dome calibration; leave it out")
+        calibrate_dome_store(capture, store, out, as_json)
+        return
+    out = Path("cal.json") if out is None else out
+    require_output_file(out)
     require_sound_capture(capture, store)
     with console.status("calibrating"):
         result = calibrate_gonio(capture, white_fill=white_fill)
@@ -509,18 +552,21 @@ def calibrate(
 
 
 def process(
-    store: Annotated[Path, typer.Argument(help="A gonio-run capture store.")],
-    calibration: Annotated[Path, typer.Option(help="spectwin calibrate's JSON.")],
+    ctx: typer.Context,
+    store: Annotated[Path, typer.Argument(help="A gonio-run or dome-run capture store.")],
+    calibration: Annotated[
+        Path, typer.Option(help="spectwin calibrate's JSON (gonio) or .npz (dome).")
+    ],
     out: Annotated[Path, typer.Option(help="BTF store to write (<name>.btf.zarr).")],
     texels: Annotated[
-        int,
+        int | None,
         typer.Option(
             min=16,
             max=1024,
             help="Texture resolution per side (at least 16: evaluate and validate need texels "
-            "inside every chart field).",
+            "inside every chart field). Default: 128 (gonio), the capture's texels (dome).",
         ),
-    ] = 128,
+    ] = None,
     manual_corners: Annotated[
         Path | None, typer.Option(help="Manual corner file for frames detection misses.")
     ] = None,
@@ -531,10 +577,12 @@ def process(
     scheduler: SchedulerOption = None,
     as_json: JsonFlag = False,
 ) -> None:
-    """Calibrate and register a measurement run into a spectral BTF store (Eq. 3.6, 4.1.2).
+    """Calibrate and register a measurement run into a spectral BTF store: the
+    gonioreflectometer's (Eq. 3.6, 4.1.2), or the dome's, spectralized from its RGB images and
+    noisy bands (Eq. 10.12, jointly over each cycle of the band schedule, 10.4.2).
 
-    With --workers N (a local cluster) or --scheduler ADDRESS the direction pairs are Dask
-    tasks; the BTF is the same as from one process.
+    With --workers N (a local cluster) or --scheduler ADDRESS the gonioreflectometer's direction
+    pairs are Dask tasks; the BTF is the same as from one process.
 
     Example: spectwin process out/run.capture.zarr --calibration out/cal.json --out out/cc.btf.zarr
     """
@@ -547,15 +595,33 @@ def process(
 
     # Everything that can be checked is, before the first frame is read: the options, the
     # calibration, the output, the store's integrity and progress, its kind and bands.
-    gonio_calibration = GonioCalibration.load(calibration)
-    corners = read_manual_corners(manual_corners) if manual_corners else None
     if out.resolve() == store.resolve():
         fail(f"--out {out} is the capture store itself; choose another --out")
     require_no_writer(out)
     if not resume:
         require_new_store(out)
-    require_output_folder(out)
     capture = CaptureStore.open(store)
+    if _is_dome(capture):
+        from twin.cli.dome_pipeline import process_dome_store
+
+        for name in ("workers", "scheduler"):
+            if _given(ctx, name):
+                fail(f"{_option(ctx, name)} is not used for a dome run; leave it out")
+        process_dome_store(
+            capture,
+            store,
+            calibration,
+            out,
+            texels=texels,
+            manual_corners=manual_corners,
+            resume=resume,
+            as_json=as_json,
+        )
+        return
+    texels = 128 if texels is None else texels
+    gonio_calibration = GonioCalibration.load(calibration)
+    corners = read_manual_corners(manual_corners) if manual_corners else None
+    require_output_folder(out)
     require_sound_capture(capture, store)
     check_gonio_run(capture, gonio_calibration)
     try:
@@ -650,23 +716,33 @@ def evaluate(
     ] = 64,
     as_json: JsonFlag = False,
 ) -> None:
-    """Compare a processed BTF with the twin's true BTF: per-field Eq. 6.8, corner errors.
+    """Compare a processed BTF with the twin's true BTF: per-field Eq. 6.8 and corner errors;
+    for a dome BTF also Delta E94 (diffuse fields, or the material's texels) and the texture's
+    shift against the truth.
 
     Example: spectwin evaluate out/cc.btf.zarr --figure out/cc_vs_truth.png --json
     """
     from recon.btf.store import BTFStore
+    from twin.validate.dome_evaluation import evaluate_dome, write_dome_figure
     from twin.validate.gonio_evaluation import evaluate_gonio, write_gonio_figure
 
+    require_sound_btf(btf, "evaluate", allow_unregistered=True)
     if figure is not None:
         require_output_file(figure, "--figure")
-    require_sound_btf(btf, "evaluate", allow_unregistered=True)
+    dome = "dome_pairs" in BTFStore.open(btf).attrs
     with console.status("rendering the truth and comparing"):
-        result = evaluate_gonio(btf, spp=spp)
+        result = evaluate_dome(btf, spp=spp) if dome else evaluate_gonio(btf, spp=spp)
     summary = result.summary()
     if figure is not None:
         figure.parent.mkdir(parents=True, exist_ok=True)
-        summary["figure"] = str(write_gonio_figure(result, BTFStore.open(btf), figure))
-    print_summary(summary, "BTF vs the twin's truth", as_json)
+        written = (
+            write_dome_figure(result, figure)
+            if dome
+            else write_gonio_figure(result, BTFStore.open(btf), figure)
+        )
+        summary["figure"] = str(written)
+    title = "dome BTF vs the twin's truth" if dome else "BTF vs the twin's truth"
+    print_summary(summary, title, as_json)
 
 
 def validate(

@@ -9,9 +9,10 @@ Capture (:func:`run_capture`): the coordinator creates the capture store, or reo
 resume, splits the pending steps into tasks of consecutive steps that share a view
 (:func:`view_tasks`) and submits them. A worker builds the devices from their recipe
 (:class:`twin.devices.sim_devices.SimGonioDevices`), so it renders a view once for all the frames
-of a
-task, and writes its steps' frames, index and progress flags: one chunk per frame, so no chunk has
-two writers. A frame's noise is drawn from ``(seed, step)``, its exposure starts at the time the
+of a task, writes its steps' frames (one chunk per frame, so no chunk has two writers) and returns
+their records; the coordinator, the one writer of the index and the progress flags, writes them
+as the tasks finish (a step is flagged done after its frame and index are written). A frame's
+noise is drawn from ``(seed, step)``, its exposure starts at the time the
 plan gives the step (:func:`hwbridge.plans.plan_start_times_s`: lamp flicker and drift stay
 modelled) and renders are deterministic whatever the thread count, so the frames and every index
 field but the wall-clock ``timestamp`` are bit-identical to a serial capture's. Every worker sets
@@ -41,6 +42,7 @@ Examples
 from __future__ import annotations
 
 import contextlib
+import functools
 import logging
 import os
 import signal
@@ -55,7 +57,6 @@ from typing import Any
 import numpy as np
 from distributed import Client, Event, Future, LocalCluster, WorkerPlugin, as_completed, wait
 
-from hwbridge.errors import BridgeInputError
 from hwbridge.lock import StoreLock
 from hwbridge.session import (
     SessionDevices,
@@ -66,7 +67,7 @@ from hwbridge.session import (
     raise_if_interrupted,
     run_session,
 )
-from hwbridge.store import CaptureStore
+from hwbridge.store import CaptureStore, FrameRecord
 from recon.btf.processing import (
     GonioRun,
     PairOutcomes,
@@ -251,10 +252,12 @@ def _gather(
     total: int,
     show_progress: bool,
     stop: StopRequest | None = None,
+    received: Callable[[Any], None] = lambda metadata: None,
 ) -> list:
     """The metadata of tasks that return ``(steps done, metadata)``, in the order they finish,
-    advancing a bar of ``total`` steps, until all are done or ``stop`` asks to stop; a task's
-    error is raised (a capture or process cut short resumes with ``resume``)."""
+    each handed to ``received`` as it comes, advancing a bar of ``total`` steps, until all are
+    done or ``stop`` asks to stop; a task's error is raised (a capture or process cut short
+    resumes with ``resume``)."""
     stop = stop or StopRequest()
     results = []
     completed = as_completed(futures, with_results=True)
@@ -264,9 +267,18 @@ def _gather(
                 time.sleep(0.05)
                 continue
             _, result = next(completed)
+            received(result[1])
             advance(result[0])
             results.append(result[1])
     return results
+
+
+@functools.lru_cache(maxsize=4)
+def _worker_store(path: str, stamp: tuple[int, int]) -> CaptureStore:
+    """The capture store at ``path``, opened once per worker process and version of its root
+    metadata (``stamp``: its modification time and size): the plan of a full campaign is tens
+    of MB of JSON, which a task per direction pair would otherwise read again."""
+    return CaptureStore.open(path)
 
 
 def _capture_task(
@@ -275,18 +287,19 @@ def _capture_task(
     seed: int,
     steps: list[int],
     stop: Event,
-) -> tuple[int, None]:
+) -> tuple[int, list[tuple[int, FrameRecord]]]:
     if stop.is_set():
-        return 0, None
+        return 0, []
+    metadata = os.stat(Path(store_path) / "zarr.json")
     taken = capture_steps(
-        CaptureStore.open(store_path),
+        _worker_store(store_path, (metadata.st_mtime_ns, metadata.st_size)),
         steps,
         devices(),
         seed=seed,
-        check_complete=False,
+        record=False,
         stop=_EventStop(stop),
     )
-    return taken, None
+    return len(taken), taken
 
 
 def run_capture(
@@ -354,23 +367,25 @@ def run_capture(
             store, plan, devices(), rig=rig, backend=backend, seed=seed, resume=resume
         ) as session,
     ):
-        if not session.one_chunk_per_frame:
-            raise BridgeInputError(
-                f"{session.path}: this store keeps kind and status in one chunk per camera (an "
-                "older spectwin made it), so only one writer may fill it: resume it without "
-                "--workers or --scheduler"
-            )
         pending = session.pending_steps()
         client.register_plugin(RendererSetup(), name=RendererSetup.name)
         [recipe] = client.scatter([devices], broadcast=True, hash=False)
         path = str(session.path.resolve())
+
+        def record(taken: list[tuple[int, FrameRecord]]) -> None:
+            if taken:
+                steps, records = zip(*taken, strict=True)
+                with stop.writing():
+                    session.write_index(steps, records)
+                    session.mark_done(steps, check_complete=False)
+
         try:
             with _stoppable_tasks(client) as (event, futures):
                 futures += [
                     client.submit(_capture_task, path, recipe, seed, steps, event, pure=False)
                     for steps in view_tasks(plan, pending, max_steps)
                 ]
-                _gather(futures, "capture", len(pending), show_progress, stop)
+                _gather(futures, "capture", len(pending), show_progress, stop, record)
         except KeyboardInterrupt:
             if not stop():
                 raise

@@ -92,6 +92,7 @@ def _camera_entry(
         "role": "spectral" if arc == SPECTRAL_CAMERA else "rgb",
         "definition": sensor.config.name,
         "mosaic": "none" if not sensor.is_colour else "RGGB",
+        "bit_depth": sensor.config.bit_depth,
         "position_m": np.asarray(view.position_m, float).tolist(),
         "rotation_world_to_camera": rotation.tolist(),
         "camera_matrix": matrix.tolist(),

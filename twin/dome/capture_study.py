@@ -25,7 +25,7 @@ from recon.metrics import delta_e94, relative_error
 from recon.scheduling.dome_schedule import THESIS_RGB_EXPOSURES_S
 from recon.spectralize.solve import BandImage, spectralize
 from twin.dome.setup import BAND_GRID, DomeSetup
-from twin.materials.textures import TextureTruth
+from twin.materials.textures import MATERIAL_TEXEL_REFLECTANCE, TextureTruth
 from twin.render.truth import texture_truth
 from twin.rigs.dome_geometry import dome_geometry
 
@@ -74,12 +74,6 @@ class DomeCapture:
     def rgb_exposure_s(self) -> float:
         """Summed RGB exposure time: the HDR set per image."""
         return float(self.truth.shape[0] * sum(THESIS_RGB_EXPOSURES_S))
-
-
-MATERIAL_TEXEL_REFLECTANCE = 0.01
-"""Texels whose true mean reflectance is below this show no material (the gaps between Lego
-bricks, seen through to the void, and full shadows): Eq. 6.8 is meaningless there, so the
-error statistics leave them out."""
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,4 @@
-"""Capture programs of the simulated LED dome (thesis 10.2-10.4), rendered by Mitsuba.
+"""Capture programs of the simulated LED dome (thesis 10.2-10.4), every frame rendered.
 
 Two programs, as on the real rig (plans: :mod:`hwbridge.dome_plans`; store layout:
 :mod:`hwbridge.dome_layout`):
@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from collections import Counter
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -54,15 +54,13 @@ from twin.devices.sim_devices import SimDomeDevices
 from twin.dome.capture_geometry import FrameSize, camera_arc_index, geometry_metadata
 from twin.dome.exposure_plan import dome_exposures
 from twin.dome.holder import holder_content
+from twin.dome.render import DOME_SPP
 from twin.dome.setup import CALIBRATION_LIGHT, THESIS_LONGEST_BAND_S
 from twin.dome.signals import DomeScene, RenderedDomeSignal
 from twin.materials import available_materials, load_material
 from twin.rigs.dome_geometry import dome_geometry
 from twin.rigs.rig_config import DomeConfig, load_rig
 from twin.sensor.model import Sensor
-
-if TYPE_CHECKING:
-    pass
 
 __all__ = [
     "DEFAULT_SPP",
@@ -94,11 +92,9 @@ LED_FULL_SCALE_MA = 700.0
 """The LED drivers' full scale, at which the dome's LEDs emit their nominal intensity (the
 drive current of every frame of the programs)."""
 
-DEFAULT_SPP = 64
-"""Samples per pixel of the dome's renders by default (``--spp``): at 64 the spectral camera's
-30-band renders of a white field scatter by 0.7 % per pixel and their means lie within 1 % of
-the closed form; at 16, where the low-discrepancy sampler gives each band about two wavelengths
-per pixel, they scatter by 48 % (``tests/integration/test_dome_capture.py``)."""
+DEFAULT_SPP = DOME_SPP
+"""Samples per pixel of the dome's renders by default (``--spp``, :data:`twin.dome.render.
+DOME_SPP`)."""
 
 
 def _spread(count: int, total: int) -> list[int]:
@@ -279,6 +275,7 @@ class DomeCaptureProgram(ProgramCapture):
             "leds": len({s.get("light_id", -1) for s in self.plan} - {-1, -2}),
             "renders": len(renders),
             "frame_size": f"{side} x {side} px",
+            "spp": self.rig["spp"],
             "estimated_duration_s": duration_s,
             "estimated_duration_h": duration_s / 3600,
             "storage_mb": len(self.plan) * per_frame / 1e6,
@@ -350,6 +347,7 @@ def _program(
         "led_current_ma": LED_FULL_SCALE_MA,
         "led_spectrum": _spectrum(PhosphorWhiteLED().intensity(FINE_GRID).values),
         "white_reflectance": _spectrum(zenith_white_reflectance(FINE_GRID).values),
+        "rgb_response": _spectrum(Sensor(config.rgb_camera).electron_responses(FINE_GRID).values),
         "geometry": geometry_metadata(
             config, parts.cameras.all, frame, stage_views=views, tilts_deg=tilts
         ),
@@ -384,7 +382,11 @@ def dome_run_program(
         material=material,
         seed=seed,
         fault_rate=fault_rate,
-        settings={"material": material, "stage_positions": size.stage_positions},
+        settings={
+            "material": material,
+            "sample_size_m": load_material(material).size_m,
+            "stage_positions": size.stage_positions,
+        },
     )
 
 

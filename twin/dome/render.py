@@ -1,10 +1,14 @@
 """Renders of the LED dome: LEDs on, the sample (or a calibration target) on its holder turned by
 the rotation stage, seen by one RGB camera of the arc or by the spectral camera (thesis 10.2).
 
-Light transport is linear in the light, so a render with one LED on, or with all of them
-(:mod:`twin.render.light_groups`: the LEDs share one spectrum, moved into the camera's channel
-responses), is the photo-electron rate per pixel for any exposure; one spectral render gives
-every band of the tunable filter at once.
+The light transport is traced once per (LEDs, stage angle, camera) at the materials' wavelength
+nodes (:mod:`twin.render.node_transport`): the LEDs share one spectrum, so the R, G, B channels
+or every band of the tunable filter follow from the node values by one weight matrix
+(the channel responses times the LED's spectrum, :func:`twin.render.node_transport.
+node_weights`), without spectral sampling noise. Light transport is linear in the light, so a
+render with one LED on, or with all of them (a sum of point lights), is the photo-electron rate
+per pixel for any exposure. The stage turns the sample; a render turns the camera and the LEDs
+the other way instead, so one scene per holder content serves every stage angle.
 """
 
 from __future__ import annotations
@@ -19,26 +23,36 @@ from twin.components.lamps import FINE_GRID, PhosphorWhiteLED
 from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.materials import Material
 from twin.materials.sample_holder import holder_parts
-from twin.materials.surfaces import SurfacePart, transformed
-from twin.render.light_groups import LightGroup, render_lit
+from twin.materials.surfaces import SurfacePart
+from twin.render.node_transport import (
+    NodeScene,
+    PinholeRays,
+    PointLight,
+    PointLights,
+    node_weights,
+)
 from twin.render.scene import PinholeCamera
-from twin.render.shapes import mitsuba_shape
-from twin.render.spectra import irregular_spectrum
 from twin.rigs.dome_geometry import dome_geometry
 from twin.rigs.rig_config import DomeConfig
 from twin.sensor.model import Sensor
 
 __all__ = [
+    "DOME_SPP",
     "DomeView",
     "dome_camera",
     "dome_part_rates",
     "dome_rates",
-    "dome_shape_rates",
-    "dome_shapes",
+    "dome_scene_rates",
     "stage_matrix",
 ]
 
-_MAX_DEPTH = 3  # direct light and one bounce, as the gonioreflectometer's renders
+DOME_SPP = 16
+"""Samples per pixel of the dome's renders by default, stratified 4 x 4 over the pixel: the
+spectra carry no sampling noise, the samples average the image over each pixel where edges
+(marks, checkerboard squares, texture) cross it, as the gonioreflectometer's
+(:data:`twin.gonio.render.GONIO_SPP`). A white field's render noise is then far below the
+sensors' temporal noise in every channel and band (``tests/twin/dome/test_dome_render_noise.py``,
+BENCHMARKS.md)."""
 
 
 def stage_matrix(stage_deg: float) -> np.ndarray:
@@ -76,17 +90,6 @@ def dome_camera(
     return PinholeCamera(position, field, pixels, up=up, window=window), sensor, bands
 
 
-def _led_group(config: DomeConfig, leds: Sequence[int]) -> LightGroup:
-    """The LEDs ``leds`` as point lights of a flat unit spectrum, sharing the LED's spectrum."""
-    positions = dome_geometry(config).led_positions_m[np.asarray(leds, int)]
-    flat = irregular_spectrum(SampledSpectra(FINE_GRID, np.ones(FINE_GRID.size)))
-    entries = {
-        f"led_{index:03d}": {"type": "point", "position": position.tolist(), "intensity": flat}
-        for index, position in zip(leds, positions, strict=True)
-    }
-    return LightGroup("leds", entries, PhosphorWhiteLED().intensity(FINE_GRID))
-
-
 def dome_part_rates(
     config: DomeConfig,
     parts: Sequence[SurfacePart],
@@ -96,7 +99,7 @@ def dome_part_rates(
     camera: int | str,
     pixels: int,
     window: int | None = None,
-    spp: int = 64,
+    spp: int = DOME_SPP,
     seed: int = 0,
     bands_nm: Sequence[float] | None = None,
 ) -> np.ndarray:
@@ -104,22 +107,15 @@ def dome_part_rates(
     the stage to ``stage_deg`` and lit by the LEDs ``leds`` together: R, G, B for an RGB camera
     (before the Bayer mosaic), one channel per band for the spectral camera."""
     view = DomeView(config, camera, pixels, window=window, bands_nm=bands_nm)
-    return dome_shape_rates(
-        config, dome_shapes(parts, stage_deg), view, leds=leds, spp=spp, seed=seed
+    return dome_scene_rates(
+        config, NodeScene(parts), view, stage_deg=stage_deg, leds=leds, spp=spp, seed=seed
     )
-
-
-def dome_shapes(parts: Sequence[SurfacePart], stage_deg: float) -> dict[str, object]:
-    """Mitsuba shapes of ``parts`` turned by the stage to ``stage_deg``, to render with any
-    camera and LEDs (:func:`dome_shape_rates`)."""
-    matrix = stage_matrix(stage_deg)
-    return {part.name: mitsuba_shape(transformed(part, matrix)) for part in parts}
 
 
 class DomeView:
     """Camera ``camera`` of the dome ready to render (:func:`dome_camera`'s arguments): its
-    channels (the sensor's electron responses, through the filter's bands) and its Mitsuba
-    sensor, built once for all the renders of the camera."""
+    view and the node weights of its channels (the sensor's electron responses, through the
+    filter's bands, times the LEDs' spectrum), built once for all the renders of the camera."""
 
     def __init__(
         self,
@@ -134,35 +130,42 @@ class DomeView:
             config, camera, pixels, window=window, bands_nm=bands_nm
         )
         self.channels = sensor.electron_responses(FINE_GRID, bands)
-        self._sensors: dict[tuple[int, bytes], dict[str, object]] = {}
+        led = PhosphorWhiteLED().intensity(FINE_GRID)
+        self.weights = node_weights(self.channels * led).astype(np.float32)
+        """Node weights ``(n_nodes, n_channels)`` of the channels under the LEDs' spectrum."""
 
-    def mitsuba_sensor(self, channels: SampledSpectra, spp: int) -> dict[str, object]:
-        """:meth:`twin.render.scene.PinholeCamera.mitsuba_sensor`, kept per film and spp."""
-        key = (int(spp), channels.values.tobytes())
-        if key not in self._sensors:
-            self._sensors[key] = self.view.mitsuba_sensor(channels, spp)
-        return self._sensors[key]
+    def rays(self, stage_deg: float) -> PinholeRays:
+        """The camera's rays in the sample frame of the stage turned to ``stage_deg``."""
+        to_sample = stage_matrix(stage_deg)[:3, :3].T
+        left, up, forward = self.view.frame()
+        return PinholeRays(
+            to_sample @ self.view.position_m,
+            to_sample @ left,
+            to_sample @ up,
+            to_sample @ forward,
+            float(np.tan(np.radians(self.view.fov_deg) / 2)),
+            self.view.pixels,
+            self.view.window,
+        )
 
 
-def dome_shape_rates(
+def dome_scene_rates(
     config: DomeConfig,
-    shapes: dict[str, object],
+    scene: NodeScene,
     view: DomeView,
     *,
+    stage_deg: float,
     leds: Sequence[int],
-    spp: int = 64,
+    spp: int = DOME_SPP,
     seed: int = 0,
 ) -> np.ndarray:
-    """:func:`dome_part_rates` of shapes made by :func:`dome_shapes`, seen by ``view``."""
-    return render_lit(
-        view,
-        view.channels,
-        shapes,
-        [_led_group(config, leds)],
-        spp=spp,
-        seed=seed,
-        max_depth=_MAX_DEPTH,
-    )
+    """:func:`dome_part_rates` of a scene of parts in the sample frame, seen by ``view``."""
+    to_sample = stage_matrix(stage_deg)[:3, :3].T
+    positions = dome_geometry(config).led_positions_m[np.asarray(leds, int)] @ to_sample.T
+    light = PointLight(positions[0]) if len(positions) == 1 else PointLights(positions)
+    radiance = scene.transport(view.rays(stage_deg), light, spp=spp, seed=seed)
+    height, width, count = radiance.shape
+    return (radiance.reshape(-1, count) @ view.weights).reshape(height, width, -1)
 
 
 def dome_rates(
@@ -173,7 +176,7 @@ def dome_rates(
     led: int,
     camera: int | str,
     pixels: int = 256,
-    spp: int = 64,
+    spp: int = DOME_SPP,
     seed: int = 0,
 ) -> np.ndarray:
     """:func:`dome_part_rates` of ``material`` on the sample holder, one LED on."""

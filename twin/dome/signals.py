@@ -1,9 +1,9 @@
 """Signals of the simulated dome's cameras: mean photo-electrons of a frame from the rig's state.
 
-:class:`RenderedDomeSignal` renders, with Mitsuba, what one camera sees: the holder with what
-the plan step puts on it (:mod:`twin.dome.holder`), turned to the angle the rotation stage has
-set, lit by the LEDs the LED array has switched on (their intensity in proportion to the drive
-current, the LED's nominal one at full scale). A render is a rate per pixel
+:class:`RenderedDomeSignal` renders (:mod:`twin.dome.render`) what one camera sees: the holder
+with what the plan step puts on it (:mod:`twin.dome.holder`), turned to the angle the rotation
+stage has set, lit by the LEDs the LED array has switched on (their intensity in proportion to
+the drive current, the LED's nominal one at full scale). A render is a rate per pixel
 (e-/s; all of the tunable filter's bands at once for the spectral camera), so one render per
 (stage angle, LEDs, holder content, camera) serves every exposure of the HDR set and every
 band: the camera keeps its last render, and a plan that takes a camera's frames of one LED
@@ -21,8 +21,9 @@ import numpy as np
 from hwbridge.dome_layout import SPECTRAL_CAMERA
 from twin.devices.sim_devices import VirtualRig
 from twin.dome.holder import holder_scene_parts
-from twin.dome.render import DomeView, dome_shape_rates, dome_shapes
+from twin.dome.render import DomeView, dome_scene_rates
 from twin.materials import Material
+from twin.render.node_transport import NodeScene
 from twin.rigs.rig_config import DomeConfig
 
 __all__ = ["DomeScene", "RenderedDomeSignal"]
@@ -59,19 +60,18 @@ class DomeScene:
     window: int
     spp: int
     bands_nm: tuple[float, ...]
-    _shapes: dict = field(default_factory=dict, repr=False)
+    _scenes: dict = field(default_factory=dict, repr=False)
 
     def __getstate__(self) -> dict:
-        return {**self.__dict__, "_shapes": {}}  # Mitsuba shapes stay in their process
+        return {**self.__dict__, "_scenes": {}}  # Mitsuba scenes stay in their process
 
-    def shapes(self, content: str, stage_deg: float) -> dict[str, object]:
-        """Mitsuba shapes of the holder with ``content`` turned to ``stage_deg`` (the last ones
+    def node_scene(self, content: str) -> NodeScene:
+        """The holder with ``content`` in the sample frame, for every stage angle (the last one
         kept)."""
-        key = (content, stage_deg)
-        if key not in self._shapes:
-            self._shapes.clear()
-            self._shapes[key] = dome_shapes(holder_scene_parts(content, self.material), stage_deg)
-        return self._shapes[key]
+        if content not in self._scenes:
+            self._scenes.clear()
+            self._scenes[content] = NodeScene(holder_scene_parts(content, self.material))
+        return self._scenes[content]
 
 
 class RenderedDomeSignal:
@@ -102,10 +102,11 @@ class RenderedDomeSignal:
                     window=scene.window,
                     bands_nm=scene.bands_nm,
                 )
-            self._rates = dome_shape_rates(
+            self._rates = dome_scene_rates(
                 scene.config,
-                scene.shapes(content, stage_deg),
+                scene.node_scene(content),
                 self._view,
+                stage_deg=stage_deg,
                 leds=leds,
                 spp=scene.spp,
                 seed=seed,

@@ -59,7 +59,7 @@ from twin.devices.programs import (
 )
 from twin.devices.sim_devices import SimGonioDevices, VirtualRig
 from twin.gonio.capture_time import estimate_plan_s
-from twin.gonio.render import gonio_camera, pose_matrix
+from twin.gonio.render import GONIO_SPP, gonio_camera, pose_matrix
 from twin.gonio.signals import RenderedGonioSignal, WhiteReferenceSignal
 from twin.materials import load_material
 from twin.materials.sample_holder import PRINT_OUTER_HALF_M, registration_corners
@@ -244,7 +244,8 @@ class CaptureProgram(ProgramCapture):
 
     def dry_run(self) -> dict[str, object]:
         """The plan in numbers, capturing nothing: steps, frames per camera and per kind,
-        views, frame size, the estimated duration (the rig's timing,
+        views, frame size, samples per pixel of the renders (where it renders), the estimated
+        duration (the rig's timing,
         :func:`twin.gonio.capture_time.estimate_plan_s`) and the storage the frames and their
         index take uncompressed (the store compresses them)."""
         devices = self.devices()
@@ -264,6 +265,7 @@ class CaptureProgram(ProgramCapture):
             "kinds": dict(Counter(step["kind"] for step in self.plan)),
             "views": len({step.get("view_id", -1) for step in self.plan} - {-1}),
             "frame_size": f"{height} x {width} px",
+            **({"spp": self.rig["spp"]} if "spp" in self.rig else {}),
             "estimated_duration_s": duration_s,
             "estimated_duration_h": duration_s / 3600,
             "storage_mb": storage / 1e6,
@@ -302,7 +304,7 @@ def _with_view(steps: list[dict], view: int) -> list[dict]:
 
 
 def gonio_calibration_program(
-    *, pixels: int = 64, spp: int = 64, seed: int = 0, white_fill: float = 0.6
+    *, pixels: int = 64, spp: int = GONIO_SPP, seed: int = 0, white_fill: float = 0.6
 ) -> CaptureProgram:
     """The calibration session (see the module docstring), checked and not yet captured.
 
@@ -350,7 +352,7 @@ def run_gonio_calibration(
     store: str | Path,
     *,
     pixels: int = 64,
-    spp: int = 64,
+    spp: int = GONIO_SPP,
     seed: int = 0,
     white_fill: float = 0.6,
     resume: bool = False,
@@ -371,7 +373,7 @@ def gonio_measurement_program(
     pairs: GonioPairs | None = None,
     pixels: int = 256,
     window: int | None = None,
-    spp: int = 64,
+    spp: int = GONIO_SPP,
     seed: int = 0,
 ) -> CaptureProgram:
     """One measurement run (see the module docstring), checked and not yet captured.
@@ -457,7 +459,7 @@ def run_gonio_measurement(
     pairs: GonioPairs | None = None,
     pixels: int = 256,
     window: int | None = None,
-    spp: int = 64,
+    spp: int = GONIO_SPP,
     seed: int = 0,
     resume: bool = False,
     show_progress: bool = False,

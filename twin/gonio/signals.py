@@ -7,8 +7,9 @@ then vary with the flicker phase, as on the real rig (thesis 3.2.2).
 
 - :class:`WhiteReferenceSignal`: the Zenith white standard facing the lamp (analytic, uniform).
 - :class:`RenderedGonioSignal`: the material on its holder rendered by Mitsuba for the view the
-  positioner has set; the renders of the current view are kept (one per lamp part, all bands at
-  once), so a plan that goes view by view renders each view once.
+  positioner has set; the scene is built once per process (:class:`twin.gonio.render.
+  GonioScene`) and the render of the current view is kept (every lamp part and band at once), so
+  a plan that goes view by view renders each view once.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import numpy as np
 from twin.components.lamps import FINE_GRID, Lamp
 from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.devices.sim_devices import VirtualRig
-from twin.gonio.render import gonio_lamp, gonio_part_rates
+from twin.gonio.render import GONIO_SPP, GonioScene, gonio_lamp
 from twin.materials import Material
 from twin.rigs.gonio_kinematics import GonioPose
 from twin.rigs.rig_config import GonioConfig
@@ -66,7 +67,7 @@ class RenderedGonioSignal:
         poses: list[GonioPose],
         *,
         pixels: int,
-        spp: int = 16,
+        spp: int = GONIO_SPP,
         window: int | None = None,
     ):
         self._config, self._material, self._poses = config, material, poses
@@ -74,19 +75,22 @@ class RenderedGonioSignal:
         self._bands_nm = np.asarray(
             LiquidCrystalTunableFilter.varispec(config.camera.filter).band_centres_nm
         )
+        self._scene: GonioScene | None = None
         self._cache: dict[int, np.ndarray] = {}
+
+    def __getstate__(self) -> dict:
+        # The Mitsuba scene and the renders stay in the process that made them; a Dask worker
+        # builds its own scene from the material.
+        return {**self.__dict__, "_scene": None, "_cache": {}}
 
     def rates(self, view_id: int) -> np.ndarray:
         """Photo-electron rates ``(n_parts, H, W, n_bands)`` of a view (the last view's kept)."""
         if view_id not in self._cache:
             self._cache.clear()
-            self._cache[view_id] = gonio_part_rates(
-                self._config,
-                self._poses[view_id],
-                self._material,
-                pixels=self._pixels,
-                spp=self._spp,
-                window=self._window,
+            if self._scene is None:
+                self._scene = GonioScene(self._config, self._material)
+            self._cache[view_id] = self._scene.part_rates(
+                self._poses[view_id], pixels=self._pixels, spp=self._spp, window=self._window
             )
         return self._cache[view_id]
 

@@ -11,7 +11,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["TextureTruth"]
+__all__ = ["MATERIAL_TEXEL_REFLECTANCE", "TextureTruth"]
+
+MATERIAL_TEXEL_REFLECTANCE = 0.01
+"""Texels whose true mean reflectance is below this show no material (the gaps between Lego
+bricks, seen through to the void, and full shadows): Eq. 6.8 is meaningless there, so the
+error statistics leave them out."""
 
 
 @dataclass(frozen=True)

@@ -15,15 +15,20 @@ from twin.render.variant import activate
 __all__ = ["mitsuba_shape", "part_bsdf"]
 
 
-def part_bsdf(part: SurfacePart) -> dict[str, object]:
-    """The Mitsuba BSDF dict of ``part``: its diffuse reflectance, coating or conductor."""
+def part_bsdf(part: SurfacePart, *, unit: bool = False) -> dict[str, object]:
+    """The Mitsuba BSDF dict of ``part``: its diffuse reflectance, coating or conductor.
+
+    With ``unit`` the same BSDF with every spectral factor one: a reflectance of one and a
+    perfectly reflecting metal (Mitsuba's ``material: none``), i.e. the geometric factors of its
+    lobes, which :mod:`twin.render.node_transport` multiplies with the spectra itself.
+    """
     if part.conductor is not None:
         return {
             "type": "roughconductor",
-            "material": part.conductor,
+            "material": "none" if unit else part.conductor,
             "alpha": part.roughness or 0.05,
         }
-    diffuse = irregular_spectrum(part.reflectance)
+    diffuse = {"type": "uniform", "value": 1.0} if unit else irregular_spectrum(part.reflectance)
     if part.roughness is None:
         return {"type": "diffuse", "reflectance": diffuse}
     return {
@@ -35,13 +40,14 @@ def part_bsdf(part: SurfacePart) -> dict[str, object]:
     }
 
 
-def mitsuba_shape(part: SurfacePart):
-    """A Mitsuba mesh built in memory from ``part`` (no files), with its BSDF attached."""
+def mitsuba_shape(part: SurfacePart, bsdf=None):
+    """A Mitsuba mesh built in memory from ``part`` (no files), with its BSDF attached (or
+    ``bsdf``, a loaded Mitsuba BSDF that several shapes may share)."""
     activate()
     import mitsuba as mi
 
     properties = mi.Properties()
-    properties["bsdf"] = mi.load_dict(part_bsdf(part))
+    properties["bsdf"] = bsdf if bsdf is not None else mi.load_dict(part_bsdf(part))
     mesh = mi.Mesh(
         part.name,
         len(part.mesh.vertices),

@@ -13,13 +13,14 @@ are rendered by :func:`truth_btf` (Mitsuba, reflectance averaged over 10 nm pass
 multiplied by :math:`\\pi`, so that a white Lambertian surface reads 1 (reflectance factors, as
 Eq. 6.8's :math:`\\epsilon = 10^{-3}` assumes).
 
-A spectral render samples wavelengths at random per path, so at 64 spp neighbouring bands of one
-texel differ by tens of percent of Monte Carlo noise (two seeds: 34 % mean relative error; 9 % at
-1024 spp), which no method could predict from RGB. Each texel is therefore replaced by its
-non-negative least-squares fit with the material's part reflectances plus a flat spectrum (the
-surface reflection of a dielectric, i.e. highlights): shading, shadowing, highlights and the
-mixing of parts within a texel stay, the noise goes. The weights also give the texel's spectrum
-on the fine grid, where the cameras integrate it (:mod:`twin.dome.capture`).
+The renders evaluate the light transport at the materials' wavelength nodes
+(:mod:`twin.render.node_transport`, the same transport as the gonioreflectometer's frames), so
+the spectra carry no sampling noise; the samples per texel average the image over the texel. A
+texture is stored as each texel's non-negative least-squares fit with the material's part
+reflectances plus a flat spectrum (the surface reflection of a dielectric, i.e. highlights):
+shading, shadowing, highlights and the mixing of parts within a texel are its weights, which
+also give the texel's spectrum on the fine grid, where the cameras integrate it
+(:mod:`twin.dome.capture`).
 """
 
 from __future__ import annotations
@@ -32,12 +33,11 @@ from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid, resample
 from twin.components.lamps import FINE_GRID
 from twin.materials import Material, load_material
 from twin.materials.textures import TextureTruth
-from twin.render.render import render_scene
-from twin.render.shapes import mitsuba_shape
-from twin.render.spectra import irregular_spectrum, ldsampler, specfilm
-from twin.render.variant import activate
+from twin.render.node_transport import DistantLight, NodeScene, ParallelCamera, node_weights
 
 __all__ = ["band_passbands", "texture_truth", "truth_btf", "truth_camera_signal"]
+
+_BOUNCES = 2  # light may meet three surfaces (Mitsuba's path tracer at max_depth 4)
 
 
 def band_passbands(centres: WavelengthGrid = DEFAULT_GRID, fwhm_nm: float = 10.0) -> SampledSpectra:
@@ -49,43 +49,34 @@ def band_passbands(centres: WavelengthGrid = DEFAULT_GRID, fwhm_nm: float = 10.0
     return SampledSpectra(FINE_GRID, shapes, tuple(f"band_{c:g}nm" for c in centres.wavelengths_nm))
 
 
-def _render(
+def _renders(
     material: Material,
-    light: np.ndarray,
-    view: np.ndarray,
+    light_dirs: np.ndarray,
+    view_dirs: np.ndarray,
     channels: SampledSpectra,
     irradiance: SampledSpectra,
     texels: int,
     spp: int,
     seed: int,
 ) -> np.ndarray:
-    activate()
-    import mitsuba as mi
-
-    half = material.size_m / 2
-    to_world = np.eye(4)
-    # Mitsuba's film x runs along the camera's -x: map it to the sample's +x so that texel
-    # (row, column) is (y from +half down, x from -half up).
-    to_world[:3, 0], to_world[:3, 1] = (-half, 0, 0), (0, half, 0)
-    to_world[:3, 2], to_world[:3, 3] = -view, 0.1 * view
-    scene = {
-        "type": "scene",
-        "integrator": {"type": "path", "max_depth": 4},
-        "sensor": {
-            "type": "orthographic",
-            "to_world": mi.ScalarTransform4f(to_world.tolist()),
-            "film": specfilm(channels, texels, texels),
-            "sampler": ldsampler(spp),
-        },
-        "light": {
-            "type": "directional",
-            "direction": (-light).tolist(),
-            "irradiance": irregular_spectrum(irradiance),
-        },
-    }
-    for part in material.parts:
-        scene[part.name] = mitsuba_shape(part)
-    return render_scene(scene, seed)
+    """Channel values ``(n_pairs, texels, texels, n_channels)`` of ``material`` lit by a distant
+    light of spectral irradiance ``irradiance`` from each light direction, seen along the view
+    direction in texel space."""
+    scene = NodeScene(material.parts)
+    weights = node_weights(channels * irradiance)
+    images = []
+    for light, view in zip(light_dirs, view_dirs, strict=True):
+        radiance = scene.transport(
+            ParallelCamera(view, material.size_m / 2, texels),
+            DistantLight(light),
+            spp=spp,
+            seed=seed,
+            bounces=_BOUNCES,
+        )
+        images.append(
+            (radiance.reshape(-1, radiance.shape[-1]) @ weights).reshape(texels, texels, -1)
+        )
+    return np.stack(images)
 
 
 def _check_directions(
@@ -131,11 +122,8 @@ def truth_btf(
             f"passbands: expected (n_bands, K) rows on {FINE_GRID.describe()}, got "
             f"{passbands.values.shape} on {passbands.grid.describe()}"
         )
-    images = [
-        _render(material, light, view, passbands, flat, texels, spp, seed) / light[2]
-        for light, view in zip(light_dirs, view_dirs, strict=True)
-    ]
-    return np.stack(images).astype(np.float32)
+    images = _renders(material, light_dirs, view_dirs, passbands, flat, texels, spp, seed)
+    return (images / light_dirs[:, 2, None, None, None]).astype(np.float32)
 
 
 def truth_camera_signal(
@@ -153,11 +141,7 @@ def truth_camera_signal(
     :math:`\\int L_o R_c d\\lambda` under ``illuminant`` (irradiance on a plane facing the light),
     both on ``FINE_GRID``."""
     light_dirs, view_dirs = _check_directions(light_dirs, view_dirs)
-    images = [
-        _render(material, light, view, response, illuminant, texels, spp, seed)
-        for light, view in zip(light_dirs, view_dirs, strict=True)
-    ]
-    return np.stack(images)
+    return _renders(material, light_dirs, view_dirs, response, illuminant, texels, spp, seed)
 
 
 def _basis(material: Material, surface: bool) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:

@@ -52,6 +52,19 @@ from twin.rigs.camera_config import CameraConfig, load_camera_config
 __all__ = ["Sensor", "bayer_channel_index"]
 
 _ROW_BLOCKS = 8  # fixed, so the same seed gives the same frame whatever the thread count
+_THREADS = 2  # numpy's generators release the GIL: the row blocks are drawn on two threads
+_pool: ThreadPoolExecutor | None = None
+
+
+def _row_pool() -> ThreadPoolExecutor:
+    """The threads that draw row blocks, started once per process (starting two threads for
+    every frame cost as much as drawing a 256 x 256 frame's noise)."""
+    global _pool
+    if _pool is None:
+        _pool = ThreadPoolExecutor(max_workers=_THREADS, thread_name_prefix="sensor")
+    return _pool
+
+
 _BAYER_RGGB = np.array([[0, 1], [1, 2]])  # channel (R=0, G=1, B=2) at (row % 2, column % 2)
 
 
@@ -293,8 +306,7 @@ class Sensor:
                 offset_dn = self._fixed_pattern["offset_dn"][rows]
                 frame[rows] = self._digitize(mean[rows], offset_dn, generators[block])
 
-        with ThreadPoolExecutor(max_workers=2) as pool:
-            list(pool.map(convert, range(_ROW_BLOCKS)))
+        list(_row_pool().map(convert, range(_ROW_BLOCKS)))
         return frame
 
     def dark_frame(self, exposure_s: float, rng: np.random.Generator) -> np.ndarray:
@@ -313,12 +325,16 @@ class Sensor:
         self, mean_electrons: np.ndarray, offset_dn: np.ndarray, generator: np.random.Generator
     ) -> np.ndarray:
         config = self.config
-        electrons = generator.poisson(mean_electrons).astype(np.float32)
-        np.minimum(electrons, config.full_well_e, out=electrons)
-        signal_dn = electrons * config.system_gain_dn_per_e
-        signal_dn += config.read_noise_dn * generator.standard_normal(signal_dn.shape, np.float32)
-        digital = self.oecf(signal_dn) + offset_dn
-        return np.clip(np.rint(digital), 0, self.max_dn).astype(np.uint16)
+        signal_dn = generator.poisson(mean_electrons).astype(np.float32)
+        np.minimum(signal_dn, config.full_well_e, out=signal_dn)
+        signal_dn *= config.system_gain_dn_per_e
+        read_dn = generator.standard_normal(signal_dn.shape, np.float32)
+        read_dn *= config.read_noise_dn
+        signal_dn += read_dn
+        digital = self.oecf(signal_dn)
+        digital += offset_dn
+        np.rint(digital, out=digital)
+        return np.clip(digital, 0, self.max_dn, out=digital).astype(np.uint16)
 
     # -- validation --------------------------------------------------------------------------
 

@@ -30,6 +30,7 @@ from recon.btf.processing import process_gonio
 from recon.calibration.gonio import calibrate_gonio
 from recon.errors import SpectwinInputError
 from twin.gonio.capture import CAMERA_ID, run_gonio_calibration, run_gonio_measurement
+from twin.gonio.render import GONIO_SPP
 from twin.output_format import dumps
 from twin.studies.demo_report import (
     plot_exposure_plan,
@@ -61,7 +62,7 @@ class DemoSettings:
     rings: tuple[tuple[float, int], ...] = DEMO_RINGS
     pixels: int = 256
     texels: int = 64
-    spp: int = 64
+    spp: int = GONIO_SPP
     figure_pixels: int = 96
     figure_spp: int = 256
     map_height: int = 32
@@ -126,7 +127,7 @@ def run_demo(
         compression = compression_report(compressed, reflectance)
         plot_textures(btf, out / "textures.png")
     with stage("evaluation against the truth"):
-        evaluation = evaluate_gonio(out / "cc.btf.zarr", spp=settings.spp)
+        evaluation = evaluate_gonio(out / "cc.btf.zarr")
         write_gonio_figure(evaluation, btf, out / "evaluation.png")
     with stage("spectralization"):
         spectralization = band_image_spectralization(

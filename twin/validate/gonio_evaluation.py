@@ -30,7 +30,8 @@ from recon.metrics import relative_error
 from recon.preview import spectral_to_srgb
 from twin.gonio.capture import GonioPairs, actual_poses, texture_corners_world
 from twin.gonio.render import gonio_camera
-from twin.materials import Material, load_material
+from twin.materials import load_material
+from twin.materials.chart_fields import FieldMasks, field_masks
 from twin.render.truth import truth_btf
 from twin.rigs.hemisphere import spherical_deg
 from twin.rigs.rig_config import load_rig
@@ -43,37 +44,6 @@ __all__ = [
     "field_masks",
     "write_gonio_figure",
 ]
-
-
-@dataclass(frozen=True)
-class FieldMasks:
-    """Interior masks ``(n_fields, H, W)`` of a chart's fields for one view, and their names."""
-
-    names: tuple[str, ...]
-    glossy: np.ndarray
-    masks: np.ndarray
-
-
-def field_masks(
-    material: Material, view_dir: np.ndarray, texels: int, *, interior: float = 0.6
-) -> FieldMasks:
-    """Field interiors in texel space for a view (texel ``(i, j)`` = sample
-    ``x = -s/2 + (j + 0.5) s / n``, ``y = s/2 - (i + 0.5) s / n``, the truth's layout)."""
-    size, parts = material.size_m, [p for p in material.parts if p.name.startswith("field_")]
-    centres = (np.arange(texels) + 0.5) / texels * size - size / 2
-    x, y = np.meshgrid(centres, -centres)
-    masks = []
-    for part in parts:
-        (low, high) = part.mesh.bounds
-        shift = high[2] * np.asarray(view_dir[:2]) / view_dir[2]
-        middle = (low[:2] + high[:2]) / 2 - shift
-        half = interior * (high[:2] - low[:2]) / 2
-        masks.append((np.abs(x - middle[0]) < half[0]) & (np.abs(y - middle[1]) < half[1]))
-    return FieldMasks(
-        tuple(p.name for p in parts),
-        np.array([p.roughness is not None for p in parts]),
-        np.stack(masks),
-    )
 
 
 @dataclass(frozen=True)

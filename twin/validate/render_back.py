@@ -6,7 +6,8 @@ For a BTF store of the twin's colour checker (raw, or its PCA form with ``compre
   and
   RGB renderings of the BTF under the room's captured spectral map, Delta E94 maps;
 - the spectrophotometer comparison of Fig. 4.3/4.4 (:mod:`twin.validate.spectrophotometer`): a 45/0
-  instrument on the true material versus the BTF integrated over theta_i = 45 degrees.
+  instrument on the true material versus the BTF integrated over theta_i = 45 degrees, in the
+  BTF's bands (a dome BTF's are the dome's spectral camera's).
 
 Writes ``figure46.png``, ``spectrophotometer_45_0.png`` and ``metrics.json`` into ``out``.
 """
@@ -22,6 +23,7 @@ from recon.errors import SpectwinInputError
 from twin.materials import load_material
 from twin.output_format import dumps
 from twin.render.plugins.btf_bsdf import store_table
+from twin.validate.dome_evaluation import spectral_passbands
 from twin.validate.figure46 import field_interiors, render_figure46, write_figure46
 from twin.validate.spectrophotometer import compare_45_0, field_spots, write_45_0_figure
 
@@ -115,7 +117,8 @@ def validate_btf(
 
     step("45/0 spectrophotometer comparison")
     start = time.perf_counter()
-    forty_five = compare_45_0(table, material, spp=spp)
+    passbands = spectral_passbands(btf.grid.wavelengths_nm) if "dome_pairs" in btf.attrs else None
+    forty_five = compare_45_0(table, material, spp=spp, passbands=passbands)
     write_45_0_figure(forty_five, btf.grid.wavelengths_nm, out / "spectrophotometer_45_0.png")
     timings["spectrophotometer_s"] = round(time.perf_counter() - start, 1)
 

@@ -11,8 +11,8 @@ integrated over the same ring by interpolating between its measured directions
 (:func:`twin.render.plugins.btf_bsdf.interpolate_table`); both are averaged over a circular spot in
 the middle
 of every chart field. The instrument's spectra are resolved to the BTF's bands with the
-gonioreflectometer's band weighting (:func:`twin.sensor.band_weights.instrument_passbands`),
-as a
+gonioreflectometer's band weighting (:func:`twin.sensor.band_weights.instrument_passbands`; a
+dome BTF's with the dome's spectral camera's), as a
 finely sampling laboratory spectrophotometer's readings would be before comparing them with the
 camera's bands, so that the comparison measures geometry and calibration, not band shapes.
 """
@@ -25,6 +25,7 @@ import numpy as np
 
 from recon.btf.store import BTFStore
 from recon.metrics import relative_error
+from recon.spectra import SampledSpectra
 from twin.materials import Material
 from twin.render.plugins.btf_bsdf import BTFTable, CompressedTable, interpolate_table, written_table
 from twin.render.truth import truth_btf
@@ -79,9 +80,12 @@ def compare_45_0(
     *,
     azimuths: int = 8,
     spp: int = 64,
+    passbands: SampledSpectra | None = None,
 ) -> FortyFiveZero:
     """45/0 reflectance factors per field from the true material and from ``btf`` (a store's
-    written pairs, or a table such as :func:`twin.render.plugins.btf_bsdf.store_table` gives)."""
+    written pairs, or a table such as :func:`twin.render.plugins.btf_bsdf.store_table` gives);
+    the instrument's spectra in ``passbands`` (the BTF's bands; default the
+    gonioreflectometer's)."""
     lights = direction(np.full(azimuths, 45.0), np.arange(azimuths) * 360.0 / azimuths)
     top = np.array([0.0, 0.0, 1.0])
     table = written_table(btf) if isinstance(btf, BTFStore) else btf
@@ -91,7 +95,7 @@ def compare_45_0(
         lights,
         np.tile(top, (azimuths, 1)),
         texels=texels,
-        passbands=instrument_passbands(load_rig("gonio")),
+        passbands=instrument_passbands(load_rig("gonio")) if passbands is None else passbands,
         spp=spp,
     ).mean(axis=0)
     measured = np.mean([interpolate_table(table, light, top) for light in lights], axis=0)

@@ -177,3 +177,23 @@ def test_resume_of_a_run_reads_its_settings_and_refuses_other_ones(tmp_path, cal
         assert result.exit_code == 2, (arguments, result.output)
         assert message in result.stderr and result.stderr.count("\n") == 1, result.stderr
     assert CaptureStore.open(path).pending_steps() == list(range(3, len(program.plan)))
+
+
+def test_the_capture_renders_at_the_rigs_sample_count_unless_told(tmp_path):
+    """Without --spp each program renders at its own default (the gonio's stratified 16, the
+    dome's 64); a given --spp is what the plan renders at."""
+    from twin.dome.programs import DEFAULT_SPP
+    from twin.gonio.render import GONIO_SPP
+
+    assert gonio_measurement_program(EXPOSURES_S).rig["spp"] == GONIO_SPP
+    dome = ["--leds", "2", "--rgb-cameras", "1", "--texels", "8"]
+    for arguments, spp in [
+        (["--program", "gonio-run"], GONIO_SPP),
+        (["--program", "gonio-run", "--spp", "40"], 40),
+        (["--program", "dome-run", *dome, "--stage-positions", "1"], DEFAULT_SPP),
+        (["--program", "dome-calibration", *dome, "--spp", "9"], 9),
+    ]:
+        store = tmp_path / "x.capture.zarr"
+        result = runner.invoke(app, ["capture", str(store), "--dry-run", "--json", *arguments])
+        assert result.exit_code == 0, result.output
+        assert json.loads(result.stdout)["spp"] == spp, arguments

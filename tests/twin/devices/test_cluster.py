@@ -5,9 +5,12 @@ of one process, bit for bit (timestamps are wall-clock time and differ)."""
 import json
 import os
 import signal
+import sys
 import threading
 import time
+from pathlib import Path
 
+import cloudpickle
 import numpy as np
 import pytest
 from typer.testing import CliRunner
@@ -25,11 +28,12 @@ from recon.errors import SpectwinInputError
 from twin.cli.app import app
 from twin.components.lamps import HMILamp
 from twin.components.lctf import LiquidCrystalTunableFilter
+from twin.devices import cluster as cluster_module
 from twin.devices.cluster import dask_client, view_tasks
 from twin.devices.sim_devices import SimGonioDevices
 from twin.gonio.capture import CAMERA_ID, GonioPairs, run_gonio_measurement
 from twin.gonio.signals import WhiteReferenceSignal
-from twin.gonio.sim_session import demo_plan, run_demo_session
+from twin.gonio.sim_session import demo_plan, demo_program, run_demo_session
 from twin.rigs.hemisphere import direction
 from twin.rigs.rig_config import load_rig
 from twin.sensor.model import Sensor
@@ -157,12 +161,64 @@ def _done(path) -> int:
     return len(store.attrs["plan"]) - len(store.pending_steps())
 
 
-def test_sigint_stops_a_capture_on_the_cluster_inside_the_coordinators_lock(client, tmp_path):
+class _GatedCamera:
+    """A camera that holds every step from ``first_gated`` on until the file ``gate`` exists."""
+
+    def __init__(self, camera, gate: Path, first_gated: int):
+        self._camera, self._gate, self._first_gated, self._step = camera, gate, first_gated, 0
+
+    def __getattr__(self, name):
+        return getattr(self._camera, name)
+
+    def set_step(self, seed: int, step: int) -> None:
+        self._step = step
+        self._camera.set_step(seed, step)
+
+    def snap(self):
+        deadline = time.monotonic() + 120
+        while self._step >= self._first_gated and not self._gate.exists():
+            assert time.monotonic() < deadline, "the gate was never opened"
+            time.sleep(0.01)
+        return self._camera.snap()
+
+
+class _GatedDevices:
+    """The demo's device recipe with its camera behind a :class:`_GatedCamera` (pickled by value
+    for the workers)."""
+
+    def __init__(self, devices, gate: Path, first_gated: int):
+        self._devices, self._gate, self._first_gated = devices, gate, first_gated
+
+    def __call__(self):
+        session = self._devices()
+        session["cameras"] = {
+            name: _GatedCamera(camera, self._gate, self._first_gated)
+            for name, camera in session["cameras"].items()
+        }
+        return session
+
+
+def test_sigint_stops_a_capture_on_the_cluster_inside_the_coordinators_lock(
+    client, tmp_path, monkeypatch
+):
     """The coordinator holds the store's lock while the workers write; on SIGINT the workers
     stop after their current step, the coordinator returns only when none writes any more, and
-    a resume on the cluster ends with the uninterrupted frames."""
-    path = tmp_path / "stopped.capture.zarr"
+    a resume on the cluster ends with the uninterrupted frames. Steps from 20 on wait for a gate
+    that opens only once the coordinator has stopped gathering, so the SIGINT always finds work
+    left, whatever the machine's speed."""
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    path, gate, first_gated = tmp_path / "stopped.capture.zarr", tmp_path / "gate", 20
+    program = demo_program(11)
     seen: dict[str, object] = {}
+    gather = cluster_module._gather
+
+    def gather_then_open_the_gate(*args, **kwargs):
+        try:
+            return gather(*args, **kwargs)
+        finally:
+            gate.touch()
+
+    monkeypatch.setattr(cluster_module, "_gather", gather_then_open_the_gate)
 
     def interrupt_once_frames_are_written() -> None:
         deadline = time.monotonic() + 120
@@ -177,13 +233,25 @@ def test_sigint_stops_a_capture_on_the_cluster_inside_the_coordinators_lock(clie
 
     interrupter = threading.Thread(target=interrupt_once_frames_are_written)
     interrupter.start()
-    with pytest.raises(SessionInterrupted) as stopped:
-        run_demo_session(path, 11, client=client)
-    interrupter.join()
+    try:
+        with pytest.raises(SessionInterrupted) as stopped:
+            cluster_module.run_capture(
+                path,
+                program.plan,
+                _GatedDevices(program.devices, gate, first_gated),
+                rig=program.rig,
+                seed=program.seed,
+                client=client,
+                max_steps=1,
+            )
+    finally:
+        gate.touch()
+        interrupter.join()
+        cloudpickle.unregister_pickle_by_value(sys.modules[__name__])
     assert seen["owner"].pid == os.getpid()  # the coordinator's lock, not a worker's
     assert f"is being written by PID {os.getpid()}" in seen["busy"]
     done = _done(path)
-    assert stopped.value.done == done and 5 <= done < len(demo_plan())
+    assert stopped.value.done == done and 5 <= done <= first_gated < len(demo_plan())
     time.sleep(1.0)
     assert _done(path) == done  # no worker wrote after the coordinator returned
     assert not (path / ".writer.lock").exists()
@@ -208,11 +276,16 @@ def test_workers_of_one_session_fill_disjoint_steps_of_one_store(tmp_path):
     coordinator = open_session_store(path, plan, devices(), rig={}, backend="sim", seed=1)
     tasks = view_tasks(plan, coordinator.pending_steps())
     assert [len(task) for task in tasks] == [6, 33, 33]
-    for task in tasks[::-1]:  # each "worker" opens the store and builds its own devices
-        capture_steps(CaptureStore.open(path), task, devices(), seed=1, check_complete=False)
+    for task in tasks[::-1]:  # each "worker" opens the store, builds its own devices, writes
+        # its frames and returns their records; the coordinator writes index and flags
+        taken = capture_steps(CaptureStore.open(path), task, devices(), seed=1, record=False)
+        assert [step for step, _ in taken] == task
+        assert set(task) <= set(coordinator.pending_steps())  # frames written, not yet recorded
+        steps, records = zip(*taken, strict=True)
+        coordinator.write_index(steps, records)
+        coordinator.mark_done(steps, check_complete=False)
     assert not coordinator.complete and coordinator.pending_steps() == []
     assert coordinator.refresh_complete() and coordinator.complete
-    assert coordinator.one_chunk_per_frame
     assert list(coordinator.index("k4")["kind"]) == [step["kind"] for step in plan]
 
 

@@ -51,20 +51,25 @@ def test_simulated_devices_follow_the_protocols_and_share_state():
 
 @pytest.mark.render
 def test_rendered_session_renders_each_view_once_and_completes(tmp_path, monkeypatch):
-    from twin.gonio import signals as rig_signals
+    from twin.gonio.render import GonioScene
 
-    rendered_poses = []
-    render = rig_signals.gonio_part_rates
+    rendered_poses, scenes = [], []
+    render, build = GonioScene.part_rates, GonioScene.__init__
 
-    def counting_render(config, pose, *args, **kwargs):
+    def counting_render(scene, pose, *args, **kwargs):
         rendered_poses.append(pose)
-        return render(config, pose, *args, **kwargs)
+        return render(scene, pose, *args, **kwargs)
 
-    monkeypatch.setattr(rig_signals, "gonio_part_rates", counting_render)
+    def counting_build(scene, *args, **kwargs):
+        scenes.append(scene)
+        build(scene, *args, **kwargs)
+
+    monkeypatch.setattr(GonioScene, "part_rates", counting_render)
+    monkeypatch.setattr(GonioScene, "__init__", counting_build)
     store = run_demo_session(tmp_path / "rendered.capture.zarr", 1, rendered=True)
     assert store.complete
-    # Two direction pairs, every band of a view from one render: two renders, two poses.
-    assert len(rendered_poses) == 2
+    # Two direction pairs, every band of a view from one render of one scene: two renders.
+    assert len(rendered_poses) == 2 and len(scenes) == 1
     assert rendered_poses[0] != rendered_poses[1]
     frames, index = store.frames("k4")[:], store.index("k4")
     at_550 = np.flatnonzero(index["band_nm"] == 550.0)

@@ -12,7 +12,7 @@ from recon.spectra import DEFAULT_GRID, resample
 from twin.components.lamps import FINE_GRID, PhosphorWhiteLED, QTHLamp
 from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.components.targets import zenith_white_reflectance
-from twin.gonio.render import gonio_camera, gonio_part_rates, pose_matrix
+from twin.gonio.render import GonioScene, gonio_camera, gonio_lamp, gonio_part_rates, pose_matrix
 from twin.materials import MATERIAL_GRID, Material, load_material
 from twin.materials.calibration_targets import colorchecker_chart, esser_chart, zenith_white_target
 from twin.materials.geometry import box
@@ -54,7 +54,32 @@ def test_white_target_under_qth_lamp_renders_to_the_analytic_sensor_irradiance(g
     sensor = Sensor(qth.camera.definition)
     bands = LiquidCrystalTunableFilter.varispec(qth.camera.filter).transmission(FINE_GRID)
     expected = sensor.mean_electrons(radiance, bands)
-    assert np.abs(measured / expected - 1).max() < 0.02
+    assert np.abs(measured / expected - 1).max() < 0.005
+
+
+def test_render_noise_of_a_white_field_is_below_half_the_cameras_temporal_noise(gonio):
+    """Two seeds of the white standard's image at the rig's render settings: in every band the
+    pixels differ by far less than the K4's own temporal noise at the white level of a run (the
+    exposure plan fills the white to ``white_fill`` of saturation, Eq. 3.4). Mitsuba's spectral
+    path tracer differed by about 30 % per pixel and band at 64 samples (4 wavelengths a path
+    for 33 bands); the node transport leaves the spectra without sampling noise."""
+    pose = solve_pairs(gonio, direction(30.0, 0.0)[None], direction(0.0, 0.0)[None]).poses[0]
+    white = zenith_white_target(0.04)
+    scene = GonioScene(gonio, None, holder=False, extra_parts=white)
+    lamp, _ = gonio_lamp(gonio, pose.lamp_id)
+    one_second = lamp.part_exposure_s(0.0, 1.0)  # whole flicker periods
+    first, second = (
+        np.tensordot(one_second, scene.part_rates(pose, pixels=64, seed=seed), axes=1)
+        for seed in (1, 2)
+    )
+    centre = (slice(28, 36), slice(28, 36))  # 2.5 cm of the 4 cm target (3.1 mm pixels)
+    render_noise = (first - second)[centre].reshape(-1, 33).std(axis=0) / np.sqrt(2)
+    render_noise /= first[centre].reshape(-1, 33).mean(axis=0)
+    sensor = Sensor(gonio.camera.definition)
+    white_e = gonio.exposure.white_fill * sensor.saturation_capacity_e
+    read_e = sensor.config.read_noise_dn / sensor.config.system_gain_dn_per_e
+    temporal_noise = np.sqrt(white_e + read_e**2) / white_e  # EMVA 1288, about 0.8 %
+    assert np.all(render_noise < 0.5 * temporal_noise)
 
 
 @pytest.mark.parametrize(

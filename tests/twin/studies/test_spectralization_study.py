@@ -21,26 +21,28 @@ from twin.studies.spectralization import (
 pytestmark = pytest.mark.render
 
 
-def test_twin_texture_removes_the_monte_carlo_band_noise_of_the_render():
+def test_twin_texture_is_the_render_in_the_cone_of_the_part_spectra():
     raw = [
         np.pi
         * truth_btf(load_material("lego"), STUDY_LIGHT, STUDY_VIEW, texels=32, spp=16, seed=s)[0]
         for s in (0, 1)
     ]
-    # The NNLS projection uses the seed-0 render.
+    # The truth's spectra carry no sampling noise (twin.render.node_transport): two seeds differ
+    # only where texels straddle the bricks' and studs' edges (measured 4.7 % mean Eq. 6.8;
+    # Mitsuba's spectral path tracer differed by 197 % per texel and band at 16 spp).
+    assert relative_error(raw[0], raw[1]).mean() < 10.0
+    # The NNLS projection uses the seed-0 render and moves it little: what leaves the cone of
+    # the part spectra is light that met two surfaces (measured 1.3 %).
     first = twin_texture("lego", texels=32, spp=16)
-    raw_spread = relative_error(raw[0], raw[1]).mean()
-    assert raw_spread > 100.0  # per-band Monte Carlo noise of a spectral render (measured 197 %)
+    assert relative_error(first, raw[0]).mean() < 3.0
     # Independent expectation: a render of 16x the samples with another seed.
     reference = (
         np.pi
         * truth_btf(load_material("lego"), STUDY_LIGHT, STUDY_VIEW, texels=32, spp=256, seed=5)[0]
     )
     texture_error = relative_error(first, reference)
-    raw_error = relative_error(raw[1], reference).mean()
-    # Measured: texture 6.4 % mean, 15.2 % 95th percentile; a raw 16 spp render 58 %.
-    assert texture_error.mean() < 13.0 and np.percentile(texture_error, 95) < 30.0
-    assert raw_error > 4 * texture_error.mean()
+    # Measured: 5.3 % mean, 14.2 % 95th percentile (edge texels at 16 spp).
+    assert texture_error.mean() < 8.0 and np.percentile(texture_error, 95) < 25.0
     materials = load_material("lego")
     assert first.shape == (32, 32, 33) and np.all(first >= 0)
     # Every texel lies in the cone of the material's part spectra: rank <= number of parts.

@@ -1,0 +1,534 @@
+"""Calibration of the LED dome from a ``dome-calibration`` capture store (thesis 10.3).
+
+From the store's frames (layout: :mod:`hwbridge.dome_layout`), without a renderer:
+
+1. every camera's geometry: intrinsics and world pose from the checkerboard frames
+   (:mod:`recon.calibration.dome_geometric`), checked against the store's nominal cameras;
+2. the spectral camera's low-SNR calibration (:func:`recon.calibration.dome
+   .calibrate_spectral_camera`): dark frames averaged per exposure time, the filtered Robertson
+   recovery on the colour checker's series in the reference band (Eq. 10.4-10.8), and the band
+   sensitivities :math:`E_\\lambda` from the white standard under the calibration LED through
+   every band, over the pixels that see the white standard;
+3. every RGB camera's inverse OECF (Robertson on its series of the colour checker) and dark
+   level per raw pixel (:func:`recon.calibration.dome.rgb_camera_response`);
+4. per LED and camera the white standard's linear values over the sample's area, rectified by
+   the calibrated camera and fitted by the LED's irradiance field
+   (:mod:`recon.calibration.dome_lighting`): the white reference of every image
+   (:math:`V_c = x_c / x^{white}_c`, 10.3) and the irradiance of every spectral image;
+5. :math:`R_{cam}` per band: the RGB cameras' spectral response (their characterization,
+   thesis chapter 9, stored with the capture) times the LED spectrum, averaged over each
+   band's 10 nm cell and scaled so that the white standard reads one.
+
+The result, :class:`DomeCalibration`, is saved as one ``.npz`` file (the dark frames are images)
+with a JSON summary inside; :mod:`recon.dome` processes dome runs with it.
+
+References
+----------
+- The thesis, section 10.3 (calibration), chapter 9 (the RGB cameras' response) and Eq. 10.1
+  (:math:`R_{cam}`: the camera's sensitivity times the light).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from hwbridge.dome_layout import SPECTRAL_CAMERA
+from hwbridge.store import CaptureStore
+from recon.calibration.capture_io import plan_frames, select_frames
+from recon.calibration.dome import (
+    RgbCameraCalibration,
+    SpectralCameraCalibration,
+    calibrate_spectral_camera,
+    rgb_camera_response,
+)
+from recon.calibration.dome_geometric import (
+    CameraGeometry,
+    GeometricCalibration,
+    calibrate_camera_geometry,
+    stage_rotation,
+)
+from recon.calibration.dome_lighting import field_scale, led_irradiance
+from recon.errors import SpectwinInputError
+from recon.progress import progress_steps
+from recon.radiometric.demosaic import demosaic
+from recon.registration.border import extract_texture
+from recon.registration.corners import texture_transform
+from recon.registration.sample_plane import texel_centres_m
+from recon.spectra import SampledSpectra, WavelengthGrid, resample
+
+__all__ = [
+    "DOME_FORMAT",
+    "DomeCalibration",
+    "band_response",
+    "calibrate_dome",
+    "dome_rig",
+    "reference_band_nm",
+    "rgb_linear_image",
+    "rig_spectrum",
+]
+
+DOME_FORMAT = "spectwin-dome-calibration"
+"""The ``format`` of a saved :class:`DomeCalibration`."""
+
+WHITE_TEXELS = 24
+"""Texels across the white standard's rectified square, for the fits of its field."""
+
+WHITE_FRACTION = 0.9
+"""Fraction of the white standard's square (the holder's opening) that the fits use."""
+
+SERIES_SIGMA_PX = 2.0
+"""Gaussian filter of the spectral camera's filtered Robertson recovery (Eq. 10.4)."""
+
+
+def dome_rig(store: CaptureStore, program: str, keys: Sequence[str]) -> dict[str, Any]:
+    """The ``rig`` attribute of a dome capture made by ``program`` (``dome-calibration`` or
+    ``dome-run``) that has ``keys``; anything else is refused, naming what it is or lacks."""
+    rig = store.attrs.get("rig") or {}
+    if rig.get("rig") != "dome" or rig.get("program") != program:
+        raise SpectwinInputError(
+            f"{store.path}: expected a {program} capture of the dome (spectwin capture "
+            f"--program {program}), got program {rig.get('program')!r}"
+        )
+    missing = [key for key in keys if key not in rig]
+    if missing:
+        raise SpectwinInputError(f"{store.path}: the capture's rig attribute lacks {missing}")
+    return rig
+
+
+def rig_spectrum(rig: Mapping[str, Any], name: str, grid: WavelengthGrid) -> np.ndarray:
+    """A spectrum the capture stores with its rig (``led_spectrum``, ``white_reflectance``,
+    ``rgb_response``), linearly interpolated to ``grid`` (rows first)."""
+    entry = rig.get(name)
+    if not isinstance(entry, Mapping) or {"wavelengths_nm", "values"} - set(entry):
+        raise SpectwinInputError(
+            f"capture rig attribute {name}: expected {{'wavelengths_nm': [...], 'values': [...]}}"
+        )
+    source = WavelengthGrid(np.asarray(entry["wavelengths_nm"], np.float64))
+    values = SampledSpectra(source, np.asarray(entry["values"], np.float64))
+    return resample(values, grid, out_of_range="zero").values
+
+
+def band_response(
+    rgb_response: SampledSpectra, led: np.ndarray, white: np.ndarray, bands: WavelengthGrid
+) -> np.ndarray:
+    """:math:`R_{cam}` ``(K, 3)`` (Eq. 10.1): the camera's response ``(3, n)`` times the LED
+    ``(n,)``, averaged over each band's cell (``resample(..., method="box")``) and scaled so
+    that the white standard ``(K,)`` reads one in every channel.
+
+    Examples
+    --------
+    >>> fine = WavelengthGrid.regular(400, 720, 1)
+    >>> flat = SampledSpectra(fine, np.ones((3, fine.size)))
+    >>> bands = WavelengthGrid.regular(410, 700, 10)
+    >>> band_response(flat, np.ones(fine.size), np.ones(30), bands).sum(axis=0).tolist()
+    [1.0, 1.0, 1.0]
+    """
+    lit = SampledSpectra(rgb_response.grid, rgb_response.values * np.asarray(led, np.float64))
+    shape = resample(lit, bands, method="box", out_of_range="zero").values.T
+    return shape / (np.asarray(white, np.float64) @ shape)
+
+
+def rgb_linear_image(calibration: RgbCameraCalibration, frames: np.ndarray) -> np.ndarray:
+    """Linear, dark-subtracted RGB ``(2H, 2W, 3)`` of one image's raw HDR set ``(n, 2H, 2W)``:
+    merged (Eq. 10.3), then demosaiced (``colour-demosaicing``, Malvar et al. 2004)."""
+    return demosaic(calibration.linear_mosaic(frames), method="Malvar2004")
+
+
+@dataclass(frozen=True)
+class DomeCalibration:
+    """The dome's cameras calibrated (module docstring).
+
+    Attributes
+    ----------
+    source
+        The calibration capture store.
+    bands_nm, led_per_band, white_per_band
+        ``(K,)`` the bands, the LED's spectrum and the white standard's reflectance in them.
+    reference_band_nm
+        The spectral camera's band of its response series and per-LED white frames.
+    leds
+        ``(n,)`` the LEDs the white standard was photographed under.
+    spectral
+        The spectral camera's dark model, inverse OECF and sensitivities :math:`E_\\lambda`.
+    spectral_white
+        ``(n,)`` per LED, the scale of its irradiance field in the spectral camera's reference
+        band (linear rate per unit :func:`recon.calibration.dome_lighting.led_irradiance`).
+    rgb
+        Per RGB camera its inverse OECF, HDR set and dark level.
+    rgb_white
+        Per RGB camera ``(n, 3)``: per LED the white standard's linear RGB per unit irradiance.
+    geometry
+        Per camera its geometric calibration.
+    nominal_deviation
+        Per camera how far the calibrated camera lies from the store's nominal one.
+    response
+        ``(K, 3)`` :math:`R_{cam}`.
+    window_px
+        Side of the cameras' stored windows.
+    """
+
+    source: str
+    bands_nm: np.ndarray
+    led_per_band: np.ndarray
+    white_per_band: np.ndarray
+    reference_band_nm: float
+    leds: np.ndarray
+    spectral: SpectralCameraCalibration
+    spectral_white: np.ndarray
+    rgb: dict[str, RgbCameraCalibration]
+    rgb_white: dict[str, np.ndarray]
+    geometry: dict[str, GeometricCalibration]
+    nominal_deviation: dict[str, dict[str, float]]
+    response: np.ndarray
+    window_px: int
+
+    @property
+    def grid(self) -> WavelengthGrid:
+        return WavelengthGrid(self.bands_nm)
+
+    def led_index(self, led: int) -> int:
+        """Row of LED ``led`` in :attr:`spectral_white` and :attr:`rgb_white`."""
+        rows = np.flatnonzero(self.leds == led)
+        if rows.size == 0:
+            raise SpectwinInputError(
+                f"LED {led}: not calibrated (the calibration has LEDs {self.leds.tolist()}); "
+                "calibrate with the run's LEDs"
+            )
+        return int(rows[0])
+
+    def summary(self) -> dict[str, object]:
+        """The calibration in numbers (the JSON inside the saved file)."""
+        return {
+            "format": DOME_FORMAT,
+            "source": self.source,
+            "bands_nm": self.bands_nm.tolist(),
+            "led_per_band": self.led_per_band.tolist(),
+            "white_per_band": self.white_per_band.tolist(),
+            "reference_band_nm": self.reference_band_nm,
+            "leds": self.leds.tolist(),
+            "window_px": self.window_px,
+            "spectral_observed_levels": list(self.spectral.observed_levels),
+            "spectral_sensitivity": self.spectral.sensitivity.tolist(),
+            "spectral_white": self.spectral_white.tolist(),
+            "rgb_white": {camera: white.tolist() for camera, white in self.rgb_white.items()},
+            "rgb_exposure_s": {c: cal.exposure_s.tolist() for c, cal in self.rgb.items()},
+            "response": self.response.tolist(),
+            "geometry": {
+                camera: {
+                    **result.geometry.to_json(),
+                    "frames_used": result.frames_used,
+                    "frames_total": result.frames_total,
+                    "reprojection_rms_px": result.reprojection_rms_px,
+                    "fitted": result.fitted,
+                }
+                for camera, result in self.geometry.items()
+            },
+            "nominal_deviation": self.nominal_deviation,
+        }
+
+    def save(self, path: str | Path) -> Path:
+        """Write the calibration as one ``.npz`` file, atomically (a temporary file renamed)."""
+        path = Path(path)
+        arrays = {
+            "summary": np.array(json.dumps(self.summary())),
+            "spectral_dark_exposure_s": self.spectral.dark_exposure_s,
+            "spectral_mean_dark_frames": self.spectral.mean_dark_frames.astype(np.float32),
+            "spectral_inverse_response": self.spectral.inverse_response,
+        }
+        for camera, calibration in self.rgb.items():
+            arrays[f"rgb_inverse_response/{camera}"] = calibration.inverse_response
+            arrays[f"rgb_dark/{camera}"] = calibration.dark.astype(np.float32)
+        temporary = path.with_name(f".{path.name}.writing")
+        with temporary.open("wb") as file:
+            np.savez_compressed(file, **arrays)
+        os.replace(temporary, path)
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path) -> DomeCalibration:
+        """Read a file written by :meth:`save` (``spectwin calibrate`` of a dome store)."""
+        path = Path(path)
+        try:
+            with np.load(path, allow_pickle=False) as file:
+                arrays = {name: file[name] for name in file.files}
+            summary = json.loads(str(arrays["summary"]))
+        except (OSError, ValueError, KeyError, json.JSONDecodeError) as error:
+            raise SpectwinInputError(
+                f"{path}: not a dome calibration written by spectwin calibrate ({error})"
+            ) from None
+        if summary.get("format") != DOME_FORMAT:
+            raise SpectwinInputError(
+                f"{path}: expected a dome calibration (format {DOME_FORMAT}), got "
+                f"{summary.get('format')!r}"
+            )
+        spectral = SpectralCameraCalibration(
+            arrays["spectral_dark_exposure_s"],
+            arrays["spectral_mean_dark_frames"].astype(np.float64),
+            arrays["spectral_inverse_response"],
+            tuple(summary["spectral_observed_levels"]),
+            np.asarray(summary["spectral_sensitivity"]),
+        )
+        rgb = {
+            camera: RgbCameraCalibration(
+                arrays[f"rgb_inverse_response/{camera}"],
+                np.asarray(times),
+                arrays[f"rgb_dark/{camera}"].astype(np.float64),
+                np.ones(3),
+            )
+            for camera, times in summary["rgb_exposure_s"].items()
+        }
+        geometry = {
+            camera: GeometricCalibration(
+                CameraGeometry.from_json(entry),
+                entry["frames_used"],
+                entry["frames_total"],
+                entry["reprojection_rms_px"],
+                entry["fitted"],
+            )
+            for camera, entry in summary["geometry"].items()
+        }
+        return cls(
+            source=summary["source"],
+            bands_nm=np.asarray(summary["bands_nm"]),
+            led_per_band=np.asarray(summary["led_per_band"]),
+            white_per_band=np.asarray(summary["white_per_band"]),
+            reference_band_nm=float(summary["reference_band_nm"]),
+            leds=np.asarray(summary["leds"], int),
+            spectral=spectral,
+            spectral_white=np.asarray(summary["spectral_white"]),
+            rgb=rgb,
+            rgb_white={c: np.asarray(w) for c, w in summary["rgb_white"].items()},
+            geometry=geometry,
+            nominal_deviation=summary["nominal_deviation"],
+            response=np.asarray(summary["response"]),
+            window_px=int(summary["window_px"]),
+        )
+
+
+def _mean_darks(
+    store: CaptureStore, camera: str, times: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Dark frames averaged per exposure time (every time the camera's dark frames have, or
+    ``times``), read one exposure time at a time."""
+    index = store.index(camera, ("kind", "exposure_s"))
+    dark = index["kind"] == "dark"
+    if times is None:
+        times = np.unique(index["exposure_s"][dark])
+    means = []
+    for exposure in times:
+        slots = np.flatnonzero(dark & np.isclose(index["exposure_s"], exposure))
+        if slots.size == 0:
+            raise SpectwinInputError(
+                f"{store.path}: no dark frames of camera {camera!r} at {exposure:g} s"
+            )
+        means.append(store.read_frames(camera, slots).mean(axis=0, dtype=np.float64))
+    return np.asarray(times, np.float64), np.stack(means)
+
+
+class _WhiteSquare:
+    """The white standard's central square at stage position 0, as one camera sees it."""
+
+    def __init__(self, geometry: CameraGeometry, holder: Mapping[str, Any]):
+        side = 2 * WHITE_FRACTION * float(holder["opening_half_m"])
+        self.points_m = np.concatenate(
+            [texel_centres_m(WHITE_TEXELS, side), np.zeros((WHITE_TEXELS, WHITE_TEXELS, 1))],
+            axis=-1,
+        )
+        half = side / 2
+        square = np.array([[-half, half, 0], [half, half, 0], [half, -half, 0], [-half, -half, 0]])
+        self.corners_xy = geometry.project(square) + 0.5
+
+    def texture(self, image: np.ndarray) -> np.ndarray:
+        return extract_texture(image, self.corners_xy, resolution=WHITE_TEXELS)
+
+    def region(self, shape: tuple[int, int]) -> np.ndarray:
+        """The pixels ``shape`` whose centres lie on the square."""
+        rows, columns = np.indices(shape)
+        centres = np.stack([columns.ravel() + 0.5, rows.ravel() + 0.5], axis=1)
+        uv = texture_transform(self.corners_xy)(centres)
+        return np.all((uv > 0) & (uv < 1), axis=1).reshape(shape)
+
+    def scale(self, image: np.ndarray, led_position_m: np.ndarray) -> np.ndarray:
+        """The scale of the LED's irradiance field in ``image`` (channels last, or one)."""
+        values = self.texture(image)
+        values = values[..., None] if values.ndim == 2 else values
+        return field_scale(values, led_irradiance(self.points_m, led_position_m))
+
+
+def _geometric_calibration(
+    store: CaptureStore, camera: str, nominal: CameraGeometry, grey: Callable
+) -> GeometricCalibration:
+    geometry = store.attrs["rig"]["geometry"]
+    target = geometry["geometric_target"]
+    frames, steps = plan_frames(store, camera, kind="geometric")
+    poses = []
+    for step in steps:
+        pose = np.eye(4)
+        pose[:3, :3] = stage_rotation(geometry["stage_angles_deg"][step["view_id"]])
+        poses.append(pose @ np.asarray(target["target_to_sample"][f"{step['tilt_deg']:g}"]))
+    return calibrate_camera_geometry(
+        [grey(frame) for frame in frames],
+        poses,
+        np.asarray(target["corners_m"]),
+        tuple(target["inner_corners"]),
+        nominal,
+    )
+
+
+def _spectral_calibration(
+    store: CaptureStore, rig: Mapping[str, Any], white: _WhiteSquare, led: np.ndarray
+) -> tuple[SpectralCameraCalibration, np.ndarray]:
+    """The spectral camera's calibration and its white scale per LED (module docstring)."""
+    bands = np.asarray(rig["bands_nm"], np.float64)
+    cameras = rig["geometry"]["cameras"]
+    reference = reference_band_nm(store)
+    series = select_frames(store, SPECTRAL_CAMERA, kind="oecf", band_nm=reference)
+    lit, steps = plan_frames(
+        store, SPECTRAL_CAMERA, kind="white", light_id=int(rig["calibration_led"])
+    )
+    last = {float(step["band_nm"]): slot for slot, step in enumerate(steps)}
+    slots = [last[float(band)] for band in bands]
+    times, means = _mean_darks(store, SPECTRAL_CAMERA)
+    spectral = calibrate_spectral_camera(
+        times,
+        means,
+        series.frames,
+        series.exposure_s,
+        lit[slots],
+        np.array([steps[slot]["exposure_s"] for slot in slots]),
+        led,
+        rig_spectrum(rig, "white_reflectance", WavelengthGrid(bands)),
+        sigma_px=SERIES_SIGMA_PX,
+        bit_depth=int(cameras[SPECTRAL_CAMERA]["bit_depth"]),
+        white_region=white.region(means.shape[1:]),
+    )
+    positions = np.asarray(rig["geometry"]["led_positions_m"], np.float64)
+    scales = []
+    for light in _run_leds(store):
+        frames, steps = plan_frames(
+            store, SPECTRAL_CAMERA, kind="white", light_id=light, band_nm=reference
+        )
+        rate = spectral.linear_rate(frames[0], steps[0]["exposure_s"])
+        scales.append(white.scale(rate, positions[light])[0])
+    return spectral, np.array(scales)
+
+
+def reference_band_nm(store: CaptureStore) -> float:
+    """The spectral camera's reference band: that of its response series (``oecf``)."""
+    index = store.index(SPECTRAL_CAMERA, ("kind", "band_nm"))
+    bands = np.unique(index["band_nm"][index["kind"] == "oecf"])
+    if bands.size != 1:
+        raise SpectwinInputError(
+            f"{store.path}: expected the spectral camera's response series in one band, got "
+            f"{bands.tolist()} nm"
+        )
+    return float(bands[0])
+
+
+def _run_leds(store: CaptureStore) -> list[int]:
+    """The LEDs the white standard was photographed under, in plan order (module docstring)."""
+    plan = store.attrs["plan"]
+    calibration_led = store.attrs["rig"]["calibration_led"]
+    leds = [s["light_id"] for s in plan if s["kind"] == "white" and s["camera"] != SPECTRAL_CAMERA]
+    return list(dict.fromkeys(leds)) or [calibration_led]
+
+
+def _rgb_calibration(
+    store: CaptureStore, camera: str, rig: Mapping[str, Any], white: _WhiteSquare
+) -> tuple[RgbCameraCalibration, np.ndarray]:
+    """An RGB camera's response, dark level and white per LED (module docstring)."""
+    hdr_set = np.asarray(rig["rgb_exposures_s"], np.float64)
+    series = select_frames(store, camera, kind="oecf")
+    times, darks = _mean_darks(store, camera, np.sort(hdr_set))
+    calibration = rgb_camera_response(
+        series.frames.astype(np.uint16),
+        series.exposure_s,
+        darks,
+        times,
+        hdr_set,
+        bit_depth=int(rig["geometry"]["cameras"][camera]["bit_depth"]),
+    )
+    positions = np.asarray(rig["geometry"]["led_positions_m"], np.float64)
+    scales = []
+    for light in _run_leds(store):
+        frames, steps = plan_frames(store, camera, kind="white", light_id=light)
+        order = [list(hdr_set).index(step["exposure_s"]) for step in steps]
+        image = rgb_linear_image(calibration, frames[np.argsort(order)])
+        scales.append(white.scale(image, positions[light]))
+    return calibration, np.array(scales)
+
+
+def calibrate_dome(
+    store: str | Path | CaptureStore, *, show_progress: bool = False
+) -> DomeCalibration:
+    """Calibrate the dome from a ``dome-calibration`` capture (module docstring).
+
+    Parameters
+    ----------
+    store
+        The calibration capture store (complete).
+    show_progress
+        A progress bar over the cameras.
+
+    Returns
+    -------
+    DomeCalibration
+    """
+    store = store if isinstance(store, CaptureStore) else CaptureStore.open(store)
+    rig = dome_rig(store, "dome-calibration", ("rgb_response", "led_spectrum"))
+    grid = WavelengthGrid(np.asarray(rig["bands_nm"], np.float64))
+    led = rig_spectrum(rig, "led_spectrum", grid)
+    white_reflectance = rig_spectrum(rig, "white_reflectance", grid)
+    cameras = rig["geometry"]["cameras"]
+    nominal = {camera: CameraGeometry.from_json(entry) for camera, entry in cameras.items()}
+    geometry, rgb, rgb_white = {}, {}, {}
+    with progress_steps("calibrate", len(cameras), enabled=show_progress) as advance:
+        for camera in cameras:
+            grey = _grey_frame(camera)
+            geometry[camera] = _geometric_calibration(store, camera, nominal[camera], grey)
+            white = _WhiteSquare(geometry[camera].geometry, rig["geometry"]["holder"])
+            if camera == SPECTRAL_CAMERA:
+                spectral, spectral_white = _spectral_calibration(store, rig, white, led)
+            else:
+                rgb[camera], rgb_white[camera] = _rgb_calibration(store, camera, rig, white)
+            advance()
+    fine = SampledSpectra(
+        WavelengthGrid(np.asarray(rig["rgb_response"]["wavelengths_nm"], np.float64)),
+        np.asarray(rig["rgb_response"]["values"], np.float64),
+    )
+    return DomeCalibration(
+        source=str(store.path),
+        bands_nm=grid.wavelengths_nm.copy(),
+        led_per_band=led,
+        white_per_band=white_reflectance,
+        reference_band_nm=reference_band_nm(store),
+        leds=np.asarray(_run_leds(store), int),
+        spectral=spectral,
+        spectral_white=spectral_white,
+        rgb=rgb,
+        rgb_white=rgb_white,
+        geometry=geometry,
+        nominal_deviation={
+            camera: result.geometry.deviation_from(nominal[camera])
+            for camera, result in geometry.items()
+        },
+        response=band_response(
+            fine, rig_spectrum(rig, "led_spectrum", fine.grid), white_reflectance, grid
+        ),
+        window_px=int(rig["window_px"]),
+    )
+
+
+def _grey_frame(camera: str) -> Callable[[np.ndarray], np.ndarray]:
+    """A grey image of a raw frame for corner finding: the frame itself, or the mean of its
+    demosaiced channels for a Bayer mosaic."""
+    if camera == SPECTRAL_CAMERA:
+        return lambda frame: frame
+    return lambda frame: demosaic(frame, method="bilinear").mean(axis=-1)

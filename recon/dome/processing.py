@@ -1,0 +1,436 @@
+"""Dome run -> spectral BTF store, without a renderer (thesis 10.1.2, 10.2.2, 10.4.2).
+
+For a ``dome-run`` capture store and the dome's calibration
+(:func:`recon.calibration.dome_capture.calibrate_dome`):
+
+1. every camera is registered at every stage position on its alignment frame
+   (:func:`recon.dome.images.register_view`);
+2. the images of the run (stage position and LED) are reconstructed in groups, one cycle of the
+   band schedule each (:func:`recon.dome.run.joint_groups`): every RGB camera's image of every
+   LED of the group gives :math:`V` (:func:`recon.dome.images.white_balanced_rgb`); the spectral
+   camera's scheduled bands of an LED, noisy reflectance factors
+   (:func:`recon.dome.images.band_reflectance`), are matched to that LED's image from the RGB
+   camera nearest the spectral camera's view (the same light; 10.2.2 places the spectral camera
+   beside an RGB camera so that both see nearly the same), each after a Gaussian filter sized to
+   its noise (:func:`band_sigma_px`, Figure 10.5); the group is solved jointly with Eq. 10.12 and
+   the dynamic-range compression of Eq. 10.2 (:func:`recon.spectralize.reconstruct`), so the
+   spectral data spread to the images and cameras without any (10.4.2);
+3. every image of every RGB camera becomes a direction pair of the BTF store (reflectance
+   factor / pi, in 1/sr), lit from the LED and seen from the calibrated camera, both in the
+   sample frame, with the texture's corners in the camera's frame; the store is written group by
+   group (an interrupted run resumes with the groups that have pending pairs).
+
+Where a camera's marks are not found at a stage position (nor given in a manual corner file,
+keys ``"<camera>_view<view_id>"``) the calibrated camera's projection of them stands in; the
+BTF's ``projected_marks`` names those, ``marks_offset_px`` how far the marks found lie from
+the projection everywhere.
+
+References
+----------
+- The thesis, sections 10.1 (Eq. 10.1, 10.2, 10.12, 10.13), 10.2.2 and 10.4.2.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy import ndimage
+from skimage.registration import phase_cross_correlation
+
+from hwbridge.dome_layout import SPECTRAL_CAMERA
+from hwbridge.store import CaptureStore
+from recon.btf.store import BTFStore
+from recon.calibration.dome_capture import DomeCalibration
+from recon.calibration.dome_geometric import stage_rotation
+from recon.dome.images import (
+    Registration,
+    TexelGrid,
+    band_reflectance,
+    register_view,
+    rgb_alignment_image,
+    white_balanced_rgb,
+)
+from recon.dome.run import DomeRun, joint_groups, open_dome_run
+from recon.errors import SpectwinInputError
+from recon.progress import progress_steps
+from recon.registration.border import extract_texture
+from recon.scheduling.dome_schedule import FILTER_SIZE_PER_SIGMA, filter_sizes
+from recon.spectralize.solve import BandImage, reconstruct
+
+__all__ = [
+    "P_DYN",
+    "TARGET_RELATIVE_NOISE",
+    "DomeProcessing",
+    "band_sigma_px",
+    "check_dome_run",
+    "dome_directions",
+    "parallax_shift",
+    "process_dome",
+    "spectral_partner",
+]
+
+P_DYN = 0.0
+"""Eq. 10.2's exponent: no dynamic-range compression. The thesis found 0.5-0.6 best for BTFs;
+on the twin's reduced dome capture of the colour checker (2 stage positions x 5 LEDs x 3 RGB
+cameras, 32 texels) its diffuse fields came out at 27.8 % (Eq. 6.8) with 0.5, 13.2 % with 0.25
+and 10.8 % with 0 (BENCHMARKS.md, "Dome processing")."""
+
+TARGET_RELATIVE_NOISE = 0.04
+"""Relative noise the band filters leave. Figure 10.5's filters nearly cancel the noise; the
+thesis found smaller ones often suffice, the prior of Eq. 10.12 smoothing what is left: on the
+capture of :data:`P_DYN` filters for 0.04 (half as wide as for 0.02) took the diffuse fields
+from 10.8 % to 9.1 %; narrower ones changed little (8.9 % for 0.08, 9.2 % without filters)."""
+
+_MAX_SIGMA_FRACTION = 0.25  # of the texture's side
+
+
+def band_sigma_px(values: np.ndarray) -> float:
+    """Gaussian sigma (texels) for a noisy band image (Figure 10.5): its noise from the
+    neighbouring texels' differences (robustly: their median absolute deviation, so edges of
+    the texture count little), relative to its mean signal, through
+    :func:`recon.scheduling.dome_schedule.filter_sizes` to :data:`TARGET_RELATIVE_NOISE`;
+    at most a quarter of the image's side."""
+    differences = np.diff(np.asarray(values, np.float64), axis=1).ravel()
+    noise = 1.4826 * np.median(np.abs(differences - np.median(differences))) / np.sqrt(2)
+    mean = float(np.mean(values))
+    if not mean > 0:
+        return _MAX_SIGMA_FRACTION * values.shape[0]
+    size = filter_sizes(np.array([noise / mean]), TARGET_RELATIVE_NOISE)[0]
+    return float(min(size / FILTER_SIZE_PER_SIGMA, _MAX_SIGMA_FRACTION * values.shape[0]))
+
+
+def check_dome_run(run: DomeRun, calibration: DomeCalibration) -> None:
+    """Refuse a run the calibration does not fit (bands, frame size, cameras, LEDs), naming the
+    difference, before any frame is read."""
+    if run.bands_nm.shape != calibration.bands_nm.shape or not np.allclose(
+        run.bands_nm, calibration.bands_nm
+    ):
+        raise SpectwinInputError(
+            f"{run.capture_path}: bands {run.bands_nm.tolist()} nm, the calibration's "
+            f"{calibration.bands_nm.tolist()} nm"
+        )
+    if int(run.rig["window_px"]) != calibration.window_px:
+        raise SpectwinInputError(
+            f"{run.capture_path}: frames of {run.rig['window_px']} px, the calibration's of "
+            f"{calibration.window_px} px; calibrate with the run's --texels"
+        )
+    cameras = sorted({*run.rgb_cameras, SPECTRAL_CAMERA} - set(calibration.geometry))
+    if cameras:
+        raise SpectwinInputError(f"{run.capture_path}: cameras {cameras} are not calibrated")
+    leds = sorted({light for _, light in run.images} - set(calibration.leds.tolist()))
+    if leds:
+        raise SpectwinInputError(
+            f"{run.capture_path}: LEDs {leds[:5]} have no white frames in the calibration; "
+            "calibrate with the run's --leds"
+        )
+
+
+def dome_directions(run: DomeRun, calibration: DomeCalibration) -> tuple[np.ndarray, np.ndarray]:
+    """Light and view directions ``(n_pairs, 3)`` in the sample frame: pair ``i`` is image
+    ``i // n_cameras`` seen by RGB camera ``i % n_cameras``; the LED's position from the rig,
+    the camera's from its calibration."""
+    geometry = run.rig["geometry"]
+    leds = np.asarray(geometry["led_positions_m"], np.float64)
+    angles = geometry["stage_angles_deg"]
+    lights, views = [], []
+    for view, light in run.images:
+        to_sample = stage_rotation(angles[view]).T
+        for camera in run.rgb_cameras:
+            lights.append(to_sample @ leds[light])
+            views.append(calibration.geometry[camera].geometry.position_in_sample(angles[view]))
+    lights, views = np.array(lights), np.array(views)
+    return (
+        lights / np.linalg.norm(lights, axis=1, keepdims=True),
+        views / np.linalg.norm(views, axis=1, keepdims=True),
+    )
+
+
+def parallax_shift(partner: np.ndarray, spectral: np.ndarray) -> np.ndarray:
+    """The shift ``(rows, columns)`` in texels that carries the spectral camera's texture onto
+    the partner's (both of the alignment frames, every LED on): cross-correlation to a tenth of
+    a texel (``skimage.registration.phase_cross_correlation``). The texture lies on the plate,
+    and what rises above it moves with the view (a 9.6 mm Lego brick's top by 3 texels at 32
+    texels between the spectral camera and the 37.5 degree RGB camera); thesis 10.1 registers
+    the spectral images to the RGB images "using markers or other methods like optical
+    flow"."""
+    shift, _, _ = phase_cross_correlation(partner, spectral, upsample_factor=10, normalization=None)
+    return shift
+
+
+def spectral_partner(run: DomeRun, calibration: DomeCalibration) -> str:
+    """The RGB camera whose view lies nearest the spectral camera's."""
+    positions = {c: r.geometry.position_m for c, r in calibration.geometry.items()}
+    spectral = positions[SPECTRAL_CAMERA] / np.linalg.norm(positions[SPECTRAL_CAMERA])
+    cosines = [spectral @ positions[c] / np.linalg.norm(positions[c]) for c in run.rgb_cameras]
+    return run.rgb_cameras[int(np.argmax(cosines))]
+
+
+@dataclass
+class DomeProcessing:
+    """A dome run being processed: the run, its calibration, the RGB camera whose images take
+    the band data (:func:`spectral_partner`), and what registration found: per camera and
+    stage position the marks, per stage position the band data's shift onto the partner's
+    texture."""
+
+    run: DomeRun
+    calibration: DomeCalibration
+    texels: int
+    partner: str
+    manual_corners: Mapping[str, np.ndarray] | None = None
+    registrations: dict[tuple[str, int], Registration] = field(default_factory=dict)
+    band_shift: dict[int, np.ndarray] = field(default_factory=dict)
+    saturated_texels: int = 0
+
+    def grid(self, view: int) -> TexelGrid:
+        angle = self.run.rig["geometry"]["stage_angles_deg"][view]
+        return TexelGrid(self.texels, self.run.sample_size_m, float(angle))
+
+    def register(self, store: CaptureStore) -> None:
+        """Register every camera at every stage position, and the spectral camera's texture
+        onto the partner's (step 1)."""
+        geometry = self.run.rig["geometry"]
+        textures = {}
+        for camera in (*self.run.rgb_cameras, SPECTRAL_CAMERA):
+            for view in self.run.views:
+                slot = self.run.slots(camera, "alignment", view)[:1]
+                if slot.size == 0:
+                    raise SpectwinInputError(
+                        f"{self.run.capture_path}: no alignment frame of camera {camera!r} at "
+                        f"stage position {view}"
+                    )
+                frame = store.read_frames(camera, slot)[0]
+                if camera == SPECTRAL_CAMERA:
+                    exposure = float(self.run.index[camera]["exposure_s"][slot[0]])
+                    image = self.calibration.spectral.linear_rate(frame, exposure)
+                else:
+                    image = rgb_alignment_image(self.calibration.rgb[camera], frame)
+                self.registrations[camera, view] = register_view(
+                    image,
+                    self.calibration.geometry[camera].geometry,
+                    geometry["holder"],
+                    geometry["stage_angles_deg"][view],
+                    self.run.sample_size_m,
+                    frame_id=f"{camera}_view{view}",
+                    manual_corners=self.manual_corners,
+                )
+                if camera in (self.partner, SPECTRAL_CAMERA):
+                    corners = self.registrations[camera, view].corners_xy
+                    textures[camera, view] = extract_texture(image, corners, resolution=self.texels)
+        for view in self.run.views:
+            self.band_shift[view] = parallax_shift(
+                textures[self.partner, view], textures[SPECTRAL_CAMERA, view]
+            )
+
+    def rgb(self, store: CaptureStore, image: int, camera: str) -> np.ndarray:
+        """:math:`V` of one image of one RGB camera, saturated texels at the image's brightest
+        finite value."""
+        view, light = self.run.images[image]
+        slots = self.run.slots(camera, "sample", view, light)
+        times = self.run.index[camera]["exposure_s"][slots]
+        order = [int(np.argmin(np.abs(self.calibration.rgb[camera].exposure_s - t))) for t in times]
+        frames = store.read_frames(camera, slots[np.argsort(order)])
+        values = white_balanced_rgb(
+            self.calibration,
+            camera,
+            frames,
+            self.registrations[camera, view].corners_xy,
+            self.grid(view),
+            light,
+            np.asarray(self.run.rig["geometry"]["led_positions_m"][light]),
+        )
+        saturated = ~np.isfinite(values)
+        self.saturated_texels += int(saturated.any(axis=-1).sum())
+        top = np.nanmax(np.where(saturated, np.nan, values).reshape(-1, 3), axis=0)
+        return np.where(saturated, top, values)
+
+    def bands(self, store: CaptureStore, image: int) -> list[tuple[int, np.ndarray]]:
+        """``(band, noisy reflectance factors)`` of the spectral frames of one image."""
+        view, light = self.run.images[image]
+        registration = self.registrations[SPECTRAL_CAMERA, view]
+        slots = self.run.slots(SPECTRAL_CAMERA, "sample", view, light)
+        frames = store.read_frames(SPECTRAL_CAMERA, slots)
+        position = np.asarray(self.run.rig["geometry"]["led_positions_m"][light])
+        index = self.run.index[SPECTRAL_CAMERA]
+        shift = self.band_shift[view]
+        return [
+            (
+                band,
+                ndimage.shift(
+                    band_reflectance(
+                        self.calibration,
+                        frame,
+                        float(index["exposure_s"][slot]),
+                        band,
+                        registration.corners_xy,
+                        self.grid(view),
+                        light,
+                        position,
+                    ),
+                    shift,
+                    order=1,
+                    mode="nearest",
+                ),
+            )
+            for frame, slot, band in zip(frames, slots, self.run.image_bands(image), strict=True)
+        ]
+
+
+def _open_btf(work: DomeProcessing, out: Path, resume: bool) -> BTFStore:
+    """The BTF store: created, or with ``resume`` an existing one reopened (its damaged pairs
+    pending again), which must have the texels asked for."""
+    if resume and out.exists():
+        btf = BTFStore.open(out, writable=True)
+        if btf.texels != (work.texels, work.texels):
+            raise SpectwinInputError(
+                f"{out}: processed at {btf.texels[0]} texels, not {work.texels}; resume it with "
+                f"texels={btf.texels[0]} (or leave texels out)"
+            )
+        btf.prepare_resume()
+        return btf
+    light_dirs, view_dirs = dome_directions(work.run, work.calibration)
+    return BTFStore.create(
+        out,
+        light_dirs=light_dirs,
+        view_dirs=view_dirs,
+        texels=work.texels,
+        grid=work.calibration.grid,
+        material=work.run.material,
+        source_capture=work.run.capture_path,
+        calibration={
+            "source": work.calibration.source,
+            "rig": "dome",
+            "p_dyn": P_DYN,
+            "target_relative_noise": TARGET_RELATIVE_NOISE,
+        },
+    )
+
+
+def _solve_group(
+    work: DomeProcessing,
+    store: CaptureStore,
+    btf: BTFStore,
+    group: list[int],
+    solver: Mapping[str, object],
+    advance: Callable[..., None],
+) -> None:
+    """Reconstruct the images ``group`` jointly and write their pairs (step 2 and 3);
+    ``advance`` once per image read and by the group's size once solved."""
+    cameras = work.run.rgb_cameras
+    shown = [(image, camera) for image in group for camera in cameras]
+    rgb, band_images = [], []
+    for image in group:
+        rgb += [work.rgb(store, image, camera) for camera in cameras]
+        partner = shown.index((image, work.partner))
+        band_images += [
+            BandImage(partner, band, values, band_sigma_px(values))
+            for band, values in work.bands(store, image)
+        ]
+        advance()
+    cube = reconstruct(
+        np.stack(rgb), work.calibration.response, band_images=band_images, p_dyn=P_DYN, **solver
+    ).spectra
+    advance(len(group))
+    for slot, (image, camera) in enumerate(shown):
+        view, _ = work.run.images[image]
+        btf.write_pair(
+            image * len(cameras) + cameras.index(camera),
+            cube[slot] / np.pi,
+            grid=work.calibration.grid,
+            corners_xy=work.registrations[camera, view].corners_xy,
+        )
+
+
+def process_dome(
+    capture: str | Path | CaptureStore,
+    calibration: DomeCalibration,
+    out: str | Path,
+    *,
+    texels: int | None = None,
+    manual_corners: Mapping[str, np.ndarray] | None = None,
+    resume: bool = False,
+    show_progress: bool = False,
+    solver: Mapping[str, object] | None = None,
+    created: Callable[[BTFStore], None] = lambda btf: None,
+) -> BTFStore:
+    """Turn a dome run into a spectral BTF store (module docstring).
+
+    Parameters
+    ----------
+    capture
+        A complete ``dome-run`` capture store.
+    calibration
+        The dome's calibration (:func:`recon.calibration.dome_capture.calibrate_dome`, or a
+        saved one: :meth:`~recon.calibration.dome_capture.DomeCalibration.load`).
+    out
+        BTF store to create; with ``resume`` an existing one is continued.
+    texels
+        Texels across the sample (default: the capture's ``texels``, or a resumed store's).
+    manual_corners
+        Corner file contents (:func:`recon.registration.border.read_manual_corners`) keyed by
+        ``"<camera>_view<view_id>"``, for alignment frames whose marks are not found.
+    resume
+        Continue an interrupted processing: the groups with pending pairs are done again.
+    show_progress
+        Progress bars.
+    solver
+        Options of :func:`recon.spectralize.reconstruct` (``tol``, ``max_iterations``,
+        ``solver``, ``appearance``, ...).
+    created
+        Called with the BTF store once it exists (before any pair is written): a writer lock
+        moves into it.
+
+    Returns
+    -------
+    BTFStore
+        The store, complete.
+    """
+    store = capture if isinstance(capture, CaptureStore) else CaptureStore.open(capture)
+    run = open_dome_run(store)
+    check_dome_run(run, calibration)
+    out = Path(out)
+    if texels is None:
+        existing = resume and out.exists()
+        texels = BTFStore.open(out).texels[0] if existing else int(run.rig["texels"])
+    work = DomeProcessing(
+        run, calibration, int(texels), spectral_partner(run, calibration), manual_corners
+    )
+    btf = _open_btf(work, out, resume)
+    created(btf)
+    work.register(store)
+    pending = set(btf.pending_pairs())
+    cameras = len(run.rgb_cameras)
+    groups = [
+        group
+        for group in joint_groups(
+            [run.image_bands(image) for image in range(len(run.images))],
+            len(run.rig["band_schedule"]),
+            run.bands_nm.size,
+        )
+        if any(image * cameras + c in pending for image in group for c in range(cameras))
+    ]
+    steps = 2 * sum(len(group) for group in groups)  # reading the images, then solving them
+    with progress_steps("process (read, solve)", steps, enabled=show_progress) as advance:
+        for group in groups:
+            _solve_group(work, store, btf, group, dict(solver or {}), advance)
+    registrations = {f"{camera}_view{view}": r for (camera, view), r in work.registrations.items()}
+    btf.set_attribute("unregistered_pairs", [])
+    btf.set_attribute("coarse_corner_pairs", [])
+    btf.set_attribute(
+        "projected_marks", sorted(name for name, r in registrations.items() if not r.found)
+    )
+    btf.set_attribute(
+        "marks_offset_px", {name: r.marks_offset_px for name, r in registrations.items()}
+    )
+    btf.set_attribute(
+        "dome_pairs",
+        [[view, light, camera] for view, light in run.images for camera in run.rgb_cameras],
+    )
+    btf.set_attribute("saturated_texels", work.saturated_texels)
+    btf.set_attribute("band_partner", work.partner)
+    btf.set_attribute(
+        "band_shift_texels", {str(view): shift.tolist() for view, shift in work.band_shift.items()}
+    )
+    return btf

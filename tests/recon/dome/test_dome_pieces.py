@@ -1,0 +1,103 @@
+"""Pieces of the dome's processing against closed forms: the sample's square through the marks'
+homography, the LED's field, the band filters' sizes, the joint groups, :math:`R_{cam}`."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from recon.calibration.dome_capture import band_response
+from recon.calibration.dome_geometric import CameraGeometry
+from recon.calibration.dome_lighting import field_scale, led_irradiance
+from recon.dome.processing import TARGET_RELATIVE_NOISE, band_sigma_px, parallax_shift
+from recon.dome.run import joint_groups
+from recon.errors import SpectwinInputError
+from recon.registration.sample_plane import sample_square_corners
+from recon.spectra import SampledSpectra, WavelengthGrid
+
+
+def _oblique_camera() -> CameraGeometry:
+    """A pinhole 0.75 m away, 60 degrees from the normal (OpenCV's conventions)."""
+    position = 0.75 * np.array([np.sin(np.radians(60)), 0.0, np.cos(np.radians(60))])
+    forward = -position / np.linalg.norm(position)
+    right = np.array([0.0, -1.0, 0.0])
+    down = np.cross(forward, right)
+    matrix = np.array([[4000.0, 0, 131.5], [0, 4000.0, 131.5], [0, 0, 1]])
+    return CameraGeometry(matrix, np.zeros(5), np.stack([right, down, forward]), position)
+
+
+def test_sample_square_is_the_plates_square_seen_through_the_raised_marks():
+    """Marks 0.22 mm above the plate, projected by a pinhole at 60 degrees: the square's
+    corners on the plate come out where the camera projects them, to 1e-9 px; taking the
+    marks' plane for the plate would put them 0.38 mm (1.2 px here) off."""
+    camera = _oblique_camera()
+    half, height, side = 0.0265, 0.00022, 0.04
+    marks = np.array([[-half, half, height], [half, half, height], [half, -half, height]])
+    marks = np.vstack([marks, [-half, -half, height]])
+    corners = sample_square_corners(camera.project(marks) + 0.5, marks, camera.position_m, side)
+    square = np.array([[-1, 1, 0], [1, 1, 0], [1, -1, 0], [-1, -1, 0]]) * side / 2
+    np.testing.assert_allclose(corners, camera.project(square) + 0.5, atol=1e-9)
+    flat = sample_square_corners(
+        camera.project(marks) + 0.5, marks * [1, 1, 0], camera.position_m, side
+    )
+    assert np.abs(flat - corners).max() > 1.0
+
+
+def test_sample_square_refuses_a_camera_below_the_marks():
+    marks = np.array([[-1.0, 1, 0.1], [1, 1, 0.1], [1, -1, 0.1], [-1, -1, 0.1]])
+    image = np.array([[0.0, 0], [10, 0], [10, 10], [0, 10]])
+    with pytest.raises(SpectwinInputError, match="below a camera"):
+        sample_square_corners(image, marks, np.array([0.0, 0, 0.05]), 1.0)
+
+
+def test_led_irradiance_falls_with_distance_and_cosine():
+    """A point light 0.75 m above: on the axis 1 / r^2; 4 cm aside cos / r^2 = z / r^3."""
+    led = np.array([0.0, 0.0, 0.75])
+    points = np.array([[0.0, 0, 0], [0.04, 0, 0]])
+    expected = [1 / 0.75**2, 0.75 / np.hypot(0.75, 0.04) ** 3]
+    np.testing.assert_allclose(led_irradiance(points, led), expected)
+    field = led_irradiance(np.random.default_rng(1).random((5, 5, 3)) * [0.02, 0.02, 0], led)
+    values = np.stack([2.0 * field, 3.0 * field], axis=-1)
+    np.testing.assert_allclose(field_scale(values, field), [2.0, 3.0])
+
+
+def test_band_filter_follows_the_noise_of_the_image(rng):
+    """White noise of 30 % on a field with a sharp edge: the filter's sigma is the one
+    :func:`recon.scheduling.dome_schedule.filter_sizes` gives for the noise (within 10 %), not
+    for the edge."""
+    clean = np.where(np.arange(64)[None, :] < 32, 0.2, 0.6) * np.ones((64, 1))
+    noisy = clean + rng.normal(0, 0.3 * clean.mean(), clean.shape)
+    expected = 0.3 / (2 * np.sqrt(np.pi) * TARGET_RELATIVE_NOISE)  # Figure 10.5's rule
+    assert band_sigma_px(noisy) == pytest.approx(expected, rel=0.1)
+    assert band_sigma_px(clean) == 0.0
+
+
+def test_parallax_shift_recovers_a_translation(rng):
+    """Two views of one texture 2.5 texels apart (the spectral camera's and its partner's)."""
+    texture = rng.random((64, 64))
+    shifted = np.roll(texture, (2, -3), axis=(0, 1))
+    np.testing.assert_allclose(parallax_shift(texture, shifted), [-2.0, 3.0], atol=0.1)
+
+
+def test_joint_groups_follow_the_schedule_cycles():
+    bands = [[0, 1], [2], [3], [0], [1, 2], [3], [0]]
+    assert joint_groups(bands, 3, 4) == [[0, 1, 2], [3, 4, 5, 6]]
+    assert joint_groups(bands[:6], 3, 4) == [[0, 1, 2], [3, 4, 5]]
+    with pytest.raises(SpectwinInputError):
+        joint_groups([], 3, 4)
+
+
+def test_band_response_reads_one_on_the_white_standard():
+    """:math:`R_{cam}` of a camera whose channels see one band each: a unit white reads one in
+    every channel, a colour by its band."""
+    fine = WavelengthGrid.regular(400, 700, 1)
+    bands = WavelengthGrid.regular(410, 690, 10)
+    channels = np.stack(
+        [np.exp(-0.5 * ((fine.wavelengths_nm - centre) / 20) ** 2) for centre in (600, 540, 450)]
+    )
+    response = band_response(
+        SampledSpectra(fine, channels), np.ones(fine.size), np.ones(bands.size), bands
+    )
+    np.testing.assert_allclose(np.ones(bands.size) @ response, 1.0)
+    red = (bands.wavelengths_nm > 580).astype(float)
+    assert np.argmax(red @ response) == 0
