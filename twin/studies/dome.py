@@ -14,8 +14,8 @@
   error (10.5: 7.5 s instead of 226 s).
 - :func:`cross_check`: Fig. 10.4, RGB predicted from a calibrated spectral image versus RGB
   measured, per colour-checker field.
-- :func:`multi_image_from_stores`: 10.4.2 on rendered dome capture stores
-  (:mod:`twin.studies.dome_stores`), next to the analytic path taking the same images.
+- :func:`twin.studies.dome_stores.store_study`: 10.4.2 and 10.5 on rendered dome capture
+  stores processed by :mod:`recon.dome`, next to the analytic path taking the same images.
 - :func:`run_dome_study`: all of them, written to ``dome_study.json`` with the figures of
   :mod:`twin.studies.dome_figures`.
 
@@ -36,7 +36,6 @@ from pathlib import Path
 import numpy as np
 from scipy import ndimage
 
-from hwbridge.store import CaptureStore
 from recon.baselines import dong_2016, spectral_a_plus
 from recon.errors import SpectwinInputError
 from recon.metrics import relative_error
@@ -68,22 +67,19 @@ from twin.rigs.dome_geometry import dome_geometry
 from twin.rigs.hemisphere import direction
 from twin.sensor.white_reference import equalized_exposures_s
 from twin.studies import dome_figures
-from twin.studies.dome_stores import capture_study_stores, store_capture, store_exposure_ratio
+from twin.studies.dome_stores import STORE_CAPTURE, store_study
 
 __all__ = [
     "DOME_MATERIALS",
     "PER_PIXEL_TEXEL_PX",
     "P_DYN",
     "SINGLE_IMAGE_LEDS",
-    "STORE_CAPTURE",
-    "STORE_TEXEL_PX",
     "SingleImage",
     "comparison",
     "cross_check",
     "exposure_comparison",
     "metamer_diagnosis",
     "multi_image",
-    "multi_image_from_stores",
     "run_dome_study",
     "schedules",
     "single_image",
@@ -201,49 +197,6 @@ def multi_image(
             "without_spectral_data": errors.summary(slice(10, 20)),
         },
     )
-
-
-STORE_CAPTURE = DomeCaptureSize(stage_positions=1, leds=10, rgb_cameras=3, texels=32)
-"""The study's dome captures by default: one stage position, 10 LEDs spread over the dome (the
-10-image band schedule once), the RGB cameras at 0, 37.5 and 75 degrees and the spectral camera,
-32 texels (a Bayer quad per texel of a 4 cm sample), 64 spp: about 45 renders a material. The
-study evaluates them at half that (:data:`STORE_TEXEL_PX`)."""
-
-
-def multi_image_from_stores(
-    setup: DomeSetup,
-    run: CaptureStore,
-    calibration: CaptureStore,
-    texels: int,
-    rng: np.random.Generator,
-    *,
-    step: Callable[[str], None] = lambda name: None,
-) -> dict[str, dict[str, dict[str, float]]]:
-    """10.4.2 on a ``dome-run`` store (:mod:`twin.studies.dome_stores`): the images of the RGB
-    camera nearest the spectral camera with the bands the schedule gave their LEDs, the other
-    RGB cameras' images without spectral data, reconstructed jointly (Eq. 10.12); and the same
-    images, LEDs and bands taken by the analytic path (:func:`simulate_capture`), for
-    comparison. Errors per group of images and per RGB camera."""
-    images = store_capture(setup, run, calibration, texels, step=step)
-    step("the same images by the analytic path")
-    analytic = simulate_capture(setup, images.truth, images.light_dirs, images.bands_per_image, rng)
-    with_bands = [i for i, bands in enumerate(images.bands_per_image) if bands]
-    paired = images.cameras[with_bands[0]]
-    groups = {
-        "with_spectral_data": [i for i, c in enumerate(images.cameras) if c == paired],
-        "without_spectral_data": [i for i, c in enumerate(images.cameras) if c != paired],
-    } | {
-        camera: [i for i, c in enumerate(images.cameras) if c == camera]
-        for camera in dict.fromkeys(images.cameras)
-    }
-    out: dict[str, dict[str, dict[str, float]]] = {}
-    for name, capture in (("stores", images.capture), ("analytic", analytic)):
-        errors = ReconstructionErrors.of(
-            reconstruct_capture(setup, capture, p_dyn=P_DYN), capture.truth
-        )
-        out[name] = {group: errors.summary(indices) for group, indices in groups.items()}
-    out["images"] = {"leds": images.leds, "cameras": images.cameras, "paired_camera": paired}
-    return out
 
 
 def metamer_diagnosis(setup: DomeSetup, capture: DomeCapture) -> dict[str, float]:
@@ -433,10 +386,6 @@ DOME_MATERIALS = ("lego", "wallpaper", "colorchecker16", "red_fabric")
 PER_PIXEL_TEXEL_PX = 2
 """Camera pixels across a texel in the per-pixel regime (module description)."""
 
-STORE_TEXEL_PX = 2 * PER_PIXEL_TEXEL_PX
-"""Camera pixels across a study texel of the store path: 2 x 2 Bayer quads, so that resampling
-the rectified frames does not blur the texels (:mod:`twin.studies.dome_stores`)."""
-
 
 def _errors_of(result: SingleImage) -> dict[str, np.ndarray]:
     return {
@@ -445,53 +394,24 @@ def _errors_of(result: SingleImage) -> dict[str, np.ndarray]:
     }
 
 
-def _store_experiments(
-    folder: Path,
-    materials: Sequence[str],
-    capture: DomeCaptureSize,
-    setup: DomeSetup,
-    rng: np.random.Generator,
-    *,
-    seed: int,
-    step: Callable[[str], None],
-) -> dict:
-    """The store path of :func:`run_dome_study`: per material its ``dome-run`` store, one
-    calibration store, the multi-image experiment and the 10.5 exposure totals."""
-    folder.mkdir(parents=True, exist_ok=True)
-    result: dict = {
-        "capture": capture.__dict__,
-        "texels": capture.texels // 2,
-        "pixels_per_texel": STORE_TEXEL_PX,
-        "folder": str(folder),
-        "materials": {},
-    }
-    for material in materials:
-        step(f"{material}: capturing the dome stores")
-        run, calibration = capture_study_stores(folder, material, capture, seed=seed, dark_frames=8)
-        result["materials"][material] = multi_image_from_stores(
-            setup, run, calibration, capture.texels // 2, rng, step=step
-        )
-    result["exposure_10_5"] = store_exposure_ratio(
-        run, calibration, max_dn=setup.cameras.spectral.max_dn
-    )
-    return result
-
-
 def run_dome_study(
     out: str | Path,
     *,
     texels: int = 32,
     materials: Sequence[str] = DOME_MATERIALS,
     seed: int = 0,
+    analytic: bool = True,
     stores: Path | None = None,
     capture: DomeCaptureSize | None = STORE_CAPTURE,
     step: Callable[[str], None] = lambda name: None,
 ) -> dict:
-    """Run every experiment of :mod:`twin.studies.dome`, write the JSON and figures to ``out``.
+    """Run the experiments of :mod:`twin.studies.dome`, write the JSON and figures to ``out``.
 
-    With ``capture`` (the default), the 10.4.2 multi-image experiment and the 10.5 exposure
-    totals are also taken from dome capture stores in ``stores`` (default ``out/stores``),
-    captured at that size where missing (:func:`multi_image_from_stores`), and reported under
+    ``analytic``: the experiments on frames computed from the texture truth (module
+    description). ``capture`` (the default size, :data:`twin.studies.dome_stores.STORE_CAPTURE`):
+    the 10.4.2 multi-image experiment and the 10.5 exposure totals also from dome capture stores
+    in ``stores`` (default ``out/stores``), captured at that size where missing and processed by
+    :mod:`recon.dome` (:func:`twin.studies.dome_stores.store_study`), reported under
     ``"stores"`` next to the analytic path's numbers for the same images; ``None`` skips them.
     """
     unknown = sorted(set(materials) - set(DOME_MATERIALS))
@@ -501,8 +421,28 @@ def run_dome_study(
         )
     if texels < 8 or texels % 4:
         raise SpectwinInputError(f"texels: expected a multiple of 4, at least 8, got {texels}")
+    if not analytic and capture is None:
+        raise SpectwinInputError("analytic, capture: expected the analytic path, stores or both")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    metrics = _analytic_study(out, texels, materials, seed, step) if analytic else {}
+    if capture is not None:
+        metrics["stores"] = store_study(
+            Path(stores) if stores is not None else out / "stores",
+            materials,
+            capture,
+            seed=seed,
+            step=step,
+        )
+        dome_figures.write_store_comparison(metrics["stores"], out / "stores_vs_analytic.png")
+    (out / "dome_study.json").write_text(dumps(metrics))
+    return metrics
+
+
+def _analytic_study(
+    out: Path, texels: int, materials: Sequence[str], seed: int, step: Callable[[str], None]
+) -> dict:
+    """The experiments on the analytic path, their figures written to ``out``."""
     rng = np.random.default_rng(seed)
     setups: dict[float, DomeSetup] = {}
 
@@ -542,16 +482,6 @@ def run_dome_study(
                 "metamer_diagnosis": metamer_diagnosis(per_pixel, per_pixel_single.captures[0]),
             },
         }
-    if capture is not None:
-        metrics["stores"] = _store_experiments(
-            Path(stores) if stores is not None else out / "stores",
-            materials,
-            capture,
-            dome_setup(capture.texels // 2, texel_px=STORE_TEXEL_PX, seed=seed),
-            rng,
-            seed=seed,
-            step=step,
-        )
     step("exposure comparison (one Bayer quad per texel) and cross-check")
     metrics["exposure_10_5"] = exposure_comparison(per_pixel, "colorchecker16", rng)
     check = cross_check(setup_for("colorchecker16"), rng)
@@ -587,7 +517,4 @@ def run_dome_study(
     dome_figures.write_comparison(metrics, out / "fig10_23_comparison.png")
     dome_figures.write_cross_check(check, out / "fig10_4_cross_check.png")
     dome_figures.write_exposure_vs_error(metrics["exposure_10_5"], out / "exposure_vs_error.png")
-    if "stores" in metrics:
-        dome_figures.write_store_comparison(metrics["stores"], out / "stores_vs_analytic.png")
-    (out / "dome_study.json").write_text(dumps(metrics))
     return metrics
