@@ -102,10 +102,7 @@ def _analytic_summary(metrics: dict) -> dict[str, str]:
         summary[f"{material} single image"] = (
             f"{single['mean_relative_error_pct']:.2f} %, Delta E94 {single['mean_delta_e94']:.2f}"
         )
-        summary[f"{material} 20 images with / without bands"] = (
-            f"{multi['with_spectral_data']['mean_relative_error_pct']:.2f} % / "
-            f"{multi['without_spectral_data']['mean_relative_error_pct']:.2f} %"
-        )
+        summary[f"{material} 20 images with / without bands"] = _with_without(multi)
     exposure = metrics["exposure_10_5"]
     summary["10.5 reference spectral capture"] = (
         f"{exposure['reference_total_s']:.0f} s, {exposure['reference_error_pct']:.2f} %"
@@ -124,10 +121,8 @@ def _store_summary(stores: dict) -> dict[str, str]:
     summary = {}
     for material, result in stores["materials"].items():
         for source in ("stores", "analytic"):
-            groups = result[source]
-            summary[f"{material} dome stores: with / without bands ({source})"] = (
-                f"{groups['with_spectral_data']['mean_relative_error_pct']:.1f} % / "
-                f"{groups['without_spectral_data']['mean_relative_error_pct']:.1f} %"
+            summary[f"{material} dome stores: with / without bands ({source})"] = _with_without(
+                result[source]
             )
     ratio = stores["exposure_10_5"]
     summary["10.5 from the stores"] = (
@@ -135,6 +130,14 @@ def _store_summary(stores: dict) -> dict[str, str]:
         f"{ratio['orders_of_magnitude']:.2f} orders of magnitude"
     )
     return summary
+
+
+def _with_without(groups: dict) -> str:
+    """Mean relative errors of the images with and without spectral data."""
+    return " / ".join(
+        f"{groups[name]['mean_relative_error_pct']:.2f} %"
+        for name in ("with_spectral_data", "without_spectral_data")
+    )
 
 
 def register(app: typer.Typer) -> None:
