@@ -9,7 +9,7 @@ code (:mod:`recon.dome`, :mod:`recon.calibration.dome_capture`):
 2. :func:`study_calibration` calibrates the dome from the calibration store
    (:func:`recon.calibration.dome_capture.calibrate_dome`: geometry, darks, low-SNR response,
    whites per LED), saved beside it;
-3. :func:`store_multi_image` processes a run into a BTF store
+3. :func:`same_images` processes a run into a BTF store
    (:func:`recon.dome.processing.process_dome`: the holder's marks, rectification, HDR merge,
    white balance per LED and texel, band reflectance, the joint solve of Eq. 10.12 over one cycle
    of the band schedule) and compares its pairs, as reflectance factors, with the analytic
@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 import shutil
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -43,15 +44,18 @@ from recon.dome.run import open_dome_run
 from recon.radiometric.hdr import interpolate_curve
 from twin.dome.capture_study import ReconstructionErrors, reconstruct_capture, simulate_capture
 from twin.dome.programs import DomeCaptureSize, dome_calibration_program, dome_run_program
-from twin.dome.setup import DomeSetup, dome_setup
+from twin.dome.setup import BAND_GRID, DomeSetup, dome_setup
+from twin.materials import load_material
 from twin.render.truth import texture_truth
+from twin.validate.dome_evaluation import chart_field_errors
 
 __all__ = [
     "STORE_CAPTURE",
     "STORE_DARK_FRAMES",
+    "SameImages",
     "capture_study_stores",
+    "same_images",
     "store_exposure_ratio",
-    "store_multi_image",
     "store_study",
     "study_calibration",
 ]
@@ -106,18 +110,73 @@ def study_calibration(calibration_store: Path) -> DomeCalibration:
     return calibration
 
 
-def store_multi_image(
+@dataclass(frozen=True)
+class SameImages:
+    """The images of a ``dome-run`` store processed from the store and taken by the analytic
+    path (module description), ``(n_pairs, texels, texels, bands)`` reflectance factors each,
+    with the truth, the material, and per pair its view direction and RGB camera."""
+
+    stored: np.ndarray
+    analytic: np.ndarray
+    truth: np.ndarray
+    material: str
+    view_dirs: np.ndarray
+    cameras: list[str]
+    partner: str
+    leds: list[int]
+    projected_marks: list[str]
+
+    def summary(self) -> dict:
+        """Errors of both paths (:class:`twin.dome.capture_study.ReconstructionErrors`) with and
+        without spectral data and per RGB camera, over the material texels and, for a chart, under
+        ``"diffuse_fields"`` the means of its diffuse fields' interiors (60 %) against the
+        truth's (:func:`twin.validate.dome_evaluation.chart_field_errors`, as ``spectwin
+        evaluate``): there a fraction of a texel of resampling or registration changes little."""
+
+        def pairs(keep) -> list[int]:
+            return [i for i, camera in enumerate(self.cameras) if keep(camera)]
+
+        groups = {
+            "with_spectral_data": pairs(lambda camera: camera == self.partner),
+            "without_spectral_data": pairs(lambda camera: camera != self.partner),
+        } | {name: pairs(lambda camera, name=name: camera == name) for name in self.cameras}
+        material = load_material(self.material)
+        chart = any(part.name.startswith("field_") for part in material.parts)
+        out: dict = {}
+        for name, cube in (("stores", self.stored), ("analytic", self.analytic)):
+            errors = ReconstructionErrors.of(cube, self.truth)
+            out[name] = {group: errors.summary(indices) for group, indices in groups.items()}
+            if chart:
+                relative, colour, *_ = chart_field_errors(
+                    material, self.view_dirs, cube, self.truth, BAND_GRID, 0.6
+                )
+                out[name]["diffuse_fields"] = {
+                    group: {
+                        "mean_relative_error_pct": float(np.nanmean(relative[indices])),
+                        "mean_delta_e94": float(np.nanmean(colour[indices])),
+                    }
+                    for group, indices in groups.items()
+                }
+        out["images"] = {
+            "leds": self.leds,
+            "cameras": list(dict.fromkeys(self.cameras)),
+            "band_partner": self.partner,
+            "texels": self.truth.shape[1],
+            "p_dyn": P_DYN,
+            "projected_marks": self.projected_marks,
+        }
+        return out
+
+
+def same_images(
     setup: DomeSetup,
     run_store: Path,
     calibration: DomeCalibration,
     btf_path: Path,
     rng: np.random.Generator,
-) -> dict:
-    """10.4.2 on a ``dome-run`` store (module description): errors of the processed BTF and of
-    the analytic path on the same images, with and without spectral data and per RGB camera,
-    and the texture's shift against the truth per pair (texels)."""
-    from skimage.registration import phase_cross_correlation
-
+) -> SameImages:
+    """A ``dome-run`` store processed into ``btf_path`` and its images taken by the analytic
+    path with ``setup`` (module description)."""
     run = open_dome_run(run_store)
     texels = setup.cameras.spectral.height // setup.cameras.pixels_per_texel
     shutil.rmtree(btf_path, ignore_errors=True)
@@ -133,31 +192,17 @@ def store_multi_image(
     truth = texture_truth(run.material, light_dirs, view_dirs, texels=texels)
     analytic = simulate_capture(setup, truth, light_dirs, bands, rng)
     stored = np.pi * np.stack([btf.read_pair(pair) for pair in range(btf.n_pairs)])
-    groups = {
-        "with_spectral_data": [i for i, c in enumerate(cameras) if c == partner],
-        "without_spectral_data": [i for i, c in enumerate(cameras) if c != partner],
-    } | {camera: [i for i, c in enumerate(cameras) if c == camera] for camera in run.rgb_cameras}
-    out: dict = {}
-    for name, cube in (
-        ("stores", stored.astype(np.float64)),
-        ("analytic", reconstruct_capture(setup, analytic, p_dyn=P_DYN)),
-    ):
-        errors = ReconstructionErrors.of(cube, analytic.truth)
-        out[name] = {group: errors.summary(indices) for group, indices in groups.items()}
-    shifts = [
-        phase_cross_correlation(t.mean(-1), s.mean(-1), upsample_factor=20)[0]
-        for t, s in zip(analytic.truth, stored, strict=True)
-    ]
-    out["images"] = {
-        "leds": [light for _, light in run.images],
-        "cameras": list(run.rgb_cameras),
-        "band_partner": partner,
-        "texels": texels,
-        "p_dyn": P_DYN,
-        "max_shift_texels": float(np.abs(shifts).max()),
-        "projected_marks": btf.attrs["projected_marks"],
-    }
-    return out
+    return SameImages(
+        stored.astype(np.float64),
+        reconstruct_capture(setup, analytic, p_dyn=P_DYN),
+        analytic.truth,
+        run.material,
+        view_dirs,
+        cameras,
+        partner,
+        [light for _, light in run.images],
+        list(btf.attrs["projected_marks"]),
+    )
 
 
 def store_exposure_ratio(run_store: Path, calibration: DomeCalibration) -> dict[str, float]:
@@ -209,8 +254,8 @@ def store_study(
             step("calibrating the dome from its calibration store")
             calibration = study_calibration(calibration_store)
         step(f"{material}: processing the run store")
-        result["materials"][material] = store_multi_image(
+        result["materials"][material] = same_images(
             setup, run_store, calibration, folder / f"{material}.btf.zarr", rng
-        )
+        ).summary()
     result["exposure_10_5"] = store_exposure_ratio(run_store, calibration)
     return result
