@@ -65,6 +65,7 @@ from twin.output_format import dumps
 from twin.render.truth import texture_truth
 from twin.rigs.dome_geometry import dome_geometry
 from twin.rigs.hemisphere import direction
+from twin.rigs.rig_config import load_rig
 from twin.sensor.white_reference import equalized_exposures_s
 from twin.studies import dome_figures
 from twin.studies.dome_stores import STORE_CAPTURE, store_study
@@ -423,6 +424,8 @@ def run_dome_study(
         raise SpectwinInputError(f"texels: expected a multiple of 4, at least 8, got {texels}")
     if not analytic and capture is None:
         raise SpectwinInputError("analytic, capture: expected the analytic path, stores or both")
+    if capture is not None:
+        capture.check(load_rig("dome"))
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     metrics = _analytic_study(out, texels, materials, seed, step) if analytic else {}

@@ -78,8 +78,8 @@ def test_store_path_agrees_with_the_analytic_path_on_the_field_interiors(summary
 def test_store_exposure_totals_are_thesis_10_5(stores, setup):
     """10.5 from the stores: the reference exposures from the calibration's white standard and
     curve against the analytic path's (the camera model's white rates and full well) within
-    8 % (measured +5.1 %: the calibrated curve is extended by a straight line above the response
-    series' top, where the sensor's response bends towards its full well); about 1.5 orders of
+    8 % (measured +5.1 %; the calibrated curve is extended by a straight line above the response
+    series' top, where the analytic path takes the model's full well); about 1.5 orders of
     magnitude above the hybrid total, as the thesis found (226 s against 7.5 s)."""
     _, run, calibration = stores
     ratio = store_exposure_ratio(run, calibration)
