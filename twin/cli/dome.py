@@ -27,6 +27,25 @@ def dome_study(
         typer.Option("--material", help="A material to study (repeat); default: all four."),
     ] = None,
     seed: Annotated[int, typer.Option(min=0, help="Seed of the cameras' noise.")] = 0,
+    stores: Annotated[
+        Path | None,
+        typer.Option(
+            help="Folder of the dome-run and dome-calibration stores (captured where missing, "
+            "reused where complete); default OUT/stores."
+        ),
+    ] = None,
+    leds: Annotated[
+        int, typer.Option(min=1, max=198, help="LEDs of the study's dome captures.")
+    ] = 10,
+    capture_texels: Annotated[
+        int, typer.Option(min=8, max=128, help="Texels of the study's dome captures.")
+    ] = 32,
+    analytic_only: Annotated[
+        bool, typer.Option(help="Skip the dome captures: frames from the analytic path only.")
+    ] = False,
+    stores_only: Annotated[
+        bool, typer.Option(help="Only the dome captures' experiments (10.4.2, 10.5).")
+    ] = False,
     as_json: JsonFlag = False,
 ) -> None:
     """Exposure plan, band schedules, low-SNR calibration, virtual dome captures and their
@@ -35,10 +54,15 @@ def dome_study(
 
     Example: spectwin dome-study --out out/dome --material lego --material red_fabric
     """
+    from dataclasses import replace
+
     from twin.studies.dome import DOME_MATERIALS, run_dome_study
+    from twin.studies.dome_stores import STORE_CAPTURE
 
     if texels % 4:
         fail(f"--texels {texels}: expected a multiple of 4")
+    if analytic_only and stores_only:
+        fail("--analytic-only, --stores-only: expected one of them at most")
     require_output_folder(out)
     chosen = tuple(dict.fromkeys(m.value for m in materials)) if materials else DOME_MATERIALS
     with console.status("dome study") as status:
@@ -47,12 +71,27 @@ def dome_study(
             texels=texels,
             materials=chosen,
             seed=seed,
+            analytic=not stores_only,
+            stores=stores,
+            capture=None
+            if analytic_only
+            else replace(STORE_CAPTURE, leds=leds, texels=capture_texels),
             step=lambda name: status.update(name),
         )
     if as_json:
         print_summary(metrics, "", as_json)
         return
     summary: dict[str, object] = {"out": str(out)}
+    if "schedules" in metrics:
+        summary |= _analytic_summary(metrics)
+    if "stores" in metrics:
+        summary |= _store_summary(metrics["stores"])
+    print_summary(summary, "dome study (thesis chapter 10)")
+
+
+def _analytic_summary(metrics: dict) -> dict[str, str]:
+    """The analytic path's numbers, rounded."""
+    summary = {}
     for name, plan in metrics["schedules"].items():
         if isinstance(plan, dict):
             summary[f"schedule {name}"] = (
@@ -63,10 +102,7 @@ def dome_study(
         summary[f"{material} single image"] = (
             f"{single['mean_relative_error_pct']:.2f} %, Delta E94 {single['mean_delta_e94']:.2f}"
         )
-        summary[f"{material} 20 images with / without bands"] = (
-            f"{multi['with_spectral_data']['mean_relative_error_pct']:.2f} % / "
-            f"{multi['without_spectral_data']['mean_relative_error_pct']:.2f} %"
-        )
+        summary[f"{material} 20 images with / without bands"] = _with_without(multi)
     exposure = metrics["exposure_10_5"]
     summary["10.5 reference spectral capture"] = (
         f"{exposure['reference_total_s']:.0f} s, {exposure['reference_error_pct']:.2f} %"
@@ -77,7 +113,31 @@ def dome_study(
         )
     check = metrics["cross_check_10_4"]
     summary["Fig. 10.4 field difference"] = f"{check['mean_abs_field_difference_pct']:.2f} % mean"
-    print_summary(summary, "dome study (thesis chapter 10)")
+    return summary
+
+
+def _store_summary(stores: dict) -> dict[str, str]:
+    """The store path's numbers next to the analytic path's on the same images, rounded."""
+    summary = {}
+    for material, result in stores["materials"].items():
+        for source in ("stores", "analytic"):
+            summary[f"{material} dome stores: with / without bands ({source})"] = _with_without(
+                result[source]
+            )
+    ratio = stores["exposure_10_5"]
+    summary["10.5 from the stores"] = (
+        f"{ratio['reference_total_s']:.0f} s / {ratio['hybrid_total_s']:.1f} s, "
+        f"{ratio['orders_of_magnitude']:.2f} orders of magnitude"
+    )
+    return summary
+
+
+def _with_without(groups: dict) -> str:
+    """Mean relative errors of the images with and without spectral data."""
+    return " / ".join(
+        f"{groups[name]['mean_relative_error_pct']:.2f} %"
+        for name in ("with_spectral_data", "without_spectral_data")
+    )
 
 
 def register(app: typer.Typer) -> None:

@@ -14,6 +14,8 @@
   error (10.5: 7.5 s instead of 226 s).
 - :func:`cross_check`: Fig. 10.4, RGB predicted from a calibrated spectral image versus RGB
   measured, per colour-checker field.
+- :func:`twin.studies.dome_stores.store_study`: 10.4.2 and 10.5 on rendered dome capture
+  stores processed by :mod:`recon.dome`, next to the analytic path taking the same images.
 - :func:`run_dome_study`: all of them, written to ``dome_study.json`` with the figures of
   :mod:`twin.studies.dome_figures`.
 
@@ -49,6 +51,7 @@ from twin.dome.capture_study import (
     sphere_lit_spectra,
 )
 from twin.dome.exposure_plan import band_schedules
+from twin.dome.programs import DomeCaptureSize
 from twin.dome.setup import (
     BAND_GRID,
     CALIBRATION_LIGHT,
@@ -62,8 +65,10 @@ from twin.output_format import dumps
 from twin.render.truth import texture_truth
 from twin.rigs.dome_geometry import dome_geometry
 from twin.rigs.hemisphere import direction
+from twin.rigs.rig_config import load_rig
 from twin.sensor.white_reference import equalized_exposures_s
 from twin.studies import dome_figures
+from twin.studies.dome_stores import STORE_CAPTURE, store_study
 
 __all__ = [
     "DOME_MATERIALS",
@@ -396,9 +401,20 @@ def run_dome_study(
     texels: int = 32,
     materials: Sequence[str] = DOME_MATERIALS,
     seed: int = 0,
+    analytic: bool = True,
+    stores: Path | None = None,
+    capture: DomeCaptureSize | None = STORE_CAPTURE,
     step: Callable[[str], None] = lambda name: None,
 ) -> dict:
-    """Run every experiment of :mod:`twin.studies.dome`, write the JSON and figures to ``out``."""
+    """Run the experiments of :mod:`twin.studies.dome`, write the JSON and figures to ``out``.
+
+    ``analytic``: the experiments on frames computed from the texture truth (module
+    description). ``capture`` (the default size, :data:`twin.studies.dome_stores.STORE_CAPTURE`):
+    the 10.4.2 multi-image experiment and the 10.5 exposure totals also from dome capture stores
+    in ``stores`` (default ``out/stores``), captured at that size where missing and processed by
+    :mod:`recon.dome` (:func:`twin.studies.dome_stores.store_study`), reported under
+    ``"stores"`` next to the analytic path's numbers for the same images; ``None`` skips them.
+    """
     unknown = sorted(set(materials) - set(DOME_MATERIALS))
     if unknown or not materials:
         raise SpectwinInputError(
@@ -406,8 +422,30 @@ def run_dome_study(
         )
     if texels < 8 or texels % 4:
         raise SpectwinInputError(f"texels: expected a multiple of 4, at least 8, got {texels}")
+    if not analytic and capture is None:
+        raise SpectwinInputError("analytic, capture: expected the analytic path, stores or both")
+    if capture is not None:
+        capture.check(load_rig("dome"))
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    metrics = _analytic_study(out, texels, materials, seed, step) if analytic else {}
+    if capture is not None:
+        metrics["stores"] = store_study(
+            Path(stores) if stores is not None else out / "stores",
+            materials,
+            capture,
+            seed=seed,
+            step=step,
+        )
+        dome_figures.write_store_comparison(metrics["stores"], out / "stores_vs_analytic.png")
+    (out / "dome_study.json").write_text(dumps(metrics))
+    return metrics
+
+
+def _analytic_study(
+    out: Path, texels: int, materials: Sequence[str], seed: int, step: Callable[[str], None]
+) -> dict:
+    """The experiments on the analytic path, their figures written to ``out``."""
     rng = np.random.default_rng(seed)
     setups: dict[float, DomeSetup] = {}
 
@@ -482,5 +520,4 @@ def run_dome_study(
     dome_figures.write_comparison(metrics, out / "fig10_23_comparison.png")
     dome_figures.write_cross_check(check, out / "fig10_4_cross_check.png")
     dome_figures.write_exposure_vs_error(metrics["exposure_10_5"], out / "exposure_vs_error.png")
-    (out / "dome_study.json").write_text(dumps(metrics))
     return metrics

@@ -53,6 +53,7 @@ from twin.render.truth import truth_btf
 __all__ = [
     "SPECULAR_DEG",
     "DomeEvaluation",
+    "chart_field_errors",
     "evaluate_dome",
     "spectral_passbands",
     "write_dome_figure",
@@ -174,9 +175,10 @@ def _capture(btf_path: Path, btf: BTFStore) -> CaptureStore:
         ) from None
 
 
-def _chart_errors(material, view_dirs, measured, truth, grid, interior):
-    """Per pair the diffuse fields' mean-spectrum errors (NaN for a field whose interior the
-    view's parallax moves off the texture) and the per-texel means."""
+def chart_field_errors(material, view_dirs, measured, truth, grid, interior):
+    """Per pair ``(n_pairs, n_diffuse_fields)`` the diffuse fields' mean-spectrum errors (Eq.
+    6.8, Delta E94; NaN for a field whose interior the view's parallax moves off the texture)
+    and ``(n_pairs,)`` the per-texel means inside them."""
     relative, colour, texel_relative, texel_colour = [], [], [], []
     for view, estimate, reference in zip(view_dirs, measured, truth, strict=True):
         fields = field_masks(material, view, estimate.shape[0], interior=interior)
@@ -251,7 +253,7 @@ def evaluate_dome(
     ).astype(np.float64)
     measured = np.pi * np.stack([btf.read_pair(int(pair)) for pair in chosen]).astype(np.float64)
     if chart:
-        errors = _chart_errors(material, views, measured, truth, btf.grid, interior)
+        errors = chart_field_errors(material, views, measured, truth, btf.grid, interior)
     else:
         span = FINE_GRID.stop_nm - FINE_GRID.start_nm
         grey = SampledSpectra(FINE_GRID, np.full((1, FINE_GRID.size), 1 / span))

@@ -1,0 +1,88 @@
+"""The dome study's store path (:mod:`twin.studies.dome_stores`) end to end on a tiny rendered
+capture: a ``dome-calibration`` store and a ``dome-run`` of the colour checker (one stage
+position, 10 LEDs: one cycle of the band schedule, the RGB cameras at 0, 37.5 and 75 degrees,
+24 texels), calibrated and processed by :mod:`recon.dome` as a real dome's stores are, against
+the analytic path taking the same images (same LEDs, views and bands)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from twin.dome.programs import DomeCaptureSize
+from twin.dome.setup import dome_setup
+from twin.studies.dome import _reference_exposures
+from twin.studies.dome_stores import (
+    capture_study_stores,
+    same_images,
+    store_exposure_ratio,
+    study_calibration,
+)
+
+pytestmark = pytest.mark.render
+
+SIZE = DomeCaptureSize(stage_positions=1, leds=10, rgb_cameras=3, texels=24)
+SEED = 3
+
+
+@pytest.fixture(scope="module")
+def stores(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("dome_study")
+    run, calibration = capture_study_stores(
+        folder, "colorchecker16", SIZE, seed=SEED, dark_frames=4
+    )
+    return folder, run, study_calibration(calibration)
+
+
+@pytest.fixture(scope="module")
+def setup():
+    return dome_setup(SIZE.texels, texel_px=2, seed=SEED)
+
+
+@pytest.fixture(scope="module")
+def summary(stores, setup):
+    folder, run, calibration = stores
+    images = same_images(setup, run, calibration, folder / "btf.zarr", np.random.default_rng(SEED))
+    return images.summary()
+
+
+def test_store_path_registers_the_cameras(summary):
+    """The band data go to the 37.5 degree camera, the nearest the spectral camera's 45; the
+    holder's marks are found by the top and the 37.5 degree camera. At 24 texels the 75 degree
+    camera sees the marks' print one or two pixels wide, and the calibrated projection stands
+    in (``recon.dome.images.register_view``)."""
+    images = summary["images"]
+    assert images["band_partner"] == "rgb05"
+    assert set(images["projected_marks"]) <= {"rgb10_view0"}
+
+
+@pytest.mark.parametrize("camera", ["rgb00", "rgb05"])
+def test_store_path_agrees_with_the_analytic_path_on_the_field_interiors(summary, camera):
+    """On the colour checker's diffuse field interiors (their mean spectra, as ``spectwin
+    evaluate`` compares them), where a fraction of a texel of resampling and registration
+    changes little, the store path gives what the analytic path gives on the same images.
+    Measured (seed 3): top camera 5.6 % / Delta E94 1.46 against 5.0 % / 0.95, 37.5 degrees
+    7.1 % / 2.06 against 5.1 % / 0.93. The bounds, 4 points and 2 Delta E94 units above the
+    analytic path's, leave room for the render's noise and a calibration estimated from frames
+    (the test capture's 4 dark frames), not for a band or the white off by 10 % (4-5 points)
+    or a field misregistered by a texel (tens of percent at 24 texels)."""
+    stored = summary["stores"]["diffuse_fields"][camera]
+    analytic = summary["analytic"]["diffuse_fields"][camera]
+    assert math.isfinite(analytic["mean_relative_error_pct"])
+    assert stored["mean_relative_error_pct"] < analytic["mean_relative_error_pct"] + 4.0
+    assert stored["mean_delta_e94"] < analytic["mean_delta_e94"] + 2.0
+
+
+def test_store_exposure_totals_are_thesis_10_5(stores, setup):
+    """10.5 from the stores: the reference exposures from the calibration's white standard and
+    curve against the analytic path's (the camera model's white rates and full well) within
+    8 % (measured +5.1 %; the calibrated curve is extended by a straight line above the response
+    series' top, where the analytic path takes the model's full well); about 1.5 orders of
+    magnitude above the hybrid total, as the thesis found (226 s against 7.5 s)."""
+    _, run, calibration = stores
+    ratio = store_exposure_ratio(run, calibration)
+    reference = float(_reference_exposures(setup).sum())
+    assert ratio["reference_total_s"] == pytest.approx(reference, rel=0.08)
+    assert 1.4 < ratio["orders_of_magnitude"] < 1.7

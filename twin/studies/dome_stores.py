@@ -1,0 +1,261 @@
+"""The chapter 10 dome study from dome capture stores, processed as a real dome's are.
+
+The study's store path takes its images where a real dome's processing would, through the same
+code (:mod:`recon.dome`, :mod:`recon.calibration.dome_capture`):
+
+1. :func:`capture_study_stores` renders a ``dome-calibration`` store (its full plan: the
+   checkerboard frames, the response series, dark frames and the white standard under every
+   LED) and per material a ``dome-run`` store (:mod:`twin.dome.programs`), where missing;
+2. :func:`study_calibration` calibrates the dome from the calibration store
+   (:func:`recon.calibration.dome_capture.calibrate_dome`: geometry, darks, low-SNR response,
+   whites per LED), saved beside it;
+3. :func:`same_images` processes a run into a BTF store
+   (:func:`recon.dome.processing.process_dome`: the holder's marks, rectification, HDR merge,
+   white balance per LED and texel, band reflectance, the joint solve of Eq. 10.12 over one cycle
+   of the band schedule) and compares its pairs, as reflectance factors, with the analytic
+   path's truth for the same light and view directions (:func:`twin.render.truth.texture_truth`
+   in the spectral camera's bands); the analytic path (:func:`twin.dome.capture_study
+   .simulate_capture`) takes the same images, LEDs and bands and is reconstructed with the same
+   :data:`recon.dome.processing.P_DYN`, so that only the frames' path differs;
+4. :func:`store_exposure_ratio` takes 10.5's exposure totals from the run's exposures and the
+   calibration's white standard.
+
+Images (10.4.2): per stage position and LED one image per RGB camera; those of the camera
+nearest the spectral camera (the processing's band partner) carry the bands the schedule gave
+the LED, the others none.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from hwbridge.dome_layout import SPECTRAL_CAMERA
+from hwbridge.store import CaptureStore
+from recon.calibration.dome import DARK_VALUE_OFFSET
+from recon.calibration.dome_capture import DomeCalibration, calibrate_dome
+from recon.dome.processing import P_DYN, dome_directions, process_dome
+from recon.dome.run import open_dome_run
+from recon.radiometric.hdr import interpolate_curve
+from twin.dome.capture_study import ReconstructionErrors, reconstruct_capture, simulate_capture
+from twin.dome.programs import DomeCaptureSize, dome_calibration_program, dome_run_program
+from twin.dome.setup import BAND_GRID, DomeSetup, dome_setup
+from twin.materials import load_material
+from twin.render.truth import texture_truth
+from twin.validate.dome_evaluation import chart_field_errors
+
+__all__ = [
+    "STORE_CAPTURE",
+    "STORE_DARK_FRAMES",
+    "SameImages",
+    "capture_study_stores",
+    "same_images",
+    "store_exposure_ratio",
+    "store_study",
+    "study_calibration",
+]
+
+STORE_CAPTURE = DomeCaptureSize(stage_positions=1, leds=10, rgb_cameras=3, texels=32)
+"""The study's dome captures by default: one stage position, 10 LEDs spread over the dome (one
+cycle of the 10-image band schedule), the RGB cameras at 0, 37.5 and 75 degrees and the spectral
+camera, 32 texels (a Bayer quad per texel of a 4 cm sample), the capture's spp: 30 direction
+pairs a material, solved jointly."""
+
+STORE_DARK_FRAMES = 16
+"""Dark frames per exposure time of the study's calibration capture (thesis 10.3: 200)."""
+
+
+def capture_study_stores(
+    folder: Path,
+    material: str,
+    size: DomeCaptureSize,
+    *,
+    seed: int,
+    dark_frames: int = STORE_DARK_FRAMES,
+    step: Callable[[str], None] = lambda name: None,
+) -> tuple[Path, Path]:
+    """The ``dome-run`` store of ``material`` and the ``dome-calibration`` store of ``size`` in
+    ``folder``, captured where missing, resumed where incomplete."""
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = {
+        "calibration": folder / "calibration.capture.zarr",
+        material: folder / f"{material}.capture.zarr",
+    }
+    programs = {
+        "calibration": lambda: dome_calibration_program(
+            size=size, dark_frames=dark_frames, seed=seed
+        ),
+        material: lambda: dome_run_program(material, size=size, seed=seed),
+    }
+    for name, path in paths.items():
+        if path.exists() and CaptureStore.open(path).complete:
+            continue
+        step(f"capturing the {name} store")
+        programs[name]().run(path, resume=path.exists())
+    return paths[material], paths["calibration"]
+
+
+def study_calibration(calibration_store: Path) -> DomeCalibration:
+    """The dome calibrated from ``calibration_store``, saved beside it (``.npz``) and reused."""
+    saved = calibration_store.with_suffix(".npz")
+    if saved.exists():
+        return DomeCalibration.load(saved)
+    calibration = calibrate_dome(calibration_store, show_progress=True)
+    calibration.save(saved)
+    return calibration
+
+
+@dataclass(frozen=True)
+class SameImages:
+    """The images of a ``dome-run`` store processed from the store and taken by the analytic
+    path (module description), ``(n_pairs, texels, texels, bands)`` reflectance factors each,
+    with the truth, the material, and per pair its view direction and RGB camera."""
+
+    stored: np.ndarray
+    analytic: np.ndarray
+    truth: np.ndarray
+    material: str
+    view_dirs: np.ndarray
+    cameras: list[str]
+    partner: str
+    leds: list[int]
+    projected_marks: list[str]
+
+    def summary(self) -> dict:
+        """Errors of both paths (:class:`twin.dome.capture_study.ReconstructionErrors`) with and
+        without spectral data and per RGB camera, over the material texels and, for a chart, under
+        ``"diffuse_fields"`` the means of its diffuse fields' interiors (60 %) against the
+        truth's (:func:`twin.validate.dome_evaluation.chart_field_errors`, as ``spectwin
+        evaluate``): there a fraction of a texel of resampling or registration changes little."""
+
+        def pairs(keep) -> list[int]:
+            return [i for i, camera in enumerate(self.cameras) if keep(camera)]
+
+        groups = {
+            "with_spectral_data": pairs(lambda camera: camera == self.partner),
+            "without_spectral_data": pairs(lambda camera: camera != self.partner),
+        } | {name: pairs(lambda camera, name=name: camera == name) for name in self.cameras}
+        material = load_material(self.material)
+        chart = any(part.name.startswith("field_") for part in material.parts)
+        out: dict = {}
+        for name, cube in (("stores", self.stored), ("analytic", self.analytic)):
+            errors = ReconstructionErrors.of(cube, self.truth)
+            out[name] = {group: errors.summary(indices) for group, indices in groups.items()}
+            if chart:
+                relative, colour, *_ = chart_field_errors(
+                    material, self.view_dirs, cube, self.truth, BAND_GRID, 0.6
+                )
+                out[name]["diffuse_fields"] = {
+                    group: {
+                        "mean_relative_error_pct": float(np.nanmean(relative[indices])),
+                        "mean_delta_e94": float(np.nanmean(colour[indices])),
+                    }
+                    for group, indices in groups.items()
+                }
+        out["images"] = {
+            "leds": self.leds,
+            "cameras": list(dict.fromkeys(self.cameras)),
+            "band_partner": self.partner,
+            "texels": self.truth.shape[1],
+            "p_dyn": P_DYN,
+            "projected_marks": self.projected_marks,
+        }
+        return out
+
+
+def same_images(
+    setup: DomeSetup,
+    run_store: Path,
+    calibration: DomeCalibration,
+    btf_path: Path,
+    rng: np.random.Generator,
+) -> SameImages:
+    """A ``dome-run`` store processed into ``btf_path`` and its images taken by the analytic
+    path with ``setup`` (module description)."""
+    run = open_dome_run(run_store)
+    texels = setup.cameras.spectral.height // setup.cameras.pixels_per_texel
+    shutil.rmtree(btf_path, ignore_errors=True)
+    btf = process_dome(run_store, calibration, btf_path, texels=texels, show_progress=True)
+    partner = btf.attrs["band_partner"]
+    cameras = [camera for _ in run.images for camera in run.rgb_cameras]
+    bands = [
+        run.image_bands(image) if camera == partner else []
+        for image in range(len(run.images))
+        for camera in run.rgb_cameras
+    ]
+    light_dirs, view_dirs = dome_directions(run, calibration)
+    truth = texture_truth(run.material, light_dirs, view_dirs, texels=texels)
+    analytic = simulate_capture(setup, truth, light_dirs, bands, rng)
+    stored = np.pi * np.stack([btf.read_pair(pair) for pair in range(btf.n_pairs)])
+    return SameImages(
+        stored.astype(np.float64),
+        reconstruct_capture(setup, analytic, p_dyn=P_DYN),
+        analytic.truth,
+        run.material,
+        view_dirs,
+        cameras,
+        partner,
+        [light for _, light in run.images],
+        list(btf.attrs["projected_marks"]),
+    )
+
+
+def store_exposure_ratio(run_store: Path, calibration: DomeCalibration) -> dict[str, float]:
+    """Thesis 10.5's exposure totals from the stores: the hybrid image (the run's HDR set and
+    every band at the run's exposures, one after the other) against spectral-only band frames
+    that bring the white standard facing the LED to 80 % of the spectral camera's range (its
+    rate per band from the calibration, :math:`E_\\lambda L_\\lambda \\rho_\\lambda`; the range
+    in the calibrated curve's units above the averaged dark level)."""
+    rig = CaptureStore.open(run_store).attrs["rig"]
+    spectral = calibration.spectral
+    full_scale_dn = 2 ** int(rig["geometry"]["cameras"][SPECTRAL_CAMERA]["bit_depth"]) - 1
+    dark = float(np.median(spectral.mean_dark_frames))
+    headroom = float(
+        interpolate_curve(
+            spectral.inverse_response,
+            np.array([full_scale_dn - dark + DARK_VALUE_OFFSET, DARK_VALUE_OFFSET]),
+        )
+        @ np.array([1.0, -1.0])
+    )
+    white_rate = spectral.sensitivity * calibration.led_per_band * calibration.white_per_band
+    reference_s = float((0.8 * headroom / white_rate).sum())
+    hybrid_s = float(sum(rig["rgb_exposures_s"]) + sum(rig["band_exposures_s"]))
+    return {
+        "hybrid_total_s": hybrid_s,
+        "reference_total_s": reference_s,
+        "orders_of_magnitude": math.log10(reference_s / hybrid_s),
+    }
+
+
+def store_study(
+    folder: Path,
+    materials: Sequence[str],
+    size: DomeCaptureSize = STORE_CAPTURE,
+    *,
+    seed: int,
+    step: Callable[[str], None] = lambda name: None,
+) -> dict:
+    """The store path of the dome study (module description): per material its ``dome-run``
+    store, one calibration store, the multi-image experiment, and the 10.5 exposure totals."""
+    setup = dome_setup(size.texels, texel_px=2, seed=seed)
+    rng = np.random.default_rng(seed)
+    result: dict = {"capture": size.__dict__, "folder": str(folder), "materials": {}}
+    calibration = None
+    for material in materials:
+        run_store, calibration_store = capture_study_stores(
+            folder, material, size, seed=seed, step=lambda name, m=material: step(f"{m}: {name}")
+        )
+        if calibration is None:
+            step("calibrating the dome from its calibration store")
+            calibration = study_calibration(calibration_store)
+        step(f"{material}: processing the run store")
+        result["materials"][material] = same_images(
+            setup, run_store, calibration, folder / f"{material}.btf.zarr", rng
+        ).summary()
+    result["exposure_10_5"] = store_exposure_ratio(run_store, calibration)
+    return result
