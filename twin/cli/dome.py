@@ -124,6 +124,9 @@ def _store_summary(stores: dict) -> dict[str, str]:
             summary[f"{material} dome stores: with / without bands ({source})"] = _with_without(
                 result[source]
             )
+            summary[f"{material} edge-free texels: with / without bands ({source})"] = (
+                _with_without(result[source]["edge_free"])
+            )
     ratio = stores["exposure_10_5"]
     summary["10.5 from the stores"] = (
         f"{ratio['reference_total_s']:.0f} s / {ratio['hybrid_total_s']:.1f} s, "
@@ -133,9 +136,10 @@ def _store_summary(stores: dict) -> dict[str, str]:
 
 
 def _with_without(groups: dict) -> str:
-    """Mean relative errors of the images with and without spectral data."""
+    """Mean relative errors of the images with and without spectral data ("none" where no
+    texel was kept)."""
     return " / ".join(
-        f"{groups[name]['mean_relative_error_pct']:.2f} %"
+        "none" if groups[name] is None else f"{groups[name]['mean_relative_error_pct']:.2f} %"
         for name in ("with_spectral_data", "without_spectral_data")
     )
 

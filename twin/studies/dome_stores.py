@@ -30,7 +30,7 @@ from __future__ import annotations
 import math
 import shutil
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -41,6 +41,7 @@ from recon.calibration.dome import DARK_VALUE_OFFSET
 from recon.calibration.dome_capture import DomeCalibration, calibrate_dome
 from recon.dome.processing import P_DYN, dome_directions, process_dome
 from recon.dome.run import open_dome_run
+from recon.metrics import relative_error
 from recon.radiometric.hdr import interpolate_curve
 from twin.dome.capture_study import ReconstructionErrors, reconstruct_capture, simulate_capture
 from twin.dome.programs import DomeCaptureSize, dome_calibration_program, dome_run_program
@@ -52,12 +53,14 @@ from twin.validate.dome_evaluation import chart_field_errors
 __all__ = [
     "STORE_CAPTURE",
     "STORE_DARK_FRAMES",
+    "UNIFORM_TRUTH_PCT",
     "SameImages",
     "capture_study_stores",
     "same_images",
     "store_exposure_ratio",
     "store_study",
     "study_calibration",
+    "uniform_texels",
 ]
 
 STORE_CAPTURE = DomeCaptureSize(stage_positions=1, leds=10, rgb_cameras=3, texels=32)
@@ -68,6 +71,14 @@ pairs a material, solved jointly."""
 
 STORE_DARK_FRAMES = 16
 """Dark frames per exposure time of the study's calibration capture (thesis 10.3: 200)."""
+
+UNIFORM_TRUTH_PCT = 5.0
+"""Largest Eq. 6.8 error (%) of any of a texel's eight neighbours' truth against its own for the
+texel to count as edge-free (:func:`uniform_texels`). A texel resampled bilinearly is a weighted
+mean of its 3 x 3 neighbourhood, its own weight at least a quarter where registration is good to
+half a texel, so mixing adds at most three quarters of this, under 4 points, to its Eq. 6.8
+error: below the analytic path's 5-18 % on the same images. The truth's own render noise is below it (the colour checker's
+field interiors: 0 %)."""
 
 
 def capture_study_stores(
@@ -100,6 +111,23 @@ def capture_study_stores(
     return paths[material], paths["calibration"]
 
 
+def uniform_texels(truth: np.ndarray, tolerance_pct: float = UNIFORM_TRUTH_PCT) -> np.ndarray:
+    """``(n, H, W)``: the texels of ``truth`` (``(n, H, W, bands)``) whose eight neighbours'
+    spectra are each within ``tolerance_pct`` of theirs by Eq. 6.8 (the neighbour taken as the
+    estimate), the texels at the texture's border excluded: where rectification's resampling
+    mixes in no other colour (:data:`UNIFORM_TRUTH_PCT`)."""
+    height, width = truth.shape[1:3]
+    centre = truth[:, 1:-1, 1:-1]
+    worst = np.zeros(centre.shape[:-1])
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            neighbour = truth[:, 1 + dy : height - 1 + dy, 1 + dx : width - 1 + dx]
+            worst = np.maximum(worst, relative_error(neighbour, centre))
+    uniform = np.zeros(truth.shape[:-1], bool)
+    uniform[:, 1:-1, 1:-1] = worst <= tolerance_pct
+    return uniform
+
+
 def study_calibration(calibration_store: Path) -> DomeCalibration:
     """The dome calibrated from ``calibration_store``, saved beside it (``.npz``) and reused."""
     saved = calibration_store.with_suffix(".npz")
@@ -128,10 +156,14 @@ class SameImages:
 
     def summary(self) -> dict:
         """Errors of both paths (:class:`twin.dome.capture_study.ReconstructionErrors`) with and
-        without spectral data and per RGB camera, over the material texels and, for a chart, under
-        ``"diffuse_fields"`` the means of its diffuse fields' interiors (60 %) against the
+        without spectral data and per RGB camera, over the material texels, under
+        ``"edge_free"`` over the material texels whose truth is uniform over their 3 x 3
+        neighbourhood (:func:`uniform_texels`; the same texels for both paths) and, for a chart,
+        under ``"diffuse_fields"`` the means of its diffuse fields' interiors (60 %) against the
         truth's (:func:`twin.validate.dome_evaluation.chart_field_errors`, as ``spectwin
-        evaluate``): there a fraction of a texel of resampling or registration changes little."""
+        evaluate``): on both a fraction of a texel of resampling or registration changes
+        little. ``"edge_free_texels"``: per group the share of the material texels kept and
+        their number (none: the group's errors are ``None``)."""
 
         def pairs(keep) -> list[int]:
             return [i for i, camera in enumerate(self.cameras) if keep(camera)]
@@ -142,10 +174,30 @@ class SameImages:
         } | {name: pairs(lambda camera, name=name: camera == name) for name in self.cameras}
         material = load_material(self.material)
         chart = any(part.name.startswith("field_") for part in material.parts)
-        out: dict = {}
+        errors = {
+            name: ReconstructionErrors.of(cube, self.truth)
+            for name, cube in (("stores", self.stored), ("analytic", self.analytic))
+        }
+        material_texels = errors["analytic"].material
+        edge_free = material_texels & uniform_texels(self.truth)
+        out: dict = {
+            "edge_free_texels": {
+                group: {
+                    "count": int(edge_free[indices].sum()),
+                    "fraction_of_material": float(
+                        edge_free[indices].sum() / max(material_texels[indices].sum(), 1)
+                    ),
+                }
+                for group, indices in groups.items()
+            }
+        }
         for name, cube in (("stores", self.stored), ("analytic", self.analytic)):
-            errors = ReconstructionErrors.of(cube, self.truth)
-            out[name] = {group: errors.summary(indices) for group, indices in groups.items()}
+            out[name] = {group: errors[name].summary(indices) for group, indices in groups.items()}
+            kept = replace(errors[name], material=edge_free)
+            out[name]["edge_free"] = {
+                group: kept.summary(indices) if edge_free[indices].any() else None
+                for group, indices in groups.items()
+            }
             if chart:
                 relative, colour, *_ = chart_field_errors(
                     material, self.view_dirs, cube, self.truth, BAND_GRID, 0.6
