@@ -77,8 +77,8 @@ UNIFORM_TRUTH_PCT = 5.0
 texel to count as edge-free (:func:`uniform_texels`). A texel resampled bilinearly is a weighted
 mean of its 3 x 3 neighbourhood, its own weight at least a quarter where registration is good to
 half a texel, so mixing adds at most three quarters of this, under 4 points, to its Eq. 6.8
-error: below the analytic path's 5-18 % on the same images. The truth's own render noise is below it (the colour checker's
-field interiors: 0 %)."""
+error: below the analytic path's 5-18 % on the same images. The truth's own render noise is
+below it (the colour checker's field interiors: 0 %)."""
 
 
 def capture_study_stores(
