@@ -55,9 +55,11 @@ def dome_study(
     Example: spectwin dome-study --out out/dome --material lego --material red_fabric
     """
     from dataclasses import replace
+    from functools import partial
 
+    from twin.rigs.rig_config import load_rig
     from twin.studies.dome import DOME_MATERIALS, run_dome_study
-    from twin.studies.dome_stores import STORE_CAPTURE
+    from twin.studies.dome_stores import STORE_CAPTURE, store_study
 
     if texels % 4:
         fail(f"--texels {texels}: expected a multiple of 4")
@@ -65,18 +67,28 @@ def dome_study(
         fail("--analytic-only, --stores-only: expected one of them at most")
     require_output_folder(out)
     chosen = tuple(dict.fromkeys(m.value for m in materials)) if materials else DOME_MATERIALS
+    capture = replace(STORE_CAPTURE, leds=leds, texels=capture_texels)
+    if not analytic_only:
+        capture.check(load_rig("dome"))  # before any work
     with console.status("dome study") as status:
+        step = lambda name: status.update(name)  # noqa: E731
         metrics = run_dome_study(
             out,
             texels=texels,
             materials=chosen,
             seed=seed,
             analytic=not stores_only,
-            stores=stores,
-            capture=None
+            store_metrics=None
             if analytic_only
-            else replace(STORE_CAPTURE, leds=leds, texels=capture_texels),
-            step=lambda name: status.update(name),
+            else partial(
+                store_study,
+                stores if stores is not None else out / "stores",
+                chosen,
+                capture,
+                seed=seed,
+                step=step,
+            ),
+            step=step,
         )
     if as_json:
         print_summary(metrics, "", as_json)

@@ -51,7 +51,6 @@ from twin.dome.capture_study import (
     sphere_lit_spectra,
 )
 from twin.dome.exposure_plan import band_schedules
-from twin.dome.programs import DomeCaptureSize
 from twin.dome.setup import (
     BAND_GRID,
     CALIBRATION_LIGHT,
@@ -65,10 +64,8 @@ from twin.output_format import dumps
 from twin.render.truth import texture_truth
 from twin.rigs.dome_geometry import dome_geometry
 from twin.rigs.hemisphere import direction
-from twin.rigs.rig_config import load_rig
 from twin.sensor.white_reference import equalized_exposures_s
 from twin.studies import dome_figures
-from twin.studies.dome_stores import STORE_CAPTURE, store_study
 
 __all__ = [
     "DOME_MATERIALS",
@@ -81,6 +78,7 @@ __all__ = [
     "exposure_comparison",
     "metamer_diagnosis",
     "multi_image",
+    "reference_exposures",
     "run_dome_study",
     "schedules",
     "single_image",
@@ -276,7 +274,7 @@ def exposure_comparison(
             }
         )
     rates = _band_rates(setup, capture)
-    reference = _reference_exposures(setup)
+    reference = reference_exposures(setup)
     totals, direct_errors = [], []
     for factor in (1.0, 4.0, 16.0, 64.0):
         values = _spectral_only(setup, rates, reference / factor, rng)
@@ -326,7 +324,7 @@ def _spectral_only(
     )
 
 
-def _reference_exposures(setup: DomeSetup) -> np.ndarray:
+def reference_exposures(setup: DomeSetup) -> np.ndarray:
     """Spectral-only reference exposures: the white reference at 80 % of saturation in every
     band (Eq. 3.4)."""
     _, white = setup.cameras.white_rates()
@@ -344,7 +342,7 @@ def cross_check(setup: DomeSetup, rng: np.random.Generator) -> dict[str, object]
     """Fig. 10.4: the colour checker's RGB predicted from a spectral image (long exposures,
     calibrated, times :math:`R_{cam}`) against its measured HDR RGB, per field (medians over
     each field's inner texels)."""
-    exposures = _reference_exposures(setup)
+    exposures = reference_exposures(setup)
     capture = simulate_capture(setup, setup.calibration_truth, CALIBRATION_LIGHT[None], [[]], rng)
     spectral = _spectral_only(setup, _band_rates(setup, capture), exposures, rng)
     predicted = spectral @ setup.response
@@ -402,18 +400,17 @@ def run_dome_study(
     materials: Sequence[str] = DOME_MATERIALS,
     seed: int = 0,
     analytic: bool = True,
-    stores: Path | None = None,
-    capture: DomeCaptureSize | None = STORE_CAPTURE,
+    store_metrics: Callable[[], dict] | None = None,
     step: Callable[[str], None] = lambda name: None,
 ) -> dict:
     """Run the experiments of :mod:`twin.studies.dome`, write the JSON and figures to ``out``.
 
     ``analytic``: the experiments on frames computed from the texture truth (module
-    description). ``capture`` (the default size, :data:`twin.studies.dome_stores.STORE_CAPTURE`):
-    the 10.4.2 multi-image experiment and the 10.5 exposure totals also from dome capture stores
-    in ``stores`` (default ``out/stores``), captured at that size where missing and processed by
-    :mod:`recon.dome` (:func:`twin.studies.dome_stores.store_study`), reported under
-    ``"stores"`` next to the analytic path's numbers for the same images; ``None`` skips them.
+    description). ``store_metrics``: the same chapter's 10.4.2 multi-image experiment and 10.5
+    exposure totals from dome capture stores, processed by :mod:`recon.dome`
+    (:func:`twin.studies.dome_stores.store_study` with its arguments bound), run after the
+    analytic path and reported under ``"stores"`` next to the analytic path's numbers for the
+    same images; ``None`` skips them.
     """
     unknown = sorted(set(materials) - set(DOME_MATERIALS))
     if unknown or not materials:
@@ -422,21 +419,13 @@ def run_dome_study(
         )
     if texels < 8 or texels % 4:
         raise SpectwinInputError(f"texels: expected a multiple of 4, at least 8, got {texels}")
-    if not analytic and capture is None:
+    if not analytic and store_metrics is None:
         raise SpectwinInputError("analytic, capture: expected the analytic path, stores or both")
-    if capture is not None:
-        capture.check(load_rig("dome"))
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     metrics = _analytic_study(out, texels, materials, seed, step) if analytic else {}
-    if capture is not None:
-        metrics["stores"] = store_study(
-            Path(stores) if stores is not None else out / "stores",
-            materials,
-            capture,
-            seed=seed,
-            step=step,
-        )
+    if store_metrics is not None:
+        metrics["stores"] = store_metrics()
         dome_figures.write_store_comparison(metrics["stores"], out / "stores_vs_analytic.png")
     (out / "dome_study.json").write_text(dumps(metrics))
     return metrics

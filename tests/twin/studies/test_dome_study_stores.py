@@ -13,7 +13,7 @@ import pytest
 
 from twin.dome.programs import DomeCaptureSize
 from twin.dome.setup import dome_setup
-from twin.studies.dome import _reference_exposures
+from twin.studies.dome import reference_exposures
 from twin.studies.dome_stores import (
     capture_study_stores,
     same_images,
@@ -83,7 +83,7 @@ def test_store_exposure_totals_are_thesis_10_5(stores, setup):
     magnitude above the hybrid total, as the thesis found (226 s against 7.5 s)."""
     _, run, calibration = stores
     ratio = store_exposure_ratio(run, calibration)
-    reference = float(_reference_exposures(setup).sum())
+    reference = float(reference_exposures(setup).sum())
     assert ratio["reference_total_s"] == pytest.approx(reference, rel=0.08)
     assert 1.4 < ratio["orders_of_magnitude"] < 1.7
 
