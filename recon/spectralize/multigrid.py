@@ -62,11 +62,13 @@ class BlockVCycle:
         current = sparse.csr_matrix(matrix, dtype=np.float64)
         candidates = np.ones((current.shape[0], 1))
         while current.shape[0] > _COARSEST and len(self.levels) < _MAX_LEVELS:
-            prolongator, candidates = _smoothed_prolongator(current, candidates)
+            row_sums = np.asarray(abs(current).sum(axis=1)).ravel()  # l1 row sums
+            prolongator, candidates = _smoothed_prolongator(current, candidates, row_sums)
             if not 0 < prolongator.shape[1] < current.shape[0]:  # nothing left to aggregate
                 break
-            self.levels.append(_single_precision(current, prolongator))
-            current = (prolongator.T.tocsr() @ (current @ prolongator)).tocsr()
+            restrictor = prolongator.T.tocsr()
+            self.levels.append(_single_precision(current, prolongator, restrictor, row_sums))
+            current = (restrictor @ (current @ prolongator)).tocsr()
         self.coarse_inverse = np.linalg.pinv(current.toarray(), hermitian=True).astype(np.float32)
 
     def __call__(self, block: np.ndarray) -> np.ndarray:
@@ -100,7 +102,7 @@ def _residual(level: _Level, rhs: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 def _smoothed_prolongator(
-    matrix: sparse.csr_matrix, candidates: np.ndarray
+    matrix: sparse.csr_matrix, candidates: np.ndarray, row_sums: np.ndarray
 ) -> tuple[sparse.csr_matrix, np.ndarray]:
     """Smoothed aggregation's prolongator :math:`P = (I - \\omega D_1^{-1} A) T` and the coarse
     near-null-space candidates: aggregates of strongly connected unknowns (pyamg's symmetric
@@ -111,15 +113,21 @@ def _smoothed_prolongator(
     aggregates, _ = standard_aggregation(strength)
     tentative, coarse_candidates = fit_candidates(aggregates, candidates)
     tentative = sparse.csr_matrix(tentative)
-    row_sums = np.asarray(abs(matrix).sum(axis=1)).ravel()
     update = (matrix @ tentative).tocsr()
     update.data *= np.repeat(_OMEGA / np.where(row_sums > 0, row_sums, 1.0), np.diff(update.indptr))
     return (tentative - update).tocsr(), coarse_candidates
 
 
-def _single_precision(matrix: sparse.csr_matrix, prolongator: sparse.csr_matrix) -> _Level:
+def _single_precision(
+    matrix: sparse.csr_matrix,
+    prolongator: sparse.csr_matrix,
+    restrictor: sparse.csr_matrix,
+    row_sums: np.ndarray,
+) -> _Level:
     """One level in float32 CSR with its l1-Jacobi scaling :math:`1 / \\sum_j |a_{ij}|`."""
-    matrix = sparse.csr_matrix(matrix, dtype=np.float32)
-    prolongator = sparse.csr_matrix(prolongator, dtype=np.float32)
-    row_sums = np.asarray(abs(matrix).sum(axis=1), dtype=np.float32)
-    return _Level(matrix, prolongator, prolongator.T.tocsr(), 1.0 / row_sums)
+    return _Level(
+        sparse.csr_matrix(matrix, dtype=np.float32),
+        sparse.csr_matrix(prolongator, dtype=np.float32),
+        sparse.csr_matrix(restrictor, dtype=np.float32),
+        (1.0 / row_sums[:, None]).astype(np.float32),
+    )
