@@ -148,13 +148,16 @@ class NeighbourGraph:
         )
 
     def laplacian(self) -> sparse.csr_matrix:
-        """Graph Laplacian :math:`D^T D` of the links (unit weights, :math:`\\gamma_{i,n} = 1`)."""
-        adjacency = sparse.csr_matrix(
-            (np.ones(self.n_links), (self.first, self.second)),
-            shape=(self.n_pixels, self.n_pixels),
-        )
-        adjacency = adjacency + adjacency.T
-        return csgraph.laplacian(adjacency).tocsr()
+        """Graph Laplacian :math:`D^T D` of the links (unit weights, :math:`\\gamma_{i,n} = 1`):
+        the degree on the diagonal and -1 per link, built from the links directly (repeated
+        links add up, as in :math:`D^T D`)."""
+        n = self.n_pixels
+        degree = np.bincount(self.first, minlength=n) + np.bincount(self.second, minlength=n)
+        diagonal = np.arange(n)
+        rows = np.concatenate([self.first, self.second, diagonal])
+        columns = np.concatenate([self.second, self.first, diagonal])
+        values = np.concatenate([np.full(2 * self.n_links, -1.0), degree.astype(np.float64)])
+        return sparse.csr_matrix((values, (rows, columns)), shape=(n, n))
 
 
 def _first_allowed(candidates: np.ndarray, allowed: np.ndarray, k: int) -> np.ndarray:

@@ -16,9 +16,12 @@ References
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy import ndimage, sparse
+
+from recon.spectralize.appearance import NeighbourGraph
 
 __all__ = [
     "AppearancePriorTerm",
@@ -130,25 +133,39 @@ class CameraTerm:
 
 @dataclass(frozen=True)
 class AppearancePriorTerm:
-    """:math:`\\sum_i \\sum_{j \\in N_i} \\lVert X_i - X_j \\rVert^2` (Eq. 6.3), with
-    ``incidence`` the ``(links, n_pixels)`` difference operator of the neighbour graph."""
+    """:math:`\\sum_i \\sum_{j \\in N_i} \\lVert X_i - X_j \\rVert^2` (Eq. 6.3) over the links of
+    ``graph``: its difference operator :math:`D` (``incidence``, ``(links, n_pixels)``) and
+    Laplacian :math:`D^T D` are built when first used."""
 
-    incidence: sparse.csr_matrix
+    graph: NeighbourGraph
     n_bands: int
+
+    @cached_property
+    def incidence(self) -> sparse.csr_matrix:
+        return self.graph.incidence()
+
+    @cached_property
+    def laplacian(self) -> sparse.csr_matrix:
+        return self.graph.laplacian()
 
     @property
     def n_rows(self) -> int:
-        return int(self.incidence.shape[0] * self.n_bands)
+        return self.graph.n_links * self.n_bands
 
     @property
     def target(self) -> np.ndarray:
-        return np.zeros((self.incidence.shape[0], self.n_bands))
+        return np.zeros((self.graph.n_links, self.n_bands))
 
     def apply(self, x: np.ndarray) -> np.ndarray:
         return self.incidence @ x
 
     def adjoint(self, residual: np.ndarray, out: np.ndarray) -> None:
         out += self.incidence.T @ residual
+
+    def sum_of_squares(self, x: np.ndarray) -> float:
+        """:math:`\\lVert D X \\rVert_F^2 = \\mathrm{tr}(X^T D^T D X)`, without forming the
+        ``(links, K)`` differences (three times the pixels)."""
+        return float(np.einsum("ij,ij->", x, self.laplacian @ x))
 
 
 @dataclass(frozen=True)

@@ -293,13 +293,15 @@ def solve_kronecker_sum(
             ]
             pending.append((runs, parts, futures, len(members)))
             solves += width
-        solution = np.zeros_like(rhs)
-        converged = True
+        solution, converged = None, True
         for runs, parts, futures, count in pending:
             counts = np.empty(sum(width for _, width, _ in runs), dtype=int)
             for part, future in zip(parts, futures, strict=True):
                 share, counts[part], done = future.result()
-                solution += share
+                if solution is None:
+                    solution = share
+                else:
+                    solution += share
                 converged &= done
             offset = 0
             for run, width, _ in runs:

@@ -171,6 +171,9 @@ class SpectralizationProblem:
         """:math:`E` at the scaled image :math:`X = f S`, ``(n_pixels, K)``."""
         energy = 0.0
         for term, weight in zip(self.terms, self.weights, strict=True):
+            if isinstance(term, AppearancePriorTerm):
+                energy += weight * term.sum_of_squares(scaled)
+                continue
             residual = np.ravel(term.apply(scaled))
             if not isinstance(term, _PRIOR_TERMS):  # the priors' targets are zero
                 residual = residual - np.ravel(term.target)
@@ -210,24 +213,27 @@ class SpectralizationProblem:
         """:math:`A, B, C` of :mod:`recon.spectralize.kronecker`, or ``None`` where the energy has
         terms that break the split (band images, device integrals)."""
         n, bands = self.n_pixels, self.n_bands
-        spatial = sparse.csr_matrix((n, n))
-        spectral = np.zeros((bands, bands))
-        rhs = np.zeros((n, bands))
+        diagonal, spectral = np.zeros(n), np.zeros((bands, bands))
+        laplacians, rhs, points = [], None, []
         for term, weight in zip(self.terms, self.weights, strict=True):
             if isinstance(term, PointSpectraTerm):
-                counts = np.bincount(term.pixels, minlength=n).astype(np.float64)
-                spatial = spatial + weight * sparse.diags(counts)
-                np.add.at(rhs, term.pixels, weight * term.target)
+                diagonal += weight * np.bincount(term.pixels, minlength=n)
+                points.append((term.pixels, weight * term.target))
             elif isinstance(term, CameraTerm):
                 spectral += weight * term.response @ term.response.T
-                rhs += weight * term.target @ term.response.T
+                camera = term.target @ (weight * term.response.T)
+                rhs = camera if rhs is None else rhs + camera
             elif isinstance(term, AppearancePriorTerm):
-                spatial = spatial + weight * (term.incidence.T @ term.incidence)
+                laplacians.append(weight * term.laplacian)
             elif isinstance(term, SpectralSmoothnessTerm):
                 differences = term.difference_matrix()
                 spectral += weight * differences @ differences.T
             else:
                 return None
+        rhs = np.zeros((n, bands)) if rhs is None else rhs
+        for pixels, values in points:
+            np.add.at(rhs, pixels, values)
+        spatial = sum(laplacians, sparse.diags(diagonal, format="csr"))
         return spatial.tocsr(), spectral, rhs
 
 
@@ -461,7 +467,7 @@ def build_problem(
     absolute = [weights.alpha * total / data_rows] * len(data_terms)
     absolute.append(weights.beta * (data_mean / rgb_mean) * total / (channels * n))
     if graph.n_links:
-        terms.append(AppearancePriorTerm(graph.incidence(), bands))
+        terms.append(AppearancePriorTerm(graph, bands))
         absolute.append(weights.gamma * total / prior_rows)
     if smooth_rows:
         terms.append(SpectralSmoothnessTerm(n, bands))
