@@ -117,23 +117,27 @@ def _block_cg(
     spatial: sparse.csr_matrix,
     shifts: np.ndarray,
     rhs: np.ndarray,
-    start: np.ndarray,
+    start: np.ndarray | None,
     preconditioner: Callable[[np.ndarray, np.ndarray], np.ndarray],
     bound: float,
     max_iterations: int,
 ) -> tuple[np.ndarray, np.ndarray, bool]:
     """Preconditioned conjugate gradients on the columns of ``rhs`` at once: column ``c``
     solves :math:`(A + s_c I) x_c = b_c` until :math:`\\lVert r_c \\rVert \\le` ``bound``.
-    ``preconditioner(block, columns)`` approximates the inverse on the given columns. The
+    ``preconditioner(block, columns)`` approximates the inverse on the given columns; ``start``
+    is the first guess (``None``: zero). The
     Polak-Ribiere form of the step keeps the iteration convergent with a preconditioner that is
     symmetric only up to single-precision rounding. Returns the solutions, the iterations per
     column and whether all converged."""
-    solution = np.array(start, dtype=np.float64)
     iterations = np.zeros(rhs.shape[1], dtype=int)
     shifted = bool(np.any(shifts))
-    residual = rhs - spatial @ solution
-    if shifted:
-        residual -= solution * shifts
+    if start is None:
+        solution, residual = np.zeros_like(rhs), rhs.copy()
+    else:
+        solution = np.array(start, dtype=np.float64)
+        residual = rhs - spatial @ solution
+        if shifted:
+            residual -= solution * shifts
     columns = np.flatnonzero(_column_norms(residual) > bound)
     current, residual = solution[:, columns], residual[:, columns]
     preconditioned = preconditioner(residual, columns)
@@ -170,30 +174,38 @@ def _block_cg(
     return solution, iterations, not columns.size
 
 
+class _Jacobi:
+    """Diagonal preconditioner of :math:`A + s_c I` for a block's columns, kept for the columns
+    still iterating (so that no step gathers the diagonal anew)."""
+
+    def __init__(self, diagonal: np.ndarray, shifts: np.ndarray) -> None:
+        self.inverse = 1.0 / (diagonal[:, None] + shifts[None, :])
+        self.columns = np.arange(shifts.size)
+
+    def __call__(self, block: np.ndarray, columns: np.ndarray) -> np.ndarray:
+        if columns.size != self.columns.size:
+            self.inverse = self.inverse[:, np.searchsorted(self.columns, columns)]
+            self.columns = columns
+        return block * self.inverse
+
+
 def _solve_part(
     spatial: sparse.csr_matrix,
-    rhs: np.ndarray,
-    initial: np.ndarray | None,
-    projection: np.ndarray,
+    block: np.ndarray,
+    start: np.ndarray | None,
     shifts: np.ndarray,
     cycle: BlockVCycle | None,
     bound: float,
     max_iterations: int,
 ) -> tuple[np.ndarray, np.ndarray, bool]:
-    """One thread's share of a group: the right-hand sides ``rhs @ projection``, conjugate
-    gradients on them (multigrid ``cycle``, or Jacobi where it is ``None``) and the solution's
-    part in band space, ``(n, K)``; with the iterations per column and whether all converged."""
-    block = rhs @ projection
-    start = np.zeros_like(block) if initial is None else initial @ projection
+    """One thread's share of a group: conjugate gradients on the right-hand sides ``block``
+    (multigrid ``cycle``, or Jacobi where it is ``None``). Returns the solutions, the iterations
+    per column and whether all converged."""
     if cycle is None:
-        jacobi = spatial.diagonal()[:, None] + shifts[None, :]
-        preconditioner = lambda r, c: r / jacobi[:, c]  # noqa: E731
+        preconditioner = _Jacobi(spatial.diagonal(), shifts)
     else:
         preconditioner = lambda r, _c: cycle(r)  # noqa: E731
-    solved, iterations, done = _block_cg(
-        spatial, shifts, block, start, preconditioner, bound, max_iterations
-    )
-    return solved @ projection.T, iterations, done
+    return _block_cg(spatial, shifts, block, start, preconditioner, bound, max_iterations)
 
 
 def solve_kronecker_sum(
@@ -240,14 +252,33 @@ def solve_kronecker_sum(
     """
     shifts, basis = np.linalg.eigh(spectral)
     # Each run of equal shifts is solved on its compressed directions, columns of a
-    # ``projection`` (K, r) in band space: the threads form their right-hand sides
-    # ``C @ projection`` themselves, and the Gram matrix of C serves the compression and the
-    # stopping bounds, so C (n, K) is never rotated as a whole.
+    # ``projection`` (K, r) in band space; the Gram matrix of C serves the compression and the
+    # stopping bounds. C is projected once onto all groups' directions, and the solution
+    # assembled once from all of them: passes over (n, K) arrays cost more than a CG step.
     gram = rhs.T @ rhs
     rotated_gram = basis.T @ gram @ basis
     mean_diagonal = float(np.mean(spatial.diagonal()))
+    groups = []
+    for group_shift, members in _shift_groups(shifts, mean_diagonal):
+        # One block per group: each run of equal shifts compressed to its numerical rank.
+        runs = []
+        for _, run in _equal_shifts(shifts, members):
+            weights = _compressed(rotated_gram[np.ix_(run, run)], rtol)
+            runs.append((run, weights.shape[1], basis[:, run] @ weights))
+        projection = np.hstack([projection for _, _, projection in runs])
+        block_shifts = np.concatenate(
+            [np.full(width, max(shifts[run[0]], 0.0)) for run, width, _ in runs]
+        )
+        # The group's relative residual, shared equally among its columns.
+        block_energy = float(np.einsum("kr,kl,lr->", projection, gram, projection))
+        bound = rtol * np.sqrt(max(block_energy, 0.0) / projection.shape[1])
+        groups.append((group_shift, members, runs, projection, block_shifts, bound))
+    projection = np.hstack([group[3] for group in groups])
+    projected = rhs @ projection
+    started = None if initial is None else initial @ projection
+    solved = np.empty_like(projected)
     iterations = np.zeros(rhs.shape[1], dtype=int)
-    hierarchies, solves, pending = 0, 0, []
+    hierarchies, offset, pending = 0, 0, []
     # Single-threaded BLAS: CG's many short dot products slow down badly with thread hand-offs.
     with (
         threadpool_limits(1, user_api="blas"),
@@ -255,19 +286,7 @@ def solve_kronecker_sum(
         ThreadPoolExecutor(_PARTS) as pool,
     ):
         # Jacobi groups come first, so that they iterate while the hierarchies are built.
-        for group_shift, members in _shift_groups(shifts, mean_diagonal):
-            # One block per group: each run of equal shifts compressed to its numerical rank.
-            runs = []
-            for _, run in _equal_shifts(shifts, members):
-                weights = _compressed(rotated_gram[np.ix_(run, run)], rtol)
-                runs.append((run, weights.shape[1], basis[:, run] @ weights))
-            projection = np.hstack([projection for _, _, projection in runs])
-            block_shifts = np.concatenate(
-                [np.full(width, max(shifts[run[0]], 0.0)) for run, width, _ in runs]
-            )
-            # The group's relative residual, shared equally among its columns.
-            block_energy = float(np.einsum("kr,kl,lr->", projection, gram, projection))
-            bound = rtol * np.sqrt(max(block_energy, 0.0) / projection.shape[1])
+        for group_shift, members, runs, group_projection, block_shifts, bound in groups:
             cycle = None
             if group_shift is not None:
                 cycle = BlockVCycle(
@@ -275,37 +294,34 @@ def solve_kronecker_sum(
                 )
                 hierarchies += 1
             # Interleaved, so that both parts get large and small right-hand sides alike.
-            width = projection.shape[1]
-            parts = [np.arange(i, width, _PARTS) for i in range(min(_PARTS, width))]
+            width = group_projection.shape[1]
+            parts = [offset + np.arange(i, width, _PARTS) for i in range(min(_PARTS, width))]
             futures = [
                 pool.submit(
                     _solve_part,
                     spatial,
-                    rhs,
-                    initial,
-                    projection[:, part],
-                    block_shifts[part],
+                    projected[:, part],
+                    None if started is None else started[:, part],
+                    block_shifts[part - offset],
                     cycle,
                     bound,
                     max_iterations,
                 )
                 for part in parts
             ]
-            pending.append((runs, parts, futures, len(members)))
-            solves += width
-        solution, converged = None, True
-        for runs, parts, futures, count in pending:
-            counts = np.empty(sum(width for _, width, _ in runs), dtype=int)
+            pending.append((runs, parts, futures, len(members), offset))
+            offset += width
+        converged = True
+        for runs, parts, futures, count, first in pending:
+            counts = np.empty(projected.shape[1], dtype=int)
             for part, future in zip(parts, futures, strict=True):
-                share, counts[part], done = future.result()
-                if solution is None:
-                    solution = share
-                else:
-                    solution += share
+                solved[:, part], counts[part], done = future.result()
                 converged &= done
-            offset = 0
             for run, width, _ in runs:
-                iterations[run] = counts[offset : offset + width].max(initial=0)
-                offset += width
+                iterations[run] = counts[first : first + width].max(initial=0)
+                first += width
             advance(count)
-    return solution, KroneckerSolveInfo(iterations, shifts, hierarchies, solves, converged)
+    solution = solved @ projection.T
+    return solution, KroneckerSolveInfo(
+        iterations, shifts, hierarchies, projection.shape[1], converged
+    )
