@@ -45,22 +45,54 @@ from threadpoolctl import threadpool_limits
 from recon.progress import progress_steps
 from recon.spectralize.multigrid import BlockVCycle
 
-__all__ = ["KroneckerSolveInfo", "solve_kronecker_sum"]
+__all__ = ["FactoredRhs", "KroneckerSolveInfo", "solve_kronecker_sum"]
 
 _JACOBI_SHIFT = 0.05  # shift / mean diagonal of A above which Jacobi preconditioning suffices
 _PARTS = 2  # each group's block is iterated in this many column parts, one thread each
 
 
 @dataclass(frozen=True)
+class FactoredRhs:
+    """A right-hand side :math:`C = U W + S`, ``(n, K)``, kept in factors: ``left`` :math:`U`
+    ``(n, c)`` times ``right`` :math:`W` ``(c, K)`` (the camera term's :math:`f V R_{cam}^T`,
+    c = 3 channels) plus ``rows`` :math:`S`, a sparse ``(n, K)`` matrix (the measured spectra at
+    their pixels). The solver needs only :math:`C^T C` and :math:`C P` for a few directions
+    :math:`P`, which the factors give without forming the ``(n, K)`` array."""
+
+    left: np.ndarray
+    right: np.ndarray
+    rows: sparse.csr_matrix
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return (self.left.shape[0], self.right.shape[1])
+
+    def gram(self) -> np.ndarray:
+        """:math:`C^T C`, ``(K, K)``."""
+        cross = self.right.T @ np.asarray(self.rows.T @ self.left).T
+        rows_gram = np.asarray((self.rows.T @ self.rows).todense())
+        return self.right.T @ (self.left.T @ self.left) @ self.right + cross + cross.T + rows_gram
+
+    def __matmul__(self, directions: np.ndarray) -> np.ndarray:
+        """:math:`C P` for ``directions`` :math:`P`, ``(K, r)``."""
+        return self.left @ (self.right @ directions) + self.rows @ directions
+
+
+@dataclass(frozen=True)
 class KroneckerSolveInfo:
     """What the solve did: CG iterations per band column, the shifts :math:`\\lambda_l`,
-    multigrid hierarchies built and sparse systems solved (after right-hand-side compression)."""
+    multigrid hierarchies built and sparse systems solved (after right-hand-side compression).
+    The solution is ``coefficients @ directions.T``: ``directions`` ``(K, r)`` orthonormal, the
+    compressed band-space directions of the ``r = solves`` systems, and ``coefficients``
+    ``(n, r)`` their solutions."""
 
     iterations: np.ndarray
     shifts: np.ndarray
     hierarchies: int
     solves: int
     converged: bool
+    coefficients: np.ndarray
+    directions: np.ndarray
 
 
 def _shift_groups(shifts: np.ndarray, mean_diagonal: float) -> list[tuple[float | None, list]]:
@@ -211,7 +243,7 @@ def _solve_part(
 def solve_kronecker_sum(
     spatial: sparse.csr_matrix,
     spectral: np.ndarray,
-    rhs: np.ndarray,
+    rhs: np.ndarray | FactoredRhs,
     *,
     rtol: float = 1e-6,
     max_iterations: int = 500,
@@ -228,7 +260,7 @@ def solve_kronecker_sum(
     spectral
         :math:`B`, ``(K, K)`` symmetric.
     rhs
-        :math:`C`, ``(n, K)``.
+        :math:`C`, ``(n, K)``: an array, or :class:`FactoredRhs`.
     rtol
         Relative residual :math:`\\lVert R \\rVert_F / \\lVert C_g \\rVert_F` to reach in each
         group :math:`g` of columns that share one preconditioner (after compression), shared
@@ -255,7 +287,7 @@ def solve_kronecker_sum(
     # ``projection`` (K, r) in band space; the Gram matrix of C serves the compression and the
     # stopping bounds. C is projected once onto all groups' directions, and the solution
     # assembled once from all of them: passes over (n, K) arrays cost more than a CG step.
-    gram = rhs.T @ rhs
+    gram = rhs.gram() if isinstance(rhs, FactoredRhs) else rhs.T @ rhs
     rotated_gram = basis.T @ gram @ basis
     mean_diagonal = float(np.mean(spatial.diagonal()))
     groups = []
@@ -323,5 +355,5 @@ def solve_kronecker_sum(
             advance(count)
     solution = solved @ projection.T
     return solution, KroneckerSolveInfo(
-        iterations, shifts, hierarchies, projection.shape[1], converged
+        iterations, shifts, hierarchies, projection.shape[1], converged, solved, projection
     )

@@ -64,7 +64,7 @@ from recon.spectralize.energy import (
     SpectralSmoothnessTerm,
     gaussian_plane,
 )
-from recon.spectralize.kronecker import solve_kronecker_sum
+from recon.spectralize.kronecker import FactoredRhs, solve_kronecker_sum
 
 __all__ = [
     "BandImage",
@@ -167,12 +167,17 @@ class SpectralizationProblem:
     def n_pixels(self) -> int:
         return int(self.scale.size)
 
-    def energy(self, scaled: np.ndarray) -> float:
-        """:math:`E` at the scaled image :math:`X = f S`, ``(n_pixels, K)``."""
+    def energy(self, scaled: np.ndarray, coefficients: np.ndarray | None = None) -> float:
+        """:math:`E` at the scaled image :math:`X = f S`, ``(n_pixels, K)``. Where
+        :math:`X = Y P^T` with orthonormal :math:`P` (``(K, r)``, as the Kronecker solver's
+        directions), ``coefficients`` :math:`Y` give the prior term in ``r`` columns instead of
+        ``K``: :math:`\\mathrm{tr}(X^T L X) = \\mathrm{tr}(Y^T L Y)`."""
         energy = 0.0
         for term, weight in zip(self.terms, self.weights, strict=True):
             if isinstance(term, AppearancePriorTerm):
-                energy += weight * term.sum_of_squares(scaled)
+                energy += weight * term.sum_of_squares(
+                    scaled if coefficients is None else coefficients
+                )
                 continue
             residual = np.ravel(term.apply(scaled))
             if not isinstance(term, _PRIOR_TERMS):  # the priors' targets are zero
@@ -209,20 +214,20 @@ class SpectralizationProblem:
         )
         return operator, rhs
 
-    def kronecker_parts(self) -> tuple[sparse.csr_matrix, np.ndarray, np.ndarray] | None:
-        """:math:`A, B, C` of :mod:`recon.spectralize.kronecker`, or ``None`` where the energy has
-        terms that break the split (band images, device integrals)."""
+    def kronecker_parts(self) -> tuple[sparse.csr_matrix, np.ndarray, FactoredRhs] | None:
+        """:math:`A, B, C` of :mod:`recon.spectralize.kronecker` (:math:`C` in factors), or
+        ``None`` where the energy has terms that break the split (band images, device
+        integrals)."""
         n, bands = self.n_pixels, self.n_bands
         diagonal, spectral = np.zeros(n), np.zeros((bands, bands))
-        laplacians, rhs, points = [], None, []
+        laplacians, cameras, points = [], [], []
         for term, weight in zip(self.terms, self.weights, strict=True):
             if isinstance(term, PointSpectraTerm):
                 diagonal += weight * np.bincount(term.pixels, minlength=n)
-                points.append((term.pixels, weight * term.target))
+                points.append(_rows_matrix(term.pixels, weight * term.target, n))
             elif isinstance(term, CameraTerm):
                 spectral += weight * term.response @ term.response.T
-                camera = term.target @ (weight * term.response.T)
-                rhs = camera if rhs is None else rhs + camera
+                cameras.append((term.target, weight * term.response.T))
             elif isinstance(term, AppearancePriorTerm):
                 laplacians.append(weight * term.laplacian)
             elif isinstance(term, SpectralSmoothnessTerm):
@@ -230,11 +235,22 @@ class SpectralizationProblem:
                 spectral += weight * differences @ differences.T
             else:
                 return None
-        rhs = np.zeros((n, bands)) if rhs is None else rhs
-        for pixels, values in points:
-            np.add.at(rhs, pixels, values)
+        rhs = FactoredRhs(
+            np.hstack([target for target, _ in cameras]),
+            np.vstack([right for _, right in cameras]),
+            sum(points, sparse.csr_matrix((n, bands))),
+        )
         spatial = sum(laplacians, sparse.diags(diagonal, format="csr"))
         return spatial.tocsr(), spectral, rhs
+
+
+def _rows_matrix(pixels: np.ndarray, values: np.ndarray, n_pixels: int) -> sparse.csr_matrix:
+    """``(n_pixels, K)`` sparse matrix with ``values`` added at the rows ``pixels``."""
+    bands = values.shape[1]
+    return sparse.csr_matrix(
+        (values.ravel(), (np.repeat(pixels, bands), np.tile(np.arange(bands), pixels.size))),
+        shape=(n_pixels, bands),
+    )
 
 
 @dataclass(frozen=True)
@@ -603,7 +619,9 @@ def reconstruct(
             progress=progress,
         )
         used, iterations, converged = "multigrid", int(info.iterations.max()), info.converged
+        coefficients = info.coefficients
     else:
+        coefficients = None
         used = "lsmr" if solver == "auto" else solver
         scaled, iterations, converged = _solve_least_squares(
             problem, used, max_iterations, tol, scaled_initial, progress
@@ -614,7 +632,7 @@ def reconstruct(
         spectra=(scaled / problem.scale[:, None]).reshape(*leading, problem.n_bands),
         solver=used,
         iterations=iterations,
-        energy=problem.energy(scaled),
+        energy=problem.energy(scaled, coefficients),
         converged=converged,
         graph_links=problem.graph_links,
         graph_added=problem.graph_added,
