@@ -325,9 +325,12 @@ def solve_kronecker_sum(
                     (spatial + group_shift * sparse.identity(spatial.shape[0])).tocsr()
                 )
                 hierarchies += 1
-            # Interleaved, so that both parts get large and small right-hand sides alike.
+            # Dealt out back and forth (0 1 1 0 0 1 ...) over the columns, which come in
+            # ascending order of data: the parts get large and small right-hand sides alike.
             width = group_projection.shape[1]
-            parts = [offset + np.arange(i, width, _PARTS) for i in range(min(_PARTS, width))]
+            turn = np.arange(width) % (2 * _PARTS)
+            owner = np.minimum(turn, 2 * _PARTS - 1 - turn)
+            parts = [offset + np.flatnonzero(owner == i) for i in range(min(_PARTS, width))]
             futures = [
                 pool.submit(
                     _solve_part,

@@ -627,12 +627,15 @@ def reconstruct(
             problem, used, max_iterations, tol, scaled_initial, progress
         )
     timings = {**problem.timings_s, "assembly": assembly_s, "solve": time.perf_counter() - started}
-    leading = np.shape(rgb)[:-1]
+    energy = problem.energy(scaled, coefficients)
+    spectra = scaled
+    if np.any(problem.scale != 1.0):  # dynamic-range compression (Eq. 10.2) undone
+        spectra = scaled / problem.scale[:, None]
     return SpectralizationResult(
-        spectra=(scaled / problem.scale[:, None]).reshape(*leading, problem.n_bands),
+        spectra=spectra.reshape(*np.shape(rgb)[:-1], problem.n_bands),
         solver=used,
         iterations=iterations,
-        energy=problem.energy(scaled, coefficients),
+        energy=energy,
         converged=converged,
         graph_links=problem.graph_links,
         graph_added=problem.graph_added,
