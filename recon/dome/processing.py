@@ -353,6 +353,7 @@ def process_dome(
     resume: bool = False,
     show_progress: bool = False,
     solver: Mapping[str, object] | None = None,
+    band_partner: str | None = None,
     created: Callable[[BTFStore], None] = lambda btf: None,
 ) -> BTFStore:
     """Turn a dome run into a spectral BTF store (module docstring).
@@ -378,6 +379,11 @@ def process_dome(
     solver
         Options of :func:`recon.spectralize.reconstruct` (``tol``, ``max_iterations``,
         ``solver``, ``appearance``, ...).
+    band_partner
+        The RGB camera whose images take the band data (default: the one whose view lies
+        nearest the spectral camera's, :func:`spectral_partner`). Another camera moves the
+        spectral data to another view, which separates the effect of spectral data on an image
+        from that of its view (for diffuse materials, whose bands do not depend on the view).
     created
         Called with the BTF store once it exists (before any pair is written): a writer lock
         moves into it.
@@ -394,9 +400,14 @@ def process_dome(
     if texels is None:
         existing = resume and out.exists()
         texels = BTFStore.open(out).texels[0] if existing else int(run.rig["texels"])
-    work = DomeProcessing(
-        run, calibration, int(texels), spectral_partner(run, calibration), manual_corners
-    )
+    if band_partner is None:
+        band_partner = spectral_partner(run, calibration)
+    elif band_partner not in run.rgb_cameras:
+        raise SpectwinInputError(
+            f"band_partner: expected one of the run's RGB cameras {run.rgb_cameras}, got "
+            f"{band_partner!r}"
+        )
+    work = DomeProcessing(run, calibration, int(texels), band_partner, manual_corners)
     btf = _open_btf(work, out, resume)
     created(btf)
     work.register(store)

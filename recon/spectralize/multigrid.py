@@ -1,9 +1,10 @@
 """A multigrid V-cycle that preconditions many right-hand sides at once, in single precision.
 
 The hierarchy is smoothed aggregation's: aggregates of connected unknowns (pyamg's standard
-aggregation on the matrix's own pattern, every link counted as strong), tentative prolongators fitted to the constant
-vector, smoothed by one Jacobi step weighted with each row's l1 sum, and Galerkin coarse matrices
-:math:`A_{k+1} = P_k^T A_k P_k`, all kept in CSR (pyamg's own builder goes through 1 x 1 block
+aggregation on the matrix's own pattern, every link counted as strong), tentative prolongators
+fitted to the constant vector (on the finest level relaxed first), smoothed by one Jacobi step
+weighted with each row's l1 sum, and Galerkin coarse matrices :math:`A_{k+1} = P_k^T A_k P_k`,
+all kept in CSR (pyamg's own builder goes through 1 x 1 block
 matrices, whose absolute value alone took most of a 7 s setup at one megapixel). The cycle itself is
 applied here to a whole block of columns: every level's sparse matrix is read once per sweep for
 all columns (a sparse-times-dense product) instead of once per column, and in float32, which

@@ -139,6 +139,9 @@ def _store_summary(stores: dict) -> dict[str, str]:
             summary[f"{material} edge-free texels: with / without bands ({source})"] = (
                 _with_without(result[source]["edge_free"])
             )
+            summary[f"{material} same view, edge-free: with / without bands ({source})"] = (
+                _same_view(result["view_fixed_shift"][source]["edge_free"])
+            )
     ratio = stores["exposure_10_5"]
     summary["10.5 from the stores"] = (
         f"{ratio['reference_total_s']:.0f} s / {ratio['hybrid_total_s']:.1f} s, "
@@ -153,6 +156,18 @@ def _with_without(groups: dict) -> str:
     return " / ".join(
         "none" if groups[name] is None else f"{groups[name]['mean_relative_error_pct']:.2f} %"
         for name in ("with_spectral_data", "without_spectral_data")
+    )
+
+
+def _same_view(cameras: dict) -> str:
+    """Per partner camera the mean relative errors of its images with and without the band
+    data ("none" where no texel was kept)."""
+    return ", ".join(
+        f"{camera} none"
+        if errors is None
+        else f"{camera} {errors['mean_relative_error_pct']['with']:.2f} / "
+        f"{errors['mean_relative_error_pct']['without']:.2f} %"
+        for camera, errors in cameras.items()
     )
 
 

@@ -60,7 +60,9 @@ __all__ = [
     "store_exposure_ratio",
     "store_study",
     "study_calibration",
+    "top_camera",
     "uniform_texels",
+    "view_fixed_shift",
 ]
 
 STORE_CAPTURE = DomeCaptureSize(stage_positions=1, leds=10, rgb_cameras=3, texels=32)
@@ -226,13 +228,23 @@ def same_images(
     calibration: DomeCalibration,
     btf_path: Path,
     rng: np.random.Generator,
+    *,
+    band_partner: str | None = None,
 ) -> SameImages:
     """A ``dome-run`` store processed into ``btf_path`` and its images taken by the analytic
-    path with ``setup`` (module description)."""
+    path with ``setup`` (module description); the band data on the images of ``band_partner``
+    (default: the RGB camera nearest the spectral camera) in both paths."""
     run = open_dome_run(run_store)
     texels = setup.cameras.spectral.height // setup.cameras.pixels_per_texel
     shutil.rmtree(btf_path, ignore_errors=True)
-    btf = process_dome(run_store, calibration, btf_path, texels=texels, show_progress=True)
+    btf = process_dome(
+        run_store,
+        calibration,
+        btf_path,
+        texels=texels,
+        show_progress=True,
+        band_partner=band_partner,
+    )
     partner = btf.attrs["band_partner"]
     cameras = [camera for _ in run.images for camera in run.rgb_cameras]
     bands = [
@@ -255,6 +267,40 @@ def same_images(
         [light for _, light in run.images],
         list(btf.attrs["projected_marks"]),
     )
+
+
+def top_camera(images: SameImages) -> str:
+    """The RGB camera other than the band partner whose view lies nearest the sample's normal."""
+    others = [camera for camera in dict.fromkeys(images.cameras) if camera != images.partner]
+    cameras = np.array(images.cameras)
+    return max(others, key=lambda camera: float(images.view_dirs[cameras == camera, 2].mean()))
+
+
+def view_fixed_shift(nearest: dict, moved: dict) -> dict:
+    """10.4.2's shift from images with spectral data to images without, camera by camera: the
+    summaries (:meth:`SameImages.summary`) of one run processed with the band data on the
+    partner nearest the spectral camera (``nearest``) and on another camera (``moved``). Each of
+    the two partners' images is then once with and once without band data, at the same view
+    and light: per source (stores, analytic) and texel set (all material texels, edge-free),
+    per partner camera the two means of Eq. 6.8 and of Delta E94."""
+    partners = {
+        nearest["images"]["band_partner"]: (nearest, moved),
+        moved["images"]["band_partner"]: (moved, nearest),
+    }
+    shift: dict = {}
+    for source in ("stores", "analytic"):
+        for scope in ("all", "edge_free"):
+            entry = shift.setdefault(source, {}).setdefault(scope, {})
+            for camera, (with_bands, without) in partners.items():
+                pair = [
+                    (summary[source] if scope == "all" else summary[source]["edge_free"])[camera]
+                    for summary in (with_bands, without)
+                ]
+                entry[camera] = None if None in pair else {
+                    measure: {"with": pair[0][measure], "without": pair[1][measure]}
+                    for measure in ("mean_relative_error_pct", "mean_delta_e94")
+                }
+    return shift
 
 
 def store_exposure_ratio(run_store: Path, calibration: DomeCalibration) -> dict[str, float]:
@@ -293,7 +339,9 @@ def store_study(
     step: Callable[[str], None] = lambda name: None,
 ) -> dict:
     """The store path of the dome study (module description): per material its ``dome-run``
-    store, one calibration store, the multi-image experiment, and the 10.5 exposure totals."""
+    store, one calibration store, the multi-image experiment (processed twice: with the band
+    data on the RGB camera nearest the spectral camera and on the top camera, for
+    :func:`view_fixed_shift`), and the 10.5 exposure totals."""
     setup = dome_setup(size.texels, texel_px=2, seed=seed)
     rng = np.random.default_rng(seed)
     result: dict = {"capture": size.__dict__, "folder": str(folder), "materials": {}}
@@ -306,8 +354,19 @@ def store_study(
             step("calibrating the dome from its calibration store")
             calibration = study_calibration(calibration_store)
         step(f"{material}: processing the run store")
-        result["materials"][material] = same_images(
-            setup, run_store, calibration, folder / f"{material}.btf.zarr", rng
+        nearest = same_images(setup, run_store, calibration, folder / f"{material}.btf.zarr", rng)
+        summary = nearest.summary()
+        moved_to = top_camera(nearest)
+        step(f"{material}: processing the run store with the band data on {moved_to}")
+        moved = same_images(
+            setup,
+            run_store,
+            calibration,
+            folder / f"{material}.bands-{moved_to}.btf.zarr",
+            rng,
+            band_partner=moved_to,
         ).summary()
+        summary["view_fixed_shift"] = view_fixed_shift(summary, moved)
+        result["materials"][material] = summary
     result["exposure_10_5"] = store_exposure_ratio(run_store, calibration)
     return result
