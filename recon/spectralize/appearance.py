@@ -30,6 +30,7 @@ References
 from __future__ import annotations
 
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -47,6 +48,9 @@ __all__ = [
     "appearance_points",
     "connect_components",
 ]
+
+_THREADS = 2  # threads of the link rule's rounds
+_SPLIT_ROWS = 50_000  # rows of a round above which it is split between them
 
 
 def _rgb(images: np.ndarray, **_) -> np.ndarray:
@@ -172,34 +176,47 @@ def _first_allowed(candidates: np.ndarray, allowed: np.ndarray, k: int) -> np.nd
     return chosen
 
 
+def _rule_choices(
+    candidates: np.ndarray, lower: np.ndarray, neighbours: np.ndarray, rows: np.ndarray, k: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """One round of :func:`_apply_link_rule` on ``rows``: those whose choice changes, and
+    their new choice, from the current ``neighbours`` (read only)."""
+    cand, low = candidates[rows], lower[rows]
+    linked = neighbours[np.where(low, cand, 0)]  # (rows, candidates, k): N_c per candidate
+    back = np.zeros(low.shape, dtype=bool)
+    for slot in range(k):
+        back |= linked[..., slot] == rows[:, None]
+    back &= low
+    chosen = _first_allowed(cand, ~back, k)
+    differs = (chosen != neighbours[rows]).any(axis=1)
+    return rows[differs], chosen[differs]
+
+
 def _apply_link_rule(candidates: np.ndarray, k: int) -> np.ndarray:
     """Choose :math:`N_j` as the first ``k`` candidates :math:`c` of pixel :math:`j` that do not
     violate the rule of section 6.2 (:math:`c < j` and :math:`j \\in N_c`).
 
     :math:`N_j` depends on :math:`N_c` for :math:`c < j` only, so a fixed-point iteration that
     revisits just the pixels whose lower-index candidates changed reaches the sequential result.
+    Each round reads the previous round's choices only, so its rows are split between two
+    threads (numpy's indexing and sorting release the GIL).
     """
     n = candidates.shape[0]
     pixels = np.arange(n, dtype=candidates.dtype)
     lower = candidates < pixels[:, None]
     neighbours = candidates[:, :k].copy()
     active = pixels
-    while active.size:
-        full = active.size == n
-        cand = candidates if full else candidates[active]
-        low = lower if full else lower[active]
-        linked = neighbours[np.where(low, cand, 0)]  # (rows, candidates, k): N_c per candidate
-        back = np.zeros(low.shape, dtype=bool)
-        for slot in range(k):
-            back |= linked[..., slot] == active[:, None]
-        back &= low
-        chosen = _first_allowed(cand, ~back, k)
-        differs = (chosen != neighbours[active]).any(axis=1)
-        changed = active[differs]
-        neighbours[changed] = chosen[differs]
-        marked = np.zeros(n, dtype=bool)
-        marked[changed] = True
-        active = np.flatnonzero((marked[candidates] & lower).any(axis=1)).astype(pixels.dtype)
+    with ThreadPoolExecutor(_THREADS) as pool:
+        while active.size:
+            chunks = np.array_split(active, _THREADS if active.size > _SPLIT_ROWS else 1)
+            rounds = pool.map(
+                lambda rows: _rule_choices(candidates, lower, neighbours, rows, k), chunks
+            )
+            marked = np.zeros(n, dtype=bool)
+            for changed, chosen in list(rounds):
+                neighbours[changed] = chosen
+                marked[changed] = True
+            active = np.flatnonzero((marked[candidates] & lower).any(axis=1)).astype(pixels.dtype)
     return neighbours
 
 
@@ -297,7 +314,7 @@ def connect_components(
         return graph
     inside = np.flatnonzero(anchored[labels])
     outside = np.flatnonzero(~anchored[labels])
-    distance, nearest = cKDTree(points[inside]).query(points[outside], k=1, workers=-1)
+    distance, nearest = KDTree(np.ascontiguousarray(points[inside])).query(points[outside], k=1)
     # Per floating component, its pixel closest to any anchored pixel.
     best = ndimage.minimum_position(
         distance, labels=labels[outside], index=np.flatnonzero(~anchored)
