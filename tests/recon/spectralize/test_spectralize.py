@@ -8,7 +8,7 @@ import pytest
 from scipy import linalg as dense_linalg
 from scipy import sparse
 from scipy.sparse import linalg
-from scipy.spatial.distance import cdist
+from scipy.spatial import cKDTree
 
 from recon.errors import SpectwinInputError
 from recon.experiments.synthetic_images import material_mosaic
@@ -114,8 +114,11 @@ def test_default_multigrid_energy_is_within_1e_4_of_a_direct_solve():
     energy = {"point_spectra": PointSpectra(pixels, spectra), "appearance": "rgbxy"}
     problem = build_problem(rgb, response, **energy)
     spatial, spectral, rhs = problem.kronecker_parts()
+    dense = rhs.left @ rhs.right + rhs.rows.toarray()  # C, kept in factors by the solver
+    assert np.allclose(rhs.gram(), dense.T @ dense, rtol=1e-12, atol=0)
     shifts, basis = np.linalg.eigh(spectral)
     rotated = rhs @ basis
+    assert np.allclose(rotated, dense @ basis, rtol=1e-12, atol=1e-12 * np.abs(dense).max())
     identity = sparse.identity(spatial.shape[0])
     columns = [
         linalg.spsolve((spatial + shift * identity).tocsc(), column)
@@ -126,6 +129,13 @@ def test_default_multigrid_energy_is_within_1e_4_of_a_direct_solve():
     default = reconstruct(rgb, response, **energy)
     assert default.solver == "multigrid" and default.converged
     assert converged <= default.energy <= converged * (1 + 1e-4)
+    # The reported energy (prior term from the solver's compressed coefficients) is the energy
+    # of the returned spectra.
+    spectra = default.spectra.reshape(direct.shape)
+    assert default.energy == pytest.approx(problem.energy(spectra), rel=1e-12)
+    assert problem.terms[2].sum_of_squares(spectra) == pytest.approx(
+        np.sum((problem.terms[2].incidence @ spectra) ** 2), rel=1e-12
+    )
     assert np.max(np.abs(default.spectra.reshape(direct.shape) - direct)) < 1e-3 * image.max()
     # The column parts iterate in threads, yet every run gives the same bits.
     assert np.array_equal(reconstruct(rgb, response, **energy).spectra, default.spectra)
@@ -199,10 +209,13 @@ def test_operator_adjoint_holds_for_every_term(mosaic):
     assert len(problem.weights) == 7  # point, 2 band images, device, camera, prior, smoothness
 
 
-def test_link_rule_matches_a_sequential_brute_force():
-    points = np.random.default_rng(4).random((300, 3))
+@pytest.mark.parametrize("n_points", [300, 60_000])
+def test_link_rule_matches_a_sequential_brute_force(n_points):
+    """The rule of section 6.2 against a pixel-by-pixel loop; 60 000 points are above the size
+    where each round's rows are split between two threads."""
+    points = np.random.default_rng(4).random((n_points, 3))
     graph = appearance_neighbours(points, k=3, candidates=6)
-    order = np.argsort(cdist(points, points), axis=1)[:, 1:7]
+    order = cKDTree(points).query(points, k=7)[1][:, 1:]
     chosen: list[list[int]] = []
     for j in range(len(points)):
         allowed = [c for c in order[j] if not (c < j and j in chosen[c])]
