@@ -30,7 +30,7 @@ from __future__ import annotations
 import math
 import shutil
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -41,6 +41,7 @@ from recon.calibration.dome import DARK_VALUE_OFFSET
 from recon.calibration.dome_capture import DomeCalibration, calibrate_dome
 from recon.dome.processing import P_DYN, dome_directions, process_dome
 from recon.dome.run import open_dome_run
+from recon.errors import SpectwinInputError
 from recon.metrics import relative_error
 from recon.radiometric.hdr import interpolate_curve
 from twin.dome.capture_study import ReconstructionErrors, reconstruct_capture, simulate_capture
@@ -106,11 +107,28 @@ def capture_study_stores(
         material: lambda: dome_run_program(material, size=size, seed=seed),
     }
     for name, path in paths.items():
-        if path.exists() and CaptureStore.open(path).complete:
-            continue
+        if path.exists():
+            _check_capture_size(path, size)
+            if CaptureStore.open(path).complete:
+                continue
         step(f"capturing the {name} store")
         programs[name]().run(path, resume=path.exists())
     return paths[material], paths["calibration"]
+
+
+def _check_capture_size(path: Path, size: DomeCaptureSize) -> None:
+    """Refuse to reuse or resume a store captured at another size."""
+    rig = CaptureStore.open(path).attrs["rig"]
+    wanted = asdict(size)
+    differing = [name for name, value in wanted.items() if name in rig and rig[name] != value]
+    if differing:
+        raise SpectwinInputError(
+            f"{path}: captured with "
+            + ", ".join(f"{name}={rig[name]}" for name in differing)
+            + "; expected "
+            + ", ".join(f"{name}={wanted[name]}" for name in differing)
+            + " (use another stores folder, or remove this store)"
+        )
 
 
 def uniform_texels(truth: np.ndarray, tolerance_pct: float = UNIFORM_TRUTH_PCT) -> np.ndarray:

@@ -7,6 +7,7 @@ the analytic path taking the same images (same LEDs, views and bands)."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -147,3 +148,13 @@ def test_band_data_moved_to_the_top_camera_separates_spectral_data_from_view(
             assert errors["without"] == without[source][camera]["mean_relative_error_pct"]
     with pytest.raises(SpectwinInputError, match="band_partner: expected one of"):
         process_dome(run, calibration, folder / "bad.btf.zarr", band_partner="rgb99")
+
+
+def test_stores_of_another_size_are_not_reused(stores):
+    """A stores folder captured at 24 texels is refused for a 32-texel study, naming the
+    setting, instead of being reused or resumed as if it were the new size."""
+    folder, _, _ = stores
+    with pytest.raises(SpectwinInputError, match="captured with texels=24; expected texels=32"):
+        capture_study_stores(
+            folder, "colorchecker16", replace(SIZE, texels=32), seed=SEED, dark_frames=4
+        )
