@@ -46,6 +46,7 @@ from pathlib import Path
 from typing import Any, Required, TypedDict
 
 import numpy as np
+from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
 from hwbridge.errors import (
@@ -491,7 +492,9 @@ def run_session(
         ) as store,
     ):
         pending = store.pending_steps()
-        with Progress(*columns, disable=not show_progress) as progress:
+        with Progress(
+            *columns, console=Console(stderr=True), disable=not show_progress
+        ) as progress:
             task = progress.add_task("capture", total=len(plan), completed=len(plan) - len(pending))
             try:
                 capture_steps(

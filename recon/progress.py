@@ -1,10 +1,12 @@
-"""Progress reporting for long reconstructions: a rich progress bar, or nothing."""
+"""Progress reporting for long reconstructions: a rich progress bar on standard error (standard
+output stays free for results, e.g. a command's JSON), or nothing."""
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
+from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 __all__ = ["progress_steps"]
@@ -23,6 +25,8 @@ def progress_steps(description: str, total: int, *, enabled: bool) -> Iterator[C
         MofNCompleteColumn(),
         TimeElapsedColumn(),
     )
-    with Progress(*columns, disable=not enabled, transient=False) as progress:
+    with Progress(
+        *columns, console=Console(stderr=True), disable=not enabled, transient=False
+    ) as progress:
         task = progress.add_task(description, total=total)
         yield lambda steps=1: progress.advance(task, steps)
