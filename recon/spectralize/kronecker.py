@@ -70,7 +70,7 @@ class FactoredRhs:
     def gram(self) -> np.ndarray:
         """:math:`C^T C`, ``(K, K)``."""
         cross = self.right.T @ np.asarray(self.rows.T @ self.left).T
-        rows_gram = np.asarray((self.rows.T @ self.rows).todense())
+        rows_gram = (self.rows.T @ self.rows).toarray()
         return self.right.T @ (self.left.T @ self.left) @ self.right + cross + cross.T + rows_gram
 
     def __matmul__(self, directions: np.ndarray) -> np.ndarray:
@@ -157,10 +157,9 @@ def _block_cg(
     """Preconditioned conjugate gradients on the columns of ``rhs`` at once: column ``c``
     solves :math:`(A + s_c I) x_c = b_c` until :math:`\\lVert r_c \\rVert \\le` ``bound``.
     ``preconditioner(block, columns)`` approximates the inverse on the given columns; ``start``
-    is the first guess (``None``: zero). The
-    Polak-Ribiere form of the step keeps the iteration convergent with a preconditioner that is
-    symmetric only up to single-precision rounding. Returns the solutions, the iterations per
-    column and whether all converged."""
+    is the first guess (``None``: zero). The Polak-Ribiere form of the step keeps the iteration
+    convergent with a preconditioner that is symmetric only up to single-precision rounding.
+    Returns the solutions, the iterations per column and whether all converged."""
     iterations = np.zeros(rhs.shape[1], dtype=int)
     shifted = bool(np.any(shifts))
     if start is None:

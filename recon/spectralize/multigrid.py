@@ -4,11 +4,11 @@ The hierarchy is smoothed aggregation's: aggregates of connected unknowns (pyamg
 aggregation on the matrix's own pattern, every link counted as strong), tentative prolongators
 fitted to the constant vector (on the finest level relaxed first), smoothed by one Jacobi step
 weighted with each row's l1 sum, and Galerkin coarse matrices :math:`A_{k+1} = P_k^T A_k P_k`,
-all kept in CSR (pyamg's own builder goes through 1 x 1 block
-matrices, whose absolute value alone took most of a 7 s setup at one megapixel). The cycle itself is
-applied here to a whole block of columns: every level's sparse matrix is read once per sweep for
-all columns (a sparse-times-dense product) instead of once per column, and in float32, which
-halves the memory traffic. Smoothing is l1-Jacobi (each row scaled by its absolute row sum,
+all kept in CSR (pyamg's own builder goes through 1 x 1 block matrices, whose absolute value
+alone took most of a 7 s setup at one megapixel). The cycle itself is applied here to a whole
+block of columns: every level's sparse matrix is read once per sweep for all columns (a
+sparse-times-dense product) instead of once per column, and in float32, which halves the memory
+traffic. Smoothing is l1-Jacobi (each row scaled by its absolute row sum,
 convergent without a spectral-radius estimate), the same sweeps before and after the coarse
 correction, so the cycle is a symmetric operator (as conjugate gradients need); its
 single-precision rounding is absorbed by the flexible conjugate gradients of
@@ -120,9 +120,9 @@ def _smoothed_prolongator(
     """Smoothed aggregation's prolongator :math:`P = (I - \\omega D_1^{-1} A) T` and the coarse
     near-null-space candidates: aggregates of connected unknowns (pyamg's standard aggregation
     on the matrix's pattern: symmetric strength with threshold 0 keeps every link, so it is
-    skipped), the tentative prolongator :math:`T` fitted to the
-    candidates, and one Jacobi step weighted row by row with the l1 row sums :math:`D_1` (the
-    Gershgorin bound, so no spectral-radius estimate is needed), all in CSR."""
+    skipped), the tentative prolongator :math:`T` fitted to the candidates, and one Jacobi step
+    weighted row by row with the l1 row sums :math:`D_1` (the Gershgorin bound, so no
+    spectral-radius estimate is needed), all in CSR."""
     aggregates, _ = standard_aggregation(matrix)
     tentative, coarse_candidates = fit_candidates(aggregates, candidates)
     tentative = sparse.csr_matrix(tentative)
