@@ -64,3 +64,45 @@ def test_dome_study_prints_its_metrics_as_json(tmp_path):
     np.testing.assert_allclose(
         exposure["spectral_only_totals_s"], reference_s / np.array([1, 4, 16, 64]), rtol=1e-12
     )
+
+
+def test_store_summary_prints_the_shift_at_a_fixed_view():
+    """The printed summary of the store path: per camera that carried the band data in one of
+    the two processings, its images' mean errors with and without them ("none" where no texel
+    was kept), next to the with / without line and the 10.5 totals."""
+    from twin.cli.dome import _store_summary
+
+    errors = {
+        "with_spectral_data": {"mean_relative_error_pct": 7.48},
+        "without_spectral_data": {"mean_relative_error_pct": 8.8},
+    }
+    shift = {
+        "rgb05": {
+            "mean_relative_error_pct": {"with": 7.48, "without": 8.82},
+            "mean_delta_e94": {"with": 1.5, "without": 1.54},
+        },
+        "rgb00": None,
+    }
+    source = errors | {"edge_free": errors}
+    stores = {
+        "materials": {
+            "colorchecker16": {
+                "stores": source,
+                "analytic": source,
+                "view_fixed_shift": {
+                    "stores": {"edge_free": shift},
+                    "analytic": {"edge_free": shift},
+                },
+            }
+        },
+        "exposure_10_5": {
+            "reference_total_s": 1826.6,
+            "hybrid_total_s": 51.52,
+            "orders_of_magnitude": 1.5496,
+        },
+    }
+    summary = _store_summary(stores)
+    line = summary["colorchecker16 same view, edge-free: with / without bands (stores)"]
+    assert line == "rgb05 7.48 / 8.82 %, rgb00 none"
+    assert summary["colorchecker16 dome stores: with / without bands (stores)"] == "7.48 % / 8.80 %"
+    assert summary["10.5 from the stores"] == "1827 s / 51.5 s, 1.55 orders of magnitude"
