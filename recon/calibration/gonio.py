@@ -52,6 +52,7 @@ __all__ = [
     "calibrate_gonio",
     "dark_model",
     "extend_curve",
+    "lamp_rounding_s",
     "store_white_factors",
     "white_reflectance",
 ]
@@ -267,6 +268,13 @@ def _response_series_curve(store: CaptureStore, camera: str, bit_depth: int) -> 
     frames = np.stack([oecf.frames[s] for s in series], axis=1).astype(np.uint16)
     curve, _ = robertson(frames, times, bit_depth=bit_depth)
     return curve
+
+
+def lamp_rounding_s(store: CaptureStore) -> float | None:
+    """The rounding of the exposure plan for the lamp a capture store records (``rig["lamp"]``):
+    whole flicker periods, 1/15 s, for the HMI lamp (thesis 3.2.2); ``None`` for a steady QTH
+    lamp."""
+    return None if store.attrs["rig"].get("lamp", "hmi") == "qth" else HMI_FLICKER_PERIOD_S
 
 
 def calibrate_gonio(

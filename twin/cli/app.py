@@ -18,6 +18,7 @@ from twin.cli.errors import SpectwinGroup, require_output_folder, run_failed
 from twin.cli.gonio import register as register_gonio
 from twin.cli.output import JsonFlag, SeedOption, console, print_summary
 from twin.cli.store import register as register_store
+from twin.cli.sweep import register as register_sweep
 
 app = typer.Typer(
     cls=SpectwinGroup,
@@ -260,6 +261,7 @@ register_camera(app)
 register_gonio(app)
 register_dome(app)
 register_store(app)
+register_sweep(app)
 
 
 if __name__ == "__main__":

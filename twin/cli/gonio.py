@@ -522,7 +522,7 @@ def calibrate(
     Example: spectwin calibrate out/cal.capture.zarr --out out/cal.json
     """
     from hwbridge.store import CaptureStore
-    from recon.calibration.gonio import calibrate_gonio
+    from recon.calibration.gonio import calibrate_gonio, lamp_rounding_s
 
     capture = CaptureStore.open(store)
     if _is_dome(capture):
@@ -536,7 +536,9 @@ def calibrate(
     require_output_file(out)
     require_sound_capture(capture, store)
     with console.status("calibrating"):
-        result = calibrate_gonio(capture, white_fill=white_fill)
+        result = calibrate_gonio(
+            capture, white_fill=white_fill, round_to_s=lamp_rounding_s(capture)
+        )
     out.parent.mkdir(parents=True, exist_ok=True)
     result.save(out)
     exposures = result.planned_exposure_s

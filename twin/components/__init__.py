@@ -18,6 +18,7 @@ from twin.components.lamps import (
     QTHLamp,
     cie_illuminant,
     irradiance_at,
+    lamp_model,
     planck_spectral_radiance,
 )
 from twin.components.lctf import VARISPEC_FWHM_NM, LiquidCrystalTunableFilter
@@ -43,6 +44,7 @@ __all__ = [
     "QTHLamp",
     "cie_illuminant",
     "irradiance_at",
+    "lamp_model",
     "colorchecker_reflectances",
     "esser_reflectances",
     "planck_spectral_radiance",

@@ -40,6 +40,7 @@ __all__ = [
     "QTHLamp",
     "cie_illuminant",
     "irradiance_at",
+    "lamp_model",
     "planck_spectral_radiance",
 ]
 
@@ -340,6 +341,15 @@ def cie_illuminant(name: str, grid: WavelengthGrid) -> SampledSpectra:
             f"({', '.join(sorted(colour.SDS_ILLUMINANTS))}), got {name!r}"
         )
     return resample(from_colour(colour.SDS_ILLUMINANTS[name]), grid, method="pchip")
+
+
+def lamp_model(spectrum: str) -> Lamp:
+    """The gonioreflectometer lamp a rig file names: ``"hmi"`` (Broncolor F575, flickering
+    lines) or ``"qth"`` (the 1000 W tungsten-halogen lamp), thesis 3.2.2."""
+    models = {"hmi": HMILamp, "qth": QTHLamp}
+    if spectrum not in models:
+        raise SpectwinInputError(f"lamp spectrum: expected 'hmi' or 'qth', got {spectrum!r}")
+    return models[spectrum]()
 
 
 def irradiance_at(intensity: SampledSpectra, distance_m: float) -> SampledSpectra:

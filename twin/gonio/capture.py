@@ -47,7 +47,6 @@ from hwbridge.store import CaptureStore
 from recon.calibration.spectral import HMI_FLICKER_PERIOD_S
 from recon.errors import SpectwinInputError
 from recon.spectra import DEFAULT_GRID
-from twin.components.lamps import HMILamp
 from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.components.targets import zenith_white_reflectance
 from twin.devices.programs import (
@@ -59,7 +58,7 @@ from twin.devices.programs import (
 )
 from twin.devices.sim_devices import SimGonioDevices, VirtualRig
 from twin.gonio.capture_time import estimate_plan_s
-from twin.gonio.render import GONIO_SPP, gonio_camera, pose_matrix
+from twin.gonio.render import GONIO_SPP, gonio_camera, gonio_lamp, pose_matrix
 from twin.gonio.signals import RenderedGonioSignal, WhiteReferenceSignal
 from twin.materials import load_material
 from twin.materials.sample_holder import PRINT_OUTER_HALF_M, registration_corners
@@ -81,6 +80,7 @@ __all__ = [
     "gonio_calibration_program",
     "gonio_measurement_program",
     "gonio_pairs",
+    "is_flickering",
     "run_gonio_calibration",
     "run_gonio_measurement",
     "stored_settings",
@@ -149,7 +149,17 @@ def _flicker_multiples(times_s: np.ndarray) -> np.ndarray:
 
 
 def _white_signal(config: GonioConfig, sensor: Sensor) -> WhiteReferenceSignal:
-    return WhiteReferenceSignal(sensor, HMILamp(), distance_m=config.lamps[0].distance_m)
+    """The white standard facing the rig's first lamp position, through the rig's filter."""
+    lamp, _ = gonio_lamp(config, config.lamps[0].id)
+    return WhiteReferenceSignal(
+        sensor, lamp, distance_m=config.lamps[0].distance_m, filter_model=config.camera.filter
+    )
+
+
+def is_flickering(config: GonioConfig) -> bool:
+    """Whether the rig's lamps flicker (HMI, thesis 3.2.2): exposures must then be whole
+    numbers of flicker periods."""
+    return any(placement.spectrum == "hmi" for placement in config.lamps)
 
 
 def _rig_attrs(config: GonioConfig, pixels: int, program: str) -> dict[str, object]:
@@ -160,7 +170,8 @@ def _rig_attrs(config: GonioConfig, pixels: int, program: str) -> dict[str, obje
         "camera": config.camera.definition,
         "camera_id": CAMERA_ID,
         "window_px": pixels,
-        "lamp": "hmi",
+        "lamp": config.lamps[0].spectrum,
+        "config": config.model_dump(mode="json"),
         "white_reflectance": {
             "wavelengths_nm": white.wavelengths_nm.tolist(),
             "values": white.values.tolist(),
@@ -228,6 +239,8 @@ class CaptureProgram(ProgramCapture):
         The session seed.
     poses
         The robot pose of each view that has one (the capture-time estimate).
+    config
+        The rig model the program was built for (default ``scenes/rigs/gonio.yaml``).
     """
 
     name: str
@@ -236,6 +249,7 @@ class CaptureProgram(ProgramCapture):
     rig: dict[str, Any]
     seed: int
     poses: dict[int, GonioPose]
+    config: GonioConfig | None = None
 
     def __post_init__(self) -> None:
         check_seed(self.seed)
@@ -256,7 +270,7 @@ class CaptureProgram(ProgramCapture):
         for camera, count in frames.items():
             height, width = devices["cameras"][camera].frame_shape
             storage += count * (2 * height * width + _INDEX_BYTES + 4 * samples)
-        duration_s = estimate_plan_s(load_rig("gonio"), self.plan, self.poses)
+        duration_s = estimate_plan_s(self.config or load_rig("gonio"), self.plan, self.poses)
         height, width = self.devices.sensor.height, self.devices.sensor.width
         return {
             "program": self.name,
@@ -304,7 +318,12 @@ def _with_view(steps: list[dict], view: int) -> list[dict]:
 
 
 def gonio_calibration_program(
-    *, pixels: int = 64, spp: int = GONIO_SPP, seed: int = 0, white_fill: float = 0.6
+    *,
+    pixels: int = 64,
+    spp: int = GONIO_SPP,
+    seed: int = 0,
+    white_fill: float = 0.6,
+    config: GonioConfig | None = None,
 ) -> CaptureProgram:
     """The calibration session (see the module docstring), checked and not yet captured.
 
@@ -316,8 +335,11 @@ def gonio_calibration_program(
     about 150 distinct whole numbers of flicker periods (thesis 3.3: 200 exposures). The white
     photographs (view 0) share one exposure time, the longest whole number of flicker periods
     that keeps the brightest band below ``white_fill`` of saturation (the operator's test shots).
+    ``config`` is the rig model (default ``scenes/rigs/gonio.yaml``): its first lamp position
+    lights the white standard, through its filter. Whole flicker periods suit a steady QTH lamp
+    as well.
     """
-    config = load_rig("gonio")
+    config = config or load_rig("gonio")
     check_capture_settings(config, pixels=pixels, spp=spp)
     check_seed(seed)
     if not 0.0 < white_fill < 1.0:
@@ -345,7 +367,9 @@ def gonio_calibration_program(
         CAMERA_ID, sensor, _GonioSignal(white, 0, chart), plan_start_times_s(plan), 2
     )
     attrs = _rig_attrs(config, pixels, "gonio-calibration")
-    return CaptureProgram("gonio-calibration", plan, devices, attrs, seed, {1: chart_pose})
+    return CaptureProgram(
+        "gonio-calibration", plan, devices, attrs, seed, {1: chart_pose}, config
+    )
 
 
 def run_gonio_calibration(
@@ -355,13 +379,16 @@ def run_gonio_calibration(
     spp: int = GONIO_SPP,
     seed: int = 0,
     white_fill: float = 0.6,
+    config: GonioConfig | None = None,
     resume: bool = False,
     show_progress: bool = False,
     client: Client | None = None,
 ) -> CaptureStore:
     """The calibration session (:func:`gonio_calibration_program`) into ``store``. With a Dask
     ``client`` the session runs over its cluster (:mod:`twin.devices.cluster`)."""
-    program = gonio_calibration_program(pixels=pixels, spp=spp, seed=seed, white_fill=white_fill)
+    program = gonio_calibration_program(
+        pixels=pixels, spp=spp, seed=seed, white_fill=white_fill, config=config
+    )
     return program.run(store, resume=resume, show_progress=show_progress, client=client)
 
 
@@ -375,6 +402,7 @@ def gonio_measurement_program(
     window: int | None = None,
     spp: int = GONIO_SPP,
     seed: int = 0,
+    config: GonioConfig | None = None,
 ) -> CaptureProgram:
     """One measurement run (see the module docstring), checked and not yet captured.
 
@@ -393,8 +421,10 @@ def gonio_measurement_program(
         (:func:`check_capture_settings`).
     seed
         Session seed (noise, robot repeatability).
+    config
+        The rig model (default ``scenes/rigs/gonio.yaml``): lamps, filter, camera, kinematics.
     """
-    config = load_rig("gonio")
+    config = config or load_rig("gonio")
     check_capture_settings(config, pixels=pixels, window=window, spp=spp)
     check_seed(seed)
     lctf = LiquidCrystalTunableFilter.varispec(config.camera.filter)
@@ -406,7 +436,7 @@ def gonio_measurement_program(
             f"shape {exposures.shape}"
         )
     periods = exposures / HMI_FLICKER_PERIOD_S
-    if not np.allclose(periods, np.round(periods), rtol=0, atol=1e-6):
+    if is_flickering(config) and not np.allclose(periods, np.round(periods), rtol=0, atol=1e-6):
         raise SpectwinInputError(
             "exposures_s: with the HMI lamp every band exposure must be a multiple of 1/15 s "
             "(thesis 3.2.2); plan them with spectwin calibrate"
@@ -416,7 +446,8 @@ def gonio_measurement_program(
     n_pairs = len(pairs.poses)
     side = window or pixels
     sensor = Sensor(config.camera.definition, roi=(side, side))
-    dark_s = _flicker_multiples(np.linspace(exposures.min(), exposures.max(), 4))
+    dark_s = np.linspace(exposures.min(), exposures.max(), 4)
+    dark_s = _flicker_multiples(dark_s) if is_flickering(config) else np.unique(dark_s)
     plan = dark_series(CAMERA_ID, dark_s, _DARK_FRAMES)
     plan += _with_view(white_reference_run(CAMERA_ID, bands, exposures), n_pairs)
     plan += gonio_sample_run(CAMERA_ID, range(n_pairs), bands, exposures)
@@ -447,7 +478,9 @@ def gonio_measurement_program(
         "sample_fraction": sample.size_m / (2 * PRINT_OUTER_HALF_M),
     }
     devices = SimGonioDevices(CAMERA_ID, sensor, signal, plan_start_times_s(plan), n_pairs + 1)
-    return CaptureProgram("gonio-run", plan, devices, attrs, seed, dict(enumerate(pairs.poses)))
+    return CaptureProgram(
+        "gonio-run", plan, devices, attrs, seed, dict(enumerate(pairs.poses)), config
+    )
 
 
 def run_gonio_measurement(
@@ -461,6 +494,7 @@ def run_gonio_measurement(
     window: int | None = None,
     spp: int = GONIO_SPP,
     seed: int = 0,
+    config: GonioConfig | None = None,
     resume: bool = False,
     show_progress: bool = False,
     client: Client | None = None,
@@ -478,5 +512,6 @@ def run_gonio_measurement(
         window=window,
         spp=spp,
         seed=seed,
+        config=config,
     )
     return program.run(store, resume=resume, show_progress=show_progress, client=client)

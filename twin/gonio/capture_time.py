@@ -45,7 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from twin.components.lamps import FINE_GRID, HMILamp, QTHLamp
+from twin.components.lamps import FINE_GRID, lamp_model
 from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.rigs.gonio_kinematics import GonioPose, GonioSolution, solve_pairs
 from twin.rigs.rig_config import GonioConfig
@@ -155,7 +155,7 @@ def band_exposures_s(
     sensor = sensor or Sensor(config.camera.definition)
     lctf = LiquidCrystalTunableFilter.varispec(config.camera.filter)
     placement = config.lamps[0]
-    lamp = HMILamp() if placement.spectrum == "hmi" else QTHLamp()
+    lamp = lamp_model(placement.spectrum)
     rates = white_reference_rates(
         sensor, lamp, lctf.transmission(FINE_GRID), distance_m=placement.distance_m
     ).sum(axis=0)

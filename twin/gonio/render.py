@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from twin.components.lamps import FINE_GRID, HMILamp, Lamp, QTHLamp
+from twin.components.lamps import FINE_GRID, Lamp, lamp_model
 from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.materials import Material
 from twin.materials.sample_holder import holder_parts
@@ -43,7 +43,7 @@ image over each pixel's area where edges cross it, which registration measures: 
 def gonio_lamp(config: GonioConfig, lamp_id: str) -> tuple[Lamp, np.ndarray]:
     """The lamp model and position of ``lamp_id``."""
     placement = next(lamp for lamp in config.lamps if lamp.id == lamp_id)
-    lamp = HMILamp() if placement.spectrum == "hmi" else QTHLamp()
+    lamp = lamp_model(placement.spectrum)
     return lamp, lamp_position(placement.azimuth_deg, placement.elevation_deg, placement.distance_m)
 
 

@@ -36,10 +36,13 @@ def _band_index(bands_nm: np.ndarray, band_nm: float | None) -> int:
 
 
 class WhiteReferenceSignal:
-    """The white standard at ``distance_m`` from ``lamp``, through the VS-10 bands, uniform."""
+    """The white standard at ``distance_m`` from ``lamp``, through the bands of the VariSpec
+    ``filter_model`` (default the VS-10), uniform."""
 
-    def __init__(self, sensor: Sensor, lamp: Lamp, *, distance_m: float = 2.0):
-        lctf = LiquidCrystalTunableFilter.varispec("VS-10")
+    def __init__(
+        self, sensor: Sensor, lamp: Lamp, *, distance_m: float = 2.0, filter_model: str = "VS-10"
+    ):
+        lctf = LiquidCrystalTunableFilter.varispec(filter_model)
         self._bands_nm = np.asarray(lctf.band_centres_nm)
         self._rates = white_reference_rates(
             sensor, lamp, lctf.transmission(FINE_GRID), distance_m=distance_m

@@ -28,17 +28,19 @@ from recon.btf.store import BTFStore
 from recon.errors import SpectwinInputError
 from recon.metrics import relative_error
 from recon.preview import spectral_to_srgb
+from recon.spectra import SampledSpectra
 from twin.gonio.capture import GonioPairs, actual_poses, texture_corners_world
 from twin.gonio.render import gonio_camera
 from twin.materials import load_material
 from twin.materials.chart_fields import FieldMasks, field_masks
 from twin.render.truth import truth_btf
 from twin.rigs.hemisphere import spherical_deg
-from twin.rigs.rig_config import load_rig
+from twin.rigs.rig_config import GonioConfig, load_rig
 from twin.sensor.band_weights import instrument_passbands
 
 __all__ = [
     "FieldMasks",
+    "capture_rig",
     "GonioEvaluation",
     "evaluate_gonio",
     "field_masks",
@@ -76,8 +78,15 @@ class GonioEvaluation:
         }
 
 
+def capture_rig(capture: CaptureStore) -> GonioConfig:
+    """The rig model a twin capture was made with (its ``rig["config"]``; stores written before
+    it was recorded: ``scenes/rigs/gonio.yaml``)."""
+    recorded = capture.attrs["rig"].get("config")
+    return GonioConfig.model_validate(recorded) if recorded else load_rig("gonio")
+
+
 def _true_corners(capture: CaptureStore, btf: BTFStore) -> np.ndarray:
-    config = load_rig("gonio")
+    config = capture_rig(capture)
     rig = capture.attrs["rig"]
     pairs = GonioPairs(config, btf.light_dirs, btf.view_dirs)
     poses = actual_poses(config, pairs.poses, int(capture.attrs["seed"]))
@@ -95,13 +104,18 @@ def evaluate_gonio(
     *,
     spp: int = 64,
     interior: float = 0.6,
+    passbands: SampledSpectra | None = None,
     progress: bool = False,
 ) -> GonioEvaluation:
     """Compare a BTF store made by ``spectwin process`` with the twin's truth (module docstring).
 
     The capture store named in the BTF's provenance supplies the session seed (the robot's
-    actual poses) and the rendered window. Pairs not written (unregistered) are left out and
-    counted in :meth:`GonioEvaluation.summary`.
+    actual poses), the rendered window and the rig model. Pairs not written (unregistered) are
+    left out and counted in :meth:`GonioEvaluation.summary`. The truth's bands average the
+    reflectance with ``passbands`` (rows of unit area on ``FINE_GRID``); by default with the
+    capturing instrument's own weights (:func:`instrument_passbands`), so that only noise,
+    registration and calibration differ; narrow ``passbands`` at the band centres make the
+    filter's bandwidth part of the error.
     """
     if isinstance(spp, bool) or not isinstance(spp, int | np.integer) or spp < 1:
         raise SpectwinInputError(f"spp: expected a positive number of samples, got {spp!r}")
@@ -138,7 +152,7 @@ def evaluate_gonio(
         btf.light_dirs[written],
         btf.view_dirs[written],
         texels=texels,
-        passbands=instrument_passbands(load_rig("gonio")),
+        passbands=instrument_passbands(capture_rig(capture)) if passbands is None else passbands,
         spp=spp,
     )
     field_means, truth_means, texel_errors = [], [], []

@@ -1,0 +1,193 @@
+"""One design point of a gonioreflectometer sweep: virtual capture, processing, evaluation.
+
+A point runs the twin's whole chain into its own folder, as a user would with the commands of
+:mod:`twin.cli.gonio`:
+
+1. the calibration session of its rig (``cal.capture.zarr``) and the calibration (Eq. 3.3, and
+   the band exposure plan of Eq. 3.4; whole flicker periods for the HMI lamp only);
+2. the measurement run of the material at the plan's direction sampling (``run.capture.zarr``);
+3. processing into a BTF (``btf.zarr``, Eq. 3.6 and registration);
+4. the measures (:data:`GONIO_MEASURES`): the run's capture time from the rig's timing model
+   (:func:`twin.gonio.capture_time.estimate_plan_s`), the BTF's error at held-out directions
+   against the truth at the band centres (:mod:`twin.validate.held_out`: Eq. 6.8 and
+   Delta E94, so that the direction sampling and the filter's bandwidth count), the exposure
+   totals and the storage.
+
+Each store is resumed where a previous attempt stopped; ``result.json`` is written last and
+atomically, so a point with one is finished and is never run again. ``history.jsonl`` records
+every start and finish of the point.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import numpy as np
+from pydantic import Field, field_validator
+
+from hwbridge.store import CaptureStore
+from recon.btf.processing import process_gonio
+from recon.calibration.gonio import calibrate_gonio, lamp_rounding_s
+from recon.errors import SpectwinInputError
+from twin.gonio.capture import (
+    check_capture_settings,
+    gonio_calibration_program,
+    gonio_measurement_program,
+    gonio_pairs,
+)
+from twin.gonio.render import GONIO_SPP
+from twin.rigs.rig_config import GonioConfig
+from twin.rigs.yaml_config import StrictModel
+from twin.validate.held_out import held_out_errors
+
+if TYPE_CHECKING:
+    from twin.studies.sweep_file import DesignPoint
+
+__all__ = ["GONIO_MEASURES", "GonioPlan", "run_gonio_point", "point_result"]
+
+GONIO_MEASURES = {
+    "capture_time_h": "capture time of the measurement run, timing model (h)",
+    "error_pct": "held-out pairs, mean Eq. 6.8 over the chart fields (%)",
+    "error_matte_pct": "held-out pairs, matte fields, mean Eq. 6.8 (%)",
+    "error_glossy_pct": "held-out pairs, glossy fields, mean Eq. 6.8 (%)",
+    "delta_e94": "held-out pairs, mean Delta E94 over the chart fields",
+    "delta_e94_matte": "held-out pairs, matte fields, mean Delta E94",
+    "exposure_per_pair_s": "sum of the band exposures of one direction pair (s)",
+    "exposure_total_h": "exposure time of all pairs of the run (h)",
+    "pairs": "direction pairs measured",
+    "pairs_registered": "direction pairs registered and in the BTF",
+    "storage_mb": "capture and BTF stores on disk (MB)",
+    "point_s": "wall time of the point on this machine (s)",
+}
+"""The measures of a gonioreflectometer design point, with their units."""
+
+_CALIBRATION_PIXELS = 64
+
+
+class GonioPlan(StrictModel):
+    """The capture and processing settings of a point (the ``plan.`` parameters).
+
+    Attributes
+    ----------
+    rings
+        The direction sampling: ``[polar_deg, count]`` rings of directions, every reachable
+        light x view combination measured (thesis 4.1.1; the twin's reduced sampling is
+        ``[[0, 1], [30, 4], [60, 8]]``).
+    pixels
+        Pixels across the camera's 20 cm field.
+    texels
+        Texels across the BTF's texture.
+    spp
+        Samples per pixel of the renders.
+    """
+
+    rings: Annotated[list[tuple[float, int]], Field(min_length=1)] = [(0.0, 1), (30.0, 4)]
+    pixels: Annotated[int, Field(ge=32, le=4096)] = 128
+    texels: Annotated[int, Field(ge=16, le=512)] = 32
+    spp: Annotated[int, Field(ge=1, le=65536)] = GONIO_SPP
+
+    @field_validator("rings")
+    @classmethod
+    def _rings(cls, rings: list[tuple[float, int]]) -> list[tuple[float, int]]:
+        for polar, count in rings:
+            if not 0 <= polar < 85 or count < 1 or (polar == 0 and count != 1):
+                raise ValueError(
+                    f"expected [polar_deg in [0, 85), count >= 1] rings (one direction at 0), "
+                    f"got [{polar}, {count}]"
+                )
+        return rings
+
+    def check(self, config: GonioConfig) -> None:
+        """Refuse settings the rig cannot take: pixels beyond its camera's, texels beyond the
+        pixels, a sampling of which the robot reaches no pair."""
+        check_capture_settings(config, pixels=self.pixels, spp=self.spp)
+        if self.texels > self.pixels:
+            raise SpectwinInputError(
+                f"plan.texels: expected at most plan.pixels ({self.pixels}), got {self.texels}"
+            )
+        if not gonio_pairs(config, tuple(self.rings)).poses:
+            raise SpectwinInputError(f"plan.rings: the robot reaches no pair of {self.rings}")
+
+
+def _capture(program, path: Path) -> CaptureStore:
+    """Capture ``program`` into ``path``, continuing a store a previous attempt left."""
+    return program.run(path, resume=path.exists())
+
+
+def _storage_mb(*paths: Path) -> float:
+    return sum(f.stat().st_size for p in paths for f in p.rglob("*") if f.is_file()) / 1e6
+
+
+def _record(folder: Path, event: str, **details) -> None:
+    line = json.dumps({"event": event, "pid": os.getpid(), "time": time.time(), **details})
+    with open(folder / "history.jsonl", "a", encoding="utf-8") as history:
+        history.write(line + "\n")
+
+
+def point_result(folder: str | Path) -> dict | None:
+    """A finished point's result (its ``result.json``), or ``None`` while it is not finished."""
+    path = Path(folder) / "result.json"
+    return json.loads(path.read_text(encoding="utf-8")) if path.is_file() else None
+
+
+def run_gonio_point(point: DesignPoint, folder: str | Path) -> dict:
+    """Run ``point`` into ``folder`` (module docstring) and return its result; a finished
+    point's result is returned as it is."""
+    folder = Path(folder)
+    finished = point_result(folder)
+    if finished is not None:
+        return finished
+    folder.mkdir(parents=True, exist_ok=True)
+    started = time.perf_counter()
+    _record(folder, "started")
+    config, plan = point.rig, point.plan
+    calibration_store = _capture(
+        gonio_calibration_program(pixels=_CALIBRATION_PIXELS, seed=point.seed, config=config),
+        folder / "cal.capture.zarr",
+    )
+    calibration = calibrate_gonio(calibration_store, round_to_s=lamp_rounding_s(calibration_store))
+    program = gonio_measurement_program(
+        calibration.planned_exposure_s,
+        material=point.material,
+        rings=tuple(plan.rings),
+        pixels=plan.pixels,
+        spp=plan.spp,
+        seed=point.seed,
+        config=config,
+    )
+    run_store = _capture(program, folder / "run.capture.zarr")
+    btf_path = folder / "btf.zarr"
+    btf = process_gonio(
+        run_store, calibration, btf_path, texels=plan.texels, resume=btf_path.exists()
+    )
+    errors = held_out_errors(btf_path).summary()
+    pairs = len(program.poses)
+    exposure_per_pair_s = float(calibration.planned_exposure_s.sum())
+    measures = {
+        "capture_time_h": program.dry_run()["estimated_duration_s"] / 3600,
+        **errors,
+        "exposure_per_pair_s": exposure_per_pair_s,
+        "exposure_total_h": exposure_per_pair_s * pairs / 3600,
+        "pairs": pairs,
+        "pairs_registered": int(np.count_nonzero(btf.written())),
+        "storage_mb": _storage_mb(folder / "run.capture.zarr", btf_path),
+        "point_s": time.perf_counter() - started,
+    }
+    result = {
+        "point": point.index,
+        "key": point.key,
+        "label": point.label,
+        "values": point.values,
+        "material": point.material,
+        "seed": point.seed,
+        "measures": measures,
+    }
+    partial = folder / "result.json.partial"
+    partial.write_text(json.dumps(result, indent=1), encoding="utf-8")
+    os.replace(partial, folder / "result.json")
+    _record(folder, "finished")
+    return result

@@ -1,0 +1,128 @@
+"""``spectwin sweep``: every design point of a sweep file, as Dask tasks, resumably.
+
+The output folder holds ``sweep.json`` (the sweep and its points' keys), one folder per point
+under ``points/`` with its stores, ``result.json`` and ``history.jsonl``
+(:mod:`twin.studies.sweep_gonio`), and, once every point is finished, the table, the figures and
+the page (:mod:`twin.studies.sweep_report`).
+
+Points run as Dask tasks on a ``LocalCluster`` of one-thread workers (``workers``) or on a
+running cluster (``scheduler``), each worker with its own Mitsuba variant
+(:class:`twin.devices.cluster.RendererSetup`); with one worker they run in this process, one
+after the other. A killed sweep is continued by running it again into the same folder: points
+with a result are not run again, the one that was running continues its stores.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from recon.errors import SpectwinInputError
+from recon.progress import progress_steps
+from twin.output_format import dumps
+from twin.studies.sweep_file import Sweep
+from twin.studies.sweep_gonio import GONIO_MEASURES, point_result, run_gonio_point
+from twin.studies.sweep_report import (
+    pareto_front,
+    plot_effects,
+    plot_front,
+    write_page,
+    write_table,
+)
+
+__all__ = ["SweepOutcome", "run_sweep"]
+
+
+@dataclass(frozen=True)
+class SweepOutcome:
+    """A finished sweep: its summary (``summary.json``) and one row per point."""
+
+    summary: dict
+    rows: list[dict]
+
+
+def _identity(sweep: Sweep) -> dict:
+    return {"sweep": sweep.name, "points": [point.key for point in sweep.points]}
+
+
+def _prepare(sweep: Sweep, out: Path) -> None:
+    """Create ``out`` for ``sweep``, or check that it holds this sweep (to continue it)."""
+    marker = out / "sweep.json"
+    if marker.is_file():
+        recorded = json.loads(marker.read_text(encoding="utf-8"))
+        if {key: recorded.get(key) for key in ("sweep", "points")} != _identity(sweep):
+            raise SpectwinInputError(
+                f"--out: {out} holds another sweep ({recorded.get('sweep')!r} with "
+                f"{len(recorded.get('points', []))} points); choose another folder"
+            )
+        return
+    if out.exists() and any(out.iterdir()):
+        raise SpectwinInputError(f"--out: {out} is not empty and holds no sweep; choose another")
+    (out / "points").mkdir(parents=True, exist_ok=True)
+    marker.write_text(dumps(_identity(sweep) | sweep.describe()), encoding="utf-8")
+
+
+def _run_points(sweep: Sweep, out: Path, pending: list, client, progress: bool) -> None:
+    folders = {point.index: out / "points" / point.key for point in pending}
+    label = f"sweep: {len(pending)} design points"
+    with progress_steps(label, len(pending), enabled=progress) as advance:
+        if client is None:
+            for point in pending:
+                run_gonio_point(point, folders[point.index])
+                advance()
+            return
+        from distributed import as_completed
+
+        from twin.devices.cluster import RendererSetup
+
+        client.register_plugin(RendererSetup(), name=RendererSetup.name)
+        futures = [
+            client.submit(run_gonio_point, point, folders[point.index], pure=False)
+            for point in pending
+        ]
+        for future in as_completed(futures):
+            future.result()
+            advance()
+
+
+def run_sweep(
+    sweep: Sweep, out: str | Path, *, client=None, progress: bool = False
+) -> SweepOutcome:
+    """Run the pending points of ``sweep`` into ``out`` (module docstring), then write the
+    table, the figures and the page; returns the summary and the rows."""
+    out = Path(out)
+    _prepare(sweep, out)
+    started = time.perf_counter()
+    pending = [p for p in sweep.points if point_result(out / "points" / p.key) is None]
+    _run_points(sweep, out, pending, client, progress)
+    rows = [point_result(out / "points" / point.key) for point in sweep.points]
+    objectives = np.array([[row["measures"][name] for name in sweep.objectives] for row in rows])
+    for row, on_front in zip(rows, pareto_front(objectives), strict=True):
+        row["on_front"] = bool(on_front)
+    measures = list(sweep.measures)
+    point_s = [row["measures"]["point_s"] for row in rows]
+    summary = {
+        "sweep": sweep.name,
+        "file": str(sweep.path),
+        "points": len(rows),
+        "points_run_now": len(pending),
+        "points_already_finished": len(rows) - len(pending),
+        "this_run_s": time.perf_counter() - started,
+        "point_s_mean": float(np.mean(point_s)),
+        "point_s_max": float(np.max(point_s)),
+        "points_s_total": float(np.sum(point_s)),
+        "workers": len(client.scheduler_info()["workers"]) if client is not None else 1,
+        "objectives": list(sweep.objectives),
+        "front": [row["label"] for row in rows if row["on_front"]],
+        "outputs": ["table.csv", "table.json", "front.png", "effects.png", "index.html"],
+    }
+    write_table(rows, list(sweep.parameters), measures, out)
+    plot_front(rows, sweep.objectives, GONIO_MEASURES, out / "front.png")
+    plot_effects(rows, sweep.parameters, sweep.objectives, GONIO_MEASURES, out / "effects.png")
+    write_page(out, summary, rows, measures)
+    (out / "summary.json").write_text(dumps(summary), encoding="utf-8")
+    return SweepOutcome(summary, rows)
