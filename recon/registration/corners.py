@@ -274,7 +274,8 @@ def _coverage(centres: np.ndarray, edge: float, sign: float, width: float | None
     standard deviation ``width`` texels."""
     if width is None:
         return np.clip(sign * (centres - edge) + 0.5, 0.0, 1.0)
-    return special.ndtr(sign * (centres - edge) / width)
+    with np.errstate(divide="ignore", over="ignore"):  # width 0: the sharp edge's step
+        return special.ndtr(sign * (centres - edge) / width)
 
 
 def fit_corner_model(

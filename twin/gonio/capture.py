@@ -367,9 +367,7 @@ def gonio_calibration_program(
         CAMERA_ID, sensor, _GonioSignal(white, 0, chart), plan_start_times_s(plan), 2
     )
     attrs = _rig_attrs(config, pixels, "gonio-calibration")
-    return CaptureProgram(
-        "gonio-calibration", plan, devices, attrs, seed, {1: chart_pose}, config
-    )
+    return CaptureProgram("gonio-calibration", plan, devices, attrs, seed, {1: chart_pose}, config)
 
 
 def run_gonio_calibration(

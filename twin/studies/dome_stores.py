@@ -314,10 +314,14 @@ def view_fixed_shift(nearest: dict, moved: dict) -> dict:
                     (summary[source] if scope == "all" else summary[source]["edge_free"])[camera]
                     for summary in (with_bands, without)
                 ]
-                entry[camera] = None if None in pair else {
-                    measure: {"with": pair[0][measure], "without": pair[1][measure]}
-                    for measure in ("mean_relative_error_pct", "mean_delta_e94")
-                }
+                entry[camera] = (
+                    None
+                    if None in pair
+                    else {
+                        measure: {"with": pair[0][measure], "without": pair[1][measure]}
+                        for measure in ("mean_relative_error_pct", "mean_delta_e94")
+                    }
+                )
     return shift
 
 

@@ -46,7 +46,7 @@ class SweepOutcome:
 
 
 def _identity(sweep: Sweep) -> dict:
-    return {"sweep": sweep.name, "points": [point.key for point in sweep.points]}
+    return {"sweep": sweep.name, "point_keys": [point.key for point in sweep.points]}
 
 
 def _prepare(sweep: Sweep, out: Path) -> None:
@@ -54,16 +54,17 @@ def _prepare(sweep: Sweep, out: Path) -> None:
     marker = out / "sweep.json"
     if marker.is_file():
         recorded = json.loads(marker.read_text(encoding="utf-8"))
-        if {key: recorded.get(key) for key in ("sweep", "points")} != _identity(sweep):
+        if {key: recorded.get(key) for key in ("sweep", "point_keys")} != _identity(sweep):
             raise SpectwinInputError(
                 f"--out: {out} holds another sweep ({recorded.get('sweep')!r} with "
-                f"{len(recorded.get('points', []))} points); choose another folder"
+                f"{len(recorded.get('point_keys', []))} points) or other settings; choose "
+                "another folder"
             )
         return
     if out.exists() and any(out.iterdir()):
         raise SpectwinInputError(f"--out: {out} is not empty and holds no sweep; choose another")
     (out / "points").mkdir(parents=True, exist_ok=True)
-    marker.write_text(dumps(_identity(sweep) | sweep.describe()), encoding="utf-8")
+    marker.write_text(dumps(sweep.describe() | _identity(sweep)), encoding="utf-8")
 
 
 def _run_points(sweep: Sweep, out: Path, pending: list, client, progress: bool) -> None:
