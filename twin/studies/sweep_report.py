@@ -108,9 +108,13 @@ def plot_effects(
                 capsize=4,
             )
             axes.set_xticks(range(len(values)), ticks, fontsize=8)
-            axes.set(xlabel=name, ylabel=titles[objective])
+            axes.set(xlabel=name, ylabel=objective if column == 0 else None)
             axes.grid(alpha=0.3)
-    figure.suptitle("effect of each parameter (mean and range over the other parameters)")
+    figure.suptitle(
+        "effect of each parameter, mean and range over the others\n"
+        + "\n".join(f"{name}: {titles[name]}" for name in objectives),
+        fontsize=9,
+    )
     figure.savefig(path, dpi=100)
 
 
