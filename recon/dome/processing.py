@@ -87,18 +87,20 @@ from 10.8 % to 9.1 %; narrower ones changed little (8.9 % for 0.08, 9.2 % withou
 _MAX_SIGMA_FRACTION = 0.25  # of the texture's side
 
 
-def band_sigma_px(values: np.ndarray) -> float:
+def band_sigma_px(
+    values: np.ndarray, target_relative_noise: float = TARGET_RELATIVE_NOISE
+) -> float:
     """Gaussian sigma (texels) for a noisy band image (Figure 10.5): its noise from the
     neighbouring texels' differences (robustly: their median absolute deviation, so edges of
     the texture count little), relative to its mean signal, through
-    :func:`recon.scheduling.dome_schedule.filter_sizes` to :data:`TARGET_RELATIVE_NOISE`;
+    :func:`recon.scheduling.dome_schedule.filter_sizes` to ``target_relative_noise``;
     at most a quarter of the image's side."""
     differences = np.diff(np.asarray(values, np.float64), axis=1).ravel()
     noise = 1.4826 * np.median(np.abs(differences - np.median(differences))) / np.sqrt(2)
     mean = float(np.mean(values))
     if not mean > 0:
         return _MAX_SIGMA_FRACTION * values.shape[0]
-    size = filter_sizes(np.array([noise / mean]), TARGET_RELATIVE_NOISE)[0]
+    size = filter_sizes(np.array([noise / mean]), target_relative_noise)[0]
     return float(min(size / FILTER_SIZE_PER_SIGMA, _MAX_SIGMA_FRACTION * values.shape[0]))
 
 
@@ -180,6 +182,7 @@ class DomeProcessing:
     texels: int
     partner: str
     manual_corners: Mapping[str, np.ndarray] | None = None
+    target_relative_noise: float = TARGET_RELATIVE_NOISE
     registrations: dict[tuple[str, int], Registration] = field(default_factory=dict)
     band_shift: dict[int, np.ndarray] = field(default_factory=dict)
     saturated_texels: int = 0
@@ -325,7 +328,7 @@ def _solve_group(
         rgb += [work.rgb(store, image, camera) for camera in cameras]
         partner = shown.index((image, work.partner))
         band_images += [
-            BandImage(partner, band, values, band_sigma_px(values))
+            BandImage(partner, band, values, band_sigma_px(values, work.target_relative_noise))
             for band, values in work.bands(store, image)
         ]
         advance()
@@ -354,6 +357,7 @@ def process_dome(
     show_progress: bool = False,
     solver: Mapping[str, object] | None = None,
     band_partner: str | None = None,
+    target_relative_noise: float = TARGET_RELATIVE_NOISE,
     created: Callable[[BTFStore], None] = lambda btf: None,
 ) -> BTFStore:
     """Turn a dome run into a spectral BTF store (module docstring).
@@ -384,6 +388,9 @@ def process_dome(
         nearest the spectral camera's, :func:`spectral_partner`). Another camera moves the
         spectral data to another view, which separates the effect of spectral data on an image
         from that of its view (for diffuse materials, whose bands do not depend on the view).
+    target_relative_noise
+        The relative noise the band images' Gaussian filters leave (Figure 10.5's filter size;
+        :func:`band_sigma_px`).
     created
         Called with the BTF store once it exists (before any pair is written): a writer lock
         moves into it.
@@ -407,7 +414,13 @@ def process_dome(
             f"band_partner: expected one of the run's RGB cameras {run.rgb_cameras}, got "
             f"{band_partner!r}"
         )
-    work = DomeProcessing(run, calibration, int(texels), band_partner, manual_corners)
+    if not 0 < target_relative_noise < 1:
+        raise SpectwinInputError(
+            f"target_relative_noise: expected a fraction in (0, 1), got {target_relative_noise}"
+        )
+    work = DomeProcessing(
+        run, calibration, int(texels), band_partner, manual_corners, target_relative_noise
+    )
     btf = _open_btf(work, out, resume)
     created(btf)
     work.register(store)

@@ -137,11 +137,17 @@ def dome_exposures(
     *,
     longest_band_s: float,
     calibration_led: int,
+    schedule_images: int | None = None,
 ) -> DomeExposures:
-    """The exposures of the dome's programs for ``camera_ids`` (module docstring)."""
+    """The exposures of the dome's programs for ``camera_ids`` (module docstring); the bands
+    packed into ``schedule_images`` RGB images each once (:func:`recon.scheduling.dome_schedule
+    .schedule_bands`), or by default into the 10 images with the noisiest bands twice."""
     cameras = dome_cameras(1, config=config, texel_px=2)
     bands = model_band_exposures_s(cameras, longest_band_s)
-    schedule = band_schedules(bands)["10_images"]["images"]
+    if schedule_images is None:
+        schedule = band_schedules(bands)["10_images"]["images"]
+    else:
+        schedule = schedule_bands(bands, schedule_images).images
     reference = int(np.flatnonzero(THESIS_BANDS_NM == REFERENCE_BAND_NM)[0])
     every_led = np.arange(config.led_count)
     paper = np.full(FINE_GRID.size, _PAPER_REFLECTANCE)

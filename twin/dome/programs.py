@@ -180,9 +180,24 @@ class DomePlanParts:
 
 
 def dome_plan_parts(
-    config: DomeConfig, size: DomeCaptureSize, *, longest_band_s: float = THESIS_LONGEST_BAND_S
+    config: DomeConfig,
+    size: DomeCaptureSize,
+    *,
+    longest_band_s: float = THESIS_LONGEST_BAND_S,
+    schedule_images: int | None = None,
 ) -> DomePlanParts:
-    """Cameras, exposures, stage positions and LEDs of a capture of ``size``."""
+    """Cameras, exposures, stage positions and LEDs of a capture of ``size``; the spectral
+    camera's weakest band exposed ``longest_band_s`` (which sets :math:`t_{base}`, thesis 10.4)
+    and the bands packed into ``schedule_images`` RGB images (:func:`twin.dome.exposure_plan
+    .dome_exposures`)."""
+    if not longest_band_s > 0:
+        raise SpectwinInputError(
+            f"longest_band_s: expected a positive exposure in s, got {longest_band_s}"
+        )
+    if schedule_images is not None and (not is_whole(schedule_images) or schedule_images < 1):
+        raise SpectwinInputError(
+            f"schedule_images: expected at least 1 RGB image, got {schedule_images}"
+        )
     size.check(config)
     cameras = size.camera_ids(config)
     led = calibration_led(config)
@@ -190,7 +205,13 @@ def dome_plan_parts(
     geometric = [(round(turn * positions) % positions, tilt) for turn, tilt in GEOMETRIC_VIEWS]
     return DomePlanParts(
         cameras,
-        dome_exposures(config, cameras, longest_band_s=longest_band_s, calibration_led=led),
+        dome_exposures(
+            config,
+            cameras,
+            longest_band_s=longest_band_s,
+            calibration_led=led,
+            schedule_images=schedule_images,
+        ),
         size.stage_views(),
         size.led_ids(config),
         led,
@@ -361,17 +382,24 @@ def dome_run_program(
     size: DomeCaptureSize = DomeCaptureSize(),
     seed: int = 0,
     fault_rate: float = 0.0,
+    config: DomeConfig | None = None,
+    longest_band_s: float = THESIS_LONGEST_BAND_S,
+    schedule_images: int | None = None,
 ) -> DomeCaptureProgram:
     """The measurement of ``material`` (``scenes/materials``) at ``size``, checked and not yet
-    captured (module docstring); ``fault_rate`` injects device faults drawn from ``seed``."""
+    captured (module docstring); ``fault_rate`` injects device faults drawn from ``seed``.
+    ``config`` is the rig model (default ``scenes/rigs/dome.yaml``), ``longest_band_s`` and
+    ``schedule_images`` set the band exposures and their schedule (:func:`dome_plan_parts`)."""
     check_seed(seed)
     check_fault_rate(fault_rate)
     if material not in available_materials():
         raise SpectwinInputError(
             f"material: expected one of {available_materials()}, got {material!r}"
         )
-    config = load_rig("dome")
-    parts = dome_plan_parts(config, size)
+    config = config or load_rig("dome")
+    parts = dome_plan_parts(
+        config, size, longest_band_s=longest_band_s, schedule_images=schedule_images
+    )
     plan = run_plan(parts)
     return _program(
         "dome-run",
@@ -396,17 +424,21 @@ def dome_calibration_program(
     dark_frames: int = 200,
     seed: int = 0,
     fault_rate: float = 0.0,
+    config: DomeConfig | None = None,
+    longest_band_s: float = THESIS_LONGEST_BAND_S,
 ) -> DomeCaptureProgram:
     """The calibration at ``size`` (its LEDs and cameras are the run's), ``dark_frames`` per
     spectral exposure time (thesis 10.3: 200; the RGB cameras take as many, at most 16, per
     exposure time), checked and not yet captured. ``size.stage_positions`` is not used: the
-    geometric frames take the stage positions of :data:`GEOMETRIC_VIEWS`."""
+    geometric frames take the stage positions of :data:`GEOMETRIC_VIEWS`. ``config`` and
+    ``longest_band_s`` as for :func:`dome_run_program` (the dark frames span the run's band
+    exposures)."""
     check_seed(seed)
     check_fault_rate(fault_rate)
     if not is_whole(dark_frames) or dark_frames < 1:
         raise SpectwinInputError(f"dark_frames: expected at least 1, got {dark_frames}")
-    config = load_rig("dome")
-    parts = dome_plan_parts(config, size)
+    config = config or load_rig("dome")
+    parts = dome_plan_parts(config, size, longest_band_s=longest_band_s)
     plan = calibration_plan(parts, dark_frames)
     return _program(
         "dome-calibration",

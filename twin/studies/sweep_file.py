@@ -15,8 +15,9 @@ A sweep file (YAML; the built-in ones are in ``scenes/sweeps``)::
     objectives: [capture_time_h, error_pct]
 
 A parameter is named by its path: ``rig.`` and the rig file's keys (list items by number, ``*``
-for every item), ``plan.`` and a field of the plan (:class:`twin.studies.sweep_gonio.GonioPlan`),
-or ``material``. The design points are every combination of the values (their cartesian
+for every item), ``plan.`` and a field of the plan (:class:`twin.studies.sweep_gonio.GonioPlan`
+for the gonioreflectometer, :class:`twin.studies.sweep_dome.DomePlan` for the dome), or
+``material``. The design points are every combination of the values (their cartesian
 product), numbered in that order. Every point's rig and plan are validated before anything is
 captured, so an unknown path, an empty range or a value outside the rig model's bounds stops the
 sweep with one line naming the parameter, the value and what was expected.
@@ -46,6 +47,7 @@ from twin.rigs.yaml_config import (
     scene_folder,
     validate_document,
 )
+from twin.studies.sweep_dome import DOME_MEASURES, DomePlan
 from twin.studies.sweep_gonio import GONIO_MEASURES, GonioPlan
 
 __all__ = [
@@ -59,6 +61,10 @@ __all__ = [
 
 SWEEP_DIR = scene_folder("sweeps")
 _MAX_POINTS = 10_000
+_KINDS = {
+    "gonioreflectometer": (GonioConfig, GonioPlan, GONIO_MEASURES),
+    "dome": (DomeConfig, DomePlan, DOME_MEASURES),
+}
 
 
 class SweepRange(StrictModel):
@@ -113,8 +119,8 @@ class DesignPoint:
     index: int
     values: dict[str, Any]
     material: str
-    rig: GonioConfig
-    plan: GonioPlan
+    rig: GonioConfig | DomeConfig
+    plan: GonioPlan | DomePlan
     seed: int
 
     @property
@@ -134,7 +140,8 @@ class DesignPoint:
 
 @dataclass(frozen=True)
 class Sweep:
-    """A validated sweep: its file, the kind of rig, the points and the objectives."""
+    """A validated sweep: its file, the kind of rig (``gonioreflectometer`` or ``dome``), the
+    points, the objectives and the measures of every point with their units."""
 
     path: Path
     name: str
@@ -142,7 +149,7 @@ class Sweep:
     parameters: dict[str, list[Any]]
     points: list[DesignPoint]
     objectives: tuple[str, str]
-    measures: tuple[str, ...]
+    measures: dict[str, str]
 
     def describe(self) -> dict[str, object]:
         return {
@@ -156,10 +163,13 @@ class Sweep:
 
 
 def value_label(path: str, value: Any) -> str:
-    """A parameter's value in short: a direction sampling by its number of directions."""
+    """A parameter's value in short: a name as it is, a direction sampling by its number of
+    directions, a number after its field's name."""
     if path == "plan.rings":
         return f"{sum(int(count) for _, count in value)} directions"
-    return value if isinstance(value, str) else format_value(value)
+    if isinstance(value, str):
+        return value
+    return f"{path.rsplit('.', 1)[-1]} {format_value(value)}"
 
 
 def _set_path(document: Any, parts: list[str], value: Any, path: str) -> None:
@@ -222,7 +232,7 @@ def _check_path(path: str, rig: dict, plan_fields: set[str]) -> None:
 
 
 def _point(
-    index: int, values: dict[str, Any], sweep: SweepFile, rig: dict, path: Path
+    index: int, values: dict[str, Any], sweep: SweepFile, rig: dict, kind: str, path: Path
 ) -> DesignPoint:
     document, plan, material = copy.deepcopy(rig), dict(sweep.plan), sweep.material
     for name, value in values.items():
@@ -238,9 +248,13 @@ def _point(
         raise SpectwinInputError(
             f"{where}: material: expected one of {available_materials()}, got {material!r}"
         )
-    config = validate_document(GonioConfig, document, Path(f"{where}: rig"))
-    plan_model = validate_document(GonioPlan, plan, Path(f"{where}: plan"))
-    plan_model.check(config)
+    config_model, plan_model, _ = _KINDS[kind]
+    config = validate_document(config_model, document, Path(f"{where}: rig"))
+    plan_model = validate_document(plan_model, plan, Path(f"{where}: plan"))
+    try:
+        plan_model.check(config)
+    except SpectwinInputError as error:
+        raise SpectwinInputError(f"{where}: plan: {error}") from None
     return DesignPoint(index, values, material, config, plan_model, sweep.seed)
 
 
@@ -250,20 +264,16 @@ def load_sweep(name_or_path: str | Path) -> Sweep:
     path = resolve_scene_file(name_or_path, SWEEP_DIR, "sweep file")
     sweep = validate_document(SweepFile, read_yaml_mapping(path), path)
     rig_path = resolve_scene_file(sweep.rig, scene_folder("rigs"), "rig")
-    base = load_rig(rig_path)
-    if isinstance(base, DomeConfig):
-        raise SpectwinInputError(
-            f"{path}: rig: the dome ({rig_path}) cannot be swept yet; expected a "
-            "gonioreflectometer rig"
-        )
+    kind = "dome" if isinstance(load_rig(rig_path), DomeConfig) else "gonioreflectometer"
+    _, plan_model, measures = _KINDS[kind]
     rig = read_yaml_mapping(rig_path)
-    unknown = [name for name in sweep.objectives if name not in GONIO_MEASURES]
+    unknown = [name for name in sweep.objectives if name not in measures]
     if unknown or sweep.objectives[0] == sweep.objectives[1]:
         raise SpectwinInputError(
-            f"{path}: objectives: expected two different measures of {list(GONIO_MEASURES)}, "
+            f"{path}: objectives: expected two different measures of {list(measures)}, "
             f"got {list(sweep.objectives)}"
         )
-    plan_fields = set(GonioPlan.model_fields)
+    plan_fields = set(plan_model.model_fields)
     unknown_plan = sorted(set(sweep.plan) - plan_fields)
     if unknown_plan:
         raise SpectwinInputError(
@@ -280,15 +290,7 @@ def load_sweep(name_or_path: str | Path) -> Sweep:
             f"{path}: parameters: {count} design points; expected at most {_MAX_POINTS}"
         )
     points = [
-        _point(index, dict(zip(parameters, combination, strict=True)), sweep, rig, path)
+        _point(index, dict(zip(parameters, combination, strict=True)), sweep, rig, kind, path)
         for index, combination in enumerate(itertools.product(*parameters.values()))
     ]
-    return Sweep(
-        path,
-        sweep.name,
-        "gonioreflectometer",
-        parameters,
-        points,
-        sweep.objectives,
-        tuple(GONIO_MEASURES),
-    )
+    return Sweep(path, sweep.name, kind, parameters, points, sweep.objectives, measures)

@@ -14,14 +14,12 @@ A point runs the twin's whole chain into its own folder, as a user would with th
    totals and the storage.
 
 Each store is resumed where a previous attempt stopped; ``result.json`` is written last and
-atomically, so a point with one is finished and is never run again. ``history.jsonl`` records
-every start and finish of the point.
+atomically, so a point with one is finished and is never run again
+(:mod:`twin.studies.sweep_points`).
 """
 
 from __future__ import annotations
 
-import json
-import os
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
@@ -29,7 +27,6 @@ from typing import TYPE_CHECKING, Annotated
 import numpy as np
 from pydantic import Field, field_validator
 
-from hwbridge.store import CaptureStore
 from recon.btf.processing import process_gonio
 from recon.calibration.gonio import calibrate_gonio, lamp_rounding_s
 from recon.errors import SpectwinInputError
@@ -42,12 +39,13 @@ from twin.gonio.capture import (
 from twin.gonio.render import GONIO_SPP
 from twin.rigs.rig_config import GonioConfig
 from twin.rigs.yaml_config import StrictModel
+from twin.studies.sweep_points import capture_into, finish_point, point_result, record, storage_mb
 from twin.validate.held_out import held_out_errors
 
 if TYPE_CHECKING:
     from twin.studies.sweep_file import DesignPoint
 
-__all__ = ["GONIO_MEASURES", "GonioPlan", "run_gonio_point", "point_result"]
+__all__ = ["GONIO_MEASURES", "GonioPlan", "run_gonio_point"]
 
 GONIO_MEASURES = {
     "capture_time_h": "capture time of the measurement run, timing model (h)",
@@ -113,27 +111,6 @@ class GonioPlan(StrictModel):
             raise SpectwinInputError(f"plan.rings: the robot reaches no pair of {self.rings}")
 
 
-def _capture(program, path: Path) -> CaptureStore:
-    """Capture ``program`` into ``path``, continuing a store a previous attempt left."""
-    return program.run(path, resume=path.exists())
-
-
-def _storage_mb(*paths: Path) -> float:
-    return sum(f.stat().st_size for p in paths for f in p.rglob("*") if f.is_file()) / 1e6
-
-
-def _record(folder: Path, event: str, **details) -> None:
-    line = json.dumps({"event": event, "pid": os.getpid(), "time": time.time(), **details})
-    with open(folder / "history.jsonl", "a", encoding="utf-8") as history:
-        history.write(line + "\n")
-
-
-def point_result(folder: str | Path) -> dict | None:
-    """A finished point's result (its ``result.json``), or ``None`` while it is not finished."""
-    path = Path(folder) / "result.json"
-    return json.loads(path.read_text(encoding="utf-8")) if path.is_file() else None
-
-
 def run_gonio_point(point: DesignPoint, folder: str | Path) -> dict:
     """Run ``point`` into ``folder`` (module docstring) and return its result; a finished
     point's result is returned as it is."""
@@ -143,9 +120,9 @@ def run_gonio_point(point: DesignPoint, folder: str | Path) -> dict:
         return finished
     folder.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
-    _record(folder, "started")
+    record(folder, "started")
     config, plan = point.rig, point.plan
-    calibration_store = _capture(
+    calibration_store = capture_into(
         gonio_calibration_program(pixels=_CALIBRATION_PIXELS, seed=point.seed, config=config),
         folder / "cal.capture.zarr",
     )
@@ -159,7 +136,7 @@ def run_gonio_point(point: DesignPoint, folder: str | Path) -> dict:
         seed=point.seed,
         config=config,
     )
-    run_store = _capture(program, folder / "run.capture.zarr")
+    run_store = capture_into(program, folder / "run.capture.zarr")
     btf_path = folder / "btf.zarr"
     btf = process_gonio(
         run_store, calibration, btf_path, texels=plan.texels, resume=btf_path.exists()
@@ -174,20 +151,7 @@ def run_gonio_point(point: DesignPoint, folder: str | Path) -> dict:
         "exposure_total_h": exposure_per_pair_s * pairs / 3600,
         "pairs": pairs,
         "pairs_registered": int(np.count_nonzero(btf.written())),
-        "storage_mb": _storage_mb(folder / "run.capture.zarr", btf_path),
+        "storage_mb": storage_mb(folder / "run.capture.zarr", btf_path),
         "point_s": time.perf_counter() - started,
     }
-    result = {
-        "point": point.index,
-        "key": point.key,
-        "label": point.label,
-        "values": point.values,
-        "material": point.material,
-        "seed": point.seed,
-        "measures": measures,
-    }
-    partial = folder / "result.json.partial"
-    partial.write_text(json.dumps(result, indent=1), encoding="utf-8")
-    os.replace(partial, folder / "result.json")
-    _record(folder, "finished")
-    return result
+    return finish_point(folder, point, measures)

@@ -24,8 +24,10 @@ import numpy as np
 from recon.errors import SpectwinInputError
 from recon.progress import progress_steps
 from twin.output_format import dumps
+from twin.studies.sweep_dome import run_dome_point
 from twin.studies.sweep_file import Sweep
-from twin.studies.sweep_gonio import GONIO_MEASURES, point_result, run_gonio_point
+from twin.studies.sweep_gonio import run_gonio_point
+from twin.studies.sweep_points import point_result
 from twin.studies.sweep_report import (
     pareto_front,
     plot_effects,
@@ -35,6 +37,8 @@ from twin.studies.sweep_report import (
 )
 
 __all__ = ["SweepOutcome", "run_sweep"]
+
+_RUNNERS = {"gonioreflectometer": run_gonio_point, "dome": run_dome_point}
 
 
 @dataclass(frozen=True)
@@ -69,11 +73,12 @@ def _prepare(sweep: Sweep, out: Path) -> None:
 
 def _run_points(sweep: Sweep, out: Path, pending: list, client, progress: bool) -> None:
     folders = {point.index: out / "points" / point.key for point in pending}
+    run_point = _RUNNERS[sweep.kind]
     label = f"sweep: {len(pending)} design points"
     with progress_steps(label, len(pending), enabled=progress) as advance:
         if client is None:
             for point in pending:
-                run_gonio_point(point, folders[point.index])
+                run_point(point, folders[point.index])
                 advance()
             return
         from distributed import as_completed
@@ -82,8 +87,7 @@ def _run_points(sweep: Sweep, out: Path, pending: list, client, progress: bool) 
 
         client.register_plugin(RendererSetup(), name=RendererSetup.name)
         futures = [
-            client.submit(run_gonio_point, point, folders[point.index], pure=False)
-            for point in pending
+            client.submit(run_point, point, folders[point.index], pure=False) for point in pending
         ]
         for future in as_completed(futures):
             future.result()
@@ -122,8 +126,8 @@ def run_sweep(
         "outputs": ["table.csv", "table.json", "front.png", "effects.png", "index.html"],
     }
     write_table(rows, list(sweep.parameters), measures, out)
-    plot_front(rows, sweep.objectives, GONIO_MEASURES, out / "front.png")
-    plot_effects(rows, sweep.parameters, sweep.objectives, GONIO_MEASURES, out / "effects.png")
+    plot_front(rows, sweep.objectives, sweep.measures, out / "front.png")
+    plot_effects(rows, sweep.parameters, sweep.objectives, sweep.measures, out / "effects.png")
     write_page(out, summary, rows, measures)
     (out / "summary.json").write_text(dumps(summary), encoding="utf-8")
     return SweepOutcome(summary, rows)

@@ -45,6 +45,16 @@ def test_builtin_gonio_sweep_is_the_product_of_its_parameters():
     assert sweep.points[17].label == "qth, VS-20, 13 directions"
 
 
+def test_builtin_dome_sweep_varies_schedule_exposure_and_filter():
+    sweep = load_sweep("dome_schedule_tbase_filter")
+    assert sweep.kind == "dome" and len(sweep.points) == 3 * 2 * 3
+    point = sweep.points[-1]
+    assert (point.plan.schedule_images, point.plan.longest_band_s) == (12, 5.48)
+    assert point.plan.target_relative_noise == 0.08 and point.plan.leds == 10
+    assert point.label == "schedule_images 12, longest_band_s 5.48, target_relative_noise 0.08"
+    assert set(sweep.objectives) <= set(sweep.measures)
+
+
 def test_a_range_gives_evenly_spaced_values(tmp_path):
     assert SweepRange(start=0.6, stop=0.9, num=4).values() == pytest.approx([0.6, 0.7, 0.8, 0.9])
     assert SweepRange(start=64, stop=128, step=32).values() == [64, 96, 128]
@@ -74,7 +84,24 @@ BAD_FILES = [
     ({"parameters": {"material": ["velvet"]}}, "material: expected one of"),
     ({"objectives": ["capture_time_h", "speed"]}, "objectives: expected two different"),
     ({"plan": {"pixel": 64}}, "plan: unknown field 'pixel'"),
-    ({"rig": "dome"}, "the dome"),
+    ({"rig": "dome", "plan": {}}, "unknown key 'lamps'"),
+    (
+        {"rig": "dome", "parameters": {"plan.leds": [10]}, "plan": {"rings": [[0, 1]]}},
+        "plan: unknown field 'rings'",
+    ),
+    ({"rig": "dome", "plan": {}, "parameters": {"plan.leds": [0]}}, "leds: Input should be"),
+    (
+        {"rig": "dome", "plan": {}, "parameters": {"plan.longest_band_s": [-1.0]}},
+        "longest_band_s: Input should be greater than 0",
+    ),
+    (
+        {"rig": "dome", "plan": {}, "parameters": {"plan.stage_positions": [30]}},
+        "stage_positions: Input should be less than or equal to 24",
+    ),
+    (
+        {"rig": "dome", "plan": {}, "parameters": {"rig.led_rings.0.count": [7]}},
+        "led_count: the rings hold 199 LEDs, not 198",
+    ),
 ]
 
 
