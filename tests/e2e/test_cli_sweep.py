@@ -122,3 +122,36 @@ def test_a_sweep_killed_three_times_resumes_to_the_uninterrupted_table(uninterru
         for path in (out / "points").glob("*/history.jsonl")
     ]
     assert sum(starts) > len(starts)
+
+
+def test_a_dome_sweep_of_t_base_doubles_the_spectral_exposure(tmp_path):
+    """Two dome designs that differ only in the weakest band's exposure: t_lambda = t_base /
+    sqrt(E L) (thesis 10.4) doubles every band exposure with t_base, the RGB sets stay."""
+    sweep = tmp_path / "dome.yaml"
+    sweep.write_text(
+        yaml.safe_dump(
+            {
+                "name": "tiny dome t_base sweep",
+                "rig": "dome",
+                "plan": {
+                    "stage_positions": 1,
+                    "leds": 4,
+                    "rgb_cameras": 2,
+                    "texels": 32,
+                    "dark_frames": 4,
+                    "schedule_images": 4,
+                },
+                "parameters": {"plan.longest_band_s": [2.0, 4.0]},
+            },
+            sort_keys=False,
+        )
+    )
+    process = _start(sweep, tmp_path / "out")
+    _, stderr = process.communicate(timeout=600)
+    assert process.returncode == 0, stderr
+    short, long = (row["measures"] for row in json.loads((tmp_path / "out/table.json").read_text()))
+    assert long["spectral_exposure_h"] / short["spectral_exposure_h"] == pytest.approx(2, rel=1e-6)
+    assert long["rgb_exposure_h"] == short["rgb_exposure_h"]
+    assert long["capture_time_h"] > short["capture_time_h"]
+    for measures in (short, long):
+        assert measures["pairs"] == 4 * 2 and 0 < measures["error_pct"] < 30

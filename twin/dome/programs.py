@@ -426,19 +426,22 @@ def dome_calibration_program(
     fault_rate: float = 0.0,
     config: DomeConfig | None = None,
     longest_band_s: float = THESIS_LONGEST_BAND_S,
+    schedule_images: int | None = None,
 ) -> DomeCaptureProgram:
     """The calibration at ``size`` (its LEDs and cameras are the run's), ``dark_frames`` per
     spectral exposure time (thesis 10.3: 200; the RGB cameras take as many, at most 16, per
     exposure time), checked and not yet captured. ``size.stage_positions`` is not used: the
-    geometric frames take the stage positions of :data:`GEOMETRIC_VIEWS`. ``config`` and
-    ``longest_band_s`` as for :func:`dome_run_program` (the dark frames span the run's band
-    exposures)."""
+    geometric frames take the stage positions of :data:`GEOMETRIC_VIEWS`. ``config``,
+    ``longest_band_s`` and ``schedule_images`` as for :func:`dome_run_program` (the dark frames
+    span the run's band exposures)."""
     check_seed(seed)
     check_fault_rate(fault_rate)
     if not is_whole(dark_frames) or dark_frames < 1:
         raise SpectwinInputError(f"dark_frames: expected at least 1, got {dark_frames}")
     config = config or load_rig("dome")
-    parts = dome_plan_parts(config, size, longest_band_s=longest_band_s)
+    parts = dome_plan_parts(
+        config, size, longest_band_s=longest_band_s, schedule_images=schedule_images
+    )
     plan = calibration_plan(parts, dark_frames)
     return _program(
         "dome-calibration",

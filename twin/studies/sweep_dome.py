@@ -134,6 +134,7 @@ def run_dome_point(point: DesignPoint, folder: str | Path) -> dict:
         seed=point.seed,
         config=config,
         longest_band_s=plan.longest_band_s,
+        schedule_images=plan.schedule_images,
     )
     calibration = calibrate_dome(capture_into(calibration_program, folder / "cal.capture.zarr"))
     program = dome_run_program(

@@ -99,6 +99,10 @@ BAD_FILES = [
         "stage_positions: Input should be less than or equal to 24",
     ),
     (
+        {"rig": "dome", "plan": {}, "parameters": {"plan.longest_band_s": [2.74]}},
+        "no schedule of 35 band exposures in 10 images keeps every image within",
+    ),
+    (
         {"rig": "dome", "plan": {}, "parameters": {"rig.led_rings.0.count": [7]}},
         "led_count: the rings hold 199 LEDs, not 198",
     ),
