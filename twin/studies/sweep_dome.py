@@ -21,7 +21,6 @@ Stores are continued where a previous attempt stopped; ``result.json`` comes las
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -40,24 +39,22 @@ from twin.dome.programs import (
 from twin.dome.setup import THESIS_LONGEST_BAND_S
 from twin.rigs.rig_config import DomeConfig
 from twin.rigs.yaml_config import StrictModel
-from twin.studies.sweep_points import capture_into, finish_point, point_result, record, storage_mb
+from twin.studies.sweep_points import SHARED_MEASURES, capture_into, storage_mb
 from twin.validate.dome_evaluation import evaluate_dome
 
 if TYPE_CHECKING:
     from twin.studies.sweep_file import DesignPoint
 
-__all__ = ["DOME_MEASURES", "DomePlan", "run_dome_point"]
+__all__ = ["DOME_MEASURES", "DomePlan", "measure_dome_point"]
 
 DOME_MEASURES = {
-    "capture_time_h": "capture time of the measurement run, timing model (h)",
     "error_pct": "BTF vs truth, mean Eq. 6.8 (%)",
     "delta_e94": "BTF vs truth, mean Delta E94",
     "per_texel_error_pct": "BTF vs truth, per-texel Eq. 6.8 (%)",
     "spectral_exposure_h": "exposure of the spectral camera's frames in the run (h)",
     "rgb_exposure_h": "exposure of each RGB camera's frames in the run (h)",
     "pairs": "direction pairs in the BTF",
-    "storage_mb": "capture and BTF stores on disk (MB)",
-    "point_s": "wall time of the point on this machine (s)",
+    **SHARED_MEASURES,
 }
 """The measures of a dome design point, with their units."""
 
@@ -117,16 +114,9 @@ def _exposure_h(plan: list[dict], spectral: bool) -> float:
     return sum(step["exposure_s"] for step in plan if step["camera"] == camera) / 3600
 
 
-def run_dome_point(point: DesignPoint, folder: str | Path) -> dict:
-    """Run ``point`` into ``folder`` (module docstring) and return its result; a finished
-    point's result is returned as it is."""
-    folder = Path(folder)
-    finished = point_result(folder)
-    if finished is not None:
-        return finished
-    folder.mkdir(parents=True, exist_ok=True)
-    started = time.perf_counter()
-    record(folder, "started")
+def measure_dome_point(point: DesignPoint, folder: Path) -> dict:
+    """Capture, process and evaluate ``point`` in ``folder`` (module docstring); its measures
+    (:func:`twin.studies.sweep_points.run_point` runs it and keeps the result)."""
     config, plan = point.rig, point.plan
     calibration_program = dome_calibration_program(
         size=plan.size,
@@ -156,7 +146,7 @@ def run_dome_point(point: DesignPoint, folder: str | Path) -> dict:
     )
     summary = evaluate_dome(btf_path).summary()
     what = "diffuse_fields" if "mean_delta_e94_diffuse_fields" in summary else "material_texels"
-    measures = {
+    return {
         "capture_time_h": program.dry_run()["estimated_duration_s"] / 3600,
         "error_pct": summary[f"mean_relative_error_{what}_pct"],
         "delta_e94": summary[f"mean_delta_e94_{what}"],
@@ -165,6 +155,4 @@ def run_dome_point(point: DesignPoint, folder: str | Path) -> dict:
         "rgb_exposure_h": _exposure_h(program.plan, spectral=False),
         "pairs": int(btf.n_pairs),
         "storage_mb": storage_mb(folder / "run.capture.zarr", btf_path),
-        "point_s": time.perf_counter() - started,
     }
-    return finish_point(folder, point, measures)

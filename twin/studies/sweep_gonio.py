@@ -20,7 +20,6 @@ atomically, so a point with one is finished and is never run again
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -39,16 +38,15 @@ from twin.gonio.capture import (
 from twin.gonio.render import GONIO_SPP
 from twin.rigs.rig_config import GonioConfig
 from twin.rigs.yaml_config import StrictModel
-from twin.studies.sweep_points import capture_into, finish_point, point_result, record, storage_mb
+from twin.studies.sweep_points import SHARED_MEASURES, capture_into, storage_mb
 from twin.validate.held_out import held_out_errors
 
 if TYPE_CHECKING:
     from twin.studies.sweep_file import DesignPoint
 
-__all__ = ["GONIO_MEASURES", "GonioPlan", "run_gonio_point"]
+__all__ = ["GONIO_MEASURES", "GonioPlan", "measure_gonio_point"]
 
 GONIO_MEASURES = {
-    "capture_time_h": "capture time of the measurement run, timing model (h)",
     "error_pct": "held-out pairs, mean Eq. 6.8 over the chart fields (%)",
     "error_matte_pct": "held-out pairs, matte fields, mean Eq. 6.8 (%)",
     "error_glossy_pct": "held-out pairs, glossy fields, mean Eq. 6.8 (%)",
@@ -58,8 +56,7 @@ GONIO_MEASURES = {
     "exposure_total_h": "exposure time of all pairs of the run (h)",
     "pairs": "direction pairs measured",
     "pairs_registered": "direction pairs registered and in the BTF",
-    "storage_mb": "capture and BTF stores on disk (MB)",
-    "point_s": "wall time of the point on this machine (s)",
+    **SHARED_MEASURES,
 }
 """The measures of a gonioreflectometer design point, with their units."""
 
@@ -111,16 +108,9 @@ class GonioPlan(StrictModel):
             raise SpectwinInputError(f"plan.rings: the robot reaches no pair of {self.rings}")
 
 
-def run_gonio_point(point: DesignPoint, folder: str | Path) -> dict:
-    """Run ``point`` into ``folder`` (module docstring) and return its result; a finished
-    point's result is returned as it is."""
-    folder = Path(folder)
-    finished = point_result(folder)
-    if finished is not None:
-        return finished
-    folder.mkdir(parents=True, exist_ok=True)
-    started = time.perf_counter()
-    record(folder, "started")
+def measure_gonio_point(point: DesignPoint, folder: Path) -> dict:
+    """Capture, process and evaluate ``point`` in ``folder`` (module docstring); its measures
+    (:func:`twin.studies.sweep_points.run_point` runs it and keeps the result)."""
     config, plan = point.rig, point.plan
     calibration_store = capture_into(
         gonio_calibration_program(pixels=_CALIBRATION_PIXELS, seed=point.seed, config=config),
@@ -144,7 +134,7 @@ def run_gonio_point(point: DesignPoint, folder: str | Path) -> dict:
     errors = held_out_errors(btf_path).summary()
     pairs = len(program.poses)
     exposure_per_pair_s = float(calibration.planned_exposure_s.sum())
-    measures = {
+    return {
         "capture_time_h": program.dry_run()["estimated_duration_s"] / 3600,
         **errors,
         "exposure_per_pair_s": exposure_per_pair_s,
@@ -152,6 +142,4 @@ def run_gonio_point(point: DesignPoint, folder: str | Path) -> dict:
         "pairs": pairs,
         "pairs_registered": int(np.count_nonzero(btf.written())),
         "storage_mb": storage_mb(folder / "run.capture.zarr", btf_path),
-        "point_s": time.perf_counter() - started,
     }
-    return finish_point(folder, point, measures)

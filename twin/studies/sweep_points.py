@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import os
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -18,7 +19,14 @@ from hwbridge.store import CaptureStore
 if TYPE_CHECKING:
     from twin.studies.sweep_file import DesignPoint
 
-__all__ = ["capture_into", "finish_point", "point_result", "record", "storage_mb"]
+__all__ = ["SHARED_MEASURES", "capture_into", "point_result", "run_point", "storage_mb"]
+
+SHARED_MEASURES = {
+    "capture_time_h": "capture time of the measurement run, timing model (h)",
+    "storage_mb": "capture and BTF stores on disk (MB)",
+    "point_s": "wall time of the point on this machine (s)",
+}
+"""The measures of every design point, whatever its rig, with their units."""
 
 
 def record(folder: Path, event: str) -> None:
@@ -44,9 +52,21 @@ def point_result(folder: str | Path) -> dict | None:
     return json.loads(path.read_text(encoding="utf-8")) if path.is_file() else None
 
 
-def finish_point(folder: Path, point: DesignPoint, measures: dict) -> dict:
-    """Write the point's ``result.json`` (atomically: a partial file, then a rename) and record
-    its finish; returns the result."""
+def run_point(
+    measure: Callable[[DesignPoint, Path], dict], point: DesignPoint, folder: str | Path
+) -> dict:
+    """Run ``point`` into ``folder`` with ``measure`` (its captures, processing and evaluation,
+    returning the measures), add its wall time ``point_s``, write ``result.json`` (atomically: a
+    partial file, then a rename) and return the result; a finished point's result is returned
+    as it is, without running anything."""
+    folder = Path(folder)
+    finished = point_result(folder)
+    if finished is not None:
+        return finished
+    folder.mkdir(parents=True, exist_ok=True)
+    started = time.perf_counter()
+    record(folder, "started")
+    measures = measure(point, folder) | {"point_s": time.perf_counter() - started}
     result = {
         "point": point.index,
         "key": point.key,

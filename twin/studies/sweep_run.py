@@ -24,10 +24,10 @@ import numpy as np
 from recon.errors import SpectwinInputError
 from recon.progress import progress_steps
 from twin.output_format import dumps
-from twin.studies.sweep_dome import run_dome_point
+from twin.studies.sweep_dome import measure_dome_point
 from twin.studies.sweep_file import Sweep
-from twin.studies.sweep_gonio import run_gonio_point
-from twin.studies.sweep_points import point_result
+from twin.studies.sweep_gonio import measure_gonio_point
+from twin.studies.sweep_points import point_result, run_point
 from twin.studies.sweep_report import (
     pareto_front,
     plot_effects,
@@ -38,7 +38,7 @@ from twin.studies.sweep_report import (
 
 __all__ = ["SweepOutcome", "run_sweep"]
 
-_RUNNERS = {"gonioreflectometer": run_gonio_point, "dome": run_dome_point}
+_MEASURES = {"gonioreflectometer": measure_gonio_point, "dome": measure_dome_point}
 
 
 @dataclass(frozen=True)
@@ -73,12 +73,12 @@ def _prepare(sweep: Sweep, out: Path) -> None:
 
 def _run_points(sweep: Sweep, out: Path, pending: list, client, progress: bool) -> None:
     folders = {point.index: out / "points" / point.key for point in pending}
-    run_point = _RUNNERS[sweep.kind]
+    measure = _MEASURES[sweep.kind]
     label = f"sweep: {len(pending)} design points"
     with progress_steps(label, len(pending), enabled=progress) as advance:
         if client is None:
             for point in pending:
-                run_point(point, folders[point.index])
+                run_point(measure, point, folders[point.index])
                 advance()
             return
         from distributed import as_completed
@@ -87,7 +87,8 @@ def _run_points(sweep: Sweep, out: Path, pending: list, client, progress: bool) 
 
         client.register_plugin(RendererSetup(), name=RendererSetup.name)
         futures = [
-            client.submit(run_point, point, folders[point.index], pure=False) for point in pending
+            client.submit(run_point, measure, point, folders[point.index], pure=False)
+            for point in pending
         ]
         for future in as_completed(futures):
             future.result()
@@ -108,7 +109,10 @@ def run_sweep(
     objectives = np.array([[row["measures"][name] for name in sweep.objectives] for row in rows])
     for row, on_front in zip(rows, pareto_front(objectives), strict=True):
         row["on_front"] = bool(on_front)
-    measures = list(sweep.measures)
+    measures = [
+        *sweep.objectives,
+        *(name for name in sweep.measures if name not in sweep.objectives),
+    ]
     point_s = [row["measures"]["point_s"] for row in rows]
     summary = {
         "sweep": sweep.name,
