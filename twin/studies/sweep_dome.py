@@ -29,6 +29,7 @@ from pydantic import Field
 from hwbridge.dome_layout import SPECTRAL_CAMERA
 from recon.calibration.dome_capture import calibrate_dome
 from recon.dome.processing import TARGET_RELATIVE_NOISE, process_dome
+from recon.errors import SpectwinInputError
 from twin.dome.programs import (
     DEFAULT_SPP,
     DomeCaptureSize,
@@ -98,7 +99,15 @@ class DomePlan(StrictModel):
         )
 
     def check(self, config: DomeConfig) -> None:
-        """Refuse a size the rig cannot take (and plan its exposures and band schedule)."""
+        """Refuse a size the rig cannot take, a band schedule of more images than LEDs (the
+        LEDs take the schedule's images in turn: the bands of the images past the last LED would
+        never be exposed), and exposures its camera cannot make."""
+        if self.schedule_images is not None and self.schedule_images > self.leds:
+            raise SpectwinInputError(
+                f"schedule_images: expected at most plan.leds ({self.leds}) images, got "
+                f"{self.schedule_images}: the bands of the images past the last LED would never "
+                "be exposed"
+            )
         dome_plan_parts(
             config,
             self.size,

@@ -50,7 +50,7 @@ def test_builtin_dome_sweep_varies_schedule_exposure_and_filter():
     assert sweep.kind == "dome" and len(sweep.points) == 3 * 2 * 3
     point = sweep.points[-1]
     assert (point.plan.schedule_images, point.plan.longest_band_s) == (12, 5.48)
-    assert point.plan.target_relative_noise == 0.08 and point.plan.leds == 10
+    assert point.plan.target_relative_noise == 0.08 and point.plan.leds == 12
     assert point.label == "schedule_images 12, longest_band_s 5.48, target_relative_noise 0.08"
     assert set(sweep.objectives) <= set(sweep.measures)
 
@@ -97,6 +97,10 @@ BAD_FILES = [
     (
         {"rig": "dome", "plan": {}, "parameters": {"plan.stage_positions": [30]}},
         "stage_positions: Input should be less than or equal to 24",
+    ),
+    (
+        {"rig": "dome", "plan": {"leds": 6}, "parameters": {"plan.schedule_images": [8]}},
+        "schedule_images: expected at most plan.leds (6) images, got 8",
     ),
     (
         {"rig": "dome", "plan": {}, "parameters": {"plan.longest_band_s": [2.74]}},
