@@ -21,8 +21,9 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks.common import machine_description
+from twin.cli.sweep import point_functions
 from twin.devices.cluster import dask_client
-from twin.studies.sweep_file import load_sweep, value_label
+from twin.studies.sweep_file import check_points, load_sweep, value_label
 from twin.studies.sweep_run import run_sweep
 
 
@@ -33,12 +34,14 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=None)
     arguments = parser.parse_args()
     sweep = load_sweep(arguments.sweep)
+    check, measure = point_functions(sweep.kind)
+    check_points(sweep, check)
     load_before = os.getloadavg()
     with tempfile.TemporaryDirectory() as folder:
         out = arguments.out or Path(folder) / "sweep"
         started = time.perf_counter()
         with dask_client(arguments.workers) as client:
-            outcome = run_sweep(sweep, out, client=client)
+            outcome = run_sweep(sweep, out, measure, client=client)
         wall_s = time.perf_counter() - started
     rows = outcome.rows
     point_s = np.array([row["measures"]["point_s"] for row in rows])

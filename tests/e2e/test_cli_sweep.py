@@ -125,8 +125,9 @@ def test_a_sweep_killed_three_times_resumes_to_the_uninterrupted_table(uninterru
 
 
 def test_a_dome_sweep_of_t_base_doubles_the_spectral_exposure(tmp_path):
-    """Two dome designs that differ only in the weakest band's exposure: t_lambda = t_base /
-    sqrt(E L) (thesis 10.4) doubles every band exposure with t_base, the RGB sets stay."""
+    """Two dome designs that differ only in the weakest band's exposure, run on a LocalCluster of
+    two workers: t_lambda = t_base / sqrt(E L) (thesis 10.4) doubles every band exposure with
+    t_base, the RGB sets stay."""
     sweep = tmp_path / "dome.yaml"
     sweep.write_text(
         yaml.safe_dump(
@@ -146,9 +147,10 @@ def test_a_dome_sweep_of_t_base_doubles_the_spectral_exposure(tmp_path):
             sort_keys=False,
         )
     )
-    process = _start(sweep, tmp_path / "out")
-    _, stderr = process.communicate(timeout=600)
+    process = _start(sweep, tmp_path / "out", "--workers", "2")  # as Dask tasks on 2 workers
+    stdout, stderr = process.communicate(timeout=600)
     assert process.returncode == 0, stderr
+    assert json.loads(stdout)["workers"] == 2
     short, long = (row["measures"] for row in json.loads((tmp_path / "out/table.json").read_text()))
     assert long["spectral_exposure_h"] / short["spectral_exposure_h"] == pytest.approx(2, rel=1e-6)
     assert long["rgb_exposure_h"] == short["rgb_exposure_h"]

@@ -33,28 +33,11 @@ from twin.cli.errors import (
     require_output_folder,
     run_failed,
 )
-from twin.cli.output import JsonFlag, console, print_summary
+from twin.cli.output import JsonFlag, SchedulerOption, WorkersOption, console, print_summary
 from twin.cli.store import require_sound_btf, require_sound_capture
 
 __all__ = ["register"]
 
-WorkersOption = Annotated[
-    int,
-    typer.Option(
-        min=0,
-        max=256,
-        help="Worker processes of a local Dask cluster (one thread each); 0 or 1: run in this "
-        "process. Same results either way.",
-    ),
-]
-SchedulerOption = Annotated[
-    str | None,
-    typer.Option(
-        envvar="DASK_SCHEDULER_ADDRESS",
-        help="Run on the Dask cluster of this scheduler (tcp://host:8786); its workers must "
-        "see the stores under the same paths.",
-    ),
-]
 SppOption = Annotated[int, typer.Option(min=1, max=65536, help="Samples per pixel of the renders.")]
 MAX_FAULT_RATE = 0.1
 """Largest injected fault rate: each device call is retried 3 times, so at 0.1 a fault outlasts

@@ -18,10 +18,35 @@ from rich.table import Table
 
 from twin.output_format import dumps, format_value, quantity
 
-__all__ = ["JsonFlag", "SeedOption", "console", "print_comparison", "print_summary"]
+__all__ = [
+    "JsonFlag",
+    "SchedulerOption",
+    "SeedOption",
+    "WorkersOption",
+    "console",
+    "print_comparison",
+    "print_summary",
+]
 
 JsonFlag = Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")]
 SeedOption = Annotated[int, typer.Option(min=0, help="Seed of the simulated noise.")]
+WorkersOption = Annotated[
+    int,
+    typer.Option(
+        min=0,
+        max=256,
+        help="Worker processes of a local Dask cluster (one thread each); 0 or 1: run in this "
+        "process. Same results either way.",
+    ),
+]
+SchedulerOption = Annotated[
+    str | None,
+    typer.Option(
+        envvar="DASK_SCHEDULER_ADDRESS",
+        help="Run on the Dask cluster of this scheduler (tcp://host:8786); its workers must "
+        "see the stores under the same paths.",
+    ),
+]
 
 console = Console()
 

@@ -9,10 +9,21 @@ from typing import Annotated
 import typer
 
 from twin.cli.errors import INTERRUPTED, fail, require_output_folder
-from twin.cli.gonio import SchedulerOption, WorkersOption
-from twin.cli.output import JsonFlag, console, print_summary
+from twin.cli.output import JsonFlag, SchedulerOption, WorkersOption, console, print_summary
 
-__all__ = ["register"]
+__all__ = ["point_functions", "register"]
+
+
+def point_functions(kind: str):
+    """The check and the measure of a design point of ``kind`` (``gonioreflectometer``,
+    ``dome``): :mod:`twin.studies.sweep_gonio`, :mod:`twin.studies.sweep_dome`."""
+    if kind == "dome":
+        from twin.studies.sweep_dome import check_dome_point, measure_dome_point
+
+        return check_dome_point, measure_dome_point
+    from twin.studies.sweep_gonio import check_gonio_point, measure_gonio_point
+
+    return check_gonio_point, measure_gonio_point
 
 
 def sweep(
@@ -47,9 +58,11 @@ def sweep(
 
     Example: spectwin sweep gonio_lamp_filter_sampling --out out/sweep --workers 2
     """
-    from twin.studies.sweep_file import load_sweep
+    from twin.studies.sweep_file import check_points, load_sweep
 
     loaded = load_sweep(sweep_file)
+    check, measure = point_functions(loaded.kind)
+    check_points(loaded, check)
     if dry_run:
         if workers != 1 or scheduler:
             fail("--dry-run runs nothing; leave out --workers and --scheduler")
@@ -64,7 +77,7 @@ def sweep(
 
     try:
         with dask_client(workers, scheduler) as client:
-            outcome = run_sweep(loaded, out, client=client, progress=not as_json)
+            outcome = run_sweep(loaded, out, measure, client=client, progress=not as_json)
     except KeyboardInterrupt:
         typer.echo(
             f"interrupted: finished points are kept in {out}; run the same command again to "

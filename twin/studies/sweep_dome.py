@@ -22,13 +22,11 @@ Stores are continued where a previous attempt stopped; ``result.json`` comes las
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
-
-from pydantic import Field
+from typing import TYPE_CHECKING
 
 from hwbridge.dome_layout import SPECTRAL_CAMERA
 from recon.calibration.dome_capture import calibrate_dome
-from recon.dome.processing import TARGET_RELATIVE_NOISE, process_dome
+from recon.dome.processing import process_dome
 from recon.errors import SpectwinInputError
 from twin.dome.programs import (
     DEFAULT_SPP,
@@ -38,89 +36,52 @@ from twin.dome.programs import (
     dome_run_program,
 )
 from twin.dome.setup import THESIS_LONGEST_BAND_S
-from twin.rigs.rig_config import DomeConfig
-from twin.rigs.yaml_config import StrictModel
-from twin.studies.sweep_points import SHARED_MEASURES, capture_into, storage_mb
+from twin.studies.sweep_points import capture_into, storage_mb
 from twin.validate.dome_evaluation import evaluate_dome
 
 if TYPE_CHECKING:
     from twin.studies.sweep_file import DesignPoint
+    from twin.studies.sweep_plans import DomePlan
 
-__all__ = ["DOME_MEASURES", "DomePlan", "measure_dome_point"]
-
-DOME_MEASURES = {
-    "error_pct": "BTF vs truth, mean Eq. 6.8 (%)",
-    "delta_e94": "BTF vs truth, mean Delta E94",
-    "per_texel_error_pct": "BTF vs truth, per-texel Eq. 6.8 (%)",
-    "spectral_exposure_h": "exposure of the spectral camera's frames in the run (h)",
-    "rgb_exposure_h": "exposure of each RGB camera's frames in the run (h)",
-    "pairs": "direction pairs in the BTF",
-    **SHARED_MEASURES,
-}
-"""The measures of a dome design point, with their units."""
+__all__ = ["check_dome_point", "measure_dome_point"]
 
 
-class DomePlan(StrictModel):
-    """The capture and processing settings of a dome point (the ``plan.`` parameters).
+def _size(plan: DomePlan) -> DomeCaptureSize:
+    return DomeCaptureSize(
+        stage_positions=plan.stage_positions,
+        leds=plan.leds,
+        rgb_cameras=plan.rgb_cameras,
+        texels=plan.texels,
+        spp=plan.spp or DEFAULT_SPP,
+    )
 
-    Attributes
-    ----------
-    stage_positions, leds, rgb_cameras, texels, spp
-        The capture's size (:class:`twin.dome.programs.DomeCaptureSize`).
-    dark_frames
-        Dark frames per spectral exposure time in the calibration (thesis 10.3: 200).
-    longest_band_s
-        Exposure of the spectral camera's weakest band (s); sets :math:`t_{base}` (10.4).
-    schedule_images
-        RGB images the 30 bands are packed into, each band once; ``None``: the thesis's 10
-        images with the noisiest bands twice.
-    target_relative_noise
-        What the band images' filters leave (the filter size, Figure 10.5).
-    """
 
-    stage_positions: Annotated[int, Field(ge=1, le=24)] = 1
-    leds: Annotated[int, Field(ge=1, le=198)] = 10
-    rgb_cameras: Annotated[int, Field(ge=1, le=11)] = 3
-    texels: Annotated[int, Field(ge=8, le=512)] = 32
-    spp: Annotated[int, Field(ge=1, le=65536)] = DEFAULT_SPP
-    dark_frames: Annotated[int, Field(ge=1, le=10000)] = 16
-    longest_band_s: Annotated[float, Field(gt=0, le=600)] = THESIS_LONGEST_BAND_S
-    schedule_images: Annotated[int, Field(ge=1, le=198)] | None = None
-    target_relative_noise: Annotated[float, Field(gt=0, lt=1)] = TARGET_RELATIVE_NOISE
-
-    @property
-    def size(self) -> DomeCaptureSize:
-        return DomeCaptureSize(
-            stage_positions=self.stage_positions,
-            leds=self.leds,
-            rgb_cameras=self.rgb_cameras,
-            texels=self.texels,
-            spp=self.spp,
+def check_dome_point(point: DesignPoint) -> None:
+    """Refuse a point whose plan its rig cannot take: a size beyond the rig's, a band schedule
+    of more images than LEDs (the LEDs take the schedule's images in turn: the bands of the
+    images past the last LED would never be exposed), exposures no schedule fits."""
+    plan = point.plan
+    if plan.schedule_images is not None and plan.schedule_images > plan.leds:
+        raise SpectwinInputError(
+            f"schedule_images: expected at most plan.leds ({plan.leds}) images, got "
+            f"{plan.schedule_images}: the bands of the images past the last LED would never "
+            "be exposed"
         )
-
-    def check(self, config: DomeConfig) -> None:
-        """Refuse a size the rig cannot take, a band schedule of more images than LEDs (the
-        LEDs take the schedule's images in turn: the bands of the images past the last LED would
-        never be exposed), and exposures its camera cannot make."""
-        if self.schedule_images is not None and self.schedule_images > self.leds:
-            raise SpectwinInputError(
-                f"schedule_images: expected at most plan.leds ({self.leds}) images, got "
-                f"{self.schedule_images}: the bands of the images past the last LED would never "
-                "be exposed"
-            )
-        dome_plan_parts(
-            config,
-            self.size,
-            longest_band_s=self.longest_band_s,
-            schedule_images=self.schedule_images,
-        )
+    dome_plan_parts(
+        point.rig,
+        _size(plan),
+        longest_band_s=plan.longest_band_s or THESIS_LONGEST_BAND_S,
+        schedule_images=plan.schedule_images,
+    )
 
 
 def _exposure_h(plan: list[dict], spectral: bool) -> float:
-    """Summed exposure of the spectral camera's frames, or of one RGB camera's, in hours."""
+    """Summed exposure of the spectral camera's band frames, or of one RGB camera's HDR sets
+    (the ``sample`` frames; not the alignment frames), in hours."""
     cameras = [step["camera"] for step in plan if step["camera"] != SPECTRAL_CAMERA]
     camera = SPECTRAL_CAMERA if spectral else cameras[0]
-    return sum(step["exposure_s"] for step in plan if step["camera"] == camera) / 3600
+    frames = [step for step in plan if step["camera"] == camera and step["kind"] == "sample"]
+    return sum(step["exposure_s"] for step in frames) / 3600
 
 
 def measure_dome_point(point: DesignPoint, folder: Path) -> dict:
@@ -128,20 +89,20 @@ def measure_dome_point(point: DesignPoint, folder: Path) -> dict:
     (:func:`twin.studies.sweep_points.run_point` runs it and keeps the result)."""
     config, plan = point.rig, point.plan
     calibration_program = dome_calibration_program(
-        size=plan.size,
+        size=_size(plan),
         dark_frames=plan.dark_frames,
         seed=point.seed,
         config=config,
-        longest_band_s=plan.longest_band_s,
+        longest_band_s=plan.longest_band_s or THESIS_LONGEST_BAND_S,
         schedule_images=plan.schedule_images,
     )
     calibration = calibrate_dome(capture_into(calibration_program, folder / "cal.capture.zarr"))
     program = dome_run_program(
         point.material,
-        size=plan.size,
+        size=_size(plan),
         seed=point.seed,
         config=config,
-        longest_band_s=plan.longest_band_s,
+        longest_band_s=plan.longest_band_s or THESIS_LONGEST_BAND_S,
         schedule_images=plan.schedule_images,
     )
     run_store = capture_into(program, folder / "run.capture.zarr")

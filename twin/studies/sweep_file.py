@@ -15,12 +15,13 @@ A sweep file (YAML; the built-in ones are in ``scenes/sweeps``)::
     objectives: [capture_time_h, error_pct]
 
 A parameter is named by its path: ``rig.`` and the rig file's keys (list items by number, ``*``
-for every item), ``plan.`` and a field of the plan (:class:`twin.studies.sweep_gonio.GonioPlan`
-for the gonioreflectometer, :class:`twin.studies.sweep_dome.DomePlan` for the dome), or
+for every item), ``plan.`` and a field of the plan (:class:`twin.studies.sweep_plans.GonioPlan`
+for the gonioreflectometer, :class:`twin.studies.sweep_plans.DomePlan` for the dome), or
 ``material``. The design points are every combination of the values (their cartesian
-product), numbered in that order. Every point's rig and plan are validated before anything is
-captured, so an unknown path, an empty range or a value outside the rig model's bounds stops the
-sweep with one line naming the parameter, the value and what was expected.
+product), numbered in that order. Every point's rig and plan are validated (:func:`load_sweep`,
+then :func:`check_points` with the kind's check) before anything is captured, so an unknown
+path, an empty range or a value outside the rig model's bounds stops the sweep with one line
+naming the parameter, the value and what was expected.
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ import copy
 import hashlib
 import itertools
 import json
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
@@ -47,14 +49,14 @@ from twin.rigs.yaml_config import (
     scene_folder,
     validate_document,
 )
-from twin.studies.sweep_dome import DOME_MEASURES, DomePlan
-from twin.studies.sweep_gonio import GONIO_MEASURES, GonioPlan
+from twin.studies.sweep_plans import DOME_MEASURES, GONIO_MEASURES, DomePlan, GonioPlan
 
 __all__ = [
     "SWEEP_DIR",
     "DesignPoint",
     "Sweep",
     "SweepRange",
+    "check_points",
     "load_sweep",
     "value_label",
 ]
@@ -114,7 +116,8 @@ class SweepFile(StrictModel):
 
 @dataclass(frozen=True)
 class DesignPoint:
-    """One design of the sweep: its number, the varied values, and the resolved rig and plan."""
+    """One design of the sweep: its number, the varied values, the resolved rig and plan, and
+    where it comes from (the file and its values, for errors)."""
 
     index: int
     values: dict[str, Any]
@@ -122,6 +125,7 @@ class DesignPoint:
     rig: GonioConfig | DomeConfig
     plan: GonioPlan | DomePlan
     seed: int
+    where: str
 
     @property
     def label(self) -> str:
@@ -251,16 +255,24 @@ def _point(
     config_model, plan_model, _ = _KINDS[kind]
     config = validate_document(config_model, document, Path(f"{where}: rig"))
     plan_model = validate_document(plan_model, plan, Path(f"{where}: plan"))
-    try:
-        plan_model.check(config)
-    except SpectwinInputError as error:
-        raise SpectwinInputError(f"{where}: plan: {error}") from None
-    return DesignPoint(index, values, material, config, plan_model, sweep.seed)
+    return DesignPoint(index, values, material, config, plan_model, sweep.seed, where)
+
+
+def check_points(sweep: Sweep, check: Callable[[DesignPoint], None]) -> None:
+    """Run ``check`` (the kind's, e.g. :func:`twin.studies.sweep_gonio.check_gonio_point`) on
+    every point: the plan against what the rig can take. Raises :class:`SpectwinInputError`
+    naming the file, the point and its values."""
+    for point in sweep.points:
+        try:
+            check(point)
+        except SpectwinInputError as error:
+            raise SpectwinInputError(f"{point.where}: plan: {error}") from None
 
 
 def load_sweep(name_or_path: str | Path) -> Sweep:
     """Read and validate a sweep file (a name in ``scenes/sweeps`` or a path), every design
-    point included; raises :class:`SpectwinInputError` naming the first problem."""
+    point's rig and plan included (what the rig can take of a plan: :func:`check_points`);
+    raises :class:`SpectwinInputError` naming the first problem."""
     path = resolve_scene_file(name_or_path, SWEEP_DIR, "sweep file")
     sweep = validate_document(SweepFile, read_yaml_mapping(path), path)
     rig_path = resolve_scene_file(sweep.rig, scene_folder("rigs"), "rig")

@@ -21,10 +21,9 @@ atomically, so a point with one is finished and is never run again
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING
 
 import numpy as np
-from pydantic import Field, field_validator
 
 from recon.btf.processing import process_gonio
 from recon.calibration.gonio import calibrate_gonio, lamp_rounding_s
@@ -36,76 +35,28 @@ from twin.gonio.capture import (
     gonio_pairs,
 )
 from twin.gonio.render import GONIO_SPP
-from twin.rigs.rig_config import GonioConfig
-from twin.rigs.yaml_config import StrictModel
-from twin.studies.sweep_points import SHARED_MEASURES, capture_into, storage_mb
+from twin.studies.sweep_points import capture_into, storage_mb
 from twin.validate.held_out import held_out_errors
 
 if TYPE_CHECKING:
     from twin.studies.sweep_file import DesignPoint
 
-__all__ = ["GONIO_MEASURES", "GonioPlan", "measure_gonio_point"]
-
-GONIO_MEASURES = {
-    "error_pct": "held-out pairs, mean Eq. 6.8 over the chart fields (%)",
-    "error_matte_pct": "held-out pairs, matte fields, mean Eq. 6.8 (%)",
-    "error_glossy_pct": "held-out pairs, glossy fields, mean Eq. 6.8 (%)",
-    "delta_e94": "held-out pairs, mean Delta E94 over the chart fields",
-    "delta_e94_matte": "held-out pairs, matte fields, mean Delta E94",
-    "exposure_per_pair_s": "sum of the band exposures of one direction pair (s)",
-    "exposure_total_h": "exposure time of all pairs of the run (h)",
-    "pairs": "direction pairs measured",
-    "pairs_registered": "direction pairs registered and in the BTF",
-    **SHARED_MEASURES,
-}
-"""The measures of a gonioreflectometer design point, with their units."""
+__all__ = ["check_gonio_point", "measure_gonio_point"]
 
 _CALIBRATION_PIXELS = 64
 
 
-class GonioPlan(StrictModel):
-    """The capture and processing settings of a point (the ``plan.`` parameters).
-
-    Attributes
-    ----------
-    rings
-        The direction sampling: ``[polar_deg, count]`` rings of directions, every reachable
-        light x view combination measured (thesis 4.1.1; the twin's reduced sampling is
-        ``[[0, 1], [30, 4], [60, 8]]``).
-    pixels
-        Pixels across the camera's 20 cm field.
-    texels
-        Texels across the BTF's texture.
-    spp
-        Samples per pixel of the renders.
-    """
-
-    rings: Annotated[list[tuple[float, int]], Field(min_length=1)] = [(0.0, 1), (30.0, 4)]
-    pixels: Annotated[int, Field(ge=32, le=4096)] = 128
-    texels: Annotated[int, Field(ge=16, le=512)] = 32
-    spp: Annotated[int, Field(ge=1, le=65536)] = GONIO_SPP
-
-    @field_validator("rings")
-    @classmethod
-    def _rings(cls, rings: list[tuple[float, int]]) -> list[tuple[float, int]]:
-        for polar, count in rings:
-            if not 0 <= polar < 85 or count < 1 or (polar == 0 and count != 1):
-                raise ValueError(
-                    f"expected [polar_deg in [0, 85), count >= 1] rings (one direction at 0), "
-                    f"got [{polar}, {count}]"
-                )
-        return rings
-
-    def check(self, config: GonioConfig) -> None:
-        """Refuse settings the rig cannot take: pixels beyond its camera's, texels beyond the
-        pixels, a sampling of which the robot reaches no pair."""
-        check_capture_settings(config, pixels=self.pixels, spp=self.spp)
-        if self.texels > self.pixels:
-            raise SpectwinInputError(
-                f"plan.texels: expected at most plan.pixels ({self.pixels}), got {self.texels}"
-            )
-        if not gonio_pairs(config, tuple(self.rings)).poses:
-            raise SpectwinInputError(f"plan.rings: the robot reaches no pair of {self.rings}")
+def check_gonio_point(point: DesignPoint) -> None:
+    """Refuse a point whose plan its rig cannot take: pixels beyond the camera's, texels beyond
+    the pixels, a sampling of which the robot reaches no pair."""
+    config, plan = point.rig, point.plan
+    check_capture_settings(config, pixels=plan.pixels, spp=plan.spp or GONIO_SPP)
+    if plan.texels > plan.pixels:
+        raise SpectwinInputError(
+            f"plan.texels: expected at most plan.pixels ({plan.pixels}), got {plan.texels}"
+        )
+    if not gonio_pairs(config, tuple(plan.rings)).poses:
+        raise SpectwinInputError(f"plan.rings: the robot reaches no pair of {plan.rings}")
 
 
 def measure_gonio_point(point: DesignPoint, folder: Path) -> dict:
@@ -122,7 +73,7 @@ def measure_gonio_point(point: DesignPoint, folder: Path) -> dict:
         material=point.material,
         rings=tuple(plan.rings),
         pixels=plan.pixels,
-        spp=plan.spp,
+        spp=plan.spp or GONIO_SPP,
         seed=point.seed,
         config=config,
     )

@@ -19,14 +19,7 @@ from hwbridge.store import CaptureStore
 if TYPE_CHECKING:
     from twin.studies.sweep_file import DesignPoint
 
-__all__ = ["SHARED_MEASURES", "capture_into", "point_result", "run_point", "storage_mb"]
-
-SHARED_MEASURES = {
-    "capture_time_h": "capture time of the measurement run, timing model (h)",
-    "storage_mb": "capture and BTF stores on disk (MB)",
-    "point_s": "wall time of the point on this machine (s)",
-}
-"""The measures of every design point, whatever its rig, with their units."""
+__all__ = ["capture_into", "point_result", "run_point", "storage_mb"]
 
 
 def record(folder: Path, event: str) -> None:

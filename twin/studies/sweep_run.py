@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,9 +25,7 @@ import numpy as np
 from recon.errors import SpectwinInputError
 from recon.progress import progress_steps
 from twin.output_format import dumps
-from twin.studies.sweep_dome import measure_dome_point
-from twin.studies.sweep_file import Sweep
-from twin.studies.sweep_gonio import measure_gonio_point
+from twin.studies.sweep_file import DesignPoint, Sweep
 from twin.studies.sweep_points import point_result, run_point
 from twin.studies.sweep_report import (
     pareto_front,
@@ -38,7 +37,7 @@ from twin.studies.sweep_report import (
 
 __all__ = ["SweepOutcome", "run_sweep"]
 
-_MEASURES = {"gonioreflectometer": measure_gonio_point, "dome": measure_dome_point}
+Measure = Callable[[DesignPoint, Path], dict]
 
 
 @dataclass(frozen=True)
@@ -71,9 +70,8 @@ def _prepare(sweep: Sweep, out: Path) -> None:
     marker.write_text(dumps(sweep.describe() | _identity(sweep)), encoding="utf-8")
 
 
-def _run_points(sweep: Sweep, out: Path, pending: list, client, progress: bool) -> None:
+def _run_points(out: Path, pending: list, measure: Measure, client, progress: bool) -> None:
     folders = {point.index: out / "points" / point.key for point in pending}
-    measure = _MEASURES[sweep.kind]
     label = f"sweep: {len(pending)} design points"
     with progress_steps(label, len(pending), enabled=progress) as advance:
         if client is None:
@@ -96,15 +94,17 @@ def _run_points(sweep: Sweep, out: Path, pending: list, client, progress: bool) 
 
 
 def run_sweep(
-    sweep: Sweep, out: str | Path, *, client=None, progress: bool = False
+    sweep: Sweep, out: str | Path, measure: Measure, *, client=None, progress: bool = False
 ) -> SweepOutcome:
-    """Run the pending points of ``sweep`` into ``out`` (module docstring), then write the
-    table, the figures and the page; returns the summary and the rows."""
+    """Run the pending points of ``sweep`` into ``out`` (module docstring) with ``measure``
+    (the kind's: :func:`twin.studies.sweep_gonio.measure_gonio_point`,
+    :func:`twin.studies.sweep_dome.measure_dome_point`), then write the table, the figures and
+    the page; returns the summary and the rows."""
     out = Path(out)
     _prepare(sweep, out)
     started = time.perf_counter()
     pending = [p for p in sweep.points if point_result(out / "points" / p.key) is None]
-    _run_points(sweep, out, pending, client, progress)
+    _run_points(out, pending, measure, client, progress)
     rows = [point_result(out / "points" / point.key) for point in sweep.points]
     objectives = np.array([[row["measures"][name] for name in sweep.objectives] for row in rows])
     for row, on_front in zip(rows, pareto_front(objectives), strict=True):

@@ -12,7 +12,8 @@ from typer.testing import CliRunner
 
 from recon.errors import SpectwinInputError
 from twin.cli.app import app
-from twin.studies.sweep_file import SweepRange, load_sweep
+from twin.cli.sweep import point_functions
+from twin.studies.sweep_file import SweepRange, check_points, load_sweep
 from twin.studies.sweep_report import pareto_front
 
 BASE = {
@@ -116,7 +117,8 @@ BAD_FILES = [
 @pytest.mark.parametrize(("changes", "phrase"), BAD_FILES, ids=[p for _, p in BAD_FILES])
 def test_bad_sweep_files_are_refused_naming_the_problem(tmp_path, changes, phrase):
     with pytest.raises(SpectwinInputError) as error:
-        load_sweep(_write(tmp_path, **changes))
+        sweep = load_sweep(_write(tmp_path, **changes))
+        check_points(sweep, point_functions(sweep.kind)[0])
     assert phrase in str(error.value)
 
 
