@@ -31,7 +31,8 @@ def sweep(
         str,
         typer.Argument(
             metavar="SWEEP",
-            help="Sweep file: a name in scenes/sweeps (gonio_lamp_filter_sampling) or a path.",
+            help="Sweep file: a name in scenes/sweeps (gonio_lamp_filter_sampling, "
+            "dome_schedule_tbase_filter) or a path.",
         ),
     ],
     out: Annotated[
