@@ -111,6 +111,8 @@ def test_the_wheel_contains_the_scenes_and_data_the_code_loads(wheel):
         "recon/data/real/emva1288_basler_ccd12/EMVA1288_Data.txt",
         "recon/data/real/emva1288_basler_ccd12/images/d_s_000_snap_049.png",
         "scenes/materials/colorchecker16.yaml",
+        "scenes/sweeps/gonio_lamp_filter_sampling.yaml",
+        "scenes/sweeps/dome_schedule_tbase_filter.yaml",
         "hwbridge/mappings/llanos2019.yaml",
         "recon/data/spectra/sensors/nikon_d70_rgb.csv",
         "recon/data/spectra/lights/tungsten_lab.csv",
