@@ -1,5 +1,5 @@
-"""The thesis's studies on the twin (chapters 7, 9, 10), the camera bench, the rig gallery and
-``spectwin demo`` with its report.
+"""The thesis's studies on the twin (chapters 7, 9, 10), the camera bench, the rig gallery,
+``spectwin demo`` with its report and design sweeps (``spectwin sweep``).
 """
 
 import lazy_loader
@@ -14,5 +14,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "dome": ["run_dome_study"],
         "gallery": ["run_gallery"],
         "spectralization": ["run_study"],
+        "sweep_file": ["check_points", "load_sweep"],
+        "sweep_run": ["run_sweep"],
     },
 )
