@@ -25,6 +25,10 @@ class FieldMasks:
     glossy: np.ndarray
     masks: np.ndarray
 
+    def means(self, texture: np.ndarray) -> np.ndarray:
+        """Each field interior's mean spectrum ``(n_fields, K)`` of a texture ``(H, W, K)``."""
+        return np.array([texture[mask].mean(axis=0) for mask in self.masks])
+
 
 def field_masks(
     material: Material, view_dir: np.ndarray, texels: int, *, interior: float = 0.6

@@ -159,8 +159,8 @@ def evaluate_gonio(
     for index, pair in enumerate(written):
         measured = btf.read_pair(pair, allow_incomplete=True)
         fields = field_masks(material, btf.view_dirs[pair], texels, interior=interior)
-        field_means.append([measured[mask].mean(axis=0) for mask in fields.masks])
-        truth_means.append([truth[index][mask].mean(axis=0) for mask in fields.masks])
+        field_means.append(fields.means(measured))
+        truth_means.append(fields.means(truth[index]))
         per_texel = relative_error(measured, truth[index])
         texel_errors.append([per_texel[mask].mean() for mask in fields.masks])
     field_means, truth_means = np.array(field_means), np.array(truth_means)

@@ -106,8 +106,7 @@ def held_out_errors(
     for index, (light, view) in enumerate(zip(lights, views, strict=True)):
         measured = interpolate_table(table, light, view)
         fields = field_masks(material, view, texels, interior=interior)
-        measured_means = np.array([measured[mask].mean(axis=0) for mask in fields.masks])
-        truth_means = np.array([truth[index][mask].mean(axis=0) for mask in fields.masks])
+        measured_means, truth_means = fields.means(measured), fields.means(truth[index])
         errors.append(relative_error(measured_means, truth_means))
         # Reflectance factors (BTF in 1/sr times pi) for the colour difference.
         colour_errors.append(
