@@ -29,6 +29,7 @@ from recon import baselines
 from recon.errors import SpectwinInputError
 from recon.experiments.sampling import add_rgb_noise, known_spectra_from_mask, whisk_broom_mask
 from recon.metrics import relative_error
+from recon.spectralize.prior_choice import choose_prior
 from recon.spectralize.solve import EnergyWeights, spectralize
 
 __all__ = [
@@ -44,50 +45,68 @@ __all__ = [
 @dataclass(frozen=True)
 class SparseInput:
     """What every method sees: noisy camera values ``rgb`` ``(H, W, C)``, the projection
-    ``response`` ``(K, C)`` and the known spectra ``spectra`` ``(m, K)`` at the row-major
-    ``pixels``."""
+    ``response`` ``(K, C)``, the known spectra ``spectra`` ``(m, K)`` at the row-major
+    ``pixels`` and the standard deviation ``noise_std`` of the RGB noise (for the methods that
+    model it)."""
 
     rgb: np.ndarray
     response: np.ndarray
     pixels: np.ndarray
     spectra: np.ndarray
+    noise_std: float = 0.0
 
 
-def _spectralization(data: SparseInput, p_dyn: float = 0.0) -> np.ndarray:
+_SPECTRALIZATION = {"appearance": "rgbxy", "weights": EnergyWeights(delta=0.0), "tol": 1e-8}
+
+
+def _spectralization(data: SparseInput, p_dyn: float = 0.0, prior: str = "spectra") -> np.ndarray:
     """Eq. 6.10 with the RGBXY appearance space, k = 3 and equal primed weights (6.11); with
     ``p_dyn > 0`` the dynamic-range compression of Eq. 10.2, so that shading does not
-    separate the appearance neighbours of one material."""
+    separate the appearance neighbours of one material; ``prior`` as in
+    :func:`recon.spectralize.solve.build_problem`, ``"chosen"`` for the one
+    :func:`recon.spectralize.choose_prior` picks."""
+    if prior == "chosen":
+        prior = choose_prior(
+            data.rgb, data.response, data.pixels, data.spectra, p_dyn=p_dyn, **_SPECTRALIZATION
+        ).prior
     return spectralize(
         data.rgb,
         data.response,
         known_pixels=data.pixels,
         known_spectra=data.spectra,
-        appearance="rgbxy",
-        weights=EnergyWeights(delta=0.0),
         p_dyn=p_dyn,
-        tol=1e-8,
+        prior=prior,
+        **_SPECTRALIZATION,
+    )
+
+
+def _a_plus(data: SparseInput, ridge_lambda: float) -> np.ndarray:
+    """A+ estimates the response from the training pairs (response=None) and codes spectra with
+    8 atoms (its default); with fewer bands than 8, with all of them."""
+    return baselines.recover(
+        data.rgb,
+        None,
+        data.spectra,
+        known_pixels=data.pixels,
+        sparsity=min(8, data.spectra.shape[1]),
+        ridge_lambda=ridge_lambda,
+        method="aplus",
     )
 
 
 METHODS: dict[str, Callable[[SparseInput], np.ndarray]] = {
     "spectralization": _spectralization,
     "spectralization p_dyn=1": lambda d: _spectralization(d, p_dyn=1.0),
+    "spectralization regression prior": lambda d: _spectralization(d, prior="regression"),
+    "spectralization chosen prior": lambda d: _spectralization(d, prior="chosen"),
     "imai": lambda d: baselines.recover(d.rgb, d.response, method="imai"),
     "hardeberg": lambda d: baselines.recover(d.rgb, d.spectra, d.pixels, method="hardeberg"),
     "murakami": lambda d: baselines.recover(
-        d.rgb, d.response, d.spectra, d.pixels, method="murakami"
+        d.rgb, d.response, d.spectra, d.pixels, rgb_noise_std=d.noise_std, method="murakami"
     ),
     "dong": lambda d: baselines.recover(d.rgb, d.response, d.spectra, method="dong"),
-    # A+ estimates the response from the training pairs (response=None) and codes spectra with
-    # 8 atoms (its default); with fewer bands than 8, with all of them.
-    "a_plus": lambda d: baselines.recover(
-        d.rgb,
-        None,
-        d.spectra,
-        known_pixels=d.pixels,
-        sparsity=min(8, d.spectra.shape[1]),
-        method="aplus",
-    ),
+    "a_plus": lambda d: _a_plus(d, 0.1),
+    "a_plus lambda=1e-5": lambda d: _a_plus(d, 1e-5),
 }
 """Reconstruction methods by name; the baselines are called through
 :func:`recon.baselines.recover` by their names in :data:`recon.baselines.RECOVERY_METHODS`.
@@ -158,8 +177,9 @@ def run_protocol(
     truth, response = np.asarray(truth, np.float64), np.asarray(response, np.float64)
     _check_case(truth, response, methods)
     pixels, spectra = known_spectra_from_mask(truth, mask)
-    rgb = add_rgb_noise(truth @ response, noise_fraction, np.random.default_rng(seed))
-    data = SparseInput(rgb, response, pixels, spectra)
+    clean = truth @ response
+    rgb = add_rgb_noise(clean, noise_fraction, np.random.default_rng(seed))
+    data = SparseInput(rgb, response, pixels, spectra, noise_fraction * float(np.mean(clean)))
     estimates = {name: METHODS[name](data).reshape(truth.shape) for name in methods}
     maps = {name: relative_error(est, truth) for name, est in estimates.items()}
     return ProtocolResult(maps, estimates, int(pixels.size))

@@ -9,6 +9,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     submod_attrs={
         "appearance": ["appearance_neighbours"],
         "kronecker": ["solve_kronecker_sum"],
+        "prior_choice": ["PriorChoice", "choose_prior"],
         "solve": ["EnergyWeights", "build_problem", "reconstruct", "spectralize"],
     },
 )

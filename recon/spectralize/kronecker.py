@@ -297,6 +297,8 @@ def solve_kronecker_sum(
             weights = _compressed(rotated_gram[np.ix_(run, run)], rtol)
             runs.append((run, weights.shape[1], basis[:, run] @ weights))
         projection = np.hstack([projection for _, _, projection in runs])
+        if projection.shape[1] == 0:  # no right-hand side in this group: its columns are zero
+            continue
         block_shifts = np.concatenate(
             [np.full(width, max(shifts[run[0]], 0.0)) for run, width, _ in runs]
         )

@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy import sparse
@@ -69,7 +69,9 @@ from recon.spectralize.kronecker import FactoredRhs, solve_kronecker_sum
 __all__ = [
     "BandImage",
     "DeviceIntegrals",
+    "DYNAMIC_FLOOR",
     "EnergyWeights",
+    "PRIORS",
     "PointSpectra",
     "SpectralizationProblem",
     "SpectralizationResult",
@@ -80,6 +82,18 @@ __all__ = [
 ]
 
 SOLVERS = ("auto", "multigrid", "lsqr", "lsmr")
+PRIORS = ("spectra", "regression")
+DYNAMIC_FLOOR = 0.05
+"""Smallest pixel sum :math:`\\sum_c V_i^c` that Eq. 10.2 scales by, as a fraction of the mean.
+
+Noisy band images (Eq. 10.1) are compared after a Gaussian filter of the f-scaled values, so a
+pixel's scale reaches its filtered neighbours: a black holder pixel at a floor of 0.1 % of the
+mean scales its band noise by 1000 and spreads it into the targets of the lit pixels beside it.
+On the case of :func:`recon.experiments.real_images.holder_bar_case` (a 96 px mosaic of VHREL
+clothes with a black bar across it, nine 5 %-noisy band images filtered at 2 px) with
+``p_dyn = 1``, the lit pixels beside the bar came out at 72.5 % (Eq. 6.8) with a floor of 0.1 %
+and at 6.5 % with 5 % (4.9 % at ``p_dyn = 0``); BENCHMARKS.md,
+"Spectralization on real spectra"."""
 _PRIOR_TERMS = (AppearancePriorTerm, SpectralSmoothnessTerm)
 
 
@@ -162,6 +176,7 @@ class SpectralizationProblem:
     graph_links: int
     graph_added: int
     timings_s: dict = field(default_factory=dict)
+    base: np.ndarray | None = None  # (n_pixels, K): f-scaled B of prior="regression", or None
 
     @property
     def n_pixels(self) -> int:
@@ -308,8 +323,9 @@ def _checked_response(response: np.ndarray, channels: int) -> np.ndarray:
 
 
 def dynamic_scale(images: np.ndarray, p_dyn: float) -> np.ndarray:
-    """:math:`f_i = (\\sum_c V_i^c)^{-p_{dyn}}` (Eq. 10.2). Sums below 0.1 % of the mean sum
-    (dark, noisy pixels; noise can make them negative) are raised to that floor."""
+    """:math:`f_i = (\\sum_c V_i^c)^{-p_{dyn}}` (Eq. 10.2). Sums below :data:`DYNAMIC_FLOOR`
+    times the mean sum (holder, shadows, noise: dark pixels whose sum noise can make negative)
+    are raised to that floor."""
     if not 0 <= p_dyn <= 1:
         raise SpectwinInputError(f"p_dyn: expected a value in [0, 1], got {p_dyn}")
     brightness = images.sum(axis=-1).ravel()
@@ -320,7 +336,7 @@ def dynamic_scale(images: np.ndarray, p_dyn: float) -> np.ndarray:
         raise SpectwinInputError(
             "rgb: dynamic-range compression (p_dyn > 0) needs a positive mean pixel sum"
         )
-    return np.maximum(brightness, 1e-3 * mean) ** -p_dyn
+    return np.maximum(brightness, DYNAMIC_FLOOR * mean) ** -p_dyn
 
 
 def _point_term(
@@ -392,6 +408,21 @@ def _device_term(data: DeviceIntegrals, scale: np.ndarray, bands: int) -> Device
     return DeviceIntegralTerm(sparse.diags(root) @ weights, root * values)
 
 
+def _regression_matrix(scaled_rgb: np.ndarray, data_terms: list) -> np.ndarray:
+    """:math:`W` ``(C, K)``: the least-squares map from the known pixels' camera values to their
+    spectra (both f-scaled), :math:`\\min_W \\lVert V_P W - D \\rVert^2`, the inverse matrix of
+    Hardeberg (thesis Sec. 6.1)."""
+    points = [t for t in data_terms if isinstance(t, PointSpectraTerm)]
+    if not points:
+        raise SpectwinInputError(
+            "prior: 'regression' learns its map from point spectra; pass known_pixels and "
+            "known_spectra, or use prior='spectra'"
+        )
+    pixels = np.concatenate([t.pixels for t in points])
+    spectra = np.concatenate([t.target for t in points])
+    return np.linalg.lstsq(scaled_rgb[pixels], spectra, rcond=None)[0]
+
+
 def build_problem(
     rgb: np.ndarray,
     response: np.ndarray,
@@ -404,6 +435,7 @@ def build_problem(
     appearance_options: dict | None = None,
     neighbours: int = 3,
     p_dyn: float = 0.0,
+    prior: str = "spectra",
 ) -> SpectralizationProblem:
     """Assemble the energy of the module docstring.
 
@@ -425,11 +457,22 @@ def build_problem(
     p_dyn
         Dynamic-range compression exponent of Eq. 10.2 (0: none; the thesis used 0.5-0.6 for
         BTFs).
+    prior
+        What the appearance prior (Eq. 6.3) and the smoothness term hold alike between
+        neighbours: ``"spectra"``, the spectra themselves (the thesis); or ``"regression"``, the
+        spectra minus :math:`B_i = V_i W`, where :math:`W` maps camera values to spectra by least
+        squares over the point spectra (Hardeberg's inverse matrix, Sec. 6.1). With
+        ``"regression"`` neighbours that differ in brightness or colour differ in spectrum as
+        the known spectra say they should (shading, smooth colour gradients); but the noise of
+        :math:`V_i` reaches the spectra through :math:`W`. :func:`recon.spectralize.choose_prior`
+        picks one from held-out known spectra.
 
     Returns
     -------
     SpectralizationProblem
     """
+    if prior not in PRIORS:
+        raise SpectwinInputError(f"prior: expected one of {PRIORS}, got {prior!r}")
     images = _as_images(rgb)
     response_values, grid = _grid_and_values(response, None, "response")
     if isinstance(response, SampledSpectra):
@@ -488,6 +531,13 @@ def build_problem(
     if smooth_rows:
         terms.append(SpectralSmoothnessTerm(n, bands))
         absolute.append(delta * total / smooth_rows)
+    base = None
+    if prior == "regression":  # the prior and smoothness terms act on X - B
+        base = scaled_rgb @ _regression_matrix(scaled_rgb, data_terms)
+        terms = [
+            t if isinstance(t, _PRIOR_TERMS) else replace(t, target=t.target - t.apply(base))
+            for t in terms
+        ]
     return SpectralizationProblem(
         terms,
         absolute,
@@ -497,6 +547,7 @@ def build_problem(
         graph.n_links,
         graph.added,
         {"neighbours": graph_s, "connect": connect_s},
+        base,
     )
 
 
@@ -553,7 +604,7 @@ def reconstruct(
         grid the point spectra must share.
     **energy
         The energy: ``point_spectra``, ``band_images``, ``device_integrals``, ``weights``,
-        ``appearance``, ``appearance_options``, ``neighbours``, ``p_dyn``; see
+        ``appearance``, ``appearance_options``, ``neighbours``, ``p_dyn``, ``prior``; see
         :func:`build_problem`.
     solver
         ``"auto"``, ``"multigrid"``, ``"lsqr"`` or ``"lsmr"``.
@@ -601,6 +652,8 @@ def reconstruct(
                 f"shape {initial.shape}"
             )
         scaled_initial = initial.reshape(shape) * problem.scale[:, None]
+        if problem.base is not None:
+            scaled_initial = scaled_initial - problem.base
     started = time.perf_counter()
     parts = problem.kronecker_parts() if solver in ("auto", "multigrid") else None
     assembly_s = time.perf_counter() - started
@@ -628,6 +681,8 @@ def reconstruct(
         )
     timings = {**problem.timings_s, "assembly": assembly_s, "solve": time.perf_counter() - started}
     energy = problem.energy(scaled, coefficients)
+    if problem.base is not None:
+        scaled = scaled + problem.base
     spectra = scaled
     if np.any(problem.scale != 1.0):  # dynamic-range compression (Eq. 10.2) undone
         spectra = scaled / problem.scale[:, None]
@@ -670,7 +725,7 @@ def spectralize(
     appearance, k
         Appearance space (Eq. 6.4-6.6) and neighbours per pixel (section 6.2).
     **options
-        Passed on to :func:`reconstruct` (``solver``, ``tol``, ``weights``, ``p_dyn``,
+        Passed on to :func:`reconstruct` (``solver``, ``tol``, ``weights``, ``p_dyn``, ``prior``,
         ``device_integrals``, ``appearance_options``, ``initial``, ``progress``, ...).
 
     Returns

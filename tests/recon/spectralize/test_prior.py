@@ -1,0 +1,111 @@
+"""The regression prior, the held-out choice of prior, and the floor of Eq. 10.2's scale."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from recon.errors import SpectwinInputError
+from recon.experiments.real_images import holder_bar_case, real_test_image
+from recon.experiments.sampling import known_spectra_from_mask, push_broom_mask, whisk_broom_mask
+from recon.metrics import relative_error
+from recon.spectralize import choose_prior
+from recon.spectralize.solve import BandImage, EnergyWeights, reconstruct, spectralize
+
+OPTIONS = {"appearance": "rgbxy", "weights": EnergyWeights(delta=0.0), "tol": 1e-10}
+
+
+@pytest.fixture(scope="module")
+def span_of_three():
+    """Spectra that are exact linear functions of their RGB: mixtures of three basis spectra,
+    with a smooth shading; a camera whose response sees the three independently."""
+    rng = np.random.default_rng(3)
+    bands = 16
+    wavelengths = np.linspace(0, 1, bands)
+    basis = np.stack([np.exp(-((wavelengths - c) ** 2) / 0.05) for c in (0.2, 0.5, 0.8)])
+    response = np.stack([np.exp(-((wavelengths - c) ** 2) / 0.08) for c in (0.25, 0.5, 0.75)], 1)
+    rows, cols = np.mgrid[0:40, 0:40] / 40
+    weights = np.stack([0.2 + 2 * rows, 0.2 + 2 * cols, 2 - 1.8 * rows * cols], axis=-1)
+    weights *= rng.uniform(0.5, 1.0, 3)
+    truth = weights @ basis
+    mask = whisk_broom_mask(truth.shape[:2], n_spots=25)
+    pixels, spectra = known_spectra_from_mask(truth, mask)
+    return truth, response, pixels, spectra
+
+
+def test_regression_prior_is_exact_where_spectra_are_linear_in_rgb(span_of_three):
+    truth, response, pixels, spectra = span_of_three
+    rgb = truth @ response
+    regression = spectralize(
+        rgb, response, known_pixels=pixels, known_spectra=spectra, prior="regression", **OPTIONS
+    )
+    plain = spectralize(rgb, response, known_pixels=pixels, known_spectra=spectra, **OPTIONS)
+    # The map from RGB to spectra is linear and learned exactly from 25 spots: nothing is
+    # left for the prior, so the reconstruction is exact (up to the solver's tolerance).
+    np.testing.assert_allclose(regression, truth, rtol=0, atol=1e-7 * truth.max())
+    # The thesis's prior holds the spectra themselves alike and misses the smooth changes.
+    assert np.mean(relative_error(plain, truth)) > 0.5
+
+
+def test_choose_prior_picks_the_regression_on_linear_spectra(span_of_three):
+    truth, response, pixels, spectra = span_of_three
+    choice = choose_prior(truth @ response, response, pixels, spectra, **OPTIONS)
+    assert choice.prior == "regression"
+    assert choice.spots == 25 and choice.held_out_spots == 5
+    assert choice.held_out_errors["regression"] < 1e-3 < choice.held_out_errors["spectra"]
+
+
+def test_choose_prior_cuts_push_broom_lines_into_segments(span_of_three):
+    truth, response, _, _ = span_of_three
+    pixels, spectra = known_spectra_from_mask(truth, push_broom_mask(truth.shape[:2]))
+    choice = choose_prior(truth @ response, response, pixels, spectra, **OPTIONS)
+    # Two lines, ten segments each, every fifth segment held out.
+    assert (choice.spots, choice.held_out_spots) == (20, 4)
+    assert choice.prior == "regression"
+
+
+def test_choose_prior_keeps_the_spectra_prior_on_a_noisy_mosaic():
+    """A mosaic of real paint spectra: neighbours share a material and only the RGB noise
+    tells them apart, which the regression would carry into the spectra."""
+    case = real_test_image("dupont_paint_chips mosaic")
+    mask = whisk_broom_mask(case.truth.shape[:2])
+    pixels, spectra = known_spectra_from_mask(case.truth, mask)
+    clean = case.truth @ case.response
+    rgb = clean + np.random.default_rng(0).normal(0, 0.01 * clean.mean(), clean.shape)
+    choice = choose_prior(rgb, case.response, pixels, spectra, **OPTIONS)
+    assert choice.prior == "spectra"
+    assert choice.held_out_errors["spectra"] < 0.8 * choice.held_out_errors["regression"]
+
+
+def test_prior_errors_name_the_problem(span_of_three):
+    truth, response, pixels, spectra = span_of_three
+    rgb = truth @ response
+    with pytest.raises(SpectwinInputError, match="prior: expected one of"):
+        spectralize(rgb, response, known_pixels=pixels, known_spectra=spectra, prior="smooth")
+    band = BandImage(0, 3, truth[..., 3], 0.0)
+    with pytest.raises(SpectwinInputError, match="learns its map from point spectra"):
+        spectralize(rgb, response, band_images=[band], prior="regression")
+    with pytest.raises(SpectwinInputError, match="at least 5 separate spots"):
+        choose_prior(rgb, response, pixels[:4:2], spectra[:4:2])
+    with pytest.raises(SpectwinInputError, match="do not pass one"):
+        choose_prior(rgb, response, pixels, spectra, prior="spectra")
+
+
+def test_dynamic_compression_keeps_black_pixels_noise_out_of_lit_neighbours():
+    """Eq. 10.2 with noisy, filtered band images (Eq. 10.1) across a black holder bar: the lit
+    pixels beside it must come out about as well as without compression."""
+    case = holder_bar_case(side=48)
+    errors = {
+        p_dyn: relative_error(
+            reconstruct(
+                case.rgb,
+                case.response,
+                band_images=case.band_images,
+                p_dyn=p_dyn,
+                appearance="rgbxy",
+            ).spectra,
+            case.truth,
+        )[case.beside].mean()
+        for p_dyn in (0.0, 1.0)
+    }
+    assert errors[1.0] < 1.5 * errors[0.0]
