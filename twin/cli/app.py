@@ -11,6 +11,7 @@ from typing import Annotated
 
 import typer
 
+from twin.cli.btf import register as register_btf
 from twin.cli.camera import register as register_camera
 from twin.cli.choices import Chart, Light, RGBCamera
 from twin.cli.dome import register as register_dome
@@ -257,6 +258,7 @@ def demo(
         console.print(f"report: {out / 'report.html'}")
 
 
+register_btf(app)
 register_camera(app)
 register_gonio(app)
 register_dome(app)

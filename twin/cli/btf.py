@@ -1,0 +1,85 @@
+"""``spectwin btf export`` and ``spectwin btf import``: a BTF store as spectral OpenEXR slices
+(one per direction pair, Fichet et al. 2021 layout) with a JSON direction index, and back
+(:mod:`recon.btf.exchange`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from twin.cli.errors import SpectwinGroup, fail, require_output_folder
+from twin.cli.output import JsonFlag, print_summary
+from twin.cli.store import require_sound_btf
+
+__all__ = ["register"]
+
+btf_app = typer.Typer(
+    cls=SpectwinGroup,
+    help="Exchange BTF stores as spectral OpenEXR slices with a JSON direction index.",
+    no_args_is_help=True,
+)
+
+
+@btf_app.command("export")
+def export(
+    store: Annotated[Path, typer.Argument(help="A complete BTF store (.btf.zarr).")],
+    out: Annotated[Path, typer.Option(help="New or empty folder for the slices.")],
+    as_json: JsonFlag = False,
+) -> None:
+    """Write one spectral EXR per direction pair (pair_00000.exr, ...; float32, T.<nm>nm
+    channels) and directions.json (light and view direction per file, wavelengths, texture size,
+    the store's attributes), the index last.
+
+    Example: spectwin btf export out/demo/colour_checker.btf.zarr --out out/slices
+    """
+    from recon.btf.exchange import export_btf
+    from recon.btf.store import BTFStore
+
+    require_output_folder(out)
+    require_sound_btf(store, "export")
+    btf = BTFStore.open(store)
+    index = export_btf(btf, out, progress=not as_json)
+    summary = {
+        "pairs": btf.n_pairs,
+        "texels": "x".join(str(v) for v in btf.texels),
+        "bands": btf.grid.size,
+        "index": str(index),
+    }
+    print_summary(summary, f"exported {btf.material}", as_json)
+
+
+@btf_app.command("import")
+def import_(
+    source: Annotated[
+        Path, typer.Argument(help="A folder of spectral EXR slices with directions.json.")
+    ],
+    out: Annotated[Path, typer.Option(help="The new BTF store (.btf.zarr); must not exist.")],
+    as_json: JsonFlag = False,
+) -> None:
+    """Read spectral EXR slices and their direction index (as spectwin btf export writes them)
+    into a new BTF store; the store is complete once every slice is in.
+
+    Example: spectwin btf import out/slices --out out/copy.btf.zarr
+    """
+    from recon.btf.exchange import import_exr_slices
+
+    if out.exists():
+        fail(f"--out {out}: exists; expected a new BTF store path (nothing was overwritten)")
+    require_output_folder(out.parent)
+    btf = import_exr_slices(source, out, progress=not as_json)
+    summary = {
+        "pairs": btf.n_pairs,
+        "texels": "x".join(str(v) for v in btf.texels),
+        "bands": btf.grid.size,
+        "material": btf.material,
+        "store": str(out),
+        "complete": btf.complete,
+    }
+    print_summary(summary, "imported BTF", as_json)
+
+
+def register(app: typer.Typer) -> None:
+    """Add the ``btf`` command group to ``app``."""
+    app.add_typer(btf_app, name="btf")
