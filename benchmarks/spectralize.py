@@ -4,7 +4,8 @@ Prints JSON: the time split (neighbour graph, linking its components, assembly o
 parts, solve), wall and process CPU time with the machine's load, peak memory, energy and error, and
 (with ``--lsqr-iterations N``) the thesis's LSQR for comparison, which at 1 MP takes long.
 
-Run: ``python -m benchmarks.spectralize [--side 1000] [--lsqr-iterations 500]``.
+Run: ``python -m benchmarks.spectralize [--side 1000] [--lsqr-iterations 500]
+[--prior regression]``.
 """
 
 from __future__ import annotations
@@ -51,6 +52,12 @@ def main() -> None:
         default=0.0,
         help="Gaussian noise on the known spectra, fraction of their mean (makes them full rank)",
     )
+    parser.add_argument(
+        "--prior",
+        choices=("spectra", "regression"),
+        default="spectra",
+        help="What the appearance prior holds alike (recon.spectralize.solve.build_problem)",
+    )
     args = parser.parse_args()
     truth, rgb, response = _scene(args.side, args.seed)
     pixels, spectra = known_spectra_from_mask(truth, whisk_broom_mask(truth.shape[:2]))
@@ -60,6 +67,7 @@ def main() -> None:
     report = {"machine": machine_description(), "pixels": args.side**2, "bands": truth.shape[-1]}
     report["known_pixels"] = int(pixels.size)
     report["spectral_noise"] = args.spectral_noise
+    report["prior"] = args.prior
     runs = [("multigrid", tol, 500) for tol in args.tol]
     if args.lsqr_iterations:
         runs.append(("lsqr", 1e-14, args.lsqr_iterations))
@@ -70,6 +78,7 @@ def main() -> None:
             response,
             point_spectra=known,
             appearance="rgbxy",
+            prior=args.prior,
             solver=solver,
             tol=tol,
             max_iterations=iterations,

@@ -51,7 +51,7 @@ def test_choose_prior_picks_the_regression_on_linear_spectra(span_of_three):
     truth, response, pixels, spectra = span_of_three
     choice = choose_prior(truth @ response, response, pixels, spectra, **OPTIONS)
     assert choice.prior == "regression"
-    assert choice.spots == 25 and choice.held_out_spots == 5
+    assert choice.spots == 25
     assert choice.held_out_errors["regression"] < 1e-3 < choice.held_out_errors["spectra"]
 
 
@@ -59,8 +59,8 @@ def test_choose_prior_cuts_push_broom_lines_into_segments(span_of_three):
     truth, response, _, _ = span_of_three
     pixels, spectra = known_spectra_from_mask(truth, push_broom_mask(truth.shape[:2]))
     choice = choose_prior(truth @ response, response, pixels, spectra, **OPTIONS)
-    # Two lines, ten segments each, every fifth segment held out.
-    assert (choice.spots, choice.held_out_spots) == (20, 4)
+    # Two lines, ten segments each.
+    assert choice.spots == 20
     assert choice.prior == "regression"
 
 
