@@ -109,3 +109,15 @@ def test_dynamic_compression_keeps_black_pixels_noise_out_of_lit_neighbours():
         for p_dyn in (0.0, 1.0)
     }
     assert errors[1.0] < 1.5 * errors[0.0]
+
+
+def test_choose_prior_counts_spots_per_image_of_a_joint_reconstruction(span_of_three):
+    """Two images reconstructed jointly (BTF slices): a spot never spans images, even where the
+    same pixel is known in both."""
+    truth, response, pixels, spectra = span_of_three
+    stack = np.stack([truth, 0.5 * truth])
+    both = np.concatenate([pixels, pixels + truth.shape[0] * truth.shape[1]])
+    choice = choose_prior(
+        stack @ response, response, both, np.concatenate([spectra, 0.5 * spectra]), **OPTIONS
+    )
+    assert choice.spots == 50 and choice.prior == "regression"
