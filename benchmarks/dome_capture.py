@@ -28,15 +28,12 @@ from benchmarks.common import (
     peak_rss_mib,
 )
 from twin.dome.programs import DomeCaptureSize, dome_run_program
+from twin.studies.sweep_points import storage_mb
 
 
 def _cpu_s() -> float:
     usage = resource.getrusage(resource.RUSAGE_SELF)
     return usage.ru_utime + usage.ru_stime
-
-
-def _size_mb(path: Path) -> float:
-    return sum(item.stat().st_size for item in path.rglob("*") if item.is_file()) / 1e6
 
 
 def main() -> None:
@@ -66,7 +63,7 @@ def main() -> None:
             "renders": plan["renders"],
             "s_per_render": round(wall_s / plan["renders"], 2),
             "frame_size": plan["frame_size"],
-            "store_mb": round(_size_mb(store.path), 1),
+            "store_mb": round(storage_mb(store.path), 1),
             "rig_estimate_s": round(plan["estimated_duration_s"], 1),
         }
     print(

@@ -45,15 +45,13 @@ __all__ = [
 @dataclass(frozen=True)
 class SparseInput:
     """What every method sees: noisy camera values ``rgb`` ``(H, W, C)``, the projection
-    ``response`` ``(K, C)``, the known spectra ``spectra`` ``(m, K)`` at the row-major
-    ``pixels`` and the standard deviation ``noise_std`` of the RGB noise (for the methods that
-    model it)."""
+    ``response`` ``(K, C)`` and the known spectra ``spectra`` ``(m, K)`` at the row-major
+    ``pixels``."""
 
     rgb: np.ndarray
     response: np.ndarray
     pixels: np.ndarray
     spectra: np.ndarray
-    noise_std: float = 0.0
 
 
 _SPECTRALIZATION = {"appearance": "rgbxy", "weights": EnergyWeights(delta=0.0), "tol": 1e-8}
@@ -102,7 +100,7 @@ METHODS: dict[str, Callable[[SparseInput], np.ndarray]] = {
     "imai": lambda d: baselines.recover(d.rgb, d.response, method="imai"),
     "hardeberg": lambda d: baselines.recover(d.rgb, d.spectra, d.pixels, method="hardeberg"),
     "murakami": lambda d: baselines.recover(
-        d.rgb, d.response, d.spectra, d.pixels, rgb_noise_std=d.noise_std, method="murakami"
+        d.rgb, d.response, d.spectra, d.pixels, method="murakami"
     ),
     "dong": lambda d: baselines.recover(d.rgb, d.response, d.spectra, method="dong"),
     "a_plus": lambda d: _a_plus(d, 0.1),
@@ -177,9 +175,8 @@ def run_protocol(
     truth, response = np.asarray(truth, np.float64), np.asarray(response, np.float64)
     _check_case(truth, response, methods)
     pixels, spectra = known_spectra_from_mask(truth, mask)
-    clean = truth @ response
-    rgb = add_rgb_noise(clean, noise_fraction, np.random.default_rng(seed))
-    data = SparseInput(rgb, response, pixels, spectra, noise_fraction * float(np.mean(clean)))
+    rgb = add_rgb_noise(truth @ response, noise_fraction, np.random.default_rng(seed))
+    data = SparseInput(rgb, response, pixels, spectra)
     estimates = {name: METHODS[name](data).reshape(truth.shape) for name in methods}
     maps = {name: relative_error(est, truth) for name, est in estimates.items()}
     return ProtocolResult(maps, estimates, int(pixels.size))

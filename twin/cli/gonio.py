@@ -463,11 +463,11 @@ def capture(
             summary["recaptured"] = recaptured
         for line in recaptured:
             typer.echo(f"re-captured {line}")
+        print_summary(summary, "capture (simulated backend)", as_json)
     except SessionInterrupted as stop:
         _interrupted(store, stop.done, stop.total)
-    except KeyboardInterrupt:  # outside the session's own handling, or a second Ctrl-C
+    except KeyboardInterrupt:  # outside the session's own handling (the summary), or a second one
         _interrupted(store)
-    print_summary(summary, "capture (simulated backend)", as_json)
 
 
 def _is_dome(capture) -> bool:

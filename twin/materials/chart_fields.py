@@ -25,9 +25,11 @@ class FieldMasks:
     glossy: np.ndarray
     masks: np.ndarray
 
-    def means(self, texture: np.ndarray) -> np.ndarray:
-        """Each field interior's mean spectrum ``(n_fields, K)`` of a texture ``(H, W, K)``."""
-        return np.array([texture[mask].mean(axis=0) for mask in self.masks])
+    def means(self, texture: np.ndarray, fields: np.ndarray | None = None) -> np.ndarray:
+        """The mean spectrum ``(n, K)`` of a texture ``(H, W, K)`` in each field interior, or in
+        those of the indices ``fields`` (each must hold texels)."""
+        masks = self.masks if fields is None else self.masks[fields]
+        return np.array([texture[mask].mean(axis=0) for mask in masks])
 
 
 def field_masks(

@@ -184,8 +184,8 @@ def chart_field_errors(material, view_dirs, measured, truth, grid, interior):
         fields = field_masks(material, view, estimate.shape[0], interior=interior)
         masks = fields.masks[~fields.glossy]
         seen = masks.any(axis=(1, 2))
-        means = np.array([estimate[mask].mean(axis=0) for mask in masks[seen]])
-        true_means = np.array([reference[mask].mean(axis=0) for mask in masks[seen]])
+        shown = np.flatnonzero(~fields.glossy)[seen]
+        means, true_means = fields.means(estimate, shown), fields.means(reference, shown)
         relative.append(np.full(seen.size, np.nan))
         colour.append(np.full(seen.size, np.nan))
         relative[-1][seen] = relative_error(means, true_means)
