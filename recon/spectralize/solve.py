@@ -16,9 +16,12 @@ solved for the scaled image :math:`X_i = f_i S_i` with :math:`f_i = (\\sum_c V_i
 - general device integrals :math:`\\sum_{i,l} w_{i,l,j} S_{i,l} = D_j` (Eq. 6.9):
   :class:`DeviceIntegrals`.
 
-The neighbours :math:`N_i` come from :mod:`recon.spectralize.appearance`. The weights are
-normalized by
-the number of terms (Eq. 6.11, or Eq. 10.13 with the smoothness term), so the primed weights
+The neighbours :math:`N_i` come from :mod:`recon.spectralize.appearance`. With
+``prior="regression"`` the prior and smoothness terms act on :math:`X - B` instead, where
+:math:`B_i = f_i V_i W` and :math:`W` is the least-squares map from camera values to the point
+spectra (Hardeberg's inverse matrix, Sec. 6.1; :func:`build_problem`). The weights are
+normalized by the number of terms (Eq. 6.11, or Eq. 10.13 with the smoothness term), so the primed
+weights
 :class:`EnergyWeights` state the terms' relative importance (defaults
 :math:`\\alpha' = \\beta' = \\gamma' = 1`; :math:`\\delta' = 0.1` with band images, 0 otherwise).
 
