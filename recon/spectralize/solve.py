@@ -21,8 +21,7 @@ The neighbours :math:`N_i` come from :mod:`recon.spectralize.appearance`. With
 :math:`B_i = f_i V_i W` and :math:`W` is the least-squares map from camera values to the point
 spectra (Hardeberg's inverse matrix, Sec. 6.1; :func:`build_problem`). The weights are
 normalized by the number of terms (Eq. 6.11, or Eq. 10.13 with the smoothness term), so the primed
-weights
-:class:`EnergyWeights` state the terms' relative importance (defaults
+weights :class:`EnergyWeights` state the terms' relative importance (defaults
 :math:`\\alpha' = \\beta' = \\gamma' = 1`; :math:`\\delta' = 0.1` with band images, 0 otherwise).
 
 Solvers: ``"lsqr"`` and ``"lsmr"`` (scipy, matrix-free on the operator :math:`M_E` of Eq. 6.12,
