@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from recon.btf.store import BTFStore
+from recon.btf.store import BTF_UNITS, BTFStore
 from recon.errors import SpectwinDataError, SpectwinInputError
 from recon.progress import progress_steps
 from recon.spectra import WavelengthGrid
@@ -99,7 +99,7 @@ def export_btf(store: BTFStore, out_dir: str | Path, *, progress: bool = False) 
     index = {
         "format": EXCHANGE_FORMAT,
         "format_version": EXCHANGE_VERSION,
-        "units": store.attrs.get("units", "1/sr"),
+        "units": BTF_UNITS,
         "texels": list(store.texels),
         "wavelengths_nm": store.grid.wavelengths_nm.tolist(),
         "attributes": {k: v for k, v in store.attrs.items() if k not in _STORE_ATTRIBUTES},
@@ -137,6 +137,10 @@ def _read_index(folder: Path) -> dict[str, Any]:
         raise SpectwinInputError(
             f"{path}: format version {index.get('format_version')!r} is not supported "
             f"(expected {EXCHANGE_VERSION})"
+        )
+    if index.get("units") != BTF_UNITS:
+        raise SpectwinInputError(
+            f"{path}: units {index.get('units')!r}, expected {BTF_UNITS!r} (BTF reflectance)"
         )
     for field, kind in (("pairs", list), ("wavelengths_nm", list), ("texels", list)):
         if not isinstance(index.get(field), kind) or not index[field]:

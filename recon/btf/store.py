@@ -67,10 +67,19 @@ from hwbridge.integrity import (
 from recon.errors import SpectwinDataError, SpectwinInputError
 from recon.spectra import WavelengthGrid
 
-__all__ = ["BTF_FORMAT", "BTF_FORMAT_VERSION", "COMPRESSED_GROUP", "BTFStore", "write_btf"]
+__all__ = [
+    "BTF_FORMAT",
+    "BTF_FORMAT_VERSION",
+    "BTF_UNITS",
+    "COMPRESSED_GROUP",
+    "BTFStore",
+    "write_btf",
+]
 
 BTF_FORMAT = "spectwin.btf"
 BTF_FORMAT_VERSION = 1
+BTF_UNITS = "1/sr"
+"""Units of every store's reflectance (a BRDF value per texel)."""
 COMPRESSED_GROUP = "pca"
 """Name of the group that holds the compressed form (ARCHITECTURE.md: ``pca/``)."""
 
@@ -260,7 +269,7 @@ class BTFStore:
             {
                 "format": BTF_FORMAT,
                 "format_version": BTF_FORMAT_VERSION,
-                "units": "1/sr",
+                "units": BTF_UNITS,
                 "material": material,
                 "source_capture": None if source_capture is None else str(source_capture),
                 "calibration": calibration,
@@ -273,7 +282,7 @@ class BTFStore:
             chunks=(1, height, width, n_bands),
             dtype="float32",
             fill_value=np.nan,
-            attributes={"units": "1/sr", "axes": ["pair", "y", "x", "band"]},
+            attributes={"units": BTF_UNITS, "axes": ["pair", "y", "x", "band"]},
             compressors=checksummed_compressors(),
         )
         for name, directions in (("light_dirs", light_dirs), ("view_dirs", view_dirs)):

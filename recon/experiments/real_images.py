@@ -28,6 +28,7 @@ import colour
 import numpy as np
 
 from recon.errors import SpectwinInputError
+from recon.experiments.sampling import add_rgb_noise
 from recon.experiments.synthetic_images import material_mosaic, smooth_blend
 from recon.measured_data import (
     camera_names,
@@ -42,6 +43,7 @@ __all__ = [
     "REFLECTANCE_SETS",
     "HolderBarCase",
     "RealTestImage",
+    "daylight_response",
     "holder_bar_case",
     "real_test_image",
     "real_test_image_names",
@@ -157,8 +159,7 @@ def holder_bar_case(
     bar = np.abs(rows - centre) < 0.07 * side
     truth = np.where(bar[..., None], 0.0, case.truth)
     rng = np.random.default_rng(seed)
-    clean = truth @ case.response
-    rgb = clean + rng.normal(0, rgb_noise * clean.mean(), clean.shape)
+    rgb = add_rgb_noise(truth @ case.response, rgb_noise, rng)
     bands = tuple(
         BandImage(
             0,

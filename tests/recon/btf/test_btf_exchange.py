@@ -89,6 +89,9 @@ def test_refusals_name_what_is_wrong(store, tmp_path):
         SpectwinDataError, match=r"pair_00000.exr: \(5, 7\) px .* expected \(5, 8\)"
     ):
         import_exr_slices(tmp_path / "slices", tmp_path / "y.btf.zarr")
+    index_path.write_text(json.dumps({**index, "texels": [5, 7], "units": "W/m2/sr"}))
+    with pytest.raises(SpectwinInputError, match="units 'W/m2/sr', expected '1/sr'"):
+        import_exr_slices(tmp_path / "slices", tmp_path / "w.btf.zarr")
     index_path.write_text(json.dumps({**index, "format": "ubo2014"}))
     with pytest.raises(SpectwinInputError, match="format 'ubo2014', expected"):
         import_exr_slices(tmp_path / "slices", tmp_path / "z.btf.zarr")
