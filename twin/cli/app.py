@@ -17,6 +17,7 @@ from twin.cli.choices import Chart, Light, RGBCamera
 from twin.cli.dome import register as register_dome
 from twin.cli.errors import SpectwinGroup, require_output_folder, run_failed
 from twin.cli.gonio import register as register_gonio
+from twin.cli.material import register as register_material
 from twin.cli.output import JsonFlag, SeedOption, console, print_summary
 from twin.cli.store import register as register_store
 from twin.cli.sweep import register as register_sweep
@@ -261,6 +262,7 @@ def demo(
 register_btf(app)
 register_camera(app)
 register_gonio(app)
+register_material(app)
 register_dome(app)
 register_store(app)
 register_sweep(app)

@@ -418,6 +418,8 @@ def capture(
             material, spp = stored.get("material", material), stored["spp"]
             dome = {name: stored.get(name, value) for name, value in dome.items()}
     _refuse_unused(ctx, program)
+    if Path(material).suffix:  # a user's material file: the store records where it lies
+        material = str(Path(material).resolve())
     built, notes = _program_of(
         program,
         calibration=calibration,
@@ -701,15 +703,17 @@ def evaluate(
     ] = 64,
     as_json: JsonFlag = False,
 ) -> None:
-    """Compare a processed BTF with the twin's true BTF: per-field Eq. 6.8 and corner errors;
-    for a dome BTF also Delta E94 (diffuse fields, or the material's texels) and the texture's
+    """Compare a processed BTF with the twin's true BTF: per-field Eq. 6.8 and corner errors
+    (a material without chart fields: per texel, Eq. 6.8 and Delta E94); for a dome BTF also
+    Delta E94 (diffuse fields, or the material's texels) and the texture's
     shift against the truth.
 
     Example: spectwin evaluate out/cc.btf.zarr --figure out/cc_vs_truth.png --json
     """
     from recon.btf.store import BTFStore
     from twin.validate.dome_evaluation import evaluate_dome, write_dome_figure
-    from twin.validate.gonio_evaluation import evaluate_gonio, write_gonio_figure
+    from twin.validate.gonio_evaluation import evaluate_gonio, pair_label, write_gonio_figure
+    from twin.validate.gonio_texel_evaluation import GonioTexelEvaluation, write_texel_figure
 
     require_sound_btf(btf, "evaluate", allow_unregistered=True)
     if figure is not None:
@@ -720,11 +724,14 @@ def evaluate(
     summary = result.summary()
     if figure is not None:
         figure.parent.mkdir(parents=True, exist_ok=True)
-        written = (
-            write_dome_figure(result, figure)
-            if dome
-            else write_gonio_figure(result, BTFStore.open(btf), figure)
-        )
+        if dome:
+            written = write_dome_figure(result, figure)
+        elif isinstance(result, GonioTexelEvaluation):
+            store = BTFStore.open(btf)
+            labels = [pair_label(store, pair) for pair in result.pairs]
+            written = write_texel_figure(result, labels, figure)
+        else:
+            written = write_gonio_figure(result, BTFStore.open(btf), figure)
         summary["figure"] = str(written)
     title = "dome BTF vs the twin's truth" if dome else "BTF vs the twin's truth"
     print_summary(summary, title, as_json)

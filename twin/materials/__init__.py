@@ -11,6 +11,7 @@ from pathlib import Path
 
 from pydantic import TypeAdapter
 
+from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra
 from twin.materials.builders import (
     MATERIAL_GRID,
@@ -21,6 +22,7 @@ from twin.materials.builders import (
 )
 from twin.materials.config import MaterialConfig
 from twin.materials.surfaces import SurfacePart
+from twin.materials.user import build_user
 from twin.rigs.yaml_config import (
     read_yaml_mapping,
     resolve_scene_file,
@@ -67,8 +69,15 @@ def available_materials() -> list[str]:
 
 
 def load_material(name_or_path: str | Path) -> Material:
-    """Build the material described by ``scenes/materials/<name>.yaml`` (or a path)."""
+    """Build the material described by ``scenes/materials/<name>.yaml`` (or a path; a user's
+    material, :mod:`twin.materials.user`, reads its files relative to its YAML file)."""
     path = resolve_scene_file(name_or_path, MATERIAL_DIR, "material")
     config = validate_document(_Document, read_yaml_mapping(path), path)
-    parts, spectra, pairs = _BUILDERS[config.material](config)
+    if config.material == "user":
+        try:
+            parts, spectra, pairs = build_user(config, path.parent)
+        except SpectwinInputError as error:
+            raise SpectwinInputError(f"{path}: {error}") from None
+    else:
+        parts, spectra, pairs = _BUILDERS[config.material](config)
     return Material(config.name, config.size_m, tuple(parts), spectra, tuple(pairs))

@@ -1,4 +1,5 @@
-"""Schema of ``scenes/materials/*.yaml``: which ground-truth material and its parameters."""
+"""Schema of ``scenes/materials/*.yaml``: which ground-truth material and its parameters, or a
+user's own sample made from files (``material: user``, :mod:`twin.materials.user`)."""
 
 from __future__ import annotations
 
@@ -9,10 +10,15 @@ from pydantic import Field, model_validator
 from twin.rigs.yaml_config import Positive, StrictModel
 
 __all__ = [
+    "BSDFConfig",
     "ColorChecker16Config",
     "FabricConfig",
     "LegoConfig",
     "MaterialConfig",
+    "RGBTextureConfig",
+    "SpectrumConfig",
+    "UserMaterialConfig",
+    "UserPartConfig",
     "WallpaperConfig",
 ]
 
@@ -61,7 +67,110 @@ class WallpaperConfig(_Material):
     roughness: Annotated[float, Field(gt=0, le=1)] = 0.25
 
 
+def _exactly_one(model: StrictModel, names: tuple[str, ...], what: str) -> None:
+    given = [name for name in names if getattr(model, name) is not None]
+    if len(given) != 1:
+        raise ValueError(f"expected exactly one of {', '.join(names)} for {what}, got {given}")
+
+
+class SpectrumConfig(StrictModel):
+    """One reflectance spectrum: a CSV file (header ``wavelength_nm,<name>,...``; ``column``
+    picks one of several), a ``colour`` dataset entry ``"<dataset>/<name>"`` (a ColorChecker
+    of ``colour.SDS_COLOURCHECKERS``, ``"CIE 1995 TCS"`` or ``"NIST CQS 9.0 VS"``), or
+    ``chart``, a patch of the ColorChecker the built-in materials use."""
+
+    csv: str | None = None
+    column: str | None = None
+    colour: str | None = None
+    chart: str | None = None
+
+    @model_validator(mode="after")
+    def _one_source(self) -> SpectrumConfig:
+        _exactly_one(self, ("csv", "colour", "chart"), "a spectrum")
+        if self.column is not None and self.csv is None:
+            raise ValueError("column: names a column of a csv file; give csv too")
+        return self
+
+
+class RGBTextureConfig(StrictModel):
+    """An sRGB image upsampled to spectra by ``method`` (:mod:`recon.rgb_upsampling`); the
+    spectralization takes ``known_spectra`` (a CSV, one column per spot) measured at
+    ``known_pixels`` (row, column of the image, in the CSV's column order)."""
+
+    image: str
+    method: Literal["jakob2019", "spectralization"]
+    known_spectra: str | None = None
+    known_pixels: list[tuple[int, int]] | None = None
+    max_texels: Annotated[int, Field(ge=1, le=1024)] = 256
+
+    @model_validator(mode="after")
+    def _spots_for_spectralization(self) -> RGBTextureConfig:
+        spots = (self.known_spectra, self.known_pixels)
+        if self.method == "spectralization" and None in spots:
+            raise ValueError("method spectralization: give known_spectra and known_pixels")
+        if self.method == "jakob2019" and spots != (None, None):
+            raise ValueError("method jakob2019: takes no known_spectra or known_pixels")
+        return self
+
+
+class BSDFConfig(StrictModel):
+    """A part's scattering: ``diffuse`` (Lambertian), ``rough_plastic`` (a rough dielectric
+    coating of index 1.5 over the diffuse base, GGX ``roughness``) or ``rough_conductor`` (a
+    metal of Mitsuba's presets, e.g. ``Ag``, ``Al``, ``Au``, ``Cu``, with GGX ``roughness``)."""
+
+    type: Literal["diffuse", "rough_plastic", "rough_conductor"] = "diffuse"
+    roughness: Annotated[float, Field(gt=0, le=1)] | None = None
+    metal: str | None = None
+
+    @model_validator(mode="after")
+    def _parameters_of_type(self) -> BSDFConfig:
+        if self.type != "diffuse" and self.roughness is None:
+            raise ValueError(f"type {self.type}: needs a roughness in (0, 1]")
+        if self.type == "diffuse" and self.roughness is not None:
+            raise ValueError("type diffuse: takes no roughness")
+        if (self.type == "rough_conductor") != (self.metal is not None):
+            raise ValueError("metal: given exactly for type rough_conductor")
+        return self
+
+
+class UserPartConfig(StrictModel):
+    """One part of a user's sample: its geometry (``mesh``, a file trimesh reads, in the sample
+    frame with z the normal, scaled to metres by ``mesh_scale``; omitted: a flat patch filling
+    the sample's square), its diffuse reflectance (exactly one of ``spectrum``, ``texture``, a
+    spectral OpenEXR of reflectance, or ``rgb_texture``) and its ``bsdf``."""
+
+    name: Annotated[str, Field(pattern=r"^[A-Za-z][A-Za-z0-9_]*$")]
+    mesh: str | None = None
+    mesh_scale: Positive = 1.0
+    spectrum: SpectrumConfig | None = None
+    texture: str | None = None
+    rgb_texture: RGBTextureConfig | None = None
+    bsdf: BSDFConfig = BSDFConfig()
+
+    @model_validator(mode="after")
+    def _one_reflectance(self) -> UserPartConfig:
+        if self.bsdf.type == "rough_conductor":
+            if (self.spectrum, self.texture, self.rgb_texture) != (None, None, None):
+                raise ValueError("a rough_conductor's colour is its metal's; give no reflectance")
+            return self
+        _exactly_one(self, ("spectrum", "texture", "rgb_texture"), f"part {self.name}")
+        return self
+
+
+class UserMaterialConfig(_Material):
+    material: Literal["user"]
+    parts: Annotated[list[UserPartConfig], Field(min_length=1, max_length=64)]
+
+    @model_validator(mode="after")
+    def _unique_part_names(self) -> UserMaterialConfig:
+        names = [part.name for part in self.parts]
+        repeated = sorted({name for name in names if names.count(name) > 1})
+        if repeated:
+            raise ValueError(f"parts: the names {repeated} are used more than once")
+        return self
+
+
 MaterialConfig = Annotated[
-    ColorChecker16Config | FabricConfig | LegoConfig | WallpaperConfig,
+    ColorChecker16Config | FabricConfig | LegoConfig | WallpaperConfig | UserMaterialConfig,
     Field(discriminator="material"),
 ]

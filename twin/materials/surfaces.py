@@ -2,9 +2,10 @@
 
 A sample, a sample holder or a target is a list of :class:`SurfacePart`: one mesh and one
 material each, with the material's spectral reflectance given explicitly on a wavelength grid so
-that renders and the noise-free truth use exactly the same spectra. Parts with a single
-reflectance need no texture, which Mitsuba only offers in RGB. :mod:`twin.render.shapes` turns
-them into Mitsuba shapes.
+that renders and the noise-free truth use exactly the same spectra. A part may instead carry a
+spectral texture (one reflectance spectrum per texel, looked up through the mesh's texture
+coordinates), which the node transport (:mod:`twin.render.node_transport`) evaluates itself:
+Mitsuba's own textures are RGB. :mod:`twin.render.shapes` turns parts into Mitsuba shapes.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ import trimesh
 from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra
 
-__all__ = ["SurfacePart", "transformed"]
+__all__ = ["SurfacePart", "texture_coordinates", "transformed"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -38,6 +39,11 @@ class SurfacePart:
     conductor
         A Mitsuba conductor preset (e.g. ``"Ag"``, ``"Al"``) instead of the diffuse base; its
         spectral reflectance then follows from the metal's complex index (Fresnel).
+    texture
+        ``None``, or the diffuse reflectance per texel ``(H, W, K)`` (row 0 at the top, texture
+        coordinate v = 1; column 0 at u = 0), which then replaces ``reflectance`` in renders;
+        ``reflectance`` is its mean. The mesh must carry per-vertex texture coordinates
+        (``mesh.visual.uv``).
     """
 
     name: str
@@ -45,6 +51,7 @@ class SurfacePart:
     reflectance: SampledSpectra
     roughness: float | None = None
     conductor: str | None = None
+    texture: SampledSpectra | None = None
 
     def __post_init__(self) -> None:
         if self.reflectance.values.ndim != 1:
@@ -58,10 +65,42 @@ class SurfacePart:
             )
         if len(self.mesh.faces) == 0:
             raise SpectwinInputError(f"{self.name}: the mesh has no faces")
+        if self.texture is not None:
+            self._check_texture()
+
+    def _check_texture(self) -> None:
+        values = self.texture.values
+        if values.ndim != 3 or min(values.shape[:2]) < 1:
+            raise SpectwinInputError(
+                f"{self.name}: expected a texture of shape (height, width, wavelengths), got "
+                f"{values.shape}"
+            )
+        if np.any(values < 0) or np.any(values > 1):
+            raise SpectwinInputError(f"{self.name}: expected texture reflectances in [0, 1]")
+        if self.conductor is not None:
+            raise SpectwinInputError(f"{self.name}: a conductor takes no diffuse texture")
+        uv = texture_coordinates(self.mesh)
+        if uv is None or len(uv) != len(self.mesh.vertices):
+            raise SpectwinInputError(
+                f"{self.name}: a textured part needs texture coordinates on every mesh vertex"
+            )
+
+    @property
+    def texels(self) -> tuple[int, int]:
+        """``(height, width)`` of the texture; ``(1, 1)`` for one reflectance."""
+        return (1, 1) if self.texture is None else self.texture.values.shape[:2]
+
+
+def texture_coordinates(mesh: trimesh.Trimesh) -> np.ndarray | None:
+    """The mesh's per-vertex texture coordinates ``(n_vertices, 2)``, or ``None``."""
+    uv = getattr(mesh.visual, "uv", None)
+    return None if uv is None else np.asarray(uv, np.float64)
 
 
 def transformed(part: SurfacePart, matrix: np.ndarray) -> SurfacePart:
     """A copy of ``part`` with its mesh moved by a 4x4 homogeneous ``matrix``."""
     mesh = part.mesh.copy()
     mesh.apply_transform(matrix)
-    return SurfacePart(part.name, mesh, part.reflectance, part.roughness, part.conductor)
+    return SurfacePart(
+        part.name, mesh, part.reflectance, part.roughness, part.conductor, part.texture
+    )

@@ -186,6 +186,25 @@ def _scalar(value: float):
     return dr.opaque(mi.Float, float(value))
 
 
+def _texel_nodes(part: SurfacePart) -> np.ndarray:
+    """A part's reflectance at the nodes, one row per texel ``(H * W, n_nodes)``."""
+    spectra = part.reflectance if part.texture is None else part.texture
+    rows = spectra.values.reshape(-1, spectra.grid.size)
+    return np.stack([np.interp(NODES_NM, spectra.wavelengths_nm, row) for row in rows])
+
+
+def _texel_index(uv, part, texels: dict, active):
+    """Row of :attr:`NodeScene.reflectance` seen at texture coordinates ``uv`` of ``part``:
+    the nearest texel (row 0 at v = 1), the part's only row where it has no texture."""
+    height = dr.gather(mi.UInt32, texels["height"], part, active)
+    width = dr.gather(mi.UInt32, texels["width"], part, active)
+    column = mi.UInt32(dr.clip(uv.x, 0.0, 1.0) * mi.Float(width))
+    row = mi.UInt32(dr.clip(1.0 - uv.y, 0.0, 1.0) * mi.Float(height))
+    column, row = dr.minimum(column, width - 1), dr.minimum(row, height - 1)
+    first = dr.gather(mi.UInt32, texels["first"], part, active)
+    return first + row * width + column
+
+
 def _conductor_index(part: SurfacePart) -> tuple[np.ndarray, np.ndarray]:
     """Real and imaginary index ``(n_nodes,)`` of a part's metal (Mitsuba's tabulated data)."""
     parameters = mi.traverse(mi.load_dict(part_bsdf(part)))
@@ -228,13 +247,16 @@ class NodeScene:
         for registered, shape in zip(registry, self._scene.shapes(), strict=True):
             part_of[registered] = names.index(shape.id())
         self._part_of = part_of
-        self.reflectance = np.stack(
-            [
-                np.interp(NODES_NM, part.reflectance.wavelengths_nm, part.reflectance.values)
-                for part in parts
-            ]
-        )
-        """Lambertian reflectance of each part at the nodes ``(n_parts, n_nodes)``."""
+        self.reflectance = np.concatenate([_texel_nodes(part) for part in parts])
+        """Lambertian reflectance at the nodes ``(n_texels, n_nodes)``: each part's texels in
+        turn (one for a part of one reflectance)."""
+        sizes = np.array([part.texels for part in parts], np.uint32)  # (n_parts, 2): H, W
+        counts = sizes.prod(axis=1)
+        self._texels = {
+            "first": (np.cumsum(counts) - counts).astype(np.uint32),
+            "height": sizes[:, 0],
+            "width": sizes[:, 1],
+        }
         self._metal_index = None
         if any(part.conductor is not None for part in parts):
             eta = np.zeros((len(parts), NODES_NM.size))
@@ -317,6 +339,7 @@ class NodeScene:
         scene = self._scene
         part_of = mi.UInt32(self._part_of)
         reflectance = mi.Float(self.reflectance.ravel().astype(np.float32))
+        texels = {name: mi.UInt32(values) for name, values in self._texels.items()}
         count = NODES_NM.size
         lobes = [
             mi.BSDFContext(mi.TransportMode.Radiance, int(flag))
@@ -328,7 +351,10 @@ class NodeScene:
         active = si.is_valid()
         for depth in range(bounces + 1):
             part = dr.gather(mi.UInt32, part_of, dr.reinterpret_array(mi.UInt32, si.shape), active)
-            rho = [dr.gather(mi.Float, reflectance, part * count + n, active) for n in range(count)]
+            texel = _texel_index(si.uv, part, texels, active)
+            rho = [
+                dr.gather(mi.Float, reflectance, texel * count + n, active) for n in range(count)
+            ]
             bsdf = si.bsdf()
             chooser = rng if depth > 0 else None  # light after a bounce: one lamp of a group
             diffuse, glossy = self._direct(si, bsdf, part, light, active, lobes, chooser)

@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from twin.materials.surfaces import SurfacePart
+from recon.errors import SpectwinInputError
+from twin.materials.surfaces import SurfacePart, texture_coordinates
 from twin.render.spectra import irregular_spectrum
 from twin.render.variant import activate
 
@@ -20,8 +21,14 @@ def part_bsdf(part: SurfacePart, *, unit: bool = False) -> dict[str, object]:
 
     With ``unit`` the same BSDF with every spectral factor one: a reflectance of one and a
     perfectly reflecting metal (Mitsuba's ``material: none``), i.e. the geometric factors of its
-    lobes, which :mod:`twin.render.node_transport` multiplies with the spectra itself.
+    lobes, which :mod:`twin.render.node_transport` multiplies with the spectra itself. A part
+    with a spectral texture has only the unit form: Mitsuba's textures are RGB.
     """
+    if part.texture is not None and not unit:
+        raise SpectwinInputError(
+            f"{part.name}: a spectrally textured part renders through the node transport "
+            "(virtual captures and the truth), not in a Mitsuba scene of its own"
+        )
     if part.conductor is not None:
         return {
             "type": "roughconductor",
@@ -42,22 +49,27 @@ def part_bsdf(part: SurfacePart, *, unit: bool = False) -> dict[str, object]:
 
 def mitsuba_shape(part: SurfacePart, bsdf=None):
     """A Mitsuba mesh built in memory from ``part`` (no files), with its BSDF attached (or
-    ``bsdf``, a loaded Mitsuba BSDF that several shapes may share)."""
+    ``bsdf``, a loaded Mitsuba BSDF that several shapes may share) and, for a textured part,
+    its texture coordinates."""
     activate()
     import mitsuba as mi
 
     properties = mi.Properties()
     properties["bsdf"] = bsdf if bsdf is not None else mi.load_dict(part_bsdf(part))
+    textured = part.texture is not None
     mesh = mi.Mesh(
         part.name,
         len(part.mesh.vertices),
         len(part.mesh.faces),
         props=properties,
         has_vertex_normals=False,
-        has_vertex_texcoords=False,
+        has_vertex_texcoords=textured,
     )
     parameters = mi.traverse(mesh)
     parameters["vertex_positions"] = mi.Float(np.asarray(part.mesh.vertices, np.float32).ravel())
     parameters["faces"] = mi.UInt32(np.asarray(part.mesh.faces, np.uint32).ravel())
+    if textured:
+        uv = texture_coordinates(part.mesh)
+        parameters["vertex_texcoords"] = mi.Float(np.asarray(uv, np.float32).ravel())
     parameters.update()
     return mesh

@@ -49,6 +49,7 @@ from twin.materials.chart_fields import field_masks
 from twin.materials.sample_holder import holder_parts
 from twin.materials.textures import MATERIAL_TEXEL_REFLECTANCE
 from twin.render.truth import truth_btf
+from twin.validate.texel_errors import texel_errors
 
 __all__ = [
     "SPECULAR_DEG",
@@ -196,16 +197,6 @@ def chart_field_errors(material, view_dirs, measured, truth, grid, interior):
     return [np.array(values) for values in (relative, colour, texel_relative, texel_colour)]
 
 
-def _texel_errors(measured, truth, grid, material):
-    """Per pair and texel the errors, NaN where a texel shows no material."""
-    relative = np.where(material, relative_error(measured, truth), np.nan)
-    colour = np.where(material, delta_e94(measured, truth, grid), np.nan)
-    flat = [values.reshape(len(values), -1) for values in (relative, colour)]
-    counts = material.reshape(len(material), -1).sum(axis=1)
-    means = [np.where(material.reshape(counts.size, -1), v, 0).sum(1) for v in flat]
-    return [*flat, *(np.where(counts > 0, mean / np.maximum(counts, 1), np.nan) for mean in means)]
-
-
 def evaluate_dome(
     btf_path: str | Path,
     *,
@@ -259,7 +250,7 @@ def evaluate_dome(
         grey = SampledSpectra(FINE_GRID, np.full((1, FINE_GRID.size), 1 / span))
         alone = np.pi * truth_btf(material, lights, views, texels=texels, passbands=grey, spp=16)
         shows = alone[..., 0] >= MATERIAL_TEXEL_REFLECTANCE
-        errors = _texel_errors(measured, truth, btf.grid, shows)
+        errors = texel_errors(measured, truth, btf.grid, shows)
     shifts = [
         float(
             np.linalg.norm(phase_cross_correlation(t.mean(-1), m.mean(-1), upsample_factor=20)[0])

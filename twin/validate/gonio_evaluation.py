@@ -37,6 +37,7 @@ from twin.render.truth import truth_btf
 from twin.rigs.hemisphere import spherical_deg
 from twin.rigs.rig_config import GonioConfig, load_rig
 from twin.sensor.band_weights import instrument_passbands
+from twin.validate.gonio_texel_evaluation import GonioTexelEvaluation, compare_texels
 
 __all__ = [
     "FieldMasks",
@@ -44,6 +45,7 @@ __all__ = [
     "GonioEvaluation",
     "evaluate_gonio",
     "field_masks",
+    "pair_label",
     "write_gonio_figure",
 ]
 
@@ -106,8 +108,9 @@ def evaluate_gonio(
     interior: float = 0.6,
     passbands: SampledSpectra | None = None,
     progress: bool = False,
-) -> GonioEvaluation:
-    """Compare a BTF store made by ``spectwin process`` with the twin's truth (module docstring).
+) -> GonioEvaluation | GonioTexelEvaluation:
+    """Compare a BTF store made by ``spectwin process`` with the twin's truth (module docstring;
+    a material without chart fields texel by texel, :mod:`twin.validate.gonio_texel_evaluation`).
 
     The capture store named in the BTF's provenance supplies the session seed (the robot's
     actual poses), the rendered window and the rig model. Pairs not written (unregistered) are
@@ -140,7 +143,8 @@ def evaluate_gonio(
         ) from None
     material = load_material(btf.material)
     texels = btf.texels[0]
-    for pair in written:
+    chart = any(part.name.startswith("field_") for part in material.parts)
+    for pair in written if chart else ():
         fields = field_masks(material, btf.view_dirs[pair], texels, interior=interior)
         if not fields.masks.any(axis=(1, 2)).all():
             raise SpectwinInputError(
@@ -155,30 +159,32 @@ def evaluate_gonio(
         passbands=instrument_passbands(capture_rig(capture)) if passbands is None else passbands,
         spp=spp,
     )
+    corners = btf.corners_xy()[written]
+    corner_error = np.linalg.norm(corners - _true_corners(capture, btf)[written], axis=2)
+    measured = np.stack([btf.read_pair(pair, allow_incomplete=True) for pair in written])
+    if not chart:
+        return compare_texels(written, measured, truth, btf.grid, corner_error)
     field_means, truth_means, texel_errors = [], [], []
     for index, pair in enumerate(written):
-        measured = btf.read_pair(pair, allow_incomplete=True)
         fields = field_masks(material, btf.view_dirs[pair], texels, interior=interior)
-        field_means.append(fields.means(measured))
+        field_means.append(fields.means(measured[index]))
         truth_means.append(fields.means(truth[index]))
-        per_texel = relative_error(measured, truth[index])
+        per_texel = relative_error(measured[index], truth[index])
         texel_errors.append([per_texel[mask].mean() for mask in fields.masks])
     field_means, truth_means = np.array(field_means), np.array(truth_means)
-    corners = btf.corners_xy()[written]
-    error = np.linalg.norm(corners - _true_corners(capture, btf)[written], axis=2)
     return GonioEvaluation(
         fields.names,
         fields.glossy,
         written,
         relative_error(field_means, truth_means),
         np.array(texel_errors),
-        error,
+        corner_error,
         field_means,
         truth_means,
     )
 
 
-def _pair_label(btf: BTFStore, pair: int) -> str:
+def pair_label(btf: BTFStore, pair: int) -> str:
     (light_theta, light_phi), (view_theta, view_phi) = (
         spherical_deg(btf.light_dirs[pair]),
         spherical_deg(btf.view_dirs[pair]),
@@ -225,7 +231,7 @@ def write_gonio_figure(evaluation: GonioEvaluation, btf: BTFStore, path: str | P
     axes[1, 0].set(
         xlabel="wavelength, nm",
         ylabel="BRDF, 1/sr",
-        title=f"lines: truth, dots: measured; {_pair_label(btf, evaluation.pairs[oblique])}",
+        title=f"lines: truth, dots: measured; {pair_label(btf, evaluation.pairs[oblique])}",
     )
     axes[1, 0].legend(fontsize=8)
     shown = [evaluation.pairs[int(np.argmin(np.arccos(views[:, 2])))], evaluation.pairs[oblique]]
@@ -233,7 +239,7 @@ def write_gonio_figure(evaluation: GonioEvaluation, btf: BTFStore, path: str | P
         spectral_to_srgb(btf.read_pair(pair, allow_incomplete=True), btf.grid) for pair in shown
     ]
     axes[1, 1].imshow(np.concatenate(previews, axis=1))
-    axes[1, 1].set_title(f"measured textures: {_pair_label(btf, shown[0])} | oblique", fontsize=9)
+    axes[1, 1].set_title(f"measured textures: {pair_label(btf, shown[0])} | oblique", fontsize=9)
     axes[1, 1].axis("off")
     figure.tight_layout()
     figure.savefig(path, dpi=110)
