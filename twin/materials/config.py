@@ -11,6 +11,7 @@ from twin.rigs.yaml_config import Positive, StrictModel
 
 __all__ = [
     "BSDFConfig",
+    "CONDUCTOR_PRESETS",
     "ColorChecker16Config",
     "FabricConfig",
     "LegoConfig",
@@ -113,6 +114,14 @@ class RGBTextureConfig(StrictModel):
         return self
 
 
+CONDUCTOR_PRESETS = (
+    "a-C", "Ag", "Al", "AlAs", "AlSb", "Au", "Be", "Cr", "Cu", "Cu2O", "CuO", "Hg", "HgTe",
+    "Ir", "K", "Li", "MgO", "Mo", "Na_palik", "Nb", "Ni_palik", "Rh", "Se", "SiC", "Ta", "Te",
+    "TiC", "TiN", "TiO2", "VC", "V_palik", "VN", "W",
+)  # fmt: skip
+"""Metals whose complex index Mitsuba 3 tabulates (its ``conductor`` presets)."""
+
+
 class BSDFConfig(StrictModel):
     """A part's scattering: ``diffuse`` (Lambertian), ``rough_plastic`` (a rough dielectric
     coating of index 1.5 over the diffuse base, GGX ``roughness``) or ``rough_conductor`` (a
@@ -130,6 +139,10 @@ class BSDFConfig(StrictModel):
             raise ValueError("type diffuse: takes no roughness")
         if (self.type == "rough_conductor") != (self.metal is not None):
             raise ValueError("metal: given exactly for type rough_conductor")
+        if self.metal is not None and self.metal not in CONDUCTOR_PRESETS:
+            raise ValueError(
+                f"metal: {self.metal!r} is not one of Mitsuba's presets {list(CONDUCTOR_PRESETS)}"
+            )
         return self
 
 

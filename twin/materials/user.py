@@ -80,7 +80,7 @@ def _mesh(config: UserPartConfig, folder: Path, size_m: float) -> trimesh.Trimes
     reach = np.abs(np.concatenate([low[:2], high[:2]])).max()
     if reach > size_m / 2 * 1.001 or low[2] < -_BELOW_M:
         raise SpectwinInputError(
-            f"{field}: spans x, y to {1e3 * reach:.1f} mm and z from {1e3 * low[2]:.1f} mm; "
+            f"{field}: {path.name} spans x, y to {1e3 * reach:.1f} mm and z from {1e3 * low[2]:.1f} mm; "
             f"expected metres (mesh_scale) within the {1e3 * size_m:.0f} mm square around the "
             f"origin, above z = {-1e3 * _BELOW_M:.0f} mm"
         )
@@ -158,20 +158,6 @@ def _texture(config: UserPartConfig, folder: Path) -> SampledSpectra | None:
     return _covering(SampledSpectra(image.grid, image.cube), f"{field}.texture")
 
 
-def _check_metal(name: str, field: str) -> None:
-    from twin.render.variant import activate
-
-    activate()
-    import mitsuba as mi
-
-    try:
-        mi.load_dict({"type": "conductor", "material": name})
-    except RuntimeError:
-        raise SpectwinInputError(
-            f"{field}: {name!r} is not one of Mitsuba's conductor presets (e.g. Ag, Al, Au, Cu, Cr)"
-        ) from None
-
-
 def _part(config: UserPartConfig, folder: Path, size_m: float) -> SurfacePart:
     field = f"parts.{config.name}"
     mesh = _mesh(config, folder, size_m)
@@ -187,8 +173,6 @@ def _part(config: UserPartConfig, folder: Path, size_m: float) -> SurfacePart:
     else:
         reflectance = SampledSpectra(MATERIAL_GRID, np.ones(MATERIAL_GRID.size))
     bsdf = config.bsdf
-    if bsdf.metal is not None:
-        _check_metal(bsdf.metal, f"{field}.bsdf.metal")
     try:
         return SurfacePart(
             config.name,

@@ -6,8 +6,8 @@ texels, bands weighted like the capturing instrument) are compared as reflectanc
 the BTF's 1/sr) over the texels that show the material (a true band mean of at least
 :data:`twin.materials.textures.MATERIAL_TEXEL_REFLECTANCE`) away from the texture's border
 (:data:`BORDER_TEXELS`, where the registration's blur mixes the holder in): Eq. 6.8 and Delta E94
-(the thesis's ten illuminants) per texel, their means per pair and over all. :func:`write_texel_figure` draws
-them with the worst pair's error map and textures.
+(the thesis's ten illuminants) per texel, their means per pair and over all.
+:func:`write_texel_figure` draws them with the worst pair's error map and textures.
 """
 
 from __future__ import annotations
