@@ -19,9 +19,10 @@ renders like the BRDF itself (``tests/twin/test_btf_bsdf.py``).
 
 The BTF is either decoded (:class:`BTFTable`, ``4 L V H W K`` bytes) or PCA-compressed
 (:class:`CompressedTable`, :mod:`recon.btf.compression`, thesis 4.1.2). A compressed BTF stays
-compressed on the renderer's side: every lookup decodes its texels from the factors,
-:math:`R = (\\mu_b + A_b[p] C_b)(\\mu_s + A_s[p, k] C_s)`, in two Dr.Jit loops over the components
-(``c_b + c_s`` steps per measured pair and texel), so memory is the factors' size.
+compressed on the renderer's side: :math:`R = b \\, s` with the brightness
+:math:`b = \\mu_b + A_b[p] C_b` decoded per pair and texel (a K-th of the decoded table) and the
+spectral factor :math:`s = \\mu_s + A_s[p, k] C_s` decoded per lookup, all of a lookup's 9
+direction pairs x 4 texels in one Dr.Jit loop of ``c_s`` steps (:class:`_CompressedSpectra`).
 
 Importing this module activates the Mitsuba variant (:func:`twin.render.variant.activate`):
 :class:`SpectralBTF` derives from the variant's ``mi.BSDF`` and is registered with Mitsuba at
@@ -125,8 +126,16 @@ class CompressedTable:
 
     @property
     def nbytes(self) -> int:
-        """Bytes the renderer holds for the reflectance: the factors (float32)."""
-        return self.compressed.nbytes
+        """Bytes the renderer holds for the reflectance (float32): the spectral factors and the
+        brightness decoded per pair and texel (:class:`_CompressedSpectra`)."""
+        compressed = self.compressed
+        n_pairs, height, width, _ = compressed.shape
+        spectral = (
+            compressed.spectral_mean.size
+            + compressed.spectral_scores.size
+            + compressed.spectral_components.size
+        )
+        return 4 * (spectral + n_pairs * height * width)
 
     def texture(self, light: int, view: int) -> np.ndarray:
         """The decoded texture ``(H, W, K)`` of the combination ``(light, view)``."""
@@ -279,23 +288,35 @@ class _DecodedSpectra:
         _, self.n_views, self.height, self.width, self.bands = table.values.shape
         self._values = mi.Float(table.values.astype(np.float32).ravel())
 
-    def __call__(self, combination, texel, lows, fractions, mask):
-        """Reflectance of ``texel`` at the product set's ``combination`` (light * n_views +
-        view), one value per wavelength channel, linear between the bands ``lows`` and
-        ``lows + 1``."""
-        base = (combination * (self.height * self.width) + texel) * self.bands
-        channels = []
-        for low, fraction in zip(lows, fractions, strict=True):
-            first = dr.gather(mi.Float, self._values, base + low, mask)
-            second = dr.gather(
-                mi.Float, self._values, base + dr.minimum(low + 1, self.bands - 1), mask
-            )
-            channels.append(first + fraction * (second - first))
+    def blend(self, combinations, texels, lows, fractions, active):
+        """Reflectance per wavelength channel, the weighted sum over the product set's
+        ``combinations`` (``(light * n_views + view, weight)``) and ``texels`` (``(offset,
+        weight)``) of their spectra, linear between the bands ``lows`` and ``lows + 1``."""
+        channels = [mi.Float(0.0) for _ in lows]
+        for combination, combination_weight in combinations:
+            for texel, texel_weight in texels:
+                weight = combination_weight * texel_weight
+                mask = active & (weight > 0)
+                base = (combination * (self.height * self.width) + texel) * self.bands
+                for channel, (low, fraction) in enumerate(zip(lows, fractions, strict=True)):
+                    first = dr.gather(mi.Float, self._values, base + low, mask)
+                    high = dr.minimum(low + 1, self.bands - 1)
+                    second = dr.gather(mi.Float, self._values, base + high, mask)
+                    value = first + fraction * (second - first)
+                    channels[channel] += dr.select(mask, weight * value, 0.0)
         return channels
 
 
 class _CompressedSpectra:
-    """Texel spectra of a :class:`CompressedTable`, decoded from the PCA factors per lookup."""
+    """Texel spectra of a :class:`CompressedTable`, decoded from the PCA factors per lookup.
+
+    The brightness :math:`b = \\mu_b + A_b C_b` is decoded once per pair and texel when the BSDF
+    is built (``n_pairs H W`` values, a K-th of the decoded table). The spectral factor is linear
+    in its components, so a lookup's blend over the direction pairs :math:`p` and texels
+    :math:`t` is one sum over the components,
+    :math:`\\sum_c \\sum_p w_p A_s[p, \\lambda, c] \\sum_t w_t b[p, t] C_s[c, t]` plus the
+    mean's term: a single Dr.Jit loop of ``c_s`` steps per lookup, its state four channels.
+    """
 
     def __init__(self, table: CompressedTable):
         compressed = table.compressed
@@ -303,86 +324,100 @@ class _CompressedSpectra:
         self.n_views = len(table.view_dirs)
         self._texels = self.height * self.width
         self._per_band = compressed.layout == "per_band"
-        self._n_brightness, self._n_spectral = compressed.n_brightness, compressed.n_spectral
+        self._n_spectral = compressed.n_spectral
         self._pairs = mi.UInt32(table.pairs.ravel().astype(np.uint32))
+        brightness = compressed.brightness_mean + (
+            compressed.brightness_scores @ compressed.brightness_components
+        )
+        self._brightness = mi.Float(np.asarray(brightness, np.float32).ravel())
         self._factors = {
             name: mi.Float(np.asarray(getattr(compressed, name), np.float32).ravel())
-            for name in (
-                "brightness_mean",
-                "brightness_scores",
-                "brightness_components",
-                "spectral_mean",
-                "spectral_scores",
-                "spectral_components",
-            )
+            for name in ("spectral_mean", "spectral_scores", "spectral_components")
         }
 
     def _gather(self, name, index, mask):
         return dr.gather(mi.Float, self._factors[name], index, mask)
 
-    @staticmethod
-    def _sum_over_components(count, terms, width):
-        """``sum_{c < count} terms(c)`` for every entry of the list ``terms`` returns, as a
-        symbolic Dr.Jit loop (one compiled loop, not ``count`` unrolled steps)."""
-        n_terms = len(terms(dr.zeros(mi.UInt32, width)))
-        state = (dr.zeros(mi.UInt32, width), *[dr.zeros(mi.Float, width) for _ in range(n_terms)])
-
-        def body(component, *sums):
-            return (component + 1, *[s + t for s, t in zip(sums, terms(component), strict=True)])
-
-        return dr.while_loop(state, lambda component, *_: component < count, body)[1:]
-
-    def __call__(self, combination, texel, lows, fractions, mask):
-        """As :meth:`_DecodedSpectra.__call__`, decoding b and s at the texel (module docstring)."""
-        width = dr.width(texel)
-        pair = dr.gather(mi.UInt32, self._pairs, combination, mask)
-        c_b, c_s, n_texels = self._n_brightness, self._n_spectral, self._texels
-
-        (brightness,) = self._sum_over_components(
-            c_b,
-            lambda c: [
-                self._gather("brightness_scores", pair * c_b + c, mask)
-                * self._gather("brightness_components", c * n_texels + texel, mask)
-            ],
-            width,
-        )
-        brightness += self._gather("brightness_mean", texel, mask)
+    def blend(self, combinations, texels, lows, fractions, active):
+        """As :meth:`_DecodedSpectra.blend`, decoding from the factors (class docstring)."""
+        n_texels, c_s = self._texels, self._n_spectral
+        pairs = [
+            (dr.gather(mi.UInt32, self._pairs, combination, active), weight)
+            for combination, weight in combinations
+        ]
+        # beta[p][t] = w_p w_t b[p, t]: the brightness-weighted blend of pair p's texels
+        beta = [
+            [
+                pair_weight
+                * texel_weight
+                * dr.gather(mi.Float, self._brightness, pair * n_texels + texel, active)
+                for texel, texel_weight in texels
+            ]
+            for pair, pair_weight in pairs
+        ]
         highs = [dr.minimum(low + 1, self.bands - 1) for low in lows]
-        groups = [
-            (low, high) if self._per_band else (mi.UInt32(0), mi.UInt32(0))
-            for low, high in zip(lows, highs, strict=True)
+        ends = [(low, high) for low, high in zip(lows, highs, strict=True)]
+        zero = mi.UInt32(0)  # the joint layout's one group, shared so that it is gathered once
+        groups = ends if self._per_band else [(zero, zero)] * len(ends)
+
+        def blended(name, component_of):
+            """sum_t beta[p][t] X[g, t] for both ends' groups g of every channel: per channel,
+            per end, per pair."""
+            cache = {}
+            result = []
+            for group_ends in groups:
+                per_end = []
+                for group in group_ends:
+                    key = id(group)
+                    if key not in cache:
+                        values = [
+                            self._gather(name, component_of(group) + texel, active)
+                            for texel, _ in texels
+                        ]
+                        cache[key] = [
+                            sum(b * v for b, v in zip(row, values, strict=True)) for row in beta
+                        ]
+                    per_end.append(cache[key])
+                result.append(per_end)
+            return result
+
+        means = blended("spectral_mean", lambda group: group * n_texels)
+        channels = [
+            sum(
+                (1 - fraction) * low_mean + fraction * high_mean
+                for low_mean, high_mean in zip(*mean, strict=True)
+            )
+            for mean, fraction in zip(means, fractions, strict=True)
         ]
 
-        def spectral_terms(c):
-            terms = []
-            for low, high, fraction, (g_low, g_high) in zip(
-                lows, highs, fractions, groups, strict=True
+        def body(component, *sums):
+            gammas = blended(
+                "spectral_components", lambda group: (group * c_s + component) * n_texels
+            )
+            updated = []
+            for total, (low, high), fraction, (gamma_low, gamma_high) in zip(
+                sums, ends, fractions, gammas, strict=True
             ):
-                score_low = self._gather(
-                    "spectral_scores", (pair * self.bands + low) * c_s + c, mask
-                )
-                score_high = self._gather(
-                    "spectral_scores", (pair * self.bands + high) * c_s + c, mask
-                )
-                component_low = self._gather(
-                    "spectral_components", (g_low * c_s + c) * n_texels + texel, mask
-                )
-                component_high = self._gather(
-                    "spectral_components", (g_high * c_s + c) * n_texels + texel, mask
-                )
-                terms.append(
-                    (1 - fraction) * score_low * component_low
-                    + fraction * score_high * component_high
-                )
-            return terms
+                for (pair, _), g_low, g_high in zip(pairs, gamma_low, gamma_high, strict=True):
+                    row = pair * self.bands
+                    score_low = self._gather(
+                        "spectral_scores", (row + low) * c_s + component, active
+                    )
+                    score_high = self._gather(
+                        "spectral_scores", (row + high) * c_s + component, active
+                    )
+                    total = (
+                        total + (1 - fraction) * score_low * g_low + fraction * score_high * g_high
+                    )
+                updated.append(total)
+            return (component + 1, *updated)
 
-        spectra = self._sum_over_components(c_s, spectral_terms, width)
-        channels = []
-        for spectrum, fraction, (g_low, g_high) in zip(spectra, fractions, groups, strict=True):
-            mean_low = self._gather("spectral_mean", g_low * n_texels + texel, mask)
-            mean_high = self._gather("spectral_mean", g_high * n_texels + texel, mask)
-            channels.append(brightness * (spectrum + mean_low + fraction * (mean_high - mean_low)))
-        return channels
+        width = dr.width(active)
+        state = (dr.zeros(mi.UInt32, width), *[dr.zeros(mi.Float, width) for _ in lows])
+        sums = dr.while_loop(state, lambda component, *_: component < c_s, body)[1:]
+        return [
+            dr.select(active, mean + total, 0.0) for mean, total in zip(channels, sums, strict=True)
+        ]
 
 
 class SpectralBTF(mi.BSDF):
@@ -455,16 +490,14 @@ class SpectralBTF(mi.BSDF):
             low = dr.minimum(mi.UInt32(dr.maximum(position, 0.0)), max(bands - 2, 0))
             lows.append(low)
             fractions.append(dr.clip(position - mi.Float(low), 0.0, 1.0))
-        texels = self._texels(si.uv)
-        for light_index, light_weight in self._corners(0, light):
-            for view_index, view_weight in self._corners(1, view):
-                combination = light_index * self._spectra.n_views + view_index
-                for texel, texel_weight in texels:
-                    weight = light_weight * view_weight * texel_weight
-                    mask = active & (weight > 0)
-                    samples = self._spectra(combination, texel, lows, fractions, mask)
-                    for channel, sample in enumerate(samples):
-                        value[channel] += dr.select(mask, weight * sample, 0.0)
+        combinations = [
+            (light_index * self._spectra.n_views + view_index, light_weight * view_weight)
+            for light_index, light_weight in self._corners(0, light)
+            for view_index, view_weight in self._corners(1, view)
+        ]
+        channels = self._spectra.blend(combinations, self._texels(si.uv), lows, fractions, active)
+        for channel, sample in enumerate(channels):
+            value[channel] = sample
         return value
 
     def sample(self, ctx, si, sample1, sample2, active=True):

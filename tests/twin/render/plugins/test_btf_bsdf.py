@@ -152,8 +152,9 @@ def _evaluate(table, wi, wo, uv, wavelengths) -> np.ndarray:
 
 @pytest.mark.parametrize("layout", ["joint", "per_band"])
 def test_compressed_btf_renders_what_its_decoded_form_renders(layout):
-    """The plugin decodes PCA factors per lookup (two Dr.Jit loops over the components): its
-    values equal those of the decoded BTF, and it holds only the factors."""
+    """The plugin decodes the spectral PCA factors per lookup (one Dr.Jit loop over the
+    components) and holds the brightness decoded: its values equal those of the decoded BTF,
+    from a quarter of the memory or less."""
     activate()
     rng = np.random.default_rng(3)
     directions = sattler_directions()[::4]
