@@ -43,11 +43,17 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--btf", help="a measured BTF store (default: the twin's true BTF)")
     parser.add_argument("--texels", type=int, default=64, help="texels of the true BTF")
+    parser.add_argument(
+        "--no-lobes", action="store_true", help="render without the fitted specular lobes"
+    )
     arguments = parser.parse_args()
     started = time.perf_counter()
     if arguments.btf:
         btf = BTFStore.open(arguments.btf)
-        material, table = load_material(btf.material), store_table(btf)
+        material, table = (
+            load_material(btf.material),
+            store_table(btf, lobes=not arguments.no_lobes),
+        )
         source = {"btf": arguments.btf, "pairs": int(btf.written().sum()), "texels": btf.texels[0]}
     else:
         config, material = load_rig("gonio"), load_material("colorchecker16")
@@ -59,7 +65,13 @@ def main() -> None:
             texels=arguments.texels,
             passbands=instrument_passbands(config),
         )
-        table = product_table(pairs.light_dirs, pairs.view_dirs, reflectance, DEFAULT_GRID)
+        table = product_table(
+            pairs.light_dirs,
+            pairs.view_dirs,
+            reflectance,
+            DEFAULT_GRID,
+            lobes=not arguments.no_lobes,
+        )
         source = {
             "btf": "twin truth, instrument band weights",
             "pairs": len(pairs.light_dirs),
@@ -69,6 +81,7 @@ def main() -> None:
         "machine": machine_description(),
         "source": source,
         "table": f"{len(table.light_dirs)} lights x {len(table.view_dirs)} views",
+        "specular_lobes": not arguments.no_lobes,
         "btf_s": round(time.perf_counter() - started, 1),
     }
     for pixels, spp in SETTINGS:

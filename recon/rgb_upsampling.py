@@ -98,15 +98,19 @@ def _jakob_table() -> LUT3D_Jakob2019:
 
 
 def _jakob2019(linear: np.ndarray) -> np.ndarray:
-    """Jakob 2019 spectra of linear sRGB values ``(..., 3)`` on ``DEFAULT_GRID``."""
-    coefficients = _jakob_table().RGB_to_coefficients(linear.reshape(-1, 3))
+    """Jakob 2019 spectra of linear sRGB values ``(..., 3)`` on ``DEFAULT_GRID``; a colour
+    brighter than 1 in some channel is upsampled scaled into the table's range, and its spectrum
+    scaled back (a highlight of a BTF)."""
+    colours = np.maximum(linear.reshape(-1, 3), 0.0)
+    brightness = np.maximum(colours.max(axis=1, keepdims=True), 1.0)
+    coefficients = _jakob_table().RGB_to_coefficients(colours / brightness)
     wavelengths = DEFAULT_GRID.wavelengths_nm
     quadratic = (
         coefficients[:, :1] * wavelengths**2
         + coefficients[:, 1:2] * wavelengths
         + coefficients[:, 2:]
     )
-    spectra = 0.5 + quadratic / (2 * np.sqrt(1 + quadratic**2))
+    spectra = brightness * (0.5 + quadratic / (2 * np.sqrt(1 + quadratic**2)))
     return spectra.reshape(*linear.shape[:-1], DEFAULT_GRID.size)
 
 
@@ -134,14 +138,15 @@ def upsample_srgb(
     Returns
     -------
     SampledSpectra
-        Reflectances clipped to [0, 1].
+        Reflectances: in [0, 1] from the spectralization (clipped); from Jakob 2019 in [0, 1]
+        for colours within [0, 1], above for brighter ones.
     """
     if method not in UPSAMPLING_METHODS:
         raise SpectwinInputError(
             f"method: expected one of {', '.join(UPSAMPLING_METHODS)}, got {method!r}"
         )
     if method == "jakob2019":
-        return SampledSpectra(DEFAULT_GRID, np.clip(_jakob2019(linear), 0.0, 1.0))
+        return SampledSpectra(DEFAULT_GRID, _jakob2019(linear))
     return SampledSpectra(
         DEFAULT_GRID, np.clip(_spectralized(linear, known_pixels, known_spectra), 0.0, 1.0)
     )

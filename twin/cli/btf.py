@@ -1,6 +1,7 @@
 """``spectwin btf export`` and ``spectwin btf import``: a BTF store as spectral OpenEXR slices
 (one per direction pair, Fichet et al. 2021 layout) with a JSON direction index, and back
-(:mod:`recon.btf.exchange`)."""
+(:mod:`recon.btf.exchange`); RGB BTFs from images with a direction table
+(:mod:`recon.btf.rgb_import`)."""
 
 from __future__ import annotations
 
@@ -17,7 +18,8 @@ __all__ = ["register"]
 
 btf_app = typer.Typer(
     cls=SpectwinGroup,
-    help="Exchange BTF stores as spectral OpenEXR slices with a JSON direction index.",
+    help="Exchange BTF stores as spectral OpenEXR slices with a JSON direction index; import "
+    "RGB BTFs from images.",
     no_args_is_help=True,
 )
 
@@ -53,22 +55,55 @@ def export(
 @btf_app.command("import")
 def import_(
     source: Annotated[
-        Path, typer.Argument(help="A folder of spectral EXR slices with directions.json.")
+        Path,
+        typer.Argument(
+            help="A folder of spectral EXR slices with directions.json, or of RGB images with "
+            "directions.csv."
+        ),
     ],
     out: Annotated[Path, typer.Option(help="The new BTF store (.btf.zarr); must not exist.")],
+    upsampling: Annotated[
+        str, typer.Option(help="RGB images: how RGB becomes spectra (jakob2019).")
+    ] = "jakob2019",
+    scale: Annotated[
+        float, typer.Option(min=1e-6, help="RGB images: reflectance factor of a linear value 1.")
+    ] = 1.0,
+    material: Annotated[
+        str | None,
+        typer.Option(help="RGB images: the material's name (colorchecker16: validate compares)."),
+    ] = None,
     as_json: JsonFlag = False,
 ) -> None:
-    """Read spectral EXR slices and their direction index (as spectwin btf export writes them)
-    into a new BTF store; the store is complete once every slice is in.
+    """Read spectral EXR slices and their direction index (as spectwin btf export writes them),
+    or an RGB BTF (sRGB images, one per direction pair, with directions.csv: file,
+    light_theta_deg, light_phi_deg, view_theta_deg, view_phi_deg), upsampled to spectra and
+    flagged as RGB, into a new BTF store; the store is complete once every image is in.
 
     Example: spectwin btf import out/slices --out out/copy.btf.zarr
     """
-    from recon.btf.exchange import import_exr_slices
+    from recon.btf.exchange import INDEX_NAME, import_exr_slices
+    from recon.btf.rgb_import import DIRECTION_TABLE, import_rgb_images
 
     if out.exists():
         fail(f"--out {out}: exists; expected a new BTF store path (nothing was overwritten)")
     require_output_folder(out.parent)
-    btf = import_exr_slices(source, out, progress=not as_json)
+    rgb = (source / DIRECTION_TABLE).is_file() and not (source / INDEX_NAME).is_file()
+    if rgb:
+        btf = import_rgb_images(
+            source,
+            out,
+            upsampling=upsampling,
+            scale=scale,
+            material=material,
+            progress=not as_json,
+        )
+    else:
+        given = [
+            name for name, value in (("--material", material), ("--scale", scale != 1.0)) if value
+        ]
+        if given:
+            fail(f"{', '.join(given)}: only for RGB images (a folder with {DIRECTION_TABLE})")
+        btf = import_exr_slices(source, out, progress=not as_json)
     summary = {
         "pairs": btf.n_pairs,
         "texels": "x".join(str(v) for v in btf.texels),
@@ -77,6 +112,8 @@ def import_(
         "store": str(out),
         "complete": btf.complete,
     }
+    if rgb:
+        summary["from_rgb"] = f"sRGB, upsampled by {upsampling}"
     print_summary(summary, "imported BTF", as_json)
 
 

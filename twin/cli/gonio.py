@@ -794,6 +794,7 @@ def validate(
     summary = {
         "out": str(out),
         "form": metrics["form"],
+        "measured_as": metrics["measured_as"],
         "field_mean_delta_e94_spectral": figure46["field_mean_delta_e94_spectral"],
         "field_mean_delta_e94_rgb": figure46["field_mean_delta_e94_rgb"],
         "field_ratio_rgb_over_spectral": figure46["field_ratio_rgb_over_spectral"],

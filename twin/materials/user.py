@@ -80,7 +80,8 @@ def _mesh(config: UserPartConfig, folder: Path, size_m: float) -> trimesh.Trimes
     reach = np.abs(np.concatenate([low[:2], high[:2]])).max()
     if reach > size_m / 2 * 1.001 or low[2] < -_BELOW_M:
         raise SpectwinInputError(
-            f"{field}: {path.name} spans x, y to {1e3 * reach:.1f} mm and z from {1e3 * low[2]:.1f} mm; "
+            f"{field}: {path.name} spans x, y to {1e3 * reach:.1f} mm and z from "
+            f"{1e3 * low[2]:.1f} mm; "
             f"expected metres (mesh_scale) within the {1e3 * size_m:.0f} mm square around the "
             f"origin, above z = {-1e3 * _BELOW_M:.0f} mm"
         )

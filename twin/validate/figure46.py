@@ -172,7 +172,8 @@ def _cie_rgb_matrix() -> np.ndarray:
 
 def _rgb_table(table: BTFTable | CompressedTable) -> list[BTFTable]:
     """The BTF as three one-channel tables of CIE RGB reflectance (equal energy, white = 1);
-    a compressed BTF is decoded one combination at a time."""
+    a compressed BTF is decoded one combination at a time. Specular lobes, spectrally flat, are
+    the same in every channel."""
     rgb_cmfs = _cie_rgb_matrix() @ _cmfs_on(table.grid).T
     weights = rgb_cmfs / rgb_cmfs.sum(axis=1, keepdims=True)
     rgb = np.maximum(
@@ -185,7 +186,13 @@ def _rgb_table(table: BTFTable | CompressedTable) -> list[BTFTable]:
         0.0,
     )
     return [
-        BTFTable(table.light_dirs, table.view_dirs, rgb[..., [c, c]].astype(np.float32), _CONSTANT)
+        BTFTable(
+            table.light_dirs,
+            table.view_dirs,
+            rgb[..., [c, c]].astype(np.float32),
+            _CONSTANT,
+            getattr(table, "lobes", None),
+        )
         for c in range(3)
     ]
 

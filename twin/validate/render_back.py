@@ -9,7 +9,11 @@ For a BTF store of the twin's colour checker (raw, or its PCA form with ``compre
   instrument on the true material versus the BTF integrated over theta_i = 45 degrees, in the
   BTF's bands (a dome BTF's are the dome's spectral camera's).
 
-Writes ``figure46.png``, ``spectrophotometer_45_0.png`` and ``metrics.json`` into ``out``.
+Writes ``figure46.png``, ``spectrophotometer_45_0.png`` and ``metrics.json`` into ``out``; the
+metrics say whether the BTF was measured spectrally or in RGB (:mod:`recon.btf.rgb_import`) and
+how its RGB became the rendered spectra. The raw form is rendered with a specular lobe fitted
+per texel (:mod:`recon.btf.specular_lobe`), which holds the highlights of glossy fields that the
+direction sampling only touches; the compressed form without.
 """
 
 from __future__ import annotations
@@ -18,6 +22,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from recon.btf.rgb_import import rgb_source
 from recon.btf.store import BTFStore
 from recon.errors import SpectwinInputError
 from twin.materials import load_material
@@ -32,6 +37,14 @@ __all__ = ["MIN_PIXELS", "validate_btf"]
 MIN_PIXELS = 23
 """Smallest image size at which every field of the colour checker keeps an interior pixel (and
 the Delta E94 of every field is a number); larger sizes all do."""
+
+
+def _measured_as(btf: BTFStore) -> str:
+    """How the rendered spectra were measured: spectral, or RGB upsampled (by which method)."""
+    source = rgb_source(btf)
+    if source is None:
+        return "spectral"
+    return f"RGB ({source['colour_space']}), rendered spectrally after {source['upsampling']}"
 
 
 def validate_btf(
@@ -103,7 +116,7 @@ def validate_btf(
         )
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    table = store_table(btf, compressed=compressed)
+    table = store_table(btf, compressed=compressed, lobes=not compressed)
     timings = {}
 
     step("Figure 4.6: map capture and three renderings")
@@ -127,7 +140,11 @@ def validate_btf(
         "btf": str(btf_path),
         "material": btf.material,
         "form": "pca" if compressed else "raw",
+        "measured_as": _measured_as(btf),
         "bytes_rendered_from": int(table.nbytes),
+        "specular_lobe_texels_fraction": round(
+            table.lobes.glossy_fraction if getattr(table, "lobes", None) else 0.0, 4
+        ),
         "settings": {"pixels": pixels, "spp": spp, "map_size": [map_height, 2 * map_height]},
         "figure46": figure.summary(),
         "figure46_per_field_delta_e94": {

@@ -39,6 +39,7 @@ import numpy as np
 from scipy.spatial import Delaunay
 
 from recon.btf.compression import CompressedBTF, load_compressed
+from recon.btf.specular_lobe import COATING_IOR, SpecularLobes, fit_specular_lobes
 from recon.btf.store import BTFStore
 from recon.errors import SpectwinInputError
 from recon.spectra import WavelengthGrid
@@ -67,12 +68,15 @@ _TABLES = PluginData("btf")
 
 @dataclass(frozen=True)
 class BTFTable:
-    """A BTF on a product set: ``values`` ``(n_lights, n_views, H, W, K)`` in 1/sr."""
+    """A BTF on a product set: ``values`` ``(n_lights, n_views, H, W, K)`` in 1/sr; with
+    ``lobes`` (:mod:`recon.btf.specular_lobe`) the values are the residual and the BTF is their
+    interpolation plus the lobes, evaluated at the looked-up directions."""
 
     light_dirs: np.ndarray
     view_dirs: np.ndarray
     values: np.ndarray
     grid: WavelengthGrid
+    lobes: SpecularLobes | None = None
 
     def __post_init__(self) -> None:
         shape = self.values.shape
@@ -95,7 +99,8 @@ class BTFTable:
         return 4 * self.values.size
 
     def texture(self, light: int, view: int) -> np.ndarray:
-        """The texture ``(H, W, K)`` of the product set's ``(light, view)`` combination."""
+        """The texture ``(H, W, K)`` of the product set's ``(light, view)`` combination (with
+        lobes: the residual, :func:`interpolate_table` adds them)."""
         return self.values[light, view]
 
 
@@ -173,12 +178,24 @@ def _product_set(
 
 
 def product_table(
-    light_dirs: np.ndarray, view_dirs: np.ndarray, reflectance: np.ndarray, grid: WavelengthGrid
+    light_dirs: np.ndarray,
+    view_dirs: np.ndarray,
+    reflectance: np.ndarray,
+    grid: WavelengthGrid,
+    *,
+    lobes: bool = False,
 ) -> BTFTable:
     """Arrange pairs ``(n_pairs, H, W, K)`` (e.g. a BTF store's) on their light x view product
-    set; a missing combination takes the nearest measured view of the same light."""
+    set; a missing combination takes the nearest measured view of the same light. With
+    ``lobes`` a specular lobe is fitted per texel
+    (:func:`recon.btf.specular_lobe.fit_specular_lobes`) and the table holds the residual."""
+    values = np.asarray(reflectance, np.float32)
+    fitted = None
+    if lobes:
+        fitted = fit_specular_lobes(light_dirs, view_dirs, values)
+        values = fitted.residual(np.asarray(light_dirs), np.asarray(view_dirs), values)
     lights, views, pairs = _product_set(light_dirs, view_dirs)
-    return BTFTable(lights, views, np.asarray(reflectance, np.float32)[pairs], grid)
+    return BTFTable(lights, views, values[pairs], grid, fitted)
 
 
 def compressed_product_table(
@@ -195,18 +212,23 @@ def compressed_product_table(
     return CompressedTable(lights, views, pairs, compressed)
 
 
-def written_table(btf: BTFStore) -> BTFTable:
+def written_table(btf: BTFStore, *, lobes: bool = False) -> BTFTable:
     """The written pairs of a BTF store on their product set (:func:`product_table`)."""
     written = np.flatnonzero(btf.written())
     values = np.stack([btf.read_pair(pair, allow_incomplete=True) for pair in written])
-    return product_table(btf.light_dirs[written], btf.view_dirs[written], values, btf.grid)
+    return product_table(
+        btf.light_dirs[written], btf.view_dirs[written], values, btf.grid, lobes=lobes
+    )
 
 
-def store_table(btf: BTFStore, *, compressed: bool = False) -> BTFTable | CompressedTable:
-    """A BTF store as the plugin's table: its written pairs decoded (:func:`written_table`), or
-    with ``compressed`` its ``pca/`` form (``spectwin compress``), left compressed."""
+def store_table(
+    btf: BTFStore, *, compressed: bool = False, lobes: bool = False
+) -> BTFTable | CompressedTable:
+    """A BTF store as the plugin's table: its written pairs decoded (:func:`written_table`,
+    with ``lobes`` fitted), or with ``compressed`` its ``pca/`` form (``spectwin compress``),
+    left compressed."""
     if not compressed:
-        return written_table(btf)
+        return written_table(btf, lobes=lobes)
     return compressed_product_table(btf.light_dirs, btf.view_dirs, load_compressed(btf))
 
 
@@ -260,6 +282,9 @@ def interpolate_table(
         for j, wj in zip(view_indices[0], view_weights[0], strict=True):
             if wi * wj > 0:
                 texture = texture + wi * wj * table.texture(i, j).astype(np.float64)
+    lobes = getattr(table, "lobes", None)
+    if lobes is not None:
+        texture = texture + lobes.values(np.atleast_2d(light), np.atleast_2d(view))[0][..., None]
     return texture
 
 
@@ -444,6 +469,13 @@ class SpectralBTF(mi.BSDF):
             self._lookups.append(
                 (mi.UInt32(indices.ravel().astype(np.uint32)), mi.Float(weights.ravel()))
             )
+        self._lobes = None
+        lobes = getattr(table, "lobes", None)
+        if lobes is not None and lobes.weight.any():
+            self._lobes = tuple(
+                mi.Float(np.asarray(values, np.float32).ravel())
+                for values in (lobes.roughness, lobes.weight)
+            )
         wavelengths = table.grid.wavelengths_nm
         self._first_nm = float(wavelengths[0])
         self._step_nm = float(wavelengths[1] - wavelengths[0]) if len(wavelengths) > 1 else 1.0
@@ -495,10 +527,36 @@ class SpectralBTF(mi.BSDF):
             for light_index, light_weight in self._corners(0, light)
             for view_index, view_weight in self._corners(1, view)
         ]
-        channels = self._spectra.blend(combinations, self._texels(si.uv), lows, fractions, active)
+        texels = self._texels(si.uv)
+        channels = self._spectra.blend(combinations, texels, lows, fractions, active)
+        lobe = self._lobe(light, view, texels, active) if self._lobes is not None else 0.0
         for channel, sample in enumerate(channels):
-            value[channel] = sample
+            value[channel] = sample + lobe
         return value
+
+    def _lobe(self, light, view, texels, active):
+        """The texels' specular lobes (:func:`recon.btf.specular_lobe.ggx_specular`) at
+        ``light``, ``view``, blended like their residuals."""
+        roughness, weight = self._lobes
+        half = dr.normalize(light + view)
+        cos_h = dr.clip(half.z, 1e-9, 1.0)
+        tan_h_squared = (1 - cos_h * cos_h) / (cos_h * cos_h)
+        fresnel = mi.fresnel(dr.clip(dr.dot(light, half), 0.0, 1.0), COATING_IOR)[0]
+        tan_squared = [
+            dr.maximum(1 - w.z * w.z, 0.0) / dr.square(dr.maximum(w.z, 1e-9)) for w in (light, view)
+        ]
+        total = mi.Float(0.0)
+        for texel, texel_weight in texels:
+            alpha = dr.gather(mi.Float, roughness, texel, active)
+            scale = dr.gather(mi.Float, weight, texel, active)
+            alpha_squared = alpha * alpha
+            distribution = alpha_squared / (
+                dr.pi * dr.square(cos_h * cos_h) * dr.square(alpha_squared + tan_h_squared)
+            )
+            shadowing = [2 / (1 + dr.sqrt(1 + alpha_squared * t)) for t in tan_squared]
+            total += texel_weight * scale * distribution * shadowing[0] * shadowing[1]
+        value = fresnel * total / (4 * light.z * view.z)
+        return dr.select(active & (light.z > 0) & (view.z > 0), value, 0.0)
 
     def sample(self, ctx, si, sample1, sample2, active=True):
         cos_view = mi.Frame3f.cos_theta(si.wi)
