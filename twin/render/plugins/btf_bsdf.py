@@ -474,7 +474,7 @@ class SpectralBTF(mi.BSDF):
         if lobes is not None and lobes.weight.any():
             self._lobes = tuple(
                 mi.Float(np.asarray(values, np.float32).ravel())
-                for values in (lobes.roughness, lobes.weight)
+                for values in (lobes.roughness, lobes.weight, lobes.beckmann)
             )
         wavelengths = table.grid.wavelengths_nm
         self._first_nm = float(wavelengths[0])
@@ -535,26 +535,37 @@ class SpectralBTF(mi.BSDF):
         return value
 
     def _lobe(self, light, view, texels, active):
-        """The texels' specular lobes (:func:`recon.btf.specular_lobe.ggx_specular`) at
+        """The texels' specular lobes (:func:`recon.btf.specular_lobe.microfacet_specular`) at
         ``light``, ``view``, blended like their residuals."""
-        roughness, weight = self._lobes
+        roughness, weight, beckmann = self._lobes
         half = dr.normalize(light + view)
         cos_h = dr.clip(half.z, 1e-9, 1.0)
         tan_h_squared = (1 - cos_h * cos_h) / (cos_h * cos_h)
         fresnel = mi.fresnel(dr.clip(dr.dot(light, half), 0.0, 1.0), COATING_IOR)[0]
-        tan_squared = [
-            dr.maximum(1 - w.z * w.z, 0.0) / dr.square(dr.maximum(w.z, 1e-9)) for w in (light, view)
+        tangents = [
+            dr.sqrt(dr.maximum(1 - w.z * w.z, 0.0)) / dr.maximum(w.z, 1e-9) for w in (light, view)
         ]
         total = mi.Float(0.0)
         for texel, texel_weight in texels:
             alpha = dr.gather(mi.Float, roughness, texel, active)
             scale = dr.gather(mi.Float, weight, texel, active)
+            is_beckmann = dr.gather(mi.Float, beckmann, texel, active) > 0.5
             alpha_squared = alpha * alpha
-            distribution = alpha_squared / (
+            ggx = alpha_squared / (
                 dr.pi * dr.square(cos_h * cos_h) * dr.square(alpha_squared + tan_h_squared)
             )
-            shadowing = [2 / (1 + dr.sqrt(1 + alpha_squared * t)) for t in tan_squared]
-            total += texel_weight * scale * distribution * shadowing[0] * shadowing[1]
+            gauss = dr.exp(-tan_h_squared / alpha_squared) / (
+                dr.pi * alpha_squared * dr.square(cos_h * cos_h)
+            )
+            shadowing = mi.Float(1.0)
+            for tangent in tangents:
+                smith_ggx = 2 / (1 + dr.sqrt(1 + alpha_squared * tangent * tangent))
+                a = 1 / dr.maximum(alpha * tangent, 1e-12)
+                rational = (3.535 * a + 2.181 * a * a) / (1 + 2.276 * a + 2.577 * a * a)
+                smith_beckmann = dr.select(a >= 1.6, 1.0, rational)
+                shadowing *= dr.select(is_beckmann, smith_beckmann, smith_ggx)
+            distribution = dr.select(is_beckmann, gauss, ggx)
+            total += texel_weight * scale * distribution * shadowing
         value = fresnel * total / (4 * light.z * view.z)
         return dr.select(active & (light.z > 0) & (view.z > 0), value, 0.0)
 
