@@ -8,21 +8,25 @@ minute; the 13 x 13 direction run at 128 texels is in BENCHMARKS.md / the sessio
 
 import json
 
+import colour
 import numpy as np
 import pytest
+import tifffile
 from typer.testing import CliRunner
 
 from recon.btf.compression import load_compressed
+from recon.btf.rgb_import import RGB_COLUMNS
 from recon.btf.store import BTFStore
 from recon.calibration.gonio import GonioCalibration
 from recon.calibration.spectral import HMI_FLICKER_PERIOD_S
+from recon.rgb_upsampling import srgb_response
 from recon.spectra import DEFAULT_GRID
 from twin.cli.app import app
 from twin.gonio.capture import GonioPairs, run_gonio_measurement
 from twin.materials import load_material
 from twin.render.plugins.btf_bsdf import BTFTable, product_table, store_table
 from twin.render.truth import truth_btf
-from twin.rigs.hemisphere import direction
+from twin.rigs.hemisphere import direction, spherical_deg
 from twin.rigs.rig_config import load_rig
 from twin.sensor.band_weights import instrument_passbands
 from twin.validate.figure46 import render_figure46, render_spectral_panel
@@ -235,3 +239,38 @@ def test_process_refuses_a_calibration_capture_and_a_missing_calibration(pipelin
         app, ["capture", str(tmp_path / "r.capture.zarr"), "--program", "gonio-run"]
     )
     assert missing.exit_code == 2 and "--calibration" in missing.output
+
+
+def test_an_rgb_btf_imported_from_images_is_validated_and_said_to_be_rgb(pipeline):
+    """The measured colour checker as sRGB TIFFs with directions.csv (an RGB BTF as published
+    BTFs are), imported through spectwin btf import and rendered back by validate, whose
+    metrics say it was RGB upsampled by Jakob 2019."""
+    root, *_ = pipeline
+    btf = BTFStore.open(root / "cc.btf.zarr")
+    folder = root / "rgb_images"
+    folder.mkdir()
+    lines = [",".join(RGB_COLUMNS)]
+    for pair in range(btf.n_pairs):
+        linear = np.clip(np.pi * btf.read_pair(pair) @ srgb_response(), 0, 1)
+        encoded = colour.cctf_encoding(linear, function="sRGB")
+        tifffile.imwrite(folder / f"{pair}.tif", np.round(65535 * encoded).astype(np.uint16))
+        (light_theta, light_phi), (view_theta, view_phi) = (
+            spherical_deg(btf.light_dirs[pair]),
+            spherical_deg(btf.view_dirs[pair]),
+        )
+        lines.append(f"{pair}.tif,{light_theta},{light_phi},{view_theta},{view_phi}")
+    (folder / "directions.csv").write_text("\n".join(lines) + "\n")
+    store = root / "rgb.btf.zarr"
+    imported = _invoke(
+        "btf", "import", folder, "--out", store, "--material", "colorchecker16", "--json"
+    )
+    assert imported["from_rgb"] == "sRGB, upsampled by jakob2019" and imported["complete"]
+    np.testing.assert_allclose(BTFStore.open(store).view_dirs, btf.view_dirs, atol=1e-9)
+    small = ("--pixels", 32, "--spp", 16, "--map-height", 16, "--json")
+    metrics = _invoke("validate", store, "--out", root / "rgb_validation", *small)
+    assert metrics["measured_as"] == "RGB (sRGB), rendered spectrally after jakob2019"
+    assert all(np.isfinite(value) and value > 0 for value in metrics["figure46"].values())
+    refused = runner.invoke(
+        app, ["btf", "import", str(folder), "--out", str(root / "x.btf.zarr"), "--scale", "0"]
+    )
+    assert refused.exit_code == 2 and "--scale" in refused.output

@@ -9,6 +9,7 @@ import pytest
 
 from recon.errors import SpectwinInputError
 from recon.metrics import delta_e94, relative_error
+from recon.rgb_upsampling import read_srgb_image, srgb_response
 from twin.materials import load_material
 from twin.materials.builders import chart_colour
 from twin.materials.user import PATCH_HEIGHT_M
@@ -131,3 +132,20 @@ def test_a_mesh_out_of_the_sample_square_says_what_was_expected(tmp_path):
     (tmp_path / "big.obj").write_text("v -20 -20 0\nv 20 -20 0\nv 20 20 0\nf 1 2 3\n")
     message = _refused(path)
     assert "big.obj spans x, y to 20000.0 mm" in message and "mesh_scale" in message
+
+
+def test_an_rgb_texture_upsampled_by_jakob2019_has_the_images_colours(tmp_path, examples):
+    card = examples[1].parent / "card.png"
+    path = _write(
+        tmp_path,
+        f"  - name: a\n    rgb_texture: {{image: {card}, method: jakob2019}}\n",
+    )
+    texture = load_material(path).parts[0].texture
+    linear = read_srgb_image(card)
+    np.testing.assert_allclose(texture.values @ srgb_response(), linear, atol=0.02)
+    refused = _write(
+        tmp_path,
+        f"  - name: a\n    rgb_texture: {{image: {card}, method: jakob2019, "
+        "known_spectra: s.csv}\n",
+    )
+    assert "takes no known_spectra" in _refused(refused)
