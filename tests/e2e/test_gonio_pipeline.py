@@ -35,17 +35,11 @@ pytestmark = pytest.mark.render
 runner = CliRunner()
 
 
-def _invoke(*arguments):
-    result = runner.invoke(app, [str(argument) for argument in arguments])
-    assert result.exit_code == 0, result.output
-    return json.loads(result.output)
-
-
 @pytest.fixture(scope="module")
-def pipeline(tmp_path_factory):
+def pipeline(tmp_path_factory, invoke_json):
     root = tmp_path_factory.mktemp("gonio")
-    _invoke("capture", root / "cal.capture.zarr", "--program", "gonio-calibration", "--json")
-    calibrated = _invoke(
+    invoke_json("capture", root / "cal.capture.zarr", "--program", "gonio-calibration", "--json")
+    calibrated = invoke_json(
         "calibrate", root / "cal.capture.zarr", "--out", root / "cal.json", "--json"
     )
     calibration = GonioCalibration.load(root / "cal.json")
@@ -57,7 +51,7 @@ def pipeline(tmp_path_factory):
     run_gonio_measurement(
         root / "run.capture.zarr", calibration.planned_exposure_s, pairs=pairs, seed=3
     )
-    processed = _invoke(
+    processed = invoke_json(
         "process",
         root / "run.capture.zarr",
         "--calibration",
@@ -68,7 +62,7 @@ def pipeline(tmp_path_factory):
         64,
         "--json",
     )
-    evaluated = _invoke("evaluate", root / "cc.btf.zarr", "--figure", root / "cc.png", "--json")
+    evaluated = invoke_json("evaluate", root / "cc.btf.zarr", "--figure", root / "cc.png", "--json")
     return root, calibrated, calibration, processed, evaluated
 
 
@@ -102,13 +96,13 @@ def test_btf_matches_the_truth_on_matte_fields_and_corners_within_a_quarter_pixe
     assert np.isfinite(btf.corners_xy()).all()
 
 
-def test_compress_writes_the_pca_form_and_reports_its_size_and_error(pipeline):
+def test_compress_writes_the_pca_form_and_reports_its_size_and_error(pipeline, invoke_json):
     root, *_ = pipeline
     btf = root / "cc.btf.zarr"
 
     def compress(spectral):
         arguments = ("--brightness", 2, "--spectral", spectral, "--layout", "joint", "--json")
-        return _invoke("compress", btf, *arguments)
+        return invoke_json("compress", btf, *arguments)
 
     # 2 pairs x 33 bands = 66 rows of normalized spectra: the error falls as components are
     # added and vanishes at the full rank (2 brightness components are the rank already).
@@ -123,13 +117,15 @@ def test_compress_writes_the_pca_form_and_reports_its_size_and_error(pipeline):
     assert refused.exit_code == 2 and "--spectral" in refused.output
 
 
-def test_validate_renders_raw_and_compressed_btf_back_with_figures_and_metrics(pipeline):
+def test_validate_renders_raw_and_compressed_btf_back_with_figures_and_metrics(
+    pipeline, invoke_json
+):
     root, *_ = pipeline
     btf = root / "cc.btf.zarr"
-    _invoke("compress", btf, "--brightness", 2, "--spectral", 60, "--json")
+    invoke_json("compress", btf, "--brightness", 2, "--spectral", 60, "--json")
     small = ("--pixels", 32, "--spp", 16, "--map-height", 16, "--json")
-    raw = _invoke("validate", btf, "--out", root / "raw", *small)
-    pca = _invoke("validate", btf, "--out", root / "pca", "--compressed", *small)
+    raw = invoke_json("validate", btf, "--out", root / "raw", *small)
+    pca = invoke_json("validate", btf, "--out", root / "pca", "--compressed", *small)
     for out, metrics in ((root / "raw", raw), (root / "pca", pca)):
         assert json.loads((out / "metrics.json").read_text()) == metrics
         assert (out / "figure46.png").stat().st_size > 20_000
@@ -241,7 +237,7 @@ def test_process_refuses_a_calibration_capture_and_a_missing_calibration(pipelin
     assert missing.exit_code == 2 and "--calibration" in missing.output
 
 
-def test_an_rgb_btf_imported_from_images_is_validated_and_said_to_be_rgb(pipeline):
+def test_an_rgb_btf_imported_from_images_is_validated_and_said_to_be_rgb(pipeline, invoke_json):
     """The measured colour checker as sRGB TIFFs with directions.csv (an RGB BTF as published
     BTFs are), imported through spectwin btf import and rendered back by validate, whose
     metrics say it was RGB upsampled by Jakob 2019."""
@@ -261,13 +257,13 @@ def test_an_rgb_btf_imported_from_images_is_validated_and_said_to_be_rgb(pipelin
         lines.append(f"{pair}.tif,{light_theta},{light_phi},{view_theta},{view_phi}")
     (folder / "directions.csv").write_text("\n".join(lines) + "\n")
     store = root / "rgb.btf.zarr"
-    imported = _invoke(
+    imported = invoke_json(
         "btf", "import", folder, "--out", store, "--material", "colorchecker16", "--json"
     )
     assert imported["from_rgb"] == "sRGB, upsampled by jakob2019" and imported["complete"]
     np.testing.assert_allclose(BTFStore.open(store).view_dirs, btf.view_dirs, atol=1e-9)
     small = ("--pixels", 32, "--spp", 16, "--map-height", 16, "--json")
-    metrics = _invoke("validate", store, "--out", root / "rgb_validation", *small)
+    metrics = invoke_json("validate", store, "--out", root / "rgb_validation", *small)
     assert metrics["measured_as"] == "RGB (sRGB), rendered spectrally after jakob2019"
     assert all(np.isfinite(value) and value > 0 for value in metrics["figure46"].values())
     refused = runner.invoke(

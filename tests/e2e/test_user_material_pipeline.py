@@ -4,34 +4,23 @@ with three measured spectra (painted_card); ``spectwin material check`` previews
 captured at three direction pairs (the full reduced 13 x 13 sampling is in BENCHMARKS.md),
 processed into a BTF and evaluated against its truth texel by texel (Eq. 6.8, Delta E94)."""
 
-import json
-
 import numpy as np
 import pytest
-from typer.testing import CliRunner
 
 from recon.calibration.gonio import GonioCalibration
-from twin.cli.app import app
 from twin.gonio.capture import GonioPairs, run_gonio_measurement
 from twin.rigs.hemisphere import direction
 from twin.rigs.rig_config import load_rig
 
 pytestmark = pytest.mark.render
-runner = CliRunner()
-
-
-def _invoke(*arguments):
-    result = runner.invoke(app, [str(argument) for argument in arguments])
-    assert result.exit_code == 0, result.output
-    return json.loads(result.output)
 
 
 @pytest.fixture(scope="module")
-def evaluated(tmp_path_factory):
+def evaluated(tmp_path_factory, invoke_json):
     root = tmp_path_factory.mktemp("user")
-    written = _invoke("material", "examples", "--out", root / "materials", "--json")
-    _invoke("capture", root / "cal.capture.zarr", "--program", "gonio-calibration", "--json")
-    _invoke("calibrate", root / "cal.capture.zarr", "--out", root / "cal.json", "--json")
+    written = invoke_json("material", "examples", "--out", root / "materials", "--json")
+    invoke_json("capture", root / "cal.capture.zarr", "--program", "gonio-calibration", "--json")
+    invoke_json("calibrate", root / "cal.capture.zarr", "--out", root / "cal.json", "--json")
     exposures = GonioCalibration.load(root / "cal.json").planned_exposure_s
     pairs = GonioPairs(
         load_rig("gonio"),
@@ -43,16 +32,16 @@ def evaluated(tmp_path_factory):
         name = path.rsplit("/", 1)[-1].removesuffix(".yaml")
         capture, btf = root / f"{name}.capture.zarr", root / f"{name}.btf.zarr"
         run_gonio_measurement(capture, exposures, material=path, pairs=pairs, seed=3)
-        _invoke("process", capture, "--calibration", root / "cal.json", "--out", btf, "--json")
+        invoke_json("process", capture, "--calibration", root / "cal.json", "--out", btf, "--json")
         figure = root / f"{name}.png"
-        results[name] = _invoke("evaluate", btf, "--figure", figure, "--json")
+        results[name] = invoke_json("evaluate", btf, "--figure", figure, "--json")
     return root, written, results
 
 
-def test_material_check_previews_a_user_material(evaluated):
+def test_material_check_previews_a_user_material(evaluated, invoke_json):
     root, written, _ = evaluated
     tile = written["materials"][0]
-    checked = _invoke(
+    checked = invoke_json(
         "material", "check", tile, "--out", root / "preview", "--texels", 32, "--json"
     )
     assert checked["parts"]["tile"] == {"faces": 4608, "texels": "32x32", "bsdf": "rough plastic"}

@@ -22,7 +22,6 @@ from twin.materials.builders import (
 )
 from twin.materials.config import MaterialConfig
 from twin.materials.surfaces import SurfacePart
-from twin.materials.user import build_user
 from twin.rigs.yaml_config import (
     read_yaml_mapping,
     resolve_scene_file,
@@ -74,6 +73,8 @@ def load_material(name_or_path: str | Path) -> Material:
     path = resolve_scene_file(name_or_path, MATERIAL_DIR, "material")
     config = validate_document(_Document, read_yaml_mapping(path), path)
     if config.material == "user":
+        from twin.materials.user import build_user  # reads files, upsamples RGB: only when used
+
         try:
             parts, spectra, pairs = build_user(config, path.parent)
         except SpectwinInputError as error:

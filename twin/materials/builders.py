@@ -13,7 +13,7 @@ import numpy as np
 import trimesh
 
 from recon.metamers import design_metamer
-from recon.spectra import SampledSpectra, WavelengthGrid, resample
+from recon.spectra import SampledSpectra, resample
 from twin.components.lamps import FINE_GRID, PhosphorWhiteLED
 from twin.components.targets import colorchecker_reflectances
 from twin.materials.config import (
@@ -23,7 +23,7 @@ from twin.materials.config import (
     WallpaperConfig,
 )
 from twin.materials.geometry import box, height_field, tube
-from twin.materials.surfaces import SurfacePart
+from twin.materials.surfaces import MATERIAL_GRID, SurfacePart
 from twin.rigs.camera_config import load_camera_config
 
 __all__ = [
@@ -37,9 +37,6 @@ __all__ = [
     "metamer_of",
     "on_fine_grid",
 ]
-
-MATERIAL_GRID = WavelengthGrid.regular(380.0, 780.0, 5.0)
-"""Grid the material spectra are designed on; they are linear between its samples."""
 
 
 def chart_colour(name: str, scale: float = 1.0) -> SampledSpectra:

@@ -16,9 +16,12 @@ import numpy as np
 import trimesh
 
 from recon.errors import SpectwinInputError
-from recon.spectra import SampledSpectra
+from recon.spectra import SampledSpectra, WavelengthGrid
 
-__all__ = ["SurfacePart", "texture_coordinates", "transformed"]
+__all__ = ["MATERIAL_GRID", "SurfacePart", "texture_coordinates", "transformed"]
+
+MATERIAL_GRID = WavelengthGrid.regular(380.0, 780.0, 5.0)
+"""Grid the material spectra are designed on; they are linear between its samples."""
 
 
 @dataclass(frozen=True, eq=False)

@@ -24,14 +24,15 @@ from recon.measured_data import read_spectra_csv
 from recon.rgb_upsampling import read_srgb_image, upsample_srgb
 from recon.spectra import SampledSpectra, from_colour, resample
 from recon.spectral_exr import read_spectral_exr
-from twin.materials.builders import MATERIAL_GRID, chart_colour, on_fine_grid
+from twin.components.lamps import FINE_GRID
+from twin.components.targets import colorchecker_reflectances
 from twin.materials.config import (
     RGBTextureConfig,
     SpectrumConfig,
     UserMaterialConfig,
     UserPartConfig,
 )
-from twin.materials.surfaces import SurfacePart, texture_coordinates
+from twin.materials.surfaces import MATERIAL_GRID, SurfacePart, texture_coordinates
 
 __all__ = ["PATCH_HEIGHT_M", "build_user", "flat_patch"]
 
@@ -124,7 +125,7 @@ def _csv_column(path: Path, column: str | None, field: str) -> SampledSpectra:
 
 def _spectrum(config: SpectrumConfig, folder: Path, field: str) -> SampledSpectra:
     if config.chart is not None:
-        return chart_colour(config.chart)
+        return colorchecker_reflectances(MATERIAL_GRID).row(config.chart)
     if config.colour is not None:
         spectrum = _colour_spectrum(config.colour, f"{field}.colour")
     else:
@@ -178,7 +179,11 @@ def _part(config: UserPartConfig, folder: Path, size_m: float) -> SurfacePart:
         return SurfacePart(
             config.name,
             mesh,
-            on_fine_grid(resample(reflectance, MATERIAL_GRID, out_of_range="clamp")),
+            resample(
+                resample(reflectance, MATERIAL_GRID, out_of_range="clamp"),
+                FINE_GRID,
+                out_of_range="clamp",
+            ),
             roughness=bsdf.roughness,
             conductor=bsdf.metal,
             texture=texture,
