@@ -38,6 +38,7 @@ from recon.spectra import DEFAULT_GRID, SampledSpectra, from_colour, resample
 __all__ = [
     "UPSAMPLING_METHODS",
     "read_srgb_image",
+    "reduce_image",
     "srgb_response",
     "upsample_srgb",
 ]
@@ -49,12 +50,9 @@ _JAKOB_TABLE = "spectra/jakob2019_srgb_16.coeff"
 _COVERED_NM = (400.0, 700.0)  # known spectra must cover these; beyond, they are held constant
 
 
-def read_srgb_image(path: str | Path, max_side: int | None = None) -> np.ndarray:
-    """Linear sRGB ``(H, W, 3)`` of an 8- or 16-bit sRGB-encoded image file, in [0, 1].
-
-    With ``max_side`` an image larger than that is reduced by area averaging (of the linear
-    values) to at most ``max_side`` pixels on its longer side."""
-    from skimage import io, transform
+def read_srgb_image(path: str | Path) -> np.ndarray:
+    """Linear sRGB ``(H, W, 3)`` of an 8- or 16-bit sRGB-encoded image file, in [0, 1]."""
+    from skimage import io
 
     path = Path(path)
     if not path.is_file():
@@ -69,11 +67,19 @@ def read_srgb_image(path: str | Path, max_side: int | None = None) -> np.ndarray
             f"{pixels.shape}"
         )
     encoded = pixels[..., :3] / np.iinfo(pixels.dtype).max
-    linear = colour.cctf_decoding(encoded, function="sRGB")
-    if max_side is not None and max(linear.shape[:2]) > max_side:
-        factor = int(np.ceil(max(linear.shape[:2]) / max_side))
-        linear = transform.downscale_local_mean(linear, (factor, factor, 1))
-    return np.clip(linear, 0.0, 1.0)
+    return np.clip(colour.cctf_decoding(encoded, function="sRGB"), 0.0, 1.0)
+
+
+def reduce_image(linear: np.ndarray, max_side: int) -> tuple[np.ndarray, int]:
+    """``linear`` reduced by area averaging (``skimage.transform.downscale_local_mean``) by
+    the smallest whole factor that brings its longer side to at most ``max_side``; returns the
+    image and the factor (1: unchanged)."""
+    from skimage import transform
+
+    factor = max(1, int(np.ceil(max(linear.shape[:2]) / max_side)))
+    if factor == 1:
+        return linear, 1
+    return transform.downscale_local_mean(linear, (factor, factor, 1)), factor
 
 
 def srgb_response() -> np.ndarray:

@@ -139,7 +139,7 @@ def import_rgb_images(
     )
     with progress_steps("import RGB images", len(rows), enabled=progress) as advance:
         for pair, row in enumerate(rows):
-            linear = read_srgb_image(folder / row["file"])
+            linear = first if pair == 0 else read_srgb_image(folder / row["file"])
             if linear.shape != first.shape:
                 raise SpectwinInputError(
                     f"{folder / row['file']}: {linear.shape[0]} x {linear.shape[1]} px, expected "

@@ -21,7 +21,7 @@ import trimesh
 
 from recon.errors import SpectwinInputError
 from recon.measured_data import read_spectra_csv
-from recon.rgb_upsampling import read_srgb_image, upsample_srgb
+from recon.rgb_upsampling import read_srgb_image, reduce_image, upsample_srgb
 from recon.spectra import SampledSpectra, from_colour, resample
 from recon.spectral_exr import read_spectral_exr
 from twin.components.lamps import FINE_GRID
@@ -135,14 +135,13 @@ def _spectrum(config: SpectrumConfig, folder: Path, field: str) -> SampledSpectr
 
 
 def _rgb_texture(config: RGBTextureConfig, folder: Path, field: str) -> SampledSpectra:
-    linear = read_srgb_image(_file(folder, config.image, f"{field}.image"), config.max_texels)
+    full = read_srgb_image(_file(folder, config.image, f"{field}.image"))
+    linear, factor = reduce_image(full, config.max_texels)
     if config.method == "jakob2019":
         return upsample_srgb(linear, "jakob2019")
     path = _file(folder, config.known_spectra, f"{field}.known_spectra")
     spectra = _covering(read_spectra_csv(path.resolve()), f"{field}.known_spectra")
-    full = read_srgb_image(_file(folder, config.image, f"{field}.image"))
-    scale = np.array(linear.shape[:2]) / np.array(full.shape[:2])
-    pixels = np.floor(np.asarray(config.known_pixels) * scale).astype(int)
+    pixels = np.asarray(config.known_pixels) // factor  # the reduced image's pixel of each spot
     return upsample_srgb(linear, "spectralization", known_pixels=pixels, known_spectra=spectra)
 
 

@@ -48,7 +48,7 @@ import mitsuba as mi
 import numpy as np
 
 from recon.errors import SpectwinInputError
-from recon.spectra import SampledSpectra
+from recon.spectra import SampledSpectra, resample
 from twin.materials.builders import MATERIAL_GRID
 from twin.materials.surfaces import SurfacePart
 from twin.render.shapes import mitsuba_shape, part_bsdf
@@ -189,8 +189,8 @@ def _scalar(value: float):
 def _texel_nodes(part: SurfacePart) -> np.ndarray:
     """A part's reflectance at the nodes, one row per texel ``(H * W, n_nodes)``."""
     spectra = part.reflectance if part.texture is None else part.texture
-    rows = spectra.values.reshape(-1, spectra.grid.size)
-    return np.stack([np.interp(NODES_NM, spectra.wavelengths_nm, row) for row in rows])
+    nodes = resample(spectra, MATERIAL_GRID, out_of_range="clamp").values
+    return nodes.reshape(-1, NODES_NM.size)
 
 
 def _texel_index(uv, part, texels: dict, active):

@@ -191,7 +191,7 @@ def _rgb_table(table: BTFTable | CompressedTable) -> list[BTFTable]:
             table.view_dirs,
             rgb[..., [c, c]].astype(np.float32),
             _CONSTANT,
-            getattr(table, "lobes", None),
+            table.lobes,
         )
         for c in range(3)
     ]

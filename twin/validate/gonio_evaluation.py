@@ -161,15 +161,16 @@ def evaluate_gonio(
     )
     corners = btf.corners_xy()[written]
     corner_error = np.linalg.norm(corners - _true_corners(capture, btf)[written], axis=2)
-    measured = np.stack([btf.read_pair(pair, allow_incomplete=True) for pair in written])
     if not chart:
+        measured = np.stack([btf.read_pair(pair, allow_incomplete=True) for pair in written])
         return compare_texels(written, measured, truth, btf.grid, corner_error)
     field_means, truth_means, texel_errors = [], [], []
-    for index, pair in enumerate(written):
+    for index, pair in enumerate(written):  # one pair in memory at a time
+        measured = btf.read_pair(pair, allow_incomplete=True)
         fields = field_masks(material, btf.view_dirs[pair], texels, interior=interior)
-        field_means.append(fields.means(measured[index]))
+        field_means.append(fields.means(measured))
         truth_means.append(fields.means(truth[index]))
-        per_texel = relative_error(measured[index], truth[index])
+        per_texel = relative_error(measured, truth[index])
         texel_errors.append([per_texel[mask].mean() for mask in fields.masks])
     field_means, truth_means = np.array(field_means), np.array(truth_means)
     return GonioEvaluation(

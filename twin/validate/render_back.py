@@ -143,7 +143,7 @@ def validate_btf(
         "measured_as": _measured_as(btf),
         "bytes_rendered_from": int(table.nbytes),
         "specular_lobe_texels_fraction": round(
-            table.lobes.glossy_fraction if getattr(table, "lobes", None) else 0.0, 4
+            table.lobes.glossy_fraction if table.lobes is not None else 0.0, 4
         ),
         "settings": {"pixels": pixels, "spp": spp, "map_size": [map_height, 2 * map_height]},
         "figure46": figure.summary(),

@@ -113,6 +113,7 @@ class CompressedTable:
     view_dirs: np.ndarray
     pairs: np.ndarray
     compressed: CompressedBTF
+    lobes: None = None  # a compressed BTF is rendered without fitted lobes
 
     def __post_init__(self) -> None:
         want = (len(self.light_dirs), len(self.view_dirs))
@@ -282,9 +283,9 @@ def interpolate_table(
         for j, wj in zip(view_indices[0], view_weights[0], strict=True):
             if wi * wj > 0:
                 texture = texture + wi * wj * table.texture(i, j).astype(np.float64)
-    lobes = getattr(table, "lobes", None)
-    if lobes is not None:
-        texture = texture + lobes.values(np.atleast_2d(light), np.atleast_2d(view))[0][..., None]
+    if table.lobes is not None:
+        lobes = table.lobes.values(np.atleast_2d(light), np.atleast_2d(view))
+        texture = texture + lobes[0][..., None]
     return texture
 
 
@@ -382,31 +383,24 @@ class _CompressedSpectra:
         ]
         highs = [dr.minimum(low + 1, self.bands - 1) for low in lows]
         ends = [(low, high) for low, high in zip(lows, highs, strict=True)]
-        zero = mi.UInt32(0)  # the joint layout's one group, shared so that it is gathered once
-        groups = ends if self._per_band else [(zero, zero)] * len(ends)
 
-        def blended(name, component_of):
-            """sum_t beta[p][t] X[g, t] for both ends' groups g of every channel: per channel,
-            per end, per pair."""
-            cache = {}
-            result = []
-            for group_ends in groups:
-                per_end = []
-                for group in group_ends:
-                    key = id(group)
-                    if key not in cache:
-                        values = [
-                            self._gather(name, component_of(group) + texel, active)
-                            for texel, _ in texels
-                        ]
-                        cache[key] = [
-                            sum(b * v for b, v in zip(row, values, strict=True)) for row in beta
-                        ]
-                    per_end.append(cache[key])
-                result.append(per_end)
-            return result
+        def blended(name, group_offset):
+            """sum_t beta[p][t] X[g, t] per pair p, for the factor ``name`` of one group g."""
+            values = [self._gather(name, group_offset + texel, active) for texel, _ in texels]
+            return [sum(b * v for b, v in zip(row, values, strict=True)) for row in beta]
 
-        means = blended("spectral_mean", lambda group: group * n_texels)
+        def per_channel(name, offset_of):
+            """:func:`blended` at both ends (low, high band) of every channel: the bands' own
+            groups in the per-band layout, the one group of the joint layout otherwise."""
+            if not self._per_band:
+                shared = blended(name, offset_of(mi.UInt32(0)))
+                return [(shared, shared)] * len(ends)
+            return [
+                (blended(name, offset_of(low)), blended(name, offset_of(high)))
+                for low, high in ends
+            ]
+
+        means = per_channel("spectral_mean", lambda group: group * n_texels)
         channels = [
             sum(
                 (1 - fraction) * low_mean + fraction * high_mean
@@ -416,7 +410,7 @@ class _CompressedSpectra:
         ]
 
         def body(component, *sums):
-            gammas = blended(
+            gammas = per_channel(
                 "spectral_components", lambda group: (group * c_s + component) * n_texels
             )
             updated = []
@@ -470,7 +464,7 @@ class SpectralBTF(mi.BSDF):
                 (mi.UInt32(indices.ravel().astype(np.uint32)), mi.Float(weights.ravel()))
             )
         self._lobes = None
-        lobes = getattr(table, "lobes", None)
+        lobes = table.lobes
         if lobes is not None and lobes.weight.any():
             self._lobes = tuple(
                 mi.Float(np.asarray(values, np.float32).ravel())
