@@ -24,6 +24,7 @@ References
 from __future__ import annotations
 
 from functools import cache
+from io import BytesIO
 from pathlib import Path
 from typing import Literal
 
@@ -50,15 +51,17 @@ _JAKOB_TABLE = "spectra/jakob2019_srgb_16.coeff"
 _COVERED_NM = (400.0, 700.0)  # known spectra must cover these; beyond, they are held constant
 
 
-def read_srgb_image(path: str | Path) -> np.ndarray:
-    """Linear sRGB ``(H, W, 3)`` of an 8- or 16-bit sRGB-encoded image file, in [0, 1]."""
+def read_srgb_image(path: str | Path, data: bytes | None = None) -> np.ndarray:
+    """Linear sRGB ``(H, W, 3)`` of an 8- or 16-bit sRGB-encoded image file, in [0, 1];
+    ``data``: the file's bytes when they come from elsewhere (an archive), ``path`` then names it
+    in errors."""
     from skimage import io
 
     path = Path(path)
-    if not path.is_file():
+    if data is None and not path.is_file():
         raise SpectwinInputError(f"{path}: no such image file; expected a PNG, JPEG or TIFF")
     try:
-        pixels = io.imread(path)
+        pixels = io.imread(path if data is None else BytesIO(data))
     except (OSError, ValueError) as error:
         raise SpectwinInputError(f"{path}: not a readable image ({error})") from None
     if pixels.ndim != 3 or pixels.shape[2] not in (3, 4) or pixels.dtype.kind != "u":

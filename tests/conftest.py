@@ -123,3 +123,16 @@ def damage(request) -> ChunkDamage:
 def chunk_damage() -> dict[str, ChunkDamage]:
     """Every way of damaging a chunk file, by name."""
     return {kind: ChunkDamage(kind) for kind in CHUNK_DAMAGE}
+
+
+@pytest.fixture(scope="session")
+def bonn_files():
+    """``scripts/bonn_btf_files.py``: writers of the Bonn BTF layouts (UBO2003 and ATRIUM
+    archives, UBO2014 files) as recon.btf.bonn_formats documents them."""
+    import importlib.util
+
+    path = Path(__file__).parents[1] / "scripts" / "bonn_btf_files.py"
+    spec = importlib.util.spec_from_file_location("bonn_btf_files", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module

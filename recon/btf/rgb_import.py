@@ -1,19 +1,26 @@
-"""An RGB BTF from a folder of images with a direction table, upsampled into a spectral store.
+"""An RGB BTF (a folder of images with a direction table, or a Bonn database archive or file)
+upsampled into a spectral store.
 
-Most measured BTFs are RGB: one photograph per light and view direction. The folder holds the
-images (8- or 16-bit sRGB-encoded PNG, JPEG or TIFF, all of one size, rectified to the sample's
-square) and ``directions.csv`` with the header
-``file,light_theta_deg,light_phi_deg,view_theta_deg,view_phi_deg`` (polar angle from the sample's
-normal, azimuth from its +x axis towards +y, degrees; one row per image). A decoded, linear value
-``v`` of an image is read as the reflectance factor ``scale * v`` (a white Lambertian reads 1),
-i.e. the BRDF ``scale * v / pi``.
+Most measured BTFs are RGB: one photograph per light and view direction. Three kinds of source
+are read (:func:`open_rgb_images`):
+
+- a folder of images (8- or 16-bit sRGB-encoded PNG, JPEG or TIFF, all of one size, rectified to
+  the sample's square) with ``directions.csv`` with the header
+  ``file,light_theta_deg,light_phi_deg,view_theta_deg,view_phi_deg`` (polar angle from the
+  sample's normal, azimuth from its +x axis towards +y, degrees; one row per image);
+- a UBO2003 or ATRIUM zip archive (``.zip``) and a UBO2014 file (``.btf``) of the Bonn BTF
+  database (:mod:`recon.btf.bonn_formats`), read as linear sRGB.
+
+A decoded, linear value ``v`` of an image is read as the reflectance factor ``scale * v`` (a
+white Lambertian reads 1), i.e. the BRDF ``scale * v / pi``.
 
 The spectral pipelines take spectra, so the import upsamples every texel by a named method
 (:mod:`recon.rgb_upsampling`; ``"jakob2019"``, brightness above 1 carried by scaling a colour
 into the table's range and back) and records in the store's ``rgb_source`` attribute that it
-came from RGB: the colour space, the method, the scale and the folder. Anything rendered from it
-(``spectwin validate``) says so. The upsampled spectra have the images' sRGB colours under D65;
-under other lights they are one metamer among many.
+came from RGB: the colour space, the source's format and encoding, the method, the scale, the
+texel reduction and the source. Anything rendered from it (``spectwin validate``) says so. The
+upsampled spectra have the images' sRGB colours under D65; under other lights they are one
+metamer among many.
 """
 
 from __future__ import annotations
@@ -23,17 +30,28 @@ from pathlib import Path
 
 import numpy as np
 
+from recon.btf.bonn_formats import read_image_archive, read_ubo2014
+from recon.btf.rgb_images import RGBImageSet
 from recon.btf.store import BTFStore
 from recon.errors import SpectwinInputError
 from recon.progress import progress_steps
-from recon.rgb_upsampling import read_srgb_image, upsample_srgb
+from recon.rgb_upsampling import read_srgb_image, reduce_image, upsample_srgb
 from recon.spectra import DEFAULT_GRID
 
-__all__ = ["DIRECTION_TABLE", "RGB_COLUMNS", "import_rgb_images", "rgb_source"]
+__all__ = [
+    "DIRECTION_TABLE",
+    "RGB_COLUMNS",
+    "import_rgb_images",
+    "is_rgb_source",
+    "open_rgb_images",
+    "rgb_source",
+]
 
 DIRECTION_TABLE = "directions.csv"
 RGB_COLUMNS = ("file", "light_theta_deg", "light_phi_deg", "view_theta_deg", "view_phi_deg")
 """The header of :data:`DIRECTION_TABLE`."""
+
+_READERS = {".zip": read_image_archive, ".btf": read_ubo2014}
 
 
 def rgb_source(store: BTFStore) -> dict | None:
@@ -41,9 +59,35 @@ def rgb_source(store: BTFStore) -> dict | None:
     return store.attrs.get("rgb_source")
 
 
-def _direction(theta_deg: float, phi_deg: float) -> np.ndarray:
-    theta, phi = np.radians(theta_deg), np.radians(phi_deg)
-    return np.array([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)])
+def is_rgb_source(path: Path) -> bool:
+    """Whether ``path`` is an RGB BTF that :func:`open_rgb_images` reads: a Bonn archive or
+    file, or a folder with :data:`DIRECTION_TABLE`."""
+    return path.suffix.lower() in _READERS or (path / DIRECTION_TABLE).is_file()
+
+
+def open_rgb_images(path: str | Path) -> RGBImageSet:
+    """The images of the RGB BTF at ``path`` (module docstring), not yet decoded."""
+    path = Path(path)
+    if path.suffix.lower() in _READERS:
+        if not path.is_file():
+            raise SpectwinInputError(
+                f"{path}: no such file; expected a UBO2003/ATRIUM .zip or a UBO2014 .btf"
+            )
+        return _READERS[path.suffix.lower()](path)
+    if not path.is_dir():
+        raise SpectwinInputError(
+            f"{path}: not a folder, .zip or .btf; expected images with {DIRECTION_TABLE}, a "
+            "UBO2003/ATRIUM archive or a UBO2014 file"
+        )
+    rows = _read_table(path)
+    return RGBImageSet(
+        angles_deg=np.array([[float(row[c]) for c in RGB_COLUMNS[1:]] for row in rows]),
+        names=tuple(row["file"] for row in rows),
+        read=lambda pair: read_srgb_image(path / rows[pair]["file"]),
+        encoding="sRGB",
+        layout="image folder",
+        source=path,
+    )
 
 
 def _read_table(folder: Path) -> list[dict[str, str]]:
@@ -64,34 +108,31 @@ def _read_table(folder: Path) -> list[dict[str, str]]:
         raise SpectwinInputError(f"{path}: no rows; expected one row per image")
     for number, row in enumerate(rows, start=2):
         try:
-            angles = [float(row[column]) for column in RGB_COLUMNS[1:]]
+            [float(row[column]) for column in RGB_COLUMNS[1:]]
         except (TypeError, ValueError):
             raise SpectwinInputError(
                 f"{path}, line {number}: expected four angles in degrees after the file name"
             ) from None
-        if not (0 <= angles[0] < 90 and 0 <= angles[2] < 90):
-            raise SpectwinInputError(
-                f"{path}, line {number}: polar angles {angles[0]:g}, {angles[2]:g} deg; expected "
-                "0 to below 90 (above the sample)"
-            )
     return rows
 
 
 def import_rgb_images(
-    folder: str | Path,
+    source: str | Path,
     out_path: str | Path,
     *,
     upsampling: str = "jakob2019",
     scale: float = 1.0,
     material: str | None = None,
+    texels: int | None = None,
     progress: bool = False,
 ) -> BTFStore:
-    """Read a folder of RGB images with ``directions.csv`` into a new spectral BTF store.
+    """Read an RGB BTF into a new spectral BTF store.
 
     Parameters
     ----------
-    folder
-        The images and their direction table (module docstring).
+    source
+        A folder of images with ``directions.csv``, a UBO2003/ATRIUM ``.zip`` or a UBO2014
+        ``.btf`` (module docstring).
     out_path
         The new store (must not exist).
     upsampling
@@ -99,15 +140,17 @@ def import_rgb_images(
     scale
         Reflectance factor of a linear image value of 1.
     material
-        The store's material name (default: the folder's name); the twin's colour checker
+        The store's material name (default: the source's name); the twin's colour checker
         (``colorchecker16``) makes the store one that ``spectwin validate`` compares.
+    texels
+        Largest side of the stored texture: images are reduced by area averaging
+        (:func:`recon.rgb_upsampling.reduce_image`); ``None`` keeps them whole.
 
     Returns
     -------
     BTFStore
         The new, complete store; an import cut short leaves an incomplete one.
     """
-    folder = Path(folder)
     if upsampling != "jakob2019":
         raise SpectwinInputError(
             f"upsampling: {upsampling!r}; expected 'jakob2019' (the spectralization needs known "
@@ -115,37 +158,48 @@ def import_rgb_images(
         )
     if not np.isfinite(scale) or scale <= 0:
         raise SpectwinInputError(f"scale: expected a positive number, got {scale}")
-    if not folder.is_dir():
-        raise SpectwinInputError(f"{folder}: not a folder; expected images with {DIRECTION_TABLE}")
-    rows = _read_table(folder)
-    first = read_srgb_image(folder / rows[0]["file"])
-    angles = np.array([[float(row[c]) for c in RGB_COLUMNS[1:]] for row in rows])
+    if texels is not None and texels < 1:
+        raise SpectwinInputError(f"texels: expected a positive side in texels, got {texels}")
+    images = open_rgb_images(source)
+    first, factor = _reduced(images.read(0), texels)
     store = BTFStore.create(
         out_path,
-        light_dirs=np.stack([_direction(*pair[:2]) for pair in angles]),
-        view_dirs=np.stack([_direction(*pair[2:]) for pair in angles]),
+        light_dirs=images.light_dirs(),
+        view_dirs=images.view_dirs(),
         texels=first.shape[:2],
         grid=DEFAULT_GRID,
-        material=material or folder.name,
+        material=material or _name(Path(source)),
     )
     store.set_attribute(
         "rgb_source",
         {
             "colour_space": "sRGB",
+            "layout": images.layout,
+            "encoding": images.encoding,
             "upsampling": upsampling,
             "scale": float(scale),
-            "images": str(folder.resolve()),
+            "texel_reduction": factor,
+            "images": str(images.source.resolve()),
         },
     )
-    with progress_steps("import RGB images", len(rows), enabled=progress) as advance:
-        for pair, row in enumerate(rows):
-            linear = first if pair == 0 else read_srgb_image(folder / row["file"])
+    with progress_steps(f"import {images.layout}", images.n_pairs, enabled=progress) as advance:
+        for pair in range(images.n_pairs):
+            linear = first if pair == 0 else _reduced(images.read(pair), texels)[0]
             if linear.shape != first.shape:
                 raise SpectwinInputError(
-                    f"{folder / row['file']}: {linear.shape[0]} x {linear.shape[1]} px, expected "
-                    f"{first.shape[0]} x {first.shape[1]} like {rows[0]['file']}"
+                    f"{images.source}: {images.names[pair]} is {linear.shape[0]} x "
+                    f"{linear.shape[1]} px, expected {first.shape[0]} x {first.shape[1]} like "
+                    f"{images.names[0]}"
                 )
             spectra = upsample_srgb(scale * linear, "jakob2019").values
             store.write_pair(pair, (spectra / np.pi).astype(np.float32), grid=DEFAULT_GRID)
             advance()
     return BTFStore.open(out_path)
+
+
+def _name(source: Path) -> str:
+    return source.stem if source.suffix.lower() in _READERS else source.name
+
+
+def _reduced(linear: np.ndarray, texels: int | None) -> tuple[np.ndarray, int]:
+    return (linear, 1) if texels is None else reduce_image(linear, texels)

@@ -270,3 +270,49 @@ def test_an_rgb_btf_imported_from_images_is_validated_and_said_to_be_rgb(pipelin
         app, ["btf", "import", str(folder), "--out", str(root / "x.btf.zarr"), "--scale", "0"]
     )
     assert refused.exit_code == 2 and "--scale" in refused.output
+
+
+def test_bonn_archives_and_files_are_imported_and_validated(pipeline, invoke_json, bonn_files):
+    """The measured colour checker as a UBO2003 archive (8-bit sRGB JPEGs) and the twin's
+    truth of it on three directions as a UBO2014 file (half floats, every light with every
+    view), imported through spectwin btf import and rendered back by validate."""
+    root, *_ = pipeline
+    btf = BTFStore.open(root / "cc.btf.zarr")
+    angles = np.array(
+        [
+            [*spherical_deg(btf.light_dirs[pair]), *spherical_deg(btf.view_dirs[pair])]
+            for pair in range(btf.n_pairs)
+        ]
+    )
+    pairs = np.stack([btf.read_pair(pair) for pair in range(btf.n_pairs)])
+    linear = np.clip(np.pi * pairs @ srgb_response(), 0, 1)
+    encoded = colour.cctf_encoding(linear, function="sRGB")
+    bonn_files.write_ubo2003(root / "cc.zip", angles, np.round(255 * encoded).astype(np.uint8))
+    degrees = np.array([[0.0, 0.0], [30.0, 0.0], [60.0, 135.0]])
+    lights, views = (np.repeat(degrees, 3, axis=0), np.tile(degrees, (3, 1)))
+    truth = truth_btf(
+        load_material("colorchecker16"),
+        direction(*lights.T),
+        direction(*views.T),
+        texels=32,
+        spp=16,
+    )
+    truth_rgb = (np.pi * truth @ srgb_response()).reshape(3, 3, 32, 32, 3)
+    bonn_files.write_ubo2014(root / "cc.btf", np.radians(degrees), np.radians(degrees), truth_rgb)
+    small = ("--pixels", 32, "--spp", 16, "--map-height", 16, "--json")
+    for source, layout in ((root / "cc.zip", "UBO2003"), (root / "cc.btf", "UBO2014")):
+        store = root / f"{layout}.btf.zarr"
+        imported = invoke_json(
+            "btf", "import", source, "--out", store, "--material", "colorchecker16", "--json"
+        )
+        assert imported["format"] == layout and imported["complete"]
+        metrics = invoke_json("validate", store, "--out", root / f"{layout}_validation", *small)
+        assert (
+            metrics["measured_as"] == f"RGB (sRGB, {layout}), rendered spectrally after jakob2019"
+        )
+        assert all(np.isfinite(value) and value > 0 for value in metrics["figure46"].values())
+    # The UBO2014 store holds the truth's colours: half floats and the Jakob 2019 table.
+    imported = BTFStore.open(root / "UBO2014.btf.zarr")
+    np.testing.assert_allclose(imported.view_dirs, direction(*views.T), atol=1e-6)
+    colours = np.pi * imported.read_pair(5) @ srgb_response()
+    np.testing.assert_allclose(colours, np.clip(truth_rgb[1, 2], 0, None), atol=0.03)

@@ -58,7 +58,7 @@ def import_(
         Path,
         typer.Argument(
             help="A folder of spectral EXR slices with directions.json, or of RGB images with "
-            "directions.csv."
+            "directions.csv; a UBO2003/ATRIUM .zip or a UBO2014 .btf."
         ),
     ],
     out: Annotated[Path, typer.Option(help="The new BTF store (.btf.zarr); must not exist.")],
@@ -72,22 +72,28 @@ def import_(
         str | None,
         typer.Option(help="RGB images: the material's name (colorchecker16: validate compares)."),
     ] = None,
+    texels: Annotated[
+        int | None,
+        typer.Option(min=1, help="RGB images: largest side of the stored texture (area average)."),
+    ] = None,
     as_json: JsonFlag = False,
 ) -> None:
     """Read spectral EXR slices and their direction index (as spectwin btf export writes them),
     or an RGB BTF (sRGB images, one per direction pair, with directions.csv: file,
-    light_theta_deg, light_phi_deg, view_theta_deg, view_phi_deg), upsampled to spectra and
-    flagged as RGB, into a new BTF store; the store is complete once every image is in.
+    light_theta_deg, light_phi_deg, view_theta_deg, view_phi_deg; or a Bonn database UBO2003 or
+    ATRIUM archive or UBO2014 file), upsampled to spectra and flagged as RGB, into a new BTF
+    store; the store is complete once every image is in.
 
     Example: spectwin btf import out/slices --out out/copy.btf.zarr
+    Example: spectwin btf import UBO_CORDUROY256.zip --out corduroy.btf.zarr --texels 64
     """
     from recon.btf.exchange import INDEX_NAME, import_exr_slices
-    from recon.btf.rgb_import import DIRECTION_TABLE, import_rgb_images
+    from recon.btf.rgb_import import DIRECTION_TABLE, import_rgb_images, is_rgb_source, rgb_source
 
     if out.exists():
         fail(f"--out {out}: exists; expected a new BTF store path (nothing was overwritten)")
     require_output_folder(out.parent)
-    rgb = (source / DIRECTION_TABLE).is_file() and not (source / INDEX_NAME).is_file()
+    rgb = is_rgb_source(source) and not (source / INDEX_NAME).is_file()
     if rgb:
         btf = import_rgb_images(
             source,
@@ -95,14 +101,24 @@ def import_(
             upsampling=upsampling,
             scale=scale,
             material=material,
+            texels=texels,
             progress=not as_json,
         )
     else:
         given = [
-            name for name, value in (("--material", material), ("--scale", scale != 1.0)) if value
+            name
+            for name, value in (
+                ("--material", material),
+                ("--scale", scale != 1.0),
+                ("--texels", texels),
+            )
+            if value
         ]
         if given:
-            fail(f"{', '.join(given)}: only for RGB images (a folder with {DIRECTION_TABLE})")
+            fail(
+                f"{', '.join(given)}: only for RGB images (a folder with {DIRECTION_TABLE}, a "
+                ".zip or a .btf)"
+            )
         btf = import_exr_slices(source, out, progress=not as_json)
     summary = {
         "pairs": btf.n_pairs,
@@ -114,6 +130,7 @@ def import_(
     }
     if rgb:
         summary["from_rgb"] = f"sRGB, upsampled by {upsampling}"
+        summary["format"] = rgb_source(btf)["layout"]
     print_summary(summary, "imported BTF", as_json)
 
 

@@ -49,7 +49,10 @@ def test_imported_rgb_btf_has_the_tables_directions_and_the_images_colours(tmp_p
     )
     assert rgb_source(store) == {
         "colour_space": "sRGB",
+        "layout": "image folder",
+        "encoding": "sRGB",
         "upsampling": "jakob2019",
+        "texel_reduction": 1,
         "scale": 1.0,
         "images": str((tmp_path / "rgb").resolve()),
     }
