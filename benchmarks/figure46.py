@@ -1,14 +1,16 @@
-"""Figure 4.6 (thesis 4.2) on a 13 x 13 BTF of the colour checker: the numbers of
+"""Figure 4.6 (thesis 4.2) on a BTF of the colour checker: the numbers of
 ``twin.validate.render_back``. Prints JSON.
 
-"13 x 13" is the direction sampling of the twin's gonioreflectometer runs: the 13 directions of
-``twin.gonio.capture.REDUCED_RINGS`` (polar 0, 30, 60 degrees with 1, 4, 8 azimuths) as lights
-and as views, 169 combinations of which the rig reaches 156; the renderer fills the others from
-the nearest measured view of the same light. The BTF is either
+``--sampling`` names the direction sampling (``twin.gonio.capture.SAMPLINGS``): ``reduced``,
+the twin's 13 x 13 (the 13 directions of ``REDUCED_RINGS``, polar 0, 30, 60 degrees with 1, 4,
+8 azimuths, as lights and as views, 169 combinations of which the rig reaches 156), or
+``glossy``, Sattler's 57 directions up to 60 degrees (``GLOSSY_RINGS``, 3192 reachable pairs);
+the renderer fills missing combinations from the nearest measured view of the same light. The
+BTF is either
 
 - ``--btf STORE``: a measured BTF store (README, ground-truth section: ``spectwin capture
   --program gonio-run``, ``calibrate``, ``process``), or
-- by default the twin's true BTF for the same 156 pairs, band-weighted like the instrument
+- by default the twin's true BTF for the sampling's pairs, band-weighted like the instrument
   (filter x sensor x lamp, as ``spectwin evaluate`` renders it), at ``--texels``.
 
 For each image setting (pixels, samples per pixel) it renders Figure 4.6
@@ -16,7 +18,7 @@ For each image setting (pixels, samples per pixel) it renders Figure 4.6
 the spectral and the RGB rendering of the BTF under the captured map) and prints the summary:
 Delta E94 against the photograph per pixel and per field mean, matte and glossy fields apart.
 
-Run: .venv/bin/python -m benchmarks.figure46 [--btf STORE] [--texels N]
+Run: .venv/bin/python -m benchmarks.figure46 [--btf STORE] [--texels N] [--sampling glossy]
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ import time
 from benchmarks.common import machine_description, peak_rss_mib
 from recon.btf.store import BTFStore
 from recon.spectra import DEFAULT_GRID
-from twin.gonio.capture import REDUCED_RINGS, gonio_pairs
+from twin.gonio.capture import SAMPLINGS, gonio_pairs
 from twin.materials import load_material
 from twin.render.plugins.btf_bsdf import product_table, store_table
 from twin.render.truth import truth_btf
@@ -44,6 +46,12 @@ def main() -> None:
     parser.add_argument("--btf", help="a measured BTF store (default: the twin's true BTF)")
     parser.add_argument("--texels", type=int, default=64, help="texels of the true BTF")
     parser.add_argument(
+        "--sampling",
+        choices=sorted(SAMPLINGS),
+        default="reduced",
+        help="directions of the true BTF (twin.gonio.capture.SAMPLINGS)",
+    )
+    parser.add_argument(
         "--no-lobes", action="store_true", help="render without the fitted specular lobes"
     )
     arguments = parser.parse_args()
@@ -57,7 +65,7 @@ def main() -> None:
         source = {"btf": arguments.btf, "pairs": int(btf.written().sum()), "texels": btf.texels[0]}
     else:
         config, material = load_rig("gonio"), load_material("colorchecker16")
-        pairs = gonio_pairs(config, REDUCED_RINGS)
+        pairs = gonio_pairs(config, SAMPLINGS[arguments.sampling])
         reflectance = truth_btf(
             material,
             pairs.light_dirs,
@@ -73,7 +81,7 @@ def main() -> None:
             lobes=not arguments.no_lobes,
         )
         source = {
-            "btf": "twin truth, instrument band weights",
+            "btf": f"twin truth, instrument band weights, {arguments.sampling} sampling",
             "pairs": len(pairs.light_dirs),
             "texels": arguments.texels,
         }

@@ -19,16 +19,21 @@ only the residual, which is smooth wherever the lobe model holds. At the measure
 is the measurement exactly.
 
 The fit, per texel, on the band mean :math:`m_p` of the pairs :math:`p` (the lobe is flat, the
-diffuse part nearly constant over directions), robust to pairs where the relief's parallax moves
-the highlight off the texel: for each roughness of a grid and both distributions, the weight
-:math:`k \\ge 0` is the upper quartile of :math:`(m_p - \\tilde m) / f_\\alpha` over the pairs
-in the lobe's core (:data:`PEAK_FRACTION`; :math:`\\tilde m` the median over all pairs) and the
-fit's error the sum of :math:`|m_p - \\tilde m - k f_\\alpha|`. Where the pairs miss the lobe's
-flanks only its peak is measured, which fixes :math:`k / \\alpha^2` alone; of the fits that tie
-(:data:`TIED_ERROR`) the one with the weight nearest a plain coating's, :math:`k = 1`, is taken. A
-texel keeps its lobe only where enough core pairs agree with its weight (:data:`MIN_AGREEING`),
-its peak stands out of the diffuse level (:data:`MIN_PEAK`) and the texel varies more than noise
-(:data:`MIN_VARIATION`); elsewhere :math:`k = 0` and the BTF renders as before.
+diffuse part nearly constant over directions), robust to pairs where the relief's parallax or
+shadows hide the highlight from the texel: for each roughness of a grid and both distributions,
+the weight :math:`k \\ge 0` is the upper quartile of :math:`(m_p - \\tilde m) / f_\\alpha` over
+the pairs in the lobe's core (:data:`PEAK_FRACTION`; :math:`\\tilde m` the median over all
+pairs) and the fit's error the sum of :math:`m_p - \\tilde m - k f_\\alpha` where positive
+plus :data:`HIDDEN_COST` times its magnitude where negative (a hidden peak costs little, a
+missed one fully). Where the pairs miss the lobe's flanks only its peak is measured, which fixes
+:math:`k / \\alpha^2` alone; of the fits that tie (:data:`TIED_ERROR`) the one with the weight
+nearest a plain coating's, :math:`k = 1`, is taken. A texel keeps its lobe only where enough
+core pairs agree with its weight (:data:`MIN_AGREEING`), its peak stands out of the diffuse
+level (:data:`MIN_PEAK`), the lobe removes at least :data:`MIN_GAIN` of the texel's error and
+the texel varies more than noise (:data:`MIN_VARIATION`). A texel left without a lobe takes the
+nearest texel's lobe within :data:`SHARE_RADIUS` texels if one of that lobe's core pairs agrees
+with its own measurement (the edges of a raised glossy field, whose peaks the relief hides from
+most pairs); elsewhere :math:`k = 0` and the BTF renders as before.
 
 References
 ----------
@@ -50,11 +55,14 @@ from recon.errors import SpectwinInputError
 __all__ = [
     "COATING_IOR",
     "AGREEMENT",
+    "HIDDEN_COST",
     "MIN_AGREEING",
+    "MIN_GAIN",
     "MIN_PEAK",
     "MIN_VARIATION",
     "PEAK_FRACTION",
     "ROUGHNESS_GRID",
+    "SHARE_RADIUS",
     "TIED_ERROR",
     "SpecularLobes",
     "dielectric_fresnel",
@@ -65,11 +73,23 @@ __all__ = [
 COATING_IOR = 1.5
 """Refractive index of the coating whose Fresnel reflectance the lobe carries."""
 
-ROUGHNESS_GRID = np.geomspace(0.01, 0.6, 61)
-"""GGX roughnesses the fit tries."""
+ROUGHNESS_GRID = np.geomspace(0.01, 0.3, 51)
+"""Roughnesses the fit tries. Broader lobes (tens of degrees wide) are resolved by the measured
+directions themselves and interpolate without an analytic lobe."""
 
 TIED_ERROR = 0.02
 """Fits whose residual is within this fraction of the best are equally good (see the fit)."""
+
+HIDDEN_COST = 0.1
+"""Cost of a pair measured below the lobe, relative to one above: the relief's parallax and
+shadows hide a highlight from some pairs but never add one, so a lobe that misses a measured
+peak is worse than one that overshoots where the peak was hidden."""
+
+MIN_GAIN = 0.5
+"""Fraction of the texel's error without a lobe that its lobe must remove."""
+
+SHARE_RADIUS = 4.0
+"""Texels within which a lobe-less texel looks for a neighbour's lobe (see the fit)."""
 
 PEAK_FRACTION = 0.25
 """Pairs whose half vector sees at least this fraction of a candidate lobe's peak microfacet
@@ -174,6 +194,14 @@ class SpecularLobes:
         return self.weight[None] * lobe
 
 
+def _asymmetric_error(difference: np.ndarray) -> np.ndarray:
+    """Per texel the fit's error of ``difference`` = measured less modelled ``(P, T)``: pairs
+    measured below the model cost :data:`HIDDEN_COST` of those above."""
+    return np.maximum(difference, 0.0).sum(axis=0) + HIDDEN_COST * np.maximum(-difference, 0.0).sum(
+        axis=0
+    )
+
+
 def fit_specular_lobes(
     light_dirs: np.ndarray, view_dirs: np.ndarray, reflectance: np.ndarray
 ) -> SpecularLobes:
@@ -213,7 +241,7 @@ def fit_specular_lobes(
             continue
         ratios = excess[peaks] / lobe[peaks, None]
         weight = np.maximum(np.percentile(ratios, 75, axis=0), 0.0)
-        errors.append(np.abs(excess - np.outer(lobe, weight)).sum(axis=0))
+        errors.append(_asymmetric_error(excess - np.outer(lobe, weight)))
         weights.append(weight)
         agreeing.append((np.abs(ratios - weight) <= AGREEMENT * weight).sum(axis=0))
         peak_values.append(weight * lobe.max())
@@ -233,9 +261,40 @@ def fit_specular_lobes(
     varies = without / n_pairs > MIN_VARIATION * level
     confirmed = np.array(agreeing)[choice, texel] >= MIN_AGREEING
     strong = np.array(peak_values)[choice, texel] >= MIN_PEAK * np.maximum(base, 0.0)
-    keep = varies & confirmed & strong & (best_weight > 0)
-    return SpecularLobes(
+    best_error = errors[choice, texel]
+    explains = best_error <= (1 - MIN_GAIN) * _asymmetric_error(excess)
+    keep = varies & confirmed & strong & explains & (best_weight > 0)
+    own = SpecularLobes(
         np.where(keep, best_alpha, ROUGHNESS_GRID[0]).reshape(height, width),
         np.where(keep, best_weight, 0.0).reshape(height, width),
         (keep & best_beckmann).reshape(height, width),
+    )
+    return _shared_with_neighbours(
+        own, light_dirs, view_dirs, excess.reshape(n_pairs, height, width)
+    )
+
+
+def _shared_with_neighbours(
+    lobes: SpecularLobes, light_dirs: np.ndarray, view_dirs: np.ndarray, excess: np.ndarray
+) -> SpecularLobes:
+    """``lobes`` with every lobe-less texel given its nearest texel's lobe within
+    :data:`SHARE_RADIUS` where a pair in that lobe's core agrees with the texel's ``excess``
+    ``(P, H, W)`` over its median (module docstring)."""
+    from scipy import ndimage
+
+    has = lobes.weight > 0
+    if not has.any() or has.all():
+        return lobes
+    distance, (rows, columns) = ndimage.distance_transform_edt(~has, return_indices=True)
+    nearest = SpecularLobes(
+        lobes.roughness[rows, columns], lobes.weight[rows, columns], lobes.beckmann[rows, columns]
+    )
+    model = nearest.values(light_dirs, view_dirs)
+    core = model >= PEAK_FRACTION * model.max(axis=0)
+    agrees = (core & (np.abs(excess - model) <= AGREEMENT * model)).any(axis=0)
+    take = ~has & (distance <= SHARE_RADIUS) & agrees
+    return SpecularLobes(
+        np.where(take, nearest.roughness, lobes.roughness),
+        np.where(take, nearest.weight, lobes.weight),
+        np.where(take, nearest.beckmann, lobes.beckmann),
     )

@@ -56,6 +56,11 @@ class Program(StrEnum):
 _DOME = {Program.dome_calibration, Program.dome_run}
 
 
+class Sampling(StrEnum):
+    reduced = "reduced"
+    glossy = "glossy"
+
+
 class Layout(StrEnum):
     per_band = "per_band"
     joint = "joint"
@@ -67,6 +72,7 @@ _PROGRAM_OPTIONS = {
     "material": {Program.gonio_run, Program.dome_run},
     "pixels": {Program.gonio_run},
     "window": {Program.gonio_run},
+    "sampling": {Program.gonio_run},
     "spp": {Program.gonio_run, *_DOME},
     "fault_rate": {Program.demo, *_DOME},
     "stage_positions": {Program.dome_run},
@@ -85,6 +91,7 @@ _STORED = (
     "pixels",
     "window",
     "spp",
+    "sampling",
     "stage_positions",
     "leds",
     "rgb_cameras",
@@ -168,6 +175,7 @@ def _program_of(
     material: str,
     pixels: int,
     window: int | None,
+    sampling: Sampling,
     spp: int | None,
     seed: int,
     fault_rate: float,
@@ -205,7 +213,7 @@ def _program_of(
 
         return gonio_calibration_program(seed=seed), {}
     from recon.calibration.gonio import GonioCalibration
-    from twin.gonio.capture import gonio_measurement_program
+    from twin.gonio.capture import SAMPLINGS, gonio_measurement_program
     from twin.gonio.render import GONIO_SPP
 
     if window is not None and window > pixels:
@@ -230,6 +238,7 @@ def _program_of(
     built = gonio_measurement_program(
         exposures_s,
         material=material,
+        rings=SAMPLINGS[sampling.value],
         pixels=pixels,
         window=window,
         spp=GONIO_SPP if spp is None else spp,
@@ -301,6 +310,14 @@ def capture(
             "most --pixels).",
         ),
     ] = None,
+    sampling: Annotated[
+        Sampling,
+        typer.Option(
+            help="gonio-run: the direction sampling; reduced: 13 directions (polar 0, 30, 60), "
+            "156 pairs; glossy: Sattler's 57 directions up to 60 degrees, 3192 pairs, about "
+            "30 min (Figure 4.6 holds on glossy fields)."
+        ),
+    ] = Sampling.reduced,
     spp: Annotated[
         int | None,
         typer.Option(
@@ -406,6 +423,7 @@ def capture(
             "material": material,
             "pixels": pixels,
             "window": window,
+            "sampling": sampling,
             "spp": spp,
             **dome,
         }
@@ -414,6 +432,9 @@ def capture(
         if program is Program.gonio_run and stored:
             material, pixels, window = stored["material"], stored["pixels"], stored["window"]
             spp, exposures_s = stored["spp"], stored["exposures_s"]
+            if stored["sampling"] is None:
+                fail(f"{store}: captured at its own direction pairs, which --resume cannot rebuild")
+            sampling = Sampling(stored["sampling"])
         if program in _DOME and stored:
             material, spp = stored.get("material", material), stored["spp"]
             dome = {name: stored.get(name, value) for name, value in dome.items()}
@@ -427,6 +448,7 @@ def capture(
         material=material,
         pixels=pixels,
         window=window,
+        sampling=sampling,
         spp=spp,
         seed=seed,
         fault_rate=fault_rate,

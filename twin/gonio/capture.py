@@ -72,7 +72,9 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CAMERA_ID",
+    "GLOSSY_RINGS",
     "REDUCED_RINGS",
+    "SAMPLINGS",
     "CaptureProgram",
     "GonioPairs",
     "actual_poses",
@@ -91,6 +93,12 @@ CAMERA_ID = "k4"
 REDUCED_RINGS = ((0.0, 1), (30.0, 4), (60.0, 8))
 """13 directions (rings of polar angle 0, 30, 60 degrees): the reduced sampling of the twin's
 end-to-end check, 13 x 13 light x view combinations."""
+GLOSSY_RINGS = ((0.0, 1), (15.0, 6), (30.0, 12), (45.0, 18), (60.0, 20))
+"""57 directions: Sattler's rings (thesis 3.1) up to 60 degrees polar, 3192 reachable light x
+view combinations. The sampling at which Figure 4.6 holds on glossy fields (BENCHMARKS.md,
+Figure 4.6); its virtual capture takes about half an hour on 2 cores."""
+SAMPLINGS = {"reduced": REDUCED_RINGS, "glossy": GLOSSY_RINGS}
+"""The named direction samplings of a measurement run (``spectwin capture --sampling``)."""
 _OECF_BANDS_NM = (420.0, 450.0, 550.0, 650.0, 700.0)
 _OECF_EXPOSURES = 200  # per band; thesis 3.3: 200 exposures for the response curve
 _DARK_FRAMES = 8
@@ -306,11 +314,20 @@ def stored_settings(store: CaptureStore) -> dict[str, Any]:
             "pixels": pixels,
             "window": None if int(rig["window_px"]) == pixels else int(rig["window_px"]),
             "spp": int(rig["spp"]),
+            "sampling": _sampling_name(rig.get("rings", [list(ring) for ring in REDUCED_RINGS])),
             "exposures_s": np.array(
                 [step["exposure_s"] for step in attrs["plan"] if step["kind"] == "white"]
             ),
         }
     return settings
+
+
+def _sampling_name(rings: list | None) -> str | None:
+    """The name in :data:`SAMPLINGS` of a store's rings (``None``: explicit pairs)."""
+    if rings is None:
+        return None
+    stored = tuple(tuple(ring) for ring in rings)
+    return next((name for name, value in SAMPLINGS.items() if value == stored), None)
 
 
 def _with_view(steps: list[dict], view: int) -> list[dict]:
@@ -440,6 +457,7 @@ def gonio_measurement_program(
             "(thesis 3.2.2); plan them with spectwin calibrate"
         )
     sample = load_material(material)
+    stored_rings = None if pairs is not None else [list(ring) for ring in rings]
     pairs = pairs or gonio_pairs(config, rings)
     n_pairs = len(pairs.poses)
     side = window or pixels
@@ -468,6 +486,7 @@ def gonio_measurement_program(
         "sensor_px": pixels,
         "material": material,
         "spp": spp,
+        "rings": stored_rings,
         "white_view_id": n_pairs,
         "light_dirs": pairs.light_dirs.tolist(),
         "view_dirs": pairs.view_dirs.tolist(),

@@ -53,8 +53,14 @@ def _partial(path, program, steps: int) -> None:
             5189,  # one exposure for every band: 8 dark frames, not 32
             "64 x 64 px",
         ),
+        # Sattler's 57 directions to 60 degrees: 3192 pairs x 33 bands + darks and white
+        (
+            ["--program", "gonio-run", "--sampling", "glossy", "--window", "64"],
+            105401,
+            "64 x 64 px",
+        ),
     ],
-    ids=["demo", "gonio-calibration", "gonio-run-modelled", "gonio-run"],
+    ids=["demo", "gonio-calibration", "gonio-run-modelled", "gonio-run", "gonio-run-glossy"],
 )
 def test_a_dry_run_of_every_program_prints_the_plan_and_writes_nothing(
     tmp_path, calibration, arguments, steps, frame_size
@@ -166,6 +172,7 @@ def test_resume_of_a_run_reads_its_settings_and_refuses_other_ones(tmp_path, cal
         (["--pixels", "128"], "was captured with --pixels 64, not 128"),
         (["--window", "32"], "was captured with --window 48, not 32"),
         (["--spp", "16"], "was captured with --spp 4, not 16"),
+        (["--sampling", "glossy"], "was captured with --sampling reduced, not glossy"),
         (["--material", "wallpaper"], "was captured with --material lego, not wallpaper"),
         (["--seed", "0"], "was captured with --seed 5, not 0"),
         (["--program", "demo"], "was captured with --program gonio-run, not demo"),

@@ -281,3 +281,39 @@ def test_fit_recovers_coatings_from_the_mirror_pairs_and_leaves_matte_texels_alo
         pytest.approx(0.6 / 0.15**2, rel=0.15)
     )  # the peaks fix weight / roughness^2
     np.testing.assert_array_equal(lobes.weight[1], 0.0)
+
+
+def test_fit_keeps_a_coating_hidden_from_some_pairs_and_gives_broad_variation_no_lobe():
+    """A raised field's relief hides its highlight from some mirror pairs but adds none: a
+    coated texel whose peak is missing at 5 of its 8 mirror pairs at 60 degrees keeps the
+    narrow coating; a matte texel that brightens towards grazing (a variation the 30 degree
+    steps resolve) gets no lobe."""
+    lights, views = twin_sampling()
+    btf = coated_btf(lights, views)
+    mirror = (np.abs(lights[:, 2] - 0.5) < 1e-6) & (
+        np.einsum("ij,ij->i", lights[:, :2], views[:, :2]) < -0.74
+    )
+    hidden = np.flatnonzero(mirror)[:5]
+    btf[hidden, 0, 0] -= microfacet_specular(lights[hidden], views[hidden], 0.08, True)[:, None]
+    grazing = 1 + 2 * (1 - lights[:, 2] * views[:, 2])
+    btf[:, 1, 1] *= grazing[:, None].astype(np.float32)
+    lobes = fit_specular_lobes(lights, views, btf)
+    assert np.flatnonzero(mirror).size == 8
+    assert lobes.roughness[0, 0] == pytest.approx(0.08, rel=0.1)
+    assert lobes.weight[0, 0] == pytest.approx(1.0, rel=0.1)
+    assert lobes.weight[1, 1] == 0.0
+
+
+def test_a_field_edge_whose_peaks_are_mostly_hidden_takes_its_neighbours_lobe():
+    """The texel beside a coated one shows the same coating at only one mirror pair (the
+    relief hides the others): too little for a fit of its own, enough to confirm the
+    neighbour's lobe. The matte texels beside it take none."""
+    lights, views = twin_sampling()
+    btf = coated_btf(lights, views)[:, :, :1].repeat(2, axis=2)  # (0, 0) and (0, 1) coated
+    coating = microfacet_specular(lights, views, 0.08, True)
+    seen = np.argmax(coating)
+    btf[:, 0, 1] -= np.where(np.arange(len(lights)) == seen, 0.0, coating)[:, None]
+    lobes = fit_specular_lobes(lights, views, btf)
+    assert lobes.weight[0, 1] == lobes.weight[0, 0] > 0
+    assert lobes.roughness[0, 1] == lobes.roughness[0, 0]
+    np.testing.assert_array_equal(lobes.weight[1], 0.0)
