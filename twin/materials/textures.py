@@ -33,7 +33,8 @@ class TextureTruth:
     band_basis
         ``(n_basis, len(DEFAULT_GRID))`` the same averaged over the 10 nm passbands.
     names
-        ``(n_basis,)`` part names, ``"surface"`` for the flat spectrum.
+        ``(n_basis,)`` part names (``"part[i]"`` for the spectra of a textured part),
+        ``"surface"`` for the flat spectrum.
     """
 
     weights: np.ndarray

@@ -32,10 +32,14 @@ from recon.errors import SpectwinInputError
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid, resample
 from twin.components.lamps import FINE_GRID
 from twin.materials import Material, load_material
+from twin.materials.surfaces import MATERIAL_GRID
 from twin.materials.textures import TextureTruth
 from twin.render.node_transport import DistantLight, NodeScene, ParallelCamera, node_weights
 
 __all__ = ["band_passbands", "texture_truth", "truth_btf", "truth_camera_signal"]
+
+TEXTURE_BASIS = 8
+"""Basis spectra that stand for a part with a spectral texture in :func:`texture_truth`."""
 
 _BOUNCES = 2  # light may meet three surfaces (Mitsuba's path tracer at max_depth 4)
 
@@ -144,11 +148,31 @@ def truth_camera_signal(
     return _renders(material, light_dirs, view_dirs, response, illuminant, texels, spp, seed)
 
 
+def _part_basis(part) -> tuple[list[np.ndarray], list[str]]:
+    """A part's basis spectra on ``FINE_GRID``: its reflectance, or for a spectral texture its
+    distinct texel spectra (at most :data:`TEXTURE_BASIS`, else k-means centres of them)."""
+    if part.texture is None:
+        spectrum = resample(part.reflectance, FINE_GRID, method="linear", out_of_range="clamp")
+        return [spectrum.values], [part.name]
+    texels = part.texture.values.reshape(-1, part.texture.grid.size)
+    distinct = np.unique(texels, axis=0)
+    if len(distinct) > TEXTURE_BASIS:
+        from sklearn.cluster import KMeans
+
+        distinct = KMeans(TEXTURE_BASIS, n_init=4, random_state=0).fit(texels).cluster_centers_
+    on_nodes = resample(
+        SampledSpectra(part.texture.grid, distinct), MATERIAL_GRID, out_of_range="clamp"
+    )  # as the node transport holds the texture
+    spectra = resample(on_nodes, FINE_GRID, method="linear", out_of_range="clamp")
+    return list(spectra.values), [f"{part.name}[{i}]" for i in range(len(distinct))]
+
+
 def _basis(material: Material, surface: bool) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
-    spectra = [
-        resample(part.reflectance, FINE_GRID, method="linear").values for part in material.parts
-    ]
-    names = tuple(part.name for part in material.parts)
+    spectra, names = [], []
+    for part in material.parts:
+        part_spectra, part_names = _part_basis(part)
+        spectra, names = spectra + part_spectra, names + part_names
+    names = tuple(names)
     if surface:
         spectra, names = spectra + [np.ones(FINE_GRID.size)], names + ("surface",)
     fine = np.array(spectra)
