@@ -88,8 +88,10 @@ peak is worse than one that overshoots where the peak was hidden."""
 MIN_GAIN = 0.5
 """Fraction of the texel's error without a lobe that its lobe must remove."""
 
-SHARE_RADIUS = 4.0
-"""Texels within which a lobe-less texel looks for a neighbour's lobe (see the fit)."""
+SHARE_RADIUS = 1.5
+"""Distance in texels within which a lobe-less texel looks for a neighbour's lobe (see the fit):
+its eight neighbours. Farther, the matte texels bordering a raised glossy field, which see its
+highlight through the parallax at a few pairs only, would take lobes too."""
 
 PEAK_FRACTION = 0.25
 """Pairs whose half vector sees at least this fraction of a candidate lobe's peak microfacet
