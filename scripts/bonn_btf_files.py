@@ -10,7 +10,8 @@ make files, and this script checks both sides against the reference reader:
                                                     # (numpy < 2): its decodes against them
 
 ``compare`` prints JSON: per file, the largest difference between the two readers' images and
-whether their angles agree.
+whether their angles agree. The module needs only numpy at import (btf-extractor's environment
+cannot install spectwin), so it spells out the layout's constants itself.
 """
 
 from __future__ import annotations
