@@ -14,18 +14,10 @@ from pathlib import Path
 
 import numpy as np
 
+from recon.directions import direction
 from recon.errors import SpectwinInputError
 
-__all__ = ["RGBImageSet", "direction"]
-
-
-def direction(theta_deg: np.ndarray, phi_deg: np.ndarray) -> np.ndarray:
-    """Unit vectors ``(..., 3)`` of polar angles from the sample's normal and azimuths from its
-    +x axis towards +y, in degrees."""
-    theta, phi = np.radians(theta_deg), np.radians(phi_deg)
-    return np.stack(
-        [np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=-1
-    )
+__all__ = ["RGBImageSet"]
 
 
 @dataclass(frozen=True)
@@ -36,7 +28,7 @@ class RGBImageSet:
     ----------
     angles_deg
         ``(N, 4)``: light polar angle, light azimuth, view polar angle, view azimuth of each
-        pair, in degrees (:func:`direction`).
+        pair, in degrees (:func:`recon.directions.direction`).
     names
         What each pair's image is called in its source (a file name, an archive entry), for
         messages.

@@ -12,23 +12,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from recon.directions import direction
 from recon.errors import SpectwinInputError
 
 __all__ = ["SATTLER_RINGS", "angle_between_deg", "direction", "sattler_directions", "spherical_deg"]
 
 SATTLER_RINGS = ((0.0, 1), (15.0, 6), (30.0, 12), (45.0, 18), (60.0, 20), (75.0, 24))
 """(polar angle in degrees, number of equally spaced azimuths starting at 0) of Sattler et al."""
-
-
-def direction(theta_deg: np.ndarray | float, phi_deg: np.ndarray | float) -> np.ndarray:
-    """Unit vector(s) ``(..., 3)`` at polar angle ``theta_deg`` from +z and azimuth ``phi_deg``."""
-    theta, phi = np.radians(theta_deg), np.radians(phi_deg)
-    return np.stack(
-        np.broadcast_arrays(
-            np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)
-        ),
-        axis=-1,
-    )
 
 
 def spherical_deg(vectors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
