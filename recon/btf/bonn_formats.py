@@ -172,7 +172,7 @@ class _Cursor:
 
 def read_ubo2014(path: str | Path) -> RGBImageSet:
     """The images of a UBO2014 ``.btf`` file in the DFMF layout (module docstring), decoded
-    one pair at a time from the memory-mapped factors."""
+    one pair at a time from the factors (``U`` memory-mapped, ``SxV`` read once)."""
     path = Path(path)
     try:
         with path.open("rb") as handle:
@@ -201,9 +201,7 @@ def read_ubo2014(path: str | Path) -> RGBImageSet:
     def read(pair: int) -> np.ndarray:
         light, view = divmod(pair, count)
         row = view * count + light
-        values = np.stack(
-            [sxv.astype(np.float32) @ u[row].astype(np.float32) for u, sxv in factors], axis=-1
-        )
+        values = np.stack([sxv @ u[row].astype(np.float32) for u, sxv in factors], axis=-1)
         image = values.reshape(height, width, 3)[::-1]
         if model == 11:
             luminance = np.exp(image[..., 0]) - _LOG_OFFSET
@@ -283,7 +281,7 @@ def _read_header(cursor: _Cursor, rotations: bool) -> tuple[np.ndarray, np.ndarr
 def _read_factors(
     cursor: _Cursor, rows: int, columns: int
 ) -> tuple[int, list[tuple[np.ndarray, np.ndarray]]]:
-    """The colour model and each channel's ``U`` and ``SxV``."""
+    """The colour model and each channel's ``U`` (memory-mapped) and ``SxV`` (as float32)."""
     cursor.number("the factorization")
     model = cursor.number("the colour model")
     if model not in (0, 11):
@@ -310,5 +308,5 @@ def _read_factors(
         cursor.take(dtype, components, what)
         u = cursor.take(dtype, rows * components, what).reshape(rows, components)
         sxv = cursor.take(dtype, columns * components, what).reshape(columns, components)
-        factors.append((u, sxv))
+        factors.append((u, sxv.astype(np.float32)))  # every pair's decode reads all of SxV
     return model, factors
