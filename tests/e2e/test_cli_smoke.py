@@ -153,6 +153,22 @@ def test_capture_dry_run_then_capture_then_refuse_to_overwrite(tmp_path):
     assert again.exit_code == 2 and "exists" in again.stderr and "--resume" in again.stderr
 
 
+def test_dry_run_counts_the_pairs_whose_marks_leave_the_window(tmp_path):
+    """The holder's marks span 53 mm, 68 px of the 256 across the camera's 20 cm field when
+    seen head-on: a 64 px window cuts them off in every pair of the reduced sampling, a 128 px
+    window in none (their diagonal, 75 mm, is 96 px)."""
+    counted = {}
+    for window in (64, 128):
+        dry = runner.invoke(
+            app,
+            ["capture", str(tmp_path / "run.capture.zarr"), "--program", "gonio-run"]
+            + ["--dry-run", "--pixels", "256", "--window", str(window), "--json"],
+        )
+        assert dry.exit_code == 0, dry.output
+        counted[window] = json.loads(dry.output)["pairs_with_marks_outside_window"]
+    assert counted == {64: 156, 128: 0}
+
+
 def test_a_low_spp_render_prints_no_library_warning(tmp_path):
     # Mitsuba's low-discrepancy sampler warns (in colour codes, on the process's stdout) when it
     # rounds a sample count: spectwin asks it for counts it takes as they are.

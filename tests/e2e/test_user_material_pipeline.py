@@ -7,8 +7,11 @@ processed into a BTF and evaluated against its truth texel by texel (Eq. 6.8, De
 import numpy as np
 import pytest
 
+from recon.btf.specular_lobe import microfacet_specular
 from recon.calibration.gonio import GonioCalibration
 from twin.gonio.capture import GonioPairs, run_gonio_measurement
+from twin.materials.user import PATCH_HEIGHT_M
+from twin.render.material_preview import PREVIEW_PAIRS_DEG
 from twin.rigs.hemisphere import direction
 from twin.rigs.rig_config import load_rig
 
@@ -49,6 +52,31 @@ def test_material_check_previews_a_user_material(evaluated, invoke_json):
     # Lit from 30 degrees the tile's texture (eight measured reflectances, shaded 0.85-1) has a
     # mean reflectance factor between its darkest and brightest spectra's.
     assert 0.1 < checked["mean_reflectance_factor_per_pair"][0] < 0.5
+
+
+def test_material_check_previews_a_clear_film_as_its_microfacet_lobe(tmp_path, invoke_json):
+    """A clear rough dielectric film (index 1.5, Beckmann roughness 0.3) alone, a flat patch:
+    the preview's reflectance factor at each pair is pi times the microfacet lobe with the
+    film's Fresnel reflectance (recon.btf.specular_lobe, Walter et al. in numpy) times nothing
+    else: no diffuse base, and its transmitted light does not come back. The patch lies 0.3 mm
+    above the sample plane, so an oblique view sees it shifted and misses a sliver of it."""
+    (tmp_path / "film.yaml").write_text(
+        "name: film\nmaterial: user\nsize_m: 0.02\nparts:\n  - name: film\n"
+        "    bsdf: {type: rough_dielectric, roughness: 0.3}\n"
+    )
+    checked = invoke_json(
+        "material", "check", tmp_path / "film.yaml", "--out", tmp_path, "--texels", 8, "--json"
+    )
+    assert checked["parts"]["film"] == {"faces": 2, "texels": "1x1", "bsdf": "rough dielectric"}
+    (light, view) = np.array(PREVIEW_PAIRS_DEG).transpose(1, 0, 2)
+    view_dirs = direction(view[:, 0], view[:, 1])
+    lobe = microfacet_specular(direction(light[:, 0], light[:, 1]), view_dirs, 0.3, True)
+    shift = PATCH_HEIGHT_M * view_dirs[:, :2] / view_dirs[:, 2:] / 0.02  # in sample sizes
+    seen = np.prod(1 - np.abs(shift), axis=1)
+    np.testing.assert_allclose(
+        checked["mean_reflectance_factor_per_pair"], np.pi * lobe * seen, atol=2e-3
+    )
+    assert np.pi * lobe.max() > 0.02  # the comparison is not between zeros
 
 
 @pytest.mark.parametrize(

@@ -247,6 +247,19 @@ def _program_of(
     return built, notes
 
 
+def _warn_of_marks_outside(built, window: int | None) -> None:
+    """One line on stderr when the read-out window cuts off the holder's registration marks
+    in some of a measurement run's pairs (they would be captured but never register)."""
+    cut = built.marks_outside_window()["pairs_with_marks_outside_window"]
+    if cut:
+        typer.echo(
+            f"warning: in {cut} of {len(built.poses)} pairs the holder's registration marks "
+            f"leave the {window} px window; those pairs will not register (give a larger "
+            "--window)",
+            err=True,
+        )
+
+
 def _interrupted(store: Path, done: int | None = None, total: int | None = None) -> NoReturn:
     """Say how far an interrupted capture got and how to continue it; exit 130."""
     if done is None:
@@ -463,6 +476,8 @@ def capture(
     if not resume:
         require_new_store(store)
     require_output_folder(store, "STORE")
+    if program is Program.gonio_run:
+        _warn_of_marks_outside(built, window)
     from twin.devices.cluster import cluster_description, dask_client
 
     summary["program"] = program.value

@@ -49,9 +49,7 @@ def check(
         part.name: {
             "faces": len(part.mesh.faces),
             "texels": "x".join(str(v) for v in part.texels),
-            "bsdf": "rough conductor"
-            if part.conductor
-            else ("diffuse" if part.roughness is None else "rough plastic"),
+            "bsdf": part.bsdf_kind,
         }
         for part in built.parts
     }

@@ -291,7 +291,18 @@ class CaptureProgram(ProgramCapture):
             "estimated_duration_s": duration_s,
             "estimated_duration_h": duration_s / 3600,
             "storage_mb": storage / 1e6,
-        }
+        } | self.marks_outside_window()
+
+    def marks_outside_window(self) -> dict[str, int]:
+        """For a measurement run, ``pairs_with_marks_outside_window``: the pairs whose
+        registration marks' corners (``expected_corners_xy``) fall outside the frame read out,
+        which therefore cannot be registered; empty for other programs."""
+        if "expected_corners_xy" not in self.rig:
+            return {}
+        corners = np.asarray(self.rig["expected_corners_xy"])
+        height, width = self.devices.sensor.height, self.devices.sensor.width
+        outside = (corners < 0) | (corners > np.array([width, height]))
+        return {"pairs_with_marks_outside_window": int(outside.any(axis=(1, 2)).sum())}
 
 
 def stored_settings(store: CaptureStore) -> dict[str, Any]:

@@ -124,12 +124,15 @@ CONDUCTOR_PRESETS = (
 
 class BSDFConfig(StrictModel):
     """A part's scattering: ``diffuse`` (Lambertian), ``rough_plastic`` (a rough dielectric
-    coating of index 1.5 over the diffuse base, GGX ``roughness``) or ``rough_conductor`` (a
-    metal of Mitsuba's presets, e.g. ``Ag``, ``Al``, ``Au``, ``Cu``, with GGX ``roughness``)."""
+    coating of index 1.5 over the diffuse base), ``rough_conductor`` (a metal of Mitsuba's
+    presets, e.g. ``Ag``, ``Al``, ``Au``, ``Cu``) or ``rough_dielectric`` (a clear dielectric of
+    index ``ior``, 1.5 if not given, with no base: glass, a clear resin or film); each rough
+    one with the Beckmann ``roughness`` of its microfacets (Mitsuba's distribution)."""
 
-    type: Literal["diffuse", "rough_plastic", "rough_conductor"] = "diffuse"
+    type: Literal["diffuse", "rough_plastic", "rough_conductor", "rough_dielectric"] = "diffuse"
     roughness: Annotated[float, Field(gt=0, le=1)] | None = None
     metal: str | None = None
+    ior: Annotated[float, Field(gt=1, le=3)] | None = None
 
     @model_validator(mode="after")
     def _parameters_of_type(self) -> BSDFConfig:
@@ -139,6 +142,8 @@ class BSDFConfig(StrictModel):
             raise ValueError("type diffuse: takes no roughness")
         if (self.type == "rough_conductor") != (self.metal is not None):
             raise ValueError("metal: given exactly for type rough_conductor")
+        if self.ior is not None and self.type != "rough_dielectric":
+            raise ValueError("ior: given only for type rough_dielectric")
         if self.metal is not None and self.metal not in CONDUCTOR_PRESETS:
             raise ValueError(
                 f"metal: {self.metal!r} is not one of Mitsuba's presets {list(CONDUCTOR_PRESETS)}"
@@ -162,9 +167,12 @@ class UserPartConfig(StrictModel):
 
     @model_validator(mode="after")
     def _one_reflectance(self) -> UserPartConfig:
-        if self.bsdf.type == "rough_conductor":
+        if self.bsdf.type in ("rough_conductor", "rough_dielectric"):
             if (self.spectrum, self.texture, self.rgb_texture) != (None, None, None):
-                raise ValueError("a rough_conductor's colour is its metal's; give no reflectance")
+                raise ValueError(
+                    "a rough_conductor's colour is its metal's and a rough_dielectric is clear; "
+                    "give no reflectance"
+                )
             return self
         _exactly_one(self, ("spectrum", "texture", "rgb_texture"), f"part {self.name}")
         return self

@@ -10,7 +10,7 @@ Mitsuba's own textures are RGB. :mod:`twin.render.shapes` turns parts into Mitsu
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import trimesh
@@ -37,11 +37,14 @@ class SurfacePart:
     reflectance
         Diffuse spectral reflectance (1-D values in [0, 1]).
     roughness
-        ``None`` for a Lambertian surface; otherwise the GGX roughness of a dielectric coating
-        (index 1.5) over the diffuse base (Mitsuba ``roughplastic``): a glossy material.
+        ``None`` for a Lambertian surface; otherwise the Beckmann roughness of a dielectric
+        coating (index 1.5) over the diffuse base (Mitsuba ``roughplastic``): a glossy material.
     conductor
         A Mitsuba conductor preset (e.g. ``"Ag"``, ``"Al"``) instead of the diffuse base; its
         spectral reflectance then follows from the metal's complex index (Fresnel).
+    dielectric_ior
+        The index of a clear dielectric with no diffuse base (Mitsuba ``roughdielectric``, of
+        ``roughness``): it reflects and transmits, and ``reflectance`` is unused.
     texture
         ``None``, or the diffuse reflectance per texel ``(H, W, K)`` (row 0 at the top, texture
         coordinate v = 1; column 0 at u = 0), which then replaces ``reflectance`` in renders;
@@ -55,6 +58,7 @@ class SurfacePart:
     roughness: float | None = None
     conductor: str | None = None
     texture: SampledSpectra | None = None
+    dielectric_ior: float | None = None
 
     def __post_init__(self) -> None:
         if self.reflectance.values.ndim != 1:
@@ -65,6 +69,13 @@ class SurfacePart:
         if self.roughness is not None and not 0 < self.roughness <= 1:
             raise SpectwinInputError(
                 f"{self.name}: expected roughness in (0, 1], got {self.roughness}"
+            )
+        if self.dielectric_ior is not None and (
+            self.roughness is None or self.conductor is not None or not self.dielectric_ior > 1
+        ):
+            raise SpectwinInputError(
+                f"{self.name}: a clear dielectric needs an index above 1 and a roughness, and "
+                "is no conductor"
             )
         if len(self.mesh.faces) == 0:
             raise SpectwinInputError(f"{self.name}: the mesh has no faces")
@@ -80,13 +91,24 @@ class SurfacePart:
             )
         if np.any(values < 0) or np.any(values > 1):
             raise SpectwinInputError(f"{self.name}: expected texture reflectances in [0, 1]")
-        if self.conductor is not None:
-            raise SpectwinInputError(f"{self.name}: a conductor takes no diffuse texture")
+        if self.conductor is not None or self.dielectric_ior is not None:
+            raise SpectwinInputError(
+                f"{self.name}: a conductor or clear dielectric takes no diffuse texture"
+            )
         uv = texture_coordinates(self.mesh)
         if uv is None or len(uv) != len(self.mesh.vertices):
             raise SpectwinInputError(
                 f"{self.name}: a textured part needs texture coordinates on every mesh vertex"
             )
+
+    @property
+    def bsdf_kind(self) -> str:
+        """``"diffuse"``, ``"rough plastic"``, ``"rough conductor"`` or ``"rough dielectric"``."""
+        if self.conductor is not None:
+            return "rough conductor"
+        if self.dielectric_ior is not None:
+            return "rough dielectric"
+        return "diffuse" if self.roughness is None else "rough plastic"
 
     @property
     def texels(self) -> tuple[int, int]:
@@ -104,6 +126,4 @@ def transformed(part: SurfacePart, matrix: np.ndarray) -> SurfacePart:
     """A copy of ``part`` with its mesh moved by a 4x4 homogeneous ``matrix``."""
     mesh = part.mesh.copy()
     mesh.apply_transform(matrix)
-    return SurfacePart(
-        part.name, mesh, part.reflectance, part.roughness, part.conductor, part.texture
-    )
+    return replace(part, mesh=mesh)

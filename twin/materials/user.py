@@ -6,7 +6,8 @@ square ``[-size/2, size/2]^2`` around the origin) or a flat patch filling that s
 a diffuse reflectance covering at least 400-700 nm, held constant beyond its last samples
 (one spectrum, a spectral OpenEXR texture in the layout of
 :mod:`recon.spectral_exr`, or an sRGB image upsampled by a named method,
-:mod:`recon.rgb_upsampling`) and a BSDF (diffuse, a rough dielectric coating, a rough metal).
+:mod:`recon.rgb_upsampling`) and a BSDF (diffuse, a rough dielectric coating, a rough metal,
+a clear rough dielectric).
 File paths are relative to the YAML file. The result is a :class:`twin.materials.Material`
 like the built-ins, so the twin's captures, its truth and its evaluations take it unchanged.
 """
@@ -19,6 +20,7 @@ import colour
 import numpy as np
 import trimesh
 
+from recon.btf.specular_lobe import COATING_IOR
 from recon.errors import SpectwinInputError
 from recon.measured_data import read_spectra_csv
 from recon.rgb_upsampling import read_srgb_image, reduce_image, upsample_srgb
@@ -186,6 +188,7 @@ def _part(config: UserPartConfig, folder: Path, size_m: float) -> SurfacePart:
             roughness=bsdf.roughness,
             conductor=bsdf.metal,
             texture=texture,
+            dielectric_ior=(bsdf.ior or COATING_IOR) if bsdf.type == "rough_dielectric" else None,
         )
     except SpectwinInputError as error:
         raise SpectwinInputError(f"{field}: {error}") from None

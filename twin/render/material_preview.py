@@ -68,11 +68,16 @@ def write_preview_figure(preview: MaterialPreview, path: str | Path) -> Path:
         )
         axis.axis("off")
     for part in preview.material.parts:
+        if part.bsdf_kind in ("rough conductor", "rough dielectric"):
+            continue  # no diffuse reflectance: a metal's colour is its own, a dielectric clear
         axes[3].plot(part.reflectance.wavelengths_nm, part.reflectance.values, label=part.name)
     axes[3].set(
         xlabel="wavelength, nm", ylabel="reflectance (a texture's mean)", title="parts", ylim=(0, 1)
     )
-    axes[3].legend(fontsize=8)
+    if axes[3].lines:
+        axes[3].legend(fontsize=8)
+    else:
+        axes[3].text(0.5, 0.5, "no diffuse part", ha="center", transform=axes[3].transAxes)
     figure.suptitle(preview.material.name)
     figure.tight_layout()
     figure.savefig(path, dpi=100)

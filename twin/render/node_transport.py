@@ -4,10 +4,13 @@ The rigs light a sample with one lamp (a point source, or a distant light for th
 with LEDs that share one spectrum (the dome), and photograph it through narrow bands. Every
 light path's contribution is a geometric factor times the spectral factors of the surfaces it
 meets: a Lambertian base contributes its reflectance :math:`\\rho_k(\\lambda)`, the dielectric
-coating of a glossy part (constant index 1.5) a factor independent of wavelength, a metal its
-Fresnel reflectance. The materials' reflectances are designed on ``MATERIAL_GRID`` (380-780 nm
-every 5 nm, linear in between and constant beyond, :mod:`twin.materials.builders`), so a path
-that meets one Lambertian surface is exactly linear between those nodes.
+coating of a glossy part (constant index 1.5) and a clear dielectric (a constant index) a factor
+independent of wavelength, a metal its Fresnel reflectance. A clear dielectric's transmission is
+traced on the camera's paths, but the lamps light nothing through it: a shadow ray stops at any
+surface, as in Mitsuba's path tracer, which finds no caustics of point lights. The materials'
+reflectances are designed on ``MATERIAL_GRID`` (380-780 nm every 5 nm, linear in between and
+constant beyond, :mod:`twin.materials.builders`), so a path that meets one Lambertian surface is
+exactly linear between those nodes.
 
 :class:`NodeScene` therefore traces each path once and evaluates its spectrum at the 81 nodes:
 Mitsuba's BSDFs give the geometric factors of each lobe (the parts carry stand-in BSDFs of unit
@@ -30,7 +33,7 @@ References
 ----------
 - Jakob, W., Speierer, S., Roussel, N., et al. (2022). Mitsuba 3 renderer, version 3.x.
   https://mitsuba-renderer.org (BSDFs ``diffuse``, ``roughplastic`` with ``nonlinear=false``,
-  ``roughconductor``; scene ray casts).
+  ``roughconductor``, ``roughdielectric``; scene ray casts).
 - Pharr, M., Jakob, W., Humphreys, G. (2016). Physically Based Rendering, 3rd ed., 14.2-14.5
   (direct lighting from point and distant lights; path tracing).
 - The thesis, section 4.1.1 (the gonioreflectometer's camera and lamp) and Eq. 6.1 / 10.9
@@ -341,9 +344,10 @@ class NodeScene:
         reflectance = mi.Float(self.reflectance.ravel().astype(np.float32))
         texels = {name: mi.UInt32(values) for name, values in self._texels.items()}
         count = NODES_NM.size
+        glossy_lobes = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.GlossyTransmission
         lobes = [
             mi.BSDFContext(mi.TransportMode.Radiance, int(flag))
-            for flag in (mi.BSDFFlags.DiffuseReflection, mi.BSDFFlags.GlossyReflection)
+            for flag in (mi.BSDFFlags.DiffuseReflection, glossy_lobes)
         ]
         radiance = [mi.Float(0.0) for _ in range(count)]
         throughput = [mi.Float(1.0) for _ in range(count)]
@@ -436,7 +440,7 @@ class NodeScene:
         return diffuse, [glossy * value for value in spectrum] if spectrum else [glossy]
 
     def _glossy_spectrum(self, si, wo, part, active) -> list | None:
-        """Spectral factor of the glossy lobe at the nodes: one for a dielectric coating, the
+        """Spectral factor of the glossy lobe at the nodes: one for a dielectric, the
         Fresnel reflectance at the half vector for a metal (as Mitsuba's ``roughconductor``);
         ``None`` (one at every node) in a scene without metal."""
         if self._metal_index is None:

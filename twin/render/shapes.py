@@ -17,7 +17,8 @@ __all__ = ["mitsuba_shape", "part_bsdf"]
 
 
 def part_bsdf(part: SurfacePart, *, unit: bool = False) -> dict[str, object]:
-    """The Mitsuba BSDF dict of ``part``: its diffuse reflectance, coating or conductor.
+    """The Mitsuba BSDF dict of ``part``: its diffuse reflectance, coating, conductor or clear
+    dielectric.
 
     With ``unit`` the same BSDF with every spectral factor one: a reflectance of one and a
     perfectly reflecting metal (Mitsuba's ``material: none``), i.e. the geometric factors of its
@@ -34,6 +35,13 @@ def part_bsdf(part: SurfacePart, *, unit: bool = False) -> dict[str, object]:
             "type": "roughconductor",
             "material": "none" if unit else part.conductor,
             "alpha": part.roughness or 0.05,
+        }
+    if part.dielectric_ior is not None:  # no spectral factor: the index is constant
+        return {
+            "type": "roughdielectric",
+            "alpha": part.roughness,
+            "int_ior": part.dielectric_ior,
+            "ext_ior": 1.0,
         }
     diffuse = {"type": "uniform", "value": 1.0} if unit else irregular_spectrum(part.reflectance)
     if part.roughness is None:

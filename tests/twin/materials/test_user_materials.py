@@ -98,6 +98,20 @@ def test_a_colour_dataset_spectrum_is_the_charts_own(tmp_path):
             "rough_conductor's colour is its metal's",
         ),
         (
+            "  - name: a\n    spectrum: {chart: dark skin}\n"
+            "    bsdf: {type: rough_dielectric, roughness: 0.1}\n",
+            "a rough_dielectric is clear; give no reflectance",
+        ),
+        (
+            "  - name: a\n    spectrum: {chart: dark skin}\n"
+            "    bsdf: {type: rough_plastic, roughness: 0.1, ior: 1.3}\n",
+            "ior: given only for type rough_dielectric",
+        ),
+        (
+            "  - name: a\n    bsdf: {type: rough_dielectric, roughness: 0.1, ior: 0.8}\n",
+            "parts.0.bsdf.ior",
+        ),
+        (
             "  - name: a\n    bsdf: {type: rough_conductor, roughness: 0.1, metal: Xx}\n",
             "metal: 'Xx' is not one of Mitsuba's presets",
         ),
@@ -125,6 +139,21 @@ def test_bad_recipes_fail_naming_the_field(tmp_path, examples, parts, named):
     (tmp_path / "big.obj").write_text("v -20 -20 0\nv 20 -20 0\nv 20 20 0\nf 1 2 3\n")
     (tmp_path / "small.obj").write_text("v -0.01 -0.01 0\nv 0.01 -0.01 0\nv 0 0.01 0\nf 1 2 3\n")
     assert named in _refused(_write(tmp_path, parts))
+
+
+def test_a_clear_dielectric_part_takes_its_index(tmp_path):
+    path = _write(
+        tmp_path,
+        "  - name: glass\n    bsdf: {type: rough_dielectric, roughness: 0.1, ior: 1.7}\n"
+        "  - name: film\n    bsdf: {type: rough_dielectric, roughness: 0.2}\n",
+    )
+    glass, film = load_material(path).parts
+    assert (glass.dielectric_ior, glass.roughness, glass.bsdf_kind) == (
+        1.7,
+        0.1,
+        "rough dielectric",
+    )
+    assert film.dielectric_ior == 1.5 and film.conductor is None
 
 
 def test_a_mesh_out_of_the_sample_square_says_what_was_expected(tmp_path):
