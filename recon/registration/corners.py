@@ -48,6 +48,7 @@ from skimage import transform
 from recon.errors import SpectwinInputError
 
 __all__ = [
+    "CORNER_PIECE_SIZE",
     "TEXTURE_CORNERS_UV",
     "corner_pieces",
     "fit_corner_model",
@@ -58,6 +59,10 @@ __all__ = [
     "validate_frame",
     "validate_marks",
 ]
+
+CORNER_PIECE_SIZE = 0.1
+"""Width and height in texture units of the image piece each corner is refined in (thesis
+4.1.2); half of it lies outside the border, where the contrast comes from."""
 
 TEXTURE_CORNERS_UV = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
 """Texture-space positions of corners 0..3: ``(u, v)``; the border lies inside the unit square."""
@@ -187,7 +192,7 @@ def corner_pieces(
     image: np.ndarray,
     corners_xy: np.ndarray,
     *,
-    piece_size: float = 0.1,
+    piece_size: float = CORNER_PIECE_SIZE,
     piece_texels: int = 64,
     percentiles: tuple[float, float] = (5.0, 95.0),
 ) -> np.ndarray:
@@ -382,7 +387,7 @@ def refine_corners(
     corners_xy: np.ndarray,
     *,
     marks: Literal["dark", "bright"] = "dark",
-    piece_size: float = 0.1,
+    piece_size: float = CORNER_PIECE_SIZE,
     piece_texels: int = 64,
     percentiles: tuple[float, float] = (5.0, 95.0),
     iterations: int = 2,

@@ -154,19 +154,23 @@ def test_capture_dry_run_then_capture_then_refuse_to_overwrite(tmp_path):
 
 
 def test_dry_run_counts_the_pairs_whose_marks_leave_the_window(tmp_path):
-    """The holder's marks span 53 mm, 68 px of the 256 across the camera's 20 cm field when
-    seen head-on: a 64 px window cuts them off in every pair of the reduced sampling, a 128 px
-    window in none (their diagonal, 75 mm, is 96 px)."""
+    """The holder's marks span 53 mm, 68 px of the 256 across the camera's 20 cm field seen
+    head-on, and registration refines each corner in a piece a tenth of that wide around it:
+    a 64 px window cuts into them in every pair of the reduced sampling, a 96 px window in the
+    pairs that see the square's diagonal across the frame, a 128 px window in none."""
     counted = {}
-    for window in (64, 128):
+    for window in (64, 96, 128):
         dry = runner.invoke(
             app,
             ["capture", str(tmp_path / "run.capture.zarr"), "--program", "gonio-run"]
             + ["--dry-run", "--pixels", "256", "--window", str(window), "--json"],
         )
         assert dry.exit_code == 0, dry.output
-        counted[window] = json.loads(dry.output)["pairs_with_marks_outside_window"]
-    assert counted == {64: 156, 128: 0}
+        summary = json.loads(dry.output)
+        counted[window] = summary["pairs_with_marks_outside_window"]
+        # (68 px + a tenth) x sqrt(2), the diagonal of the square with its pieces: 106 px
+        assert summary["window_px_holding_marks"] == 106
+    assert counted[64] == 156 and 0 < counted[96] < 156 and counted[128] == 0
 
 
 def test_a_low_spp_render_prints_no_library_warning(tmp_path):

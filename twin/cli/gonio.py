@@ -248,14 +248,15 @@ def _program_of(
 
 
 def _warn_of_marks_outside(built, window: int | None) -> None:
-    """One line on stderr when the read-out window cuts off the holder's registration marks
-    in some of a measurement run's pairs (they would be captured but never register)."""
-    cut = built.marks_outside_window()["pairs_with_marks_outside_window"]
+    """One line on stderr when the read-out window cuts into the holder's registration marks
+    in some of a measurement run's pairs (they would be captured but may not register)."""
+    marks = built.marks_outside_window()
+    cut = marks["pairs_with_marks_outside_window"]
     if cut:
         typer.echo(
-            f"warning: in {cut} of {len(built.poses)} pairs the holder's registration marks "
-            f"leave the {window} px window; those pairs will not register (give a larger "
-            "--window)",
+            f"warning: in {cut} of {len(built.poses)} pairs the {window} px window cuts into "
+            "the holder's registration marks, so they may not register; a window of "
+            f"{marks['window_px_holding_marks']} px holds them in every pair",
             err=True,
         )
 

@@ -46,6 +46,7 @@ from hwbridge.plans import (
 from hwbridge.store import CaptureStore
 from recon.calibration.spectral import HMI_FLICKER_PERIOD_S
 from recon.errors import SpectwinInputError
+from recon.registration.corners import CORNER_PIECE_SIZE
 from recon.spectra import DEFAULT_GRID
 from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.components.targets import zenith_white_reflectance
@@ -148,6 +149,23 @@ def texture_corners_world(pose: GonioPose) -> np.ndarray:
     corners = registration_corners()[[1, 0, 3, 2]]
     matrix = pose_matrix(pose)
     return corners @ matrix[:3, :3].T + matrix[:3, 3]
+
+
+def _marks_window_px(config: GonioConfig, pose: GonioPose, pixels: int) -> int:
+    """The smallest centred window (pixels of ``pixels`` across the field) that holds the image
+    pieces around the four corners of the holder's marks at ``pose``, in which the
+    registration refines them."""
+    reach = CORNER_PIECE_SIZE * PRINT_OUTER_HALF_M  # half a piece, in metres
+    offsets = np.array([[1, 1, 0], [-1, 1, 0], [-1, -1, 0], [1, -1, 0]]) * reach
+    points = (registration_corners()[:, None, :] + offsets).reshape(-1, 3)
+    matrix = pose_matrix(pose)
+    xy = gonio_camera(config, pose.rail_deg, pixels).project(
+        points @ matrix[:3, :3].T + matrix[:3, 3]
+    )
+    sides = np.arange(1, pixels + 1)
+    first = (pixels - sides) // 2  # the window's first pixel, as the camera crops it
+    holds = (first <= xy.min()) & (first + sides >= xy.max())
+    return int(sides[holds][0]) if holds.any() else pixels + 1
 
 
 def _flicker_multiples(times_s: np.ndarray) -> np.ndarray:
@@ -294,15 +312,21 @@ class CaptureProgram(ProgramCapture):
         } | self.marks_outside_window()
 
     def marks_outside_window(self) -> dict[str, int]:
-        """For a measurement run, ``pairs_with_marks_outside_window``: the pairs whose
-        registration marks' corners (``expected_corners_xy``) fall outside the frame read out,
-        which therefore cannot be registered; empty for other programs."""
-        if "expected_corners_xy" not in self.rig:
+        """For a measurement run: ``pairs_with_marks_outside_window``, the pairs in which the
+        window read out cuts into an image piece that the registration refines a corner of the
+        holder's marks in (:data:`recon.registration.corners.CORNER_PIECE_SIZE`), so that they
+        may not register, and ``window_px_holding_marks``, the smallest centred window that
+        holds every pair's pieces; empty for other programs."""
+        if self.name != "gonio-run":
             return {}
-        corners = np.asarray(self.rig["expected_corners_xy"])
-        height, width = self.devices.sensor.height, self.devices.sensor.width
-        outside = (corners < 0) | (corners > np.array([width, height]))
-        return {"pairs_with_marks_outside_window": int(outside.any(axis=(1, 2)).sum())}
+        pixels = int(self.rig["sensor_px"])
+        needed = np.array(
+            [_marks_window_px(self.config, pose, pixels) for pose in self.poses.values()]
+        )
+        return {
+            "pairs_with_marks_outside_window": int((needed > self.devices.sensor.width).sum()),
+            "window_px_holding_marks": int(needed.max()),
+        }
 
 
 def stored_settings(store: CaptureStore) -> dict[str, Any]:
