@@ -244,6 +244,7 @@ def process_pairs(
     manual_corners: dict[str, np.ndarray] | None = None,
     check_complete: bool = True,
     advance: Callable[[], None] = lambda: None,
+    stop: Callable[[], bool] = lambda: False,
 ) -> PairOutcomes:
     """Calibrate, register and write ``pairs`` of ``run`` into ``btf`` (steps 2 to 4).
 
@@ -263,6 +264,8 @@ def process_pairs(
         run, see :meth:`recon.btf.store.BTFStore.write_pair`).
     advance
         Called after each pair (a progress bar).
+    stop
+        Asked before each pair: when it says so the remaining pairs are left (for a resume).
 
     Returns
     -------
@@ -275,6 +278,8 @@ def process_pairs(
     calibration = run.calibration
     outcomes = PairOutcomes()
     for pair in pairs:
+        if stop():
+            break
         frames, exposure, monitor = _pair_frames(store, run, pair)
         drift = drift_factors(np.vstack([run.reference, monitor.astype(np.float64).mean(axis=0)]))
         linear = run.darks.linear_signal(frames, exposure, calibration.inverse_response)

@@ -21,9 +21,10 @@ so ``N`` one-thread workers do not oversubscribe ``N`` cores.
 
 Processing (:func:`run_process`): the coordinator prepares the run once (dark model, white
 factors, drift reference: :func:`recon.btf.processing.prepare_gonio_run`), creates the BTF store
-and submits one task per pending direction pair; a worker registers its pair and writes the
-pair's chunks. Workers return metadata only (steps done, pairs registered coarsely or not at all);
-the coordinator alone writes the stores' attributes (``complete``, the outcome lists).
+and submits the pending direction pairs in tasks of up to :data:`MAX_TASK_PAIRS`
+(:func:`pair_tasks`); a worker opens the capture store once per task, registers its pairs and
+writes their chunks. Workers return metadata only (steps done, pairs registered coarsely or not
+at all); the coordinator alone writes the stores' attributes (``complete``, the outcome lists).
 
 One writer per store (:mod:`hwbridge.lock`): the coordinator holds the store's writer lock for
 the whole run, serial or distributed, and the workers write their chunks inside it. When the run
@@ -85,6 +86,7 @@ __all__ = [
     "RendererSetup",
     "cluster_description",
     "dask_client",
+    "pair_tasks",
     "run_capture",
     "run_process",
     "view_tasks",
@@ -93,6 +95,10 @@ __all__ = [
 MAX_TASK_STEPS = 64
 """Most steps per capture task: a gonio pair's 33 bands stay in one task (one render), the
 calibration's 750 response-series frames of one view spread over several."""
+
+MAX_TASK_PAIRS = 16
+"""Most direction pairs per processing task: a task opens the capture store once for all of
+them (about a second for the index of a campaign of 100 000 frames)."""
 
 
 @contextmanager
@@ -397,14 +403,30 @@ def run_capture(
 def _process_task(
     run: GonioRun,
     btf_path: str,
-    pair: int,
+    pairs: list[int],
     manual_corners: dict[str, np.ndarray] | None,
     stop: Event,
 ) -> tuple[int, PairOutcomes]:
-    if stop.is_set():
-        return 0, PairOutcomes()
     btf = BTFStore.open(btf_path, writable=True)
-    return 1, process_pairs(run, btf, [pair], manual_corners=manual_corners, check_complete=False)
+    done: list[None] = []
+    outcomes = process_pairs(
+        run,
+        btf,
+        pairs,
+        manual_corners=manual_corners,
+        check_complete=False,
+        advance=lambda: done.append(None),
+        stop=_EventStop(stop),
+    )
+    return len(done), outcomes
+
+
+def pair_tasks(pairs: list[int], workers: int) -> list[list[int]]:
+    """Split the pending ``pairs`` into processing tasks of at most :data:`MAX_TASK_PAIRS`
+    consecutive pairs, at least four tasks per worker where there are pairs enough (so that
+    the workers finish together)."""
+    count = max(-(-len(pairs) // MAX_TASK_PAIRS), min(len(pairs), 4 * workers))
+    return [chunk.tolist() for chunk in np.array_split(np.asarray(pairs, int), count) if chunk.size]
 
 
 def _btf_lock(out: Path, resume: bool) -> StoreLock:
@@ -458,8 +480,8 @@ def run_process(
         path = str(btf.path.resolve())
         with _stoppable_tasks(client) as (event, futures):
             futures += [
-                client.submit(_process_task, context, path, pair, manual_corners, event, pure=False)
-                for pair in pending
+                client.submit(_process_task, context, path, task, manual_corners, event, pure=False)
+                for task in pair_tasks(pending, len(client.nthreads()))
             ]
             outcomes = _gather(futures, "process", len(pending), show_progress)
         record_outcomes(btf, outcomes)

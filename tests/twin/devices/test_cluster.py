@@ -29,7 +29,7 @@ from twin.cli.app import app
 from twin.components.lamps import HMILamp
 from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.devices import cluster as cluster_module
-from twin.devices.cluster import dask_client, view_tasks
+from twin.devices.cluster import dask_client, pair_tasks, view_tasks
 from twin.devices.sim_devices import SimGonioDevices
 from twin.gonio.capture import CAMERA_ID, GonioPairs, run_gonio_measurement
 from twin.gonio.signals import WhiteReferenceSignal
@@ -133,6 +133,22 @@ def test_process_on_two_workers_from_the_command_line_equals_the_serial_btf(capt
     for name in ("complete", "coarse_corner_pairs", "unregistered_pairs", "calibration"):
         assert cluster.attrs[name] == serial.attrs[name]
     assert serial.complete and np.isfinite(serial.reflectance()).all()
+
+
+@pytest.mark.parametrize(
+    ("pairs", "workers", "sizes"),
+    [
+        (3192, 2, {15, 16}),  # 200 tasks: a full glossy campaign opens its store 200 times
+        (60, 2, {7, 8}),  # four tasks per worker at least
+        (3, 2, {1}),
+    ],
+)
+def test_processing_tasks_take_consecutive_pairs_in_small_batches(pairs, workers, sizes):
+    pending = list(range(5, 5 + pairs))
+    tasks = pair_tasks(pending, workers)
+    assert [pair for task in tasks for pair in task] == pending
+    assert {len(task) for task in tasks} == sizes
+    assert len(tasks) >= min(pairs, 4 * workers)
 
 
 def _demo_devices(seed: int) -> SimGonioDevices:
