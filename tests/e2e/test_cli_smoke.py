@@ -9,6 +9,7 @@ import pytest
 from typer.testing import CliRunner
 
 from recon.spectral_exr import read_spectral_exr
+from twin.cli import gonio
 from twin.cli.app import app
 from twin.rigs.rig_config import load_rig
 
@@ -171,6 +172,26 @@ def test_dry_run_counts_the_pairs_whose_marks_leave_the_window(tmp_path):
         # (68 px + a tenth) x sqrt(2), the diagonal of the square with its pieces: 106 px
         assert summary["window_px_holding_marks"] == 106
     assert counted[64] == 156 and 0 < counted[96] < 156 and counted[128] == 0
+
+
+def test_a_ctrl_c_as_a_finished_capture_returns_says_how_far_it_got(tmp_path, monkeypatch):
+    """A Ctrl-C that arrives after the capture's last frame, as the command returns (here: as
+    its context closes), ends with exit 130 and the line saying the capture is complete."""
+    checked = gonio._refuse_unused
+
+    def check_then_ctrl_c_at_close(ctx, *args):
+        def ctrl_c():
+            raise KeyboardInterrupt
+
+        ctx.call_on_close(ctrl_c)
+        return checked(ctx, *args)
+
+    monkeypatch.setattr(gonio, "_refuse_unused", check_then_ctrl_c_at_close)
+    result = runner.invoke(app, ["capture", str(tmp_path / "demo.capture.zarr"), "--json"])
+    assert result.exit_code == 130
+    assert result.stderr.splitlines() == [
+        "interrupted after 72 of 72 frames; the capture is complete"
+    ]
 
 
 def test_a_low_spp_render_prints_no_library_warning(tmp_path):

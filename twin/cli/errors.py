@@ -37,6 +37,7 @@ from recon.errors import SpectwinDataError, SpectwinInputError
 
 __all__ = [
     "INTERRUPTED",
+    "INTERRUPT_REPORT",
     "RUN_FAILED",
     "USAGE",
     "SpectwinGroup",
@@ -50,6 +51,11 @@ __all__ = [
 USAGE = 2
 RUN_FAILED = 1
 INTERRUPTED = 130
+
+INTERRUPT_REPORT = "spectwin.interrupt_report"
+"""Key in a command's ``ctx.meta`` of a callable that says how far the command got and exits
+with :data:`INTERRUPTED`: a Ctrl-C that reaches the command group, e.g. one arriving as the
+command returns, ends with that line rather than a bare "interrupted"."""
 
 
 def one_line(message: object) -> str:
@@ -138,5 +144,8 @@ class SpectwinGroup(TyperGroup):
             )
             raise typer.Exit(INTERRUPTED) from None
         except KeyboardInterrupt:
+            report = ctx.meta.get(INTERRUPT_REPORT)
+            if report is not None:
+                report()
             typer.echo("interrupted", err=True)
             raise typer.Exit(INTERRUPTED) from None

@@ -27,6 +27,7 @@ import numpy as np
 import typer
 
 from twin.cli.errors import (
+    INTERRUPT_REPORT,
     INTERRUPTED,
     fail,
     require_output_file,
@@ -420,6 +421,7 @@ def capture(
     from hwbridge.errors import SessionInterrupted
     from hwbridge.lock import require_new_store
 
+    ctx.meta[INTERRUPT_REPORT] = lambda: _interrupted(store)  # a Ctrl-C as the command returns
     if dry_run:
         _refuse_capture_only(ctx)
     exposures_s = None
