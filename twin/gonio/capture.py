@@ -63,6 +63,7 @@ from twin.gonio.render import GONIO_SPP, gonio_camera, gonio_lamp, pose_matrix
 from twin.gonio.signals import RenderedGonioSignal, WhiteReferenceSignal
 from twin.materials import load_material
 from twin.materials.sample_holder import PRINT_OUTER_HALF_M, registration_corners
+from twin.render.scene import centred_window_offset
 from twin.rigs.gonio_kinematics import GonioPose, perturbed_pose, solve_pairs
 from twin.rigs.hemisphere import direction, sattler_directions
 from twin.rigs.rig_config import GonioConfig, load_rig
@@ -146,9 +147,13 @@ def texture_corners_world(pose: GonioPose) -> np.ndarray:
     """World points ``(4, 3)`` of the registration marks' corners in texture order (texture
     ``(0,0), (1,0), (1,1), (0,1)`` = sample ``(-h, +h), (+h, +h), (+h, -h), (-h, -h)``), the
     orientation of the twin's truth textures (:mod:`twin.render.truth`)."""
-    corners = registration_corners()[[1, 0, 3, 2]]
+    return _in_world(registration_corners()[[1, 0, 3, 2]], pose)
+
+
+def _in_world(points: np.ndarray, pose: GonioPose) -> np.ndarray:
+    """Sample-frame ``points`` ``(n, 3)`` in the world, the sample held at ``pose``."""
     matrix = pose_matrix(pose)
-    return corners @ matrix[:3, :3].T + matrix[:3, 3]
+    return points @ matrix[:3, :3].T + matrix[:3, 3]
 
 
 def _marks_window_px(config: GonioConfig, pose: GonioPose, pixels: int) -> int:
@@ -158,12 +163,9 @@ def _marks_window_px(config: GonioConfig, pose: GonioPose, pixels: int) -> int:
     reach = CORNER_PIECE_SIZE * PRINT_OUTER_HALF_M  # half a piece, in metres
     offsets = np.array([[1, 1, 0], [-1, 1, 0], [-1, -1, 0], [1, -1, 0]]) * reach
     points = (registration_corners()[:, None, :] + offsets).reshape(-1, 3)
-    matrix = pose_matrix(pose)
-    xy = gonio_camera(config, pose.rail_deg, pixels).project(
-        points @ matrix[:3, :3].T + matrix[:3, 3]
-    )
+    xy = gonio_camera(config, pose.rail_deg, pixels).project(_in_world(points, pose))
     sides = np.arange(1, pixels + 1)
-    first = (pixels - sides) // 2  # the window's first pixel, as the camera crops it
+    first = centred_window_offset(pixels, sides)  # the window's first pixel, as cropped
     holds = (first <= xy.min()) & (first + sides >= xy.max())
     return int(sides[holds][0]) if holds.any() else pixels + 1
 

@@ -24,7 +24,13 @@ from twin.render.spectra import irregular_spectrum, ldsampler, specfilm
 from twin.render.variant import activate
 from twin.rigs.hemisphere import direction
 
-__all__ = ["PinholeCamera", "lamp_position", "render_view"]
+__all__ = ["PinholeCamera", "centred_window_offset", "lamp_position", "render_view"]
+
+
+def centred_window_offset(pixels, window):
+    """Pixels between the sensor's edge and a centred read-out ``window`` of ``pixels`` (numbers
+    or integer arrays)."""
+    return (pixels - window) // 2
 
 
 @dataclass(frozen=True)
@@ -45,7 +51,7 @@ class PinholeCamera:
     @property
     def window_offset(self) -> int:
         """Pixels between the sensor's edge and the window's."""
-        return 0 if self.window is None else (self.pixels - self.window) // 2
+        return 0 if self.window is None else centred_window_offset(self.pixels, self.window)
 
     @property
     def fov_deg(self) -> float:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from recon.btf.specular_lobe import COATING_IOR
 from recon.errors import SpectwinInputError
 from twin.materials.surfaces import SurfacePart, texture_coordinates
 from twin.render.spectra import irregular_spectrum
@@ -50,7 +51,7 @@ def part_bsdf(part: SurfacePart, *, unit: bool = False) -> dict[str, object]:
         "type": "roughplastic",
         "diffuse_reflectance": diffuse,
         "alpha": part.roughness,
-        "int_ior": 1.5,
+        "int_ior": COATING_IOR,
         "nonlinear": False,
     }
 
