@@ -33,8 +33,8 @@ from skimage import io as skimage_io
 from hwbridge.store import CaptureStore
 from recon.calibration.capture_io import select_frames
 from recon.errors import SpectwinDataError, SpectwinInputError
-from recon.measured_data import data_path
-from recon.spectra import SampledSpectra, WavelengthGrid
+from recon.measured_data import data_path, read_spectra_columns
+from recon.spectra import SampledSpectra
 
 __all__ = [
     "LLANOS2019_PATCH_NAMES",
@@ -280,19 +280,6 @@ def read_llanos2019_chart_spectra(
         :data:`LLANOS2019_PATCH_NAMES` (label order).
     """
     path = data_path(_FOLDER) / "spectral_data" / "spectra_averaged.csv"
-    if not path.is_file():
-        raise SpectwinDataError(f"Llanos 2019 spectra file {path} does not exist")
-    lines = path.read_text().splitlines()
-    header = [column.strip() for column in lines[0].split(",")]
-    missing = [name for name in _FILTER_COLUMNS + LLANOS2019_PATCH_NAMES if name not in header]
-    if header[0] != "Wavelength" or missing:
-        raise SpectwinDataError(f"{path}: expected a 'Wavelength' column and {missing}")
-    table = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
-    keep = (table[:, 0] >= low_nm) & (table[:, 0] <= high_nm)
-    grid = WavelengthGrid(table[keep, 0])
-
-    def columns(names: tuple[str, ...]) -> SampledSpectra:
-        values = table[keep][:, [header.index(name) for name in names]].T
-        return SampledSpectra(grid, values, names)
-
-    return columns(_FILTER_COLUMNS), columns(LLANOS2019_PATCH_NAMES)
+    filters = read_spectra_columns(path, _FILTER_COLUMNS, low_nm=low_nm, high_nm=high_nm)
+    patches = read_spectra_columns(path, LLANOS2019_PATCH_NAMES, low_nm=low_nm, high_nm=high_nm)
+    return filters, patches

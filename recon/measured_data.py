@@ -25,6 +25,7 @@ __all__ = [
     "data_path",
     "read_camera_sensitivities",
     "read_llanos2019_multispectral",
+    "read_spectra_columns",
     "read_spectra_csv",
 ]
 
@@ -75,6 +76,42 @@ def read_spectra_csv(relative_path: str | Path) -> SampledSpectra:
         )
     table = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
     return SampledSpectra(WavelengthGrid(table[:, 0]), table[:, 1:].T, tuple(header[1:]))
+
+
+def read_spectra_columns(
+    path: str | Path, columns: tuple[str, ...], *, low_nm: float, high_nm: float
+) -> SampledSpectra:
+    """Named columns of a spectrometer's CSV export (a ``Wavelength`` column first, one column
+    per measured spectrum), kept between ``low_nm`` and ``high_nm``.
+
+    Parameters
+    ----------
+    path
+        The CSV file.
+    columns
+        The columns to read, in the order of the result's rows.
+    low_nm, high_nm
+        The wavelength range kept.
+
+    Returns
+    -------
+    SampledSpectra
+        Values ``(len(columns), K)`` named by ``columns``.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise SpectwinDataError(f"spectra file {path} does not exist: expected a CSV file")
+    lines = path.read_text().splitlines()
+    header = [column.strip() for column in lines[0].split(",")]
+    missing = [name for name in columns if name not in header]
+    if header[0] != "Wavelength" or missing:
+        raise SpectwinDataError(f"{path}: expected a 'Wavelength' column and {missing}")
+    table = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
+    keep = (table[:, 0] >= low_nm) & (table[:, 0] <= high_nm)
+    if keep.sum() < 2:
+        raise SpectwinDataError(f"{path}: fewer than 2 wavelengths in [{low_nm}, {high_nm}] nm")
+    values = table[keep][:, [header.index(name) for name in columns]].T
+    return SampledSpectra(WavelengthGrid(table[keep, 0]), values, tuple(columns))
 
 
 _CAMERAS_FOLDER = Path("spectra") / "cameras_rawtoaces"

@@ -150,6 +150,9 @@ def test_the_installed_wheel_runs_from_another_folder_without_the_repository(whe
         "from recon.llanos_capture import read_llanos2019_chart_capture\n"
         "from recon.llanos_capture import read_llanos2019_chart_spectra\n"
         "from recon.spectra import DEFAULT_GRID\n"
+        "from twin.rigs.bench_config import available_benches, load_bench\n"
+        "[load_bench(n).require_files() for n in available_benches()]\n"
+        "load_camera_config('flea3_fl3_ge_50s5c').quantum_efficiency.curve(DEFAULT_GRID)\n"
         "[load_rig(n) for n in available_rigs()]\n"
         "[load_camera_config(n) for n in available_cameras()]\n"
         "assert load_camera_config('basler_ccd12').emva1288.descriptor_path().is_file()\n"
@@ -162,7 +165,8 @@ def test_the_installed_wheel_runs_from_another_folder_without_the_repository(whe
         "read_llanos2019_multispectral()\n"
         "read_llanos2019_chart_capture(); read_llanos2019_chart_spectra()\n"
         "print(json.dumps({m.__name__: m.__file__ for m in (twin, recon, scenes, hwbridge)}))\n"
-        "print(json.dumps([available_rigs(), available_cameras(), available_materials()]))\n"
+        "print(json.dumps([available_rigs(), available_cameras(), available_materials(), "
+        "available_benches()]))\n"
     )
     environment = {**os.environ, "PYTHONPATH": str(target)}
     result = subprocess.run(
@@ -173,8 +177,9 @@ def test_the_installed_wheel_runs_from_another_folder_without_the_repository(whe
     assert all(path.startswith(str(target)) for path in locations.values())
     assert names == [
         ["dome", "gonio"],
-        ["basler_ccd12", "coolsnap_k4", "dslr_nikon_5100", "svs_vistek_4022"],
+        ["basler_ccd12", "coolsnap_k4", "dslr_nikon_5100", "flea3_fl3_ge_50s5c", "svs_vistek_4022"],
         ["colorchecker16", "lego", "red_fabric", "wallpaper"],
+        ["llanos2019"],
     ]
     command = subprocess.run(
         [sys.executable, "-c", "from twin.cli.app import app; app()", "estimate", "dome", "--json"],

@@ -11,6 +11,7 @@ from typing import Annotated
 
 import typer
 
+from twin.cli.bench import register as register_bench
 from twin.cli.btf import register as register_btf
 from twin.cli.camera import register as register_camera
 from twin.cli.choices import Chart, Light, RGBCamera
@@ -259,6 +260,7 @@ def demo(
         console.print(f"report: {out / 'report.html'}")
 
 
+register_bench(app)
 register_btf(app)
 register_camera(app)
 register_gonio(app)

@@ -20,8 +20,9 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from recon.measured_data import data_path
-from recon.spectra import SampledSpectra, WavelengthGrid
+from recon.errors import SpectwinDataError
+from recon.measured_data import data_path, read_spectra_csv
+from recon.spectra import SampledSpectra, WavelengthGrid, resample
 from twin.components.detectors import CCDQuantumEfficiency, rgb_camera_response
 from twin.rigs.yaml_config import (
     NonNegative,
@@ -73,6 +74,32 @@ class RGBQuantumEfficiencyConfig(StrictModel):
     def curve(self, grid: WavelengthGrid) -> SampledSpectra:
         """:math:`\\eta(\\lambda)` on ``grid``, values ``(3, K)`` (R, G, B); 0 outside the data."""
         return rgb_camera_response(self.camera, grid, out_of_range="zero") * self.peak_qe
+
+
+class RGBCSVQuantumEfficiencyConfig(StrictModel):
+    """Colour sensor: a relative RGB response from a CSV file (``wavelength_nm,R,G,B``), scaled to
+    a peak quantum efficiency.
+
+    ``file``: a path inside spectwin's measured data (``recon/data``) or an absolute path.
+    """
+
+    model: Literal["rgb_csv"]
+    file: str
+    peak_qe: Annotated[float, Field(gt=0, le=1)]
+
+    def curve(self, grid: WavelengthGrid) -> SampledSpectra:
+        """:math:`\\eta(\\lambda)` on ``grid``, values ``(3, K)`` (R, G, B); 0 outside the file's
+        range, the largest value ``peak_qe``."""
+        measured = read_spectra_csv(self.file)
+        if measured.names != ("R", "G", "B"):
+            raise SpectwinDataError(
+                f"{self.file}: expected the columns R, G, B, got {measured.names}"
+            )
+        measured.require_non_negative(self.file)
+        response = resample(measured, grid, method="linear", out_of_range="zero")
+        return SampledSpectra(
+            grid, response.values * (self.peak_qe / measured.values.max()), ("R", "G", "B")
+        )
 
 
 class DarkCurrentConfig(StrictModel):
@@ -138,7 +165,7 @@ class CameraConfig(StrictModel):
 
     name: str
     serial: str
-    mosaic: Literal["none", "RGGB"]
+    mosaic: Literal["none", "RGGB", "GBRG"]
     width: Annotated[int, Field(gt=0)]
     height: Annotated[int, Field(gt=0)]
     pixel_pitch_um: Positive
@@ -146,9 +173,9 @@ class CameraConfig(StrictModel):
     sensor_temperature_c: float
     exposure_range_s: tuple[Positive, Positive]
     optics: OpticsConfig
-    quantum_efficiency: CCDQuantumEfficiencyConfig | RGBQuantumEfficiencyConfig = Field(
-        discriminator="model"
-    )
+    quantum_efficiency: (
+        CCDQuantumEfficiencyConfig | RGBQuantumEfficiencyConfig | RGBCSVQuantumEfficiencyConfig
+    ) = Field(discriminator="model")
     system_gain_dn_per_e: Positive
     read_noise_dn: NonNegative
     full_well_e: Positive
@@ -165,9 +192,11 @@ class CameraConfig(StrictModel):
             raise ValueError(f"exposure_range_s: expected [shortest, longest], got {low}, {high}")
         if self.adc_offset_dn >= 2**self.bit_depth - 1:
             raise ValueError("adc_offset_dn: expected an offset below the ADC's largest value")
-        colour_sensor = self.quantum_efficiency.model == "rgb_camera"
+        colour_sensor = self.quantum_efficiency.model in ("rgb_camera", "rgb_csv")
         if colour_sensor != (self.mosaic != "none"):
-            raise ValueError("mosaic: an rgb_camera response needs a Bayer mosaic and vice versa")
+            raise ValueError(
+                "mosaic: an rgb_camera or rgb_csv response needs a Bayer mosaic and vice versa"
+            )
         return self
 
 

@@ -19,7 +19,7 @@ Mitsuba gives radiance; real cameras give raw digital numbers. Between the two:
 4. Conversion: system gain K, a monotone OECF (thesis 3.3: :math:`p = f(tI) + d`, Eq. 3.1;
    :mod:`recon.emva.linear_model`), ADC offset, quantization to the bit depth and clamping to
    :math:`[0, 2^n - 1]`.
-5. For colour sensors, an RGGB Bayer mosaic picks one channel per pixel.
+5. For colour sensors, a Bayer mosaic (RGGB or GBRG) picks one channel per pixel.
 
 Every stochastic call takes a ``numpy.random.Generator``: the same seed gives the same frame.
 
@@ -65,12 +65,20 @@ def _row_pool() -> ThreadPoolExecutor:
     return _pool
 
 
-_BAYER_RGGB = np.array([[0, 1], [1, 2]])  # channel (R=0, G=1, B=2) at (row % 2, column % 2)
+def bayer_channel_index(height: int, width: int, pattern: str = "RGGB") -> np.ndarray:
+    """Channel index (0 = R, 1 = G, 2 = B) of every pixel of a Bayer mosaic, ``(H, W)``.
 
+    ``pattern`` names the colours of the 2 x 2 tile read row by row (``"RGGB"``, ``"GBRG"``, ...).
 
-def bayer_channel_index(height: int, width: int) -> np.ndarray:
-    """Channel index (0 = R, 1 = G, 2 = B) of every pixel of an RGGB mosaic, ``(H, W)``."""
-    return np.tile(_BAYER_RGGB, (height // 2 + 1, width // 2 + 1))[:height, :width]
+    Examples
+    --------
+    >>> bayer_channel_index(2, 4, "GBRG").tolist()
+    [[1, 2, 1, 2], [0, 1, 0, 1]]
+    """
+    if sorted(pattern) != ["B", "G", "G", "R"]:
+        raise SpectwinInputError(f"pattern: expected a Bayer tile such as RGGB, got {pattern!r}")
+    tile = np.array(["RGB".index(letter) for letter in pattern]).reshape(2, 2)
+    return np.tile(tile, (height // 2 + 1, width // 2 + 1))[:height, :width]
 
 
 class Sensor:
@@ -292,7 +300,7 @@ class Sensor:
             photo_electrons, "photo_electrons", channels=3 if self.is_colour else None
         )
         if self.is_colour:
-            channel = bayer_channel_index(self.height, self.width)
+            channel = bayer_channel_index(self.height, self.width, self.config.mosaic)
             electrons = np.take_along_axis(electrons, channel[..., None], axis=-1)[..., 0]
         mean = electrons.astype(np.float32) * self._fixed_pattern["photo_response"]
         mean += self.mean_dark_electrons(exposure_s)

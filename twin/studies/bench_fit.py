@@ -1,0 +1,311 @@
+"""What the twin of a real bench fits, and only on the frames its bench file declares.
+
+- The chart's pose, from its patch label image (geometry, not radiometry): OpenCV's
+  ``solvePnP`` on the patch centres, scaled to the bench's chart distance.
+- The lamp: its power behind each filter (the lamp's spectrum inside a 10 nm passband is not in
+  the data) and, where the bench asks, its position, on the fit patches' pixels at one exposure
+  per filter (the longest at which most of their channel means lie in ``[min_dn, max_dn]``).
+  The stored value of a pixel of a Lambertian chart is :math:`p = t P_f S_{f,c} K E(L)/E(L_0)`
+  (thesis Eq. 3.1 without the dark signal, which is fitted apart): exposure time, the lamp's
+  power behind filter :math:`f`, the rendered photo-electron rate of the pixel's channel
+  :math:`c` for a unit lamp at :math:`L_0`, the gain into stored digital numbers, and the ratio
+  of the irradiance :math:`E = \\cos\\theta / r^2` that a point lamp at :math:`L` and at
+  :math:`L_0` gives the chart point the pixel sees. Log residuals, least squares
+  (``scipy.optimize.least_squares``) from several starting positions.
+- The dark current and its log-normal spread across pixels (DSNU), on the dark frames of
+  ``fit.dark_exposures_ms``, by the mean stored value and the fraction of stored pixels above
+  zero.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+from scipy import ndimage
+from scipy.optimize import least_squares
+
+from recon.errors import SpectwinDataError
+from twin.rigs.bench_config import BenchConfig
+from twin.rigs.camera_config import CameraConfig
+from twin.sensor.model import Sensor
+from twin.sensor.reduced_copy import reduce_linear
+
+__all__ = [
+    "DarkFit",
+    "LampFit",
+    "camera_with_dark",
+    "chart_points",
+    "chart_pose",
+    "fit_dark",
+    "fit_exposure_index",
+    "fit_lamp",
+    "lamp_irradiance_ratio",
+]
+
+_DSNU_GRID = np.arange(0.5, 6.01, 0.5)
+_DARK_CURRENT_GRID = np.logspace(-3, 4, 141)
+_LAMP_STARTS_M = np.array([[0.0, 0.0, 0.0], [-0.3, -0.3, 0.0], [0.3, 0.3, 0.0]])
+_FLOOR = 1e-5  # keeps the logarithm of a zero statistic finite
+
+
+def chart_pose(
+    labels: np.ndarray, *, columns: int, distance_m: float, focal_px: float
+) -> tuple[np.ndarray, float, float]:
+    """The chart's pose in the camera frame from its patch label image.
+
+    The patch centres (label centroids) against the chart's layout (``columns`` per row, unit
+    pitch, centred, y up; :func:`twin.materials.calibration_targets.chart_parts`) give the pose
+    up to scale (principal point at the image centre, no distortion); the scale puts the chart's
+    centre at ``distance_m``.
+
+    Returns
+    -------
+    pose : numpy.ndarray
+        4 x 4 chart-to-camera transform (OpenCV frame), in metres.
+    pitch_m : float
+        The patch pitch that scale implies.
+    rms_px : float
+        Root-mean-square distance between the label centroids and the projected patch centres.
+    """
+    count = int(labels.max())
+    rows = -(-count // columns)
+    centroids = np.array(ndimage.center_of_mass(np.ones_like(labels), labels, range(1, count + 1)))[
+        :, ::-1
+    ]
+    indices = np.arange(count)
+    layout = np.column_stack(
+        [
+            -columns / 2 + indices % columns + 0.5,
+            rows / 2 - indices // columns - 0.5,
+            np.zeros(count),
+        ]
+    )
+    height, width = labels.shape
+    intrinsics = np.array(
+        [[focal_px, 0, (width - 1) / 2], [0, focal_px, (height - 1) / 2], [0, 0, 1]]
+    )
+    found, rotation_vector, translation = cv2.solvePnP(layout, centroids, intrinsics, None)
+    if not found:
+        raise SpectwinDataError("chart labels: the patch centres fit no pose of the chart")
+    projected, _ = cv2.projectPoints(layout, rotation_vector, translation, intrinsics, None)
+    rms_px = float(np.sqrt(np.mean(np.sum((projected[:, 0] - centroids) ** 2, axis=1))))
+    pitch_m = distance_m / float(np.linalg.norm(translation))
+    pose = np.eye(4)
+    pose[:3, :3] = cv2.Rodrigues(rotation_vector)[0]
+    pose[:3, 3] = translation[:, 0] * pitch_m
+    return pose, pitch_m, rms_px
+
+
+def chart_points(pose: np.ndarray, focal_px: float, shape: tuple[int, int]) -> np.ndarray:
+    """``(H, W, 3)``: the point of the chart's plane each pixel sees, in the camera frame."""
+    height, width = shape
+    rows, columns = np.mgrid[0:height, 0:width]
+    rays = np.stack(
+        [
+            (columns - (width - 1) / 2) / focal_px,
+            (rows - (height - 1) / 2) / focal_px,
+            np.ones(shape),
+        ],
+        axis=-1,
+    )
+    normal = pose[:3, 2]
+    return rays * ((normal @ pose[:3, 3]) / (rays @ normal))[..., None]
+
+
+def lamp_irradiance_ratio(
+    pose: np.ndarray, points: np.ndarray, lamp_m: np.ndarray, reference_m: np.ndarray
+) -> np.ndarray:
+    """The irradiance :math:`\\cos\\theta / r^2` a point lamp at ``lamp_m`` gives chart-plane
+    ``points`` ``(..., 3)`` (:func:`chart_points`), over that of a lamp at ``reference_m``
+    (camera frame); zero where the lamp lies behind the chart."""
+    normal = pose[:3, 2] if pose[:3, 2] @ pose[:3, 3] < 0 else -pose[:3, 2]  # towards the camera
+
+    def irradiance(lamp: np.ndarray) -> np.ndarray:
+        towards = np.asarray(lamp, np.float64) - points
+        squared = np.sum(towards**2, axis=-1)
+        return np.clip(towards @ normal, 0, None) / squared**1.5
+
+    return irradiance(lamp_m) / irradiance(reference_m)
+
+
+def fit_exposure_index(bench: BenchConfig, means: np.ndarray, exposures: np.ndarray) -> int:
+    """Index of the longest exposure at which most of the fit patches' channel means lie in
+    ``[min_dn, max_dn]``; ``means`` ``(n_exposures, n_fit_patches, 3)``."""
+    inside = (means >= bench.fit.min_dn) & (means <= bench.fit.max_dn)
+    counts = inside.reshape(len(exposures), -1).sum(axis=1)
+    best = max(range(len(exposures)), key=lambda index: (counts[index], exposures[index]))
+    if counts[best] == 0:
+        raise SpectwinDataError(
+            f"{bench.name}: no exposure puts a fit patch between {bench.fit.min_dn} and "
+            f"{bench.fit.max_dn} DN"
+        )
+    return best
+
+
+@dataclass(frozen=True, eq=False)
+class LampFit:
+    """The fitted lamp: ``position_m`` (camera frame), ``log_power`` per filter (against the
+    unit lamp of the render), and per filter the ``fit_exposure_s`` and ``pixels`` used;
+    ``rms_log`` is the fit's root-mean-square log residual."""
+
+    position_m: np.ndarray
+    log_power: np.ndarray
+    fit_exposure_s: np.ndarray
+    pixels: np.ndarray
+    rms_log: float
+
+
+@dataclass(frozen=True, eq=False)
+class FitPixels:
+    """The pixels one filter's lamp fit uses: their flat indices and their log of the stored
+    value over :math:`t S_{f,c} K`."""
+
+    flat_index: np.ndarray
+    log_ratio: np.ndarray
+    exposure_s: float
+
+
+def fit_pixels(
+    bench: BenchConfig,
+    frames: np.ndarray,
+    exposures: np.ndarray,
+    rate_dn: np.ndarray,
+    fit_masks: np.ndarray,
+    channel_index: np.ndarray,
+) -> FitPixels:
+    """Choose one filter's fit exposure among its ``frames`` ``(n, H, W)`` and collect the fit
+    patches' pixels in ``[min_dn, max_dn]`` (``rate_dn`` ``(H, W, 3)``: stored DN per second)."""
+    order = np.argsort(exposures)
+    means = np.array(
+        [
+            [
+                [frames[k][mask & (channel_index == c)].mean() for c in range(3)]
+                for mask in fit_masks
+            ]
+            for k in order
+        ]
+    )
+    chosen = order[fit_exposure_index(bench, means, exposures[order])]
+    frame = frames[chosen]
+    rate = np.take_along_axis(rate_dn, channel_index[..., None], axis=-1)[..., 0]
+    use = fit_masks.any(axis=0) & (frame >= bench.fit.min_dn) & (frame <= bench.fit.max_dn)
+    use &= rate > 0
+    flat = np.flatnonzero(use)
+    ratio = np.log(frame.ravel()[flat]) - np.log(exposures[chosen] * rate.ravel()[flat])
+    return FitPixels(flat, ratio, float(exposures[chosen]))
+
+
+def fit_lamp(
+    bench: BenchConfig,
+    pixels: list[FitPixels],
+    *,
+    pose: np.ndarray,
+    focal_px: float,
+    shape: tuple[int, int],
+) -> LampFit:
+    """Fit the lamp's power per filter and (with ``lamp.fit_position``) its position, on the
+    pixels of :func:`fit_pixels` (module docstring)."""
+    reference = np.asarray(bench.lamp.position_m, np.float64)
+    filters = len(pixels)
+    used, inverse = np.unique(
+        np.concatenate([item.flat_index for item in pixels]), return_inverse=True
+    )
+    points = chart_points(pose, focal_px, shape).reshape(-1, 3)[used]
+    where = np.split(inverse, np.cumsum([item.flat_index.size for item in pixels])[:-1])
+
+    def residuals(parameters: np.ndarray) -> np.ndarray:
+        position = parameters[:3] if bench.lamp.fit_position else reference
+        ratio = lamp_irradiance_ratio(pose, points, position, reference)
+        log_ratio = np.log(np.maximum(ratio, _FLOOR))
+        return np.concatenate(
+            [
+                item.log_ratio - parameters[3 + index] - log_ratio[where[index]]
+                for index, item in enumerate(pixels)
+            ]
+        )
+
+    powers = np.array([np.mean(item.log_ratio) for item in pixels])
+    starts = _LAMP_STARTS_M + reference if bench.lamp.fit_position else reference[None, :]
+    best = None
+    for start in starts:
+        solution = least_squares(residuals, np.concatenate([start, powers]), method="lm")
+        if best is None or solution.cost < best.cost:
+            best = solution
+    position = best.x[:3] if bench.lamp.fit_position else reference
+    return LampFit(
+        position_m=position,
+        log_power=best.x[3 : 3 + filters],
+        fit_exposure_s=np.array([item.exposure_s for item in pixels]),
+        pixels=np.array([item.flat_index.size for item in pixels]),
+        rms_log=float(np.sqrt(np.mean(best.fun**2))),
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class DarkFit:
+    """The fitted dark current (e-/s at the sensor's temperature) and DSNU spread."""
+
+    dark_current_e_per_s: float
+    dsnu_sigma: float
+
+
+def camera_with_dark(camera: CameraConfig, dark_current: float, dsnu_sigma: float) -> CameraConfig:
+    """``camera`` with the dark current (at its sensor temperature) and DSNU spread set."""
+    dark = camera.dark_current.model_copy(
+        update={
+            "e_per_s_at_reference": dark_current,
+            "reference_temperature_c": camera.sensor_temperature_c,
+        }
+    )
+    pattern = camera.fixed_pattern.model_copy(update={"dsnu_sigma": dsnu_sigma})
+    return camera.model_copy(update={"dark_current": dark, "fixed_pattern": pattern})
+
+
+def fit_dark(
+    bench: BenchConfig,
+    camera: CameraConfig,
+    dark_frames: np.ndarray,
+    dark_exposure_s: np.ndarray,
+) -> DarkFit:
+    """Fit the dark current and its log-normal spread on the dark frames of
+    ``fit.dark_exposures_ms``, by the mean stored value and the fraction of stored pixels above
+    zero (squared log errors).
+
+    A stored dark frame is the reduction of the mean dark electrons
+    (:meth:`twin.sensor.Sensor.mean_dark_electrons`, linear in the dark current), rounded: one
+    reduction per spread on the grid, then every dark current on a fine grid. Temporal noise is
+    left out of the fit (its share of a stored dark pixel is below 0.1 DN after the reduction).
+    """
+    wanted = np.array(bench.fit.dark_exposures_ms) / 1000
+    chosen = np.isclose(dark_exposure_s[:, None], wanted[None, :]).any(axis=1)
+    if not chosen.any():
+        raise SpectwinDataError(
+            f"{bench.name}: no dark frame at the fit exposures "
+            f"{list(bench.fit.dark_exposures_ms)} ms"
+        )
+    exposures = np.unique(dark_exposure_s[chosen])
+    groups = [dark_frames[np.isclose(dark_exposure_s, exposure)] for exposure in exposures]
+    measured_mean = np.log(np.array([group.mean() for group in groups]) + _FLOOR)
+    measured_above = np.log(np.array([np.mean(group > 0) for group in groups]) + _FLOOR)
+    shape = (bench.reduction.height, bench.reduction.width)
+    per_electron = camera.system_gain_dn_per_e * (
+        (2**bench.reduction.bit_depth - 1) / (2**camera.bit_depth - 1)
+    )
+    best = (np.inf, 0.0, 0.0)
+    for sigma in _DSNU_GRID:
+        unit = camera_with_dark(camera, 1.0, float(sigma))
+        unit_frame = reduce_linear(Sensor(unit).mean_dark_electrons(1.0), unit.mosaic, shape)
+        ordered = np.sort(unit_frame.ravel())  # a stored pixel is non-zero from 0.5 DN up
+        for dark_current in _DARK_CURRENT_GRID:
+            error = 0.0
+            for exposure, mean, above in zip(exposures, measured_mean, measured_above, strict=True):
+                scale = dark_current * exposure * per_electron
+                start = int(np.searchsorted(ordered, 0.5 / scale))
+                stored_sum = np.rint(ordered[start:] * scale).sum()
+                error += (np.log(stored_sum / ordered.size + _FLOOR) - mean) ** 2
+                error += (np.log((ordered.size - start) / ordered.size + _FLOOR) - above) ** 2
+            if error < best[0]:
+                best = (error, float(dark_current), float(sigma))
+    return DarkFit(dark_current_e_per_s=best[1], dsnu_sigma=best[2])
