@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+from rich.table import Table
 
 from twin.cli.errors import require_output_folder
 from twin.cli.output import JsonFlag, SeedOption, console, print_summary
@@ -61,25 +62,42 @@ def twin_vs_real(
     console.print(f"fitted on: {report['split']['fitted_on']}")
     console.print(f"evaluated on: {report['split']['evaluated_on']}")
     print_summary(report["fitted"], "fitted parameters")
-    errors = {
-        f"{name}_median_pct": 100 * row["median"] for name, row in report["mean_error"].items()
-    } | {f"{name}_p95_pct": 100 * row["p95"] for name, row in report["mean_error"].items()}
-    print_summary(
-        dict(sorted(errors.items(), key=lambda item: item[0].split("_")[0])),
-        "|predicted - measured| / measured of the patch means (unclipped, >= "
-        f"{report['split']['min_dn']:g} DN)",
+    errors = Table(
+        "patches",
+        "n",
+        "median",
+        "95th percentile",
+        title="|predicted - measured| / measured of the patch means "
+        f"(unclipped, >= {report['split']['min_dn']:g} DN)",
     )
+    for name, row in report["mean_error"].items():
+        label = {"all": "evaluated, all channels", "colour_patches": "colour patches"}.get(
+            name, f"evaluated, {name}" if len(name) == 1 else name
+        )
+        errors.add_row(
+            label, str(row["n"]), f"{100 * row['median']:.1f} %", f"{100 * row['p95']:.1f} %"
+        )
+    console.print(errors)
     print_summary(
         report["clipping"], "clipping (a patch channel with >= 1 % of its pixels at the top)"
     )
-    dark = {
-        f"{row['exposure_ms']:g}_ms_{row['role']}": (
-            f"mean {row['measured_mean_dn']:.2g} vs {row['predicted_mean_dn']:.2g} DN, spread "
-            f"{row['measured_spread_dn']:.2g} vs {row['predicted_spread_dn']:.2g} DN"
+    dark = Table(
+        "exposure",
+        "role",
+        "mean (DN)",
+        "spatial spread (DN)",
+        "temporal spread (DN)",
+        title="dark frames, measured / predicted",
+    )
+    for row in report["dark"]:
+        dark.add_row(
+            f"{row['exposure_ms']:g} ms",
+            row["role"],
+            f"{row['measured_mean_dn']:.2g} / {row['predicted_mean_dn']:.2g}",
+            f"{row['measured_spread_dn']:.2g} / {row['predicted_spread_dn']:.2g}",
+            f"{row['measured_temporal_dn']:.2g} / {row['predicted_temporal_dn']:.2g}",
         )
-        for row in report["dark"]
-    }
-    print_summary(dark, "dark frames, measured vs predicted")
+    console.print(dark)
     goals = report["goals"]
     verdict = ", ".join(
         f"{name} {'met' if goals[f'{name}_met'] else 'missed'}"

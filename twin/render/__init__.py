@@ -9,6 +9,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submodules=["plugins"],
     submod_attrs={
+        "bench_scene": ["render_chart_bench"],
         "flat_target": ["render_flat_target"],
         "light_groups": ["render_lit"],
         "render": ["render_scene"],

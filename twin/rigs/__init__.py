@@ -7,6 +7,7 @@ import lazy_loader
 __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
+        "bench_config": ["load_bench"],
         "camera_config": ["load_camera_config"],
         "dome_geometry": ["dome_geometry"],
         "gonio_kinematics": ["solve_pairs"],

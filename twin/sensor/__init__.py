@@ -9,6 +9,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     submod_attrs={
         "band_weights": ["instrument_passbands"],
         "model": ["Sensor"],
+        "reduced_copy": ["reduce_raw_frame"],
         "white_reference": ["equalized_exposures_s"],
     },
 )

@@ -1,5 +1,6 @@
 """The thesis's studies on the twin (chapters 7, 9, 10), the camera bench, the rig gallery,
-``spectwin demo`` with its report and design sweeps (``spectwin sweep``).
+``spectwin demo`` with its report, design sweeps (``spectwin sweep``) and a real bench's twin
+against its capture (``spectwin twin-vs-real``).
 """
 
 import lazy_loader
@@ -16,5 +17,6 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "spectralization": ["run_study"],
         "sweep_file": ["check_points", "load_sweep"],
         "sweep_run": ["run_sweep"],
+        "twin_vs_real": ["run_twin_vs_real"],
     },
 )

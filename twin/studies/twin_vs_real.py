@@ -347,7 +347,9 @@ def run_twin_vs_real(
             real.dark_frames,
             real.dark_exposure_s,
         )
-    twin = bench_twin(bench, real, spp=spp, seed=seed)
+    with progress_steps("rendering the bench and fitting its twin", 1, enabled=progress) as done:
+        twin = bench_twin(bench, real, spp=spp, seed=seed)
+        done()
     comparison = compare_frames(twin, real, simulate=True, seed=seed, progress=progress)
     colour_rows = np.array(
         [index for index, name in enumerate(bench.chart.patches) if name not in bench.fit.patches]

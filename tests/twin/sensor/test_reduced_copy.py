@@ -1,0 +1,55 @@
+"""Reduced copies of raw frames (twin.sensor.reduced_copy) and GBRG mosaics in the sensor model.
+
+The fast bilinear demosaicing is checked against colour-demosaicing's, the peer it replaces, for
+every Bayer tile; the reduction against frames whose reduced values follow by hand.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from colour_demosaicing import demosaicing_CFA_Bayer_bilinear
+
+from recon.spectra import WavelengthGrid
+from twin.rigs.camera_config import load_camera_config
+from twin.sensor.model import Sensor, bayer_channel_index
+from twin.sensor.reduced_copy import bilinear_demosaic, reduce_linear, reduce_raw_frame
+
+
+@pytest.mark.parametrize("pattern", ["RGGB", "GBRG", "GRBG", "BGGR"])
+def test_bilinear_demosaic_equals_colour_demosaicing(pattern):
+    raw = np.random.default_rng(1).integers(0, 4096, (30, 34)).astype(np.float64)
+    ours = bilinear_demosaic(raw, pattern)
+    peer = demosaicing_CFA_Bayer_bilinear(raw, pattern)
+    assert np.abs(ours - peer).max() <= 1e-3 * 4096
+
+
+def test_a_grey_frame_reduces_to_its_level_in_the_stored_bits():
+    raw = np.full((120, 144), 1000, np.uint16)
+    stored = reduce_raw_frame(raw, pattern="GBRG", raw_bit_depth=12, shape=(20, 24), bit_depth=8)
+    assert stored.dtype == np.uint8
+    assert np.all(stored[2:-2, 2:-2] == round(1000 * 255 / 4095))
+
+
+def test_the_reduction_keeps_each_channel_apart():
+    """A raw frame with red sites at 4000, green at 2000 and blue at 0: every reduced pixel keeps
+    its own channel's level (away from the border)."""
+    channel = bayer_channel_index(120, 144, "GBRG")
+    raw = np.choose(channel, [4000.0, 2000.0, 0.0])
+    reduced = reduce_linear(raw, "GBRG", (20, 24))
+    expected = np.choose(bayer_channel_index(20, 24, "GBRG"), [4000.0, 2000.0, 0.0])
+    assert np.allclose(reduced[2:-2, 2:-2], expected[2:-2, 2:-2], atol=1e-3)
+
+
+def test_the_flea3_is_a_gbrg_colour_sensor_with_its_filter_band_ratios():
+    camera = load_camera_config("flea3_fl3_ge_50s5c")
+    sensor = Sensor(camera, roi=(4, 4))
+    assert sensor.is_colour and camera.mosaic == "GBRG"
+    electrons = np.zeros((4, 4, 3), np.float32)
+    electrons[..., 0] = 4000  # red everywhere: only the red sites of GBRG (row 1, column 0) see it
+    frame = sensor.capture(electrons, 0.01, np.random.default_rng(0))
+    red_sites = bayer_channel_index(4, 4, "GBRG") == 0
+    assert frame[red_sites].min() > 1000 and frame[~red_sites].max() < 50
+    qe = sensor.quantum_efficiency(WavelengthGrid(np.array([546.0, 640.0, 692.0])))
+    # sensor.mat's R/G ratios behind the 550, 650 and 700 nm filters (Llanos 2019)
+    assert qe.values[0] / qe.values[1] == pytest.approx([0.0145803, 8.67242, 1.99582], rel=1e-5)
