@@ -32,7 +32,11 @@ def _scatter(path: Path, twin: BenchTwin, comparison: FrameComparison) -> None:
             alpha=0.6,
             label=f"{'RGB'[channel]} evaluated",
         )
-    fitted = comparison.fitted[..., None] & (comparison.measured.clipped == 0)
+    fitted = (
+        comparison.fitted[..., None]
+        & (comparison.measured.clipped == 0)
+        & (comparison.measured.mean >= twin.bench.fit.min_dn)
+    )
     axes.scatter(measured[fitted], predicted[fitted], s=14, marker="x", color="k", label="fitted")
     line = np.array([1.0, 2.0 * twin.top_dn])
     axes.plot(line, line, "k-", lw=0.8)
