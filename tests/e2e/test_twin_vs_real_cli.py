@@ -16,6 +16,7 @@ from twin.cli.app import app
 from twin.rigs.bench_config import BENCH_DIR
 
 runner = CliRunner()
+PATCHES = yaml.safe_load((BENCH_DIR / "llanos2019.yaml").read_text())["chart"]["patches"]
 
 
 def test_twin_vs_real_on_one_filter_writes_the_report_and_figures(tmp_path):
@@ -73,8 +74,9 @@ BAD_BENCHES = [
     ({"mapping": "nosuch"}, 2, "mapping: no file"),
     ({"camera": "nosuch"}, 2, "camera: no file"),
     ({"camera": "coolsnap_k4"}, 2, "needs a colour camera"),
-    ({"filters__columns": {550: "nosuch"}}, 1, "frames at bands"),
-    ({"reduction__width": 400}, 1, "expected frames of 342x400 px"),
+    ({"filters__columns": {550: "nosuch"}}, 1, "expected a 'Wavelength' column and ['nosuch']"),
+    ({"chart__patches": list(PATCHES[1:])}, 1, "image labelling patches 1-23"),
+    ({"reduction__width": 400}, 1, "expected a 342x400 image labelling patches"),
     ({"focal_length_mm": -8}, 2, "focal_length_mm: Input should be greater than 0"),
 ]
 

@@ -40,7 +40,7 @@ from twin.studies.bench_fit import (
     fit_pixels,
 )
 
-__all__ = ["BenchTwin", "RealCapture", "bench_twin", "read_real_capture"]
+__all__ = ["BenchTwin", "RealCapture", "bench_twin", "check_bench", "read_real_capture"]
 
 _SPECTRAL_RANGE_NM = (380.0, 780.0)
 
@@ -199,6 +199,21 @@ def _read_labels(bench: BenchConfig) -> np.ndarray:
     return labels
 
 
+def _colour_camera(camera: CameraConfig) -> CameraConfig:
+    if camera.mosaic == "none":
+        raise SpectwinInputError(f"camera {camera.name}: the bench twin needs a colour camera")
+    return camera
+
+
+def check_bench(bench: BenchConfig) -> None:
+    """Check, before any work, that the bench's files exist and fit together: its data, its
+    camera (a colour one), its label image and its filters' spectra."""
+    bench.require_files()
+    _colour_camera(load_camera_config(bench.camera))
+    _read_labels(bench)
+    _passbands(bench, tuple(sorted(bench.filters.columns)))
+
+
 def bench_twin(
     bench: BenchConfig,
     real: RealCapture,
@@ -221,9 +236,7 @@ def bench_twin(
     spp, seed
         Samples per pixel and seed of the renders.
     """
-    camera = camera or load_camera_config(bench.camera)
-    if camera.mosaic == "none":
-        raise SpectwinInputError(f"camera {camera.name}: the bench twin needs a colour camera")
+    camera = _colour_camera(camera or load_camera_config(bench.camera))
     labels = _read_labels(bench)
     shape = labels.shape
     focal_px = (

@@ -27,7 +27,13 @@ from recon.errors import SpectwinInputError
 from recon.progress import progress_steps
 from twin.output_format import dumps
 from twin.rigs.bench_config import BenchConfig, load_bench
-from twin.studies.bench_twin import BenchTwin, RealCapture, bench_twin, read_real_capture
+from twin.studies.bench_twin import (
+    BenchTwin,
+    RealCapture,
+    bench_twin,
+    check_bench,
+    read_real_capture,
+)
 
 __all__ = [
     "CLIPPED_FRACTION",
@@ -331,7 +337,7 @@ def run_twin_vs_real(
     from twin.studies.twin_vs_real_figures import write_figures
 
     bench = bench if isinstance(bench, BenchConfig) else load_bench(bench)
-    bench.require_files()
+    check_bench(bench)
     real = read_real_capture(bench)
     if bands_nm:
         keep = np.isin(np.round(real.band_nm).astype(int), bands_nm)
