@@ -81,10 +81,13 @@ def main() -> None:
         "errors_simulated_frames": simulated,
         "errors_noise_free": noise_free,
         "errors_with_nikon_d850_sensitivities": _errors(
-            bench, bench_twin(bench, real, camera=nikon, spp=spp), real, simulate=False
+            bench,
+            bench_twin(bench, real, camera=nikon, dark=twin.dark, spp=spp),
+            real,
+            simulate=False,
         ),
         "errors_with_each_filter_taken_for_the_next": _errors(
-            shifted, bench_twin(shifted, real, spp=spp), real, simulate=False
+            shifted, bench_twin(shifted, real, dark=twin.dark, spp=spp), real, simulate=False
         ),
     }
     print(json.dumps(result, indent=2))

@@ -118,7 +118,8 @@ class FixedPatternConfig(StrictModel):
     current; ``transfer_dark_e``: dark charge picked up during readout, growing linearly along the
     CCD shift direction (rows) to this value at the last row (thesis Fig. 10.2d);
     ``offset_sigma_dn``: standard deviation of the per-pixel offset (DN), the DSNU at zero
-    exposure time.
+    exposure time; ``defect_pixel_fraction`` of the pixels are defects with an extra offset of
+    ``defect_offset_dn`` at every exposure (bright pixels that no dark current explains).
     """
 
     dsnu_sigma: NonNegative = 0.0
@@ -127,6 +128,8 @@ class FixedPatternConfig(StrictModel):
     hot_pixel_factor: Annotated[float, Field(ge=1)] = 1.0
     transfer_dark_e: NonNegative = 0.0
     offset_sigma_dn: NonNegative = 0.0
+    defect_pixel_fraction: Annotated[float, Field(ge=0, lt=0.01)] = 0.0
+    defect_offset_dn: NonNegative = 0.0
 
 
 class OECFConfig(StrictModel):

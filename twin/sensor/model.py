@@ -239,12 +239,12 @@ class Sensor:
 
     @cached_property
     def _fixed_pattern(self) -> dict[str, np.ndarray]:
-        """PRNU, DSNU (with hot pixels), the transfer gradient and the per-pixel offsets of the
-        full sensor, cropped.
+        """PRNU, DSNU (with hot pixels), the transfer gradient, the per-pixel offsets and the
+        defect pixels of the full sensor, cropped.
 
         Drawn from a generator seeded by the camera serial: the same serial always has the same
-        patterns, as a real camera does. The offsets are drawn last, so a camera without them
-        keeps the patterns it had before they existed.
+        patterns, as a real camera does. The offsets, then the defects, are drawn last, so a
+        camera without them keeps the patterns it had before they existed.
         """
         pattern = self.config.fixed_pattern
         generator = np.random.default_rng(zlib.crc32(self.config.serial.encode()))
@@ -261,13 +261,24 @@ class Sensor:
             offset = pattern.offset_sigma_dn * generator.standard_normal(shape, np.float32)
         else:
             offset = np.zeros((self.config.height, 1), np.float32)  # broadcasts over columns
+        defects = np.zeros((self.config.height, 1), bool)  # broadcasts over columns
+        if pattern.defect_pixel_fraction > 0:
+            defects = generator.random(shape, np.float32) < pattern.defect_pixel_fraction
+            offset = np.broadcast_to(offset, shape).copy()
+            offset[defects] += np.float32(pattern.defect_offset_dn)
         window = (slice(0, self.height), slice(0, self.width))
         return {
             "photo_response": np.clip(photo_response, 0, None)[window],
             "dark_factor": dark_factor.astype(np.float32)[window],
             "transfer_e": transfer[: self.height],
             "offset_dn": offset[window] + np.float32(self.config.adc_offset_dn),
+            "defects": defects[window],
         }
+
+    def defect_pixels(self) -> np.ndarray:
+        """``(H, W)`` bool: the defect pixels (``defect_pixel_fraction``), whose offset is
+        ``defect_offset_dn`` higher at every exposure."""
+        return np.broadcast_to(self._fixed_pattern["defects"], (self.height, self.width))
 
     def mean_dark_electrons(self, exposure_s: float) -> np.ndarray:
         """Expected dark electrons per pixel, ``(H, W)``: dark current x time x DSNU + transfer."""

@@ -12,9 +12,10 @@
   of the irradiance :math:`E = \\cos\\theta / r^2` that a point lamp at :math:`L` and at
   :math:`L_0` gives the chart point the pixel sees. Log residuals, least squares
   (``scipy.optimize.least_squares``) from several starting positions.
-- The dark current and its log-normal spread across pixels (DSNU), on the dark frames of
-  ``fit.dark_exposures_ms``, by the mean stored value and the fraction of stored pixels above
-  zero.
+- The dark current, its log-normal spread across pixels (DSNU) and the defect pixels (a
+  fraction with an extra offset at every exposure), on the dark frames of
+  ``fit.dark_exposures_ms``, by the mean stored value, its spatial spread and the fraction of
+  stored pixels above zero.
 """
 
 from __future__ import annotations
@@ -46,6 +47,8 @@ __all__ = [
 
 _DSNU_GRID = np.arange(0.5, 6.01, 0.5)
 _DARK_CURRENT_GRID = np.logspace(-3, 4, 141)
+_DEFECT_GRID = np.array([0, 1, 2, 3, 5, 8, 12, 20, 30, 50]) * 1e-6
+_DEFECT_OFFSET_GRID = (256.0, 512.0, 1024.0, 2048.0, 4096.0)
 _LAMP_STARTS_M = np.array([[0.0, 0.0, 0.0], [-0.3, -0.3, 0.0], [0.3, 0.3, 0.0]])
 _FLOOR = 1e-5  # keeps the logarithm of a zero statistic finite
 
@@ -245,21 +248,37 @@ def fit_lamp(
 
 @dataclass(frozen=True, eq=False)
 class DarkFit:
-    """The fitted dark current (e-/s at the sensor's temperature) and DSNU spread."""
+    """The fitted dark current (e-/s at the sensor's temperature), DSNU spread, and the fraction
+    of defect pixels and their offset (raw DN)."""
 
     dark_current_e_per_s: float
     dsnu_sigma: float
+    defect_pixel_fraction: float = 0.0
+    defect_offset_dn: float = 0.0
 
 
-def camera_with_dark(camera: CameraConfig, dark_current: float, dsnu_sigma: float) -> CameraConfig:
-    """``camera`` with the dark current (at its sensor temperature) and DSNU spread set."""
+def camera_with_dark(
+    camera: CameraConfig,
+    dark_current: float,
+    dsnu_sigma: float,
+    defect_fraction: float = 0.0,
+    defect_offset_dn: float = 0.0,
+) -> CameraConfig:
+    """``camera`` with the dark current (at its sensor temperature), DSNU spread and defect
+    pixels (fraction, offset) set."""
     dark = camera.dark_current.model_copy(
         update={
             "e_per_s_at_reference": dark_current,
             "reference_temperature_c": camera.sensor_temperature_c,
         }
     )
-    pattern = camera.fixed_pattern.model_copy(update={"dsnu_sigma": dsnu_sigma})
+    pattern = camera.fixed_pattern.model_copy(
+        update={
+            "dsnu_sigma": dsnu_sigma,
+            "defect_pixel_fraction": defect_fraction,
+            "defect_offset_dn": defect_offset_dn,
+        }
+    )
     return camera.model_copy(update={"dark_current": dark, "fixed_pattern": pattern})
 
 
@@ -269,14 +288,15 @@ def fit_dark(
     dark_frames: np.ndarray,
     dark_exposure_s: np.ndarray,
 ) -> DarkFit:
-    """Fit the dark current and its log-normal spread on the dark frames of
-    ``fit.dark_exposures_ms``, by the mean stored value and the fraction of stored pixels above
-    zero (squared log errors).
+    """Fit the dark current, its log-normal spread and the defect pixels (their fraction and
+    offset) on the dark frames of ``fit.dark_exposures_ms``, by the mean stored value, its
+    spatial spread and the fraction of stored pixels above zero (squared log errors).
 
     A stored dark frame is the reduction of the mean dark electrons
-    (:meth:`twin.sensor.Sensor.mean_dark_electrons`, linear in the dark current), rounded: one
-    reduction per spread on the grid, then every dark current on a fine grid. Temporal noise is
-    left out of the fit (its share of a stored dark pixel is below 0.1 DN after the reduction).
+    (:meth:`twin.sensor.Sensor.mean_dark_electrons`, linear in the dark current) plus that of
+    the defects' offsets, rounded: one reduction per spread and per defect fraction on their
+    grids, then every defect offset and dark current on theirs. Temporal noise is left out of
+    the fit (its share of a stored dark pixel is below 0.1 DN after the reduction).
     """
     wanted = np.array(bench.fit.dark_exposures_ms) / 1000
     chosen = np.isclose(dark_exposure_s[:, None], wanted[None, :]).any(axis=1)
@@ -287,25 +307,73 @@ def fit_dark(
         )
     exposures = np.unique(dark_exposure_s[chosen])
     groups = [dark_frames[np.isclose(dark_exposure_s, exposure)] for exposure in exposures]
-    measured_mean = np.log(np.array([group.mean() for group in groups]) + _FLOOR)
-    measured_above = np.log(np.array([np.mean(group > 0) for group in groups]) + _FLOOR)
-    shape = (bench.reduction.height, bench.reduction.width)
-    per_electron = camera.system_gain_dn_per_e * (
-        (2**bench.reduction.bit_depth - 1) / (2**camera.bit_depth - 1)
+    measured = np.log(
+        np.array([[group.mean(), group.std(), np.mean(group > 0)] for group in groups]) + _FLOOR
     )
-    best = (np.inf, 0.0, 0.0)
-    for sigma in _DSNU_GRID:
-        unit = camera_with_dark(camera, 1.0, float(sigma))
-        unit_frame = reduce_linear(Sensor(unit).mean_dark_electrons(1.0), unit.mosaic, shape)
-        ordered = np.sort(unit_frame.ravel())  # a stored pixel is non-zero from 0.5 DN up
-        for dark_current in _DARK_CURRENT_GRID:
-            error = 0.0
-            for exposure, mean, above in zip(exposures, measured_mean, measured_above, strict=True):
-                scale = dark_current * exposure * per_electron
-                start = int(np.searchsorted(ordered, 0.5 / scale))
-                stored_sum = np.rint(ordered[start:] * scale).sum()
-                error += (np.log(stored_sum / ordered.size + _FLOOR) - mean) ** 2
-                error += (np.log((ordered.size - start) / ordered.size + _FLOOR) - above) ** 2
-            if error < best[0]:
-                best = (error, float(dark_current), float(sigma))
-    return DarkFit(dark_current_e_per_s=best[1], dsnu_sigma=best[2])
+    shape = (bench.reduction.height, bench.reduction.width)
+    stored_per_raw = (2**bench.reduction.bit_depth - 1) / (2**camera.bit_depth - 1)
+    scales = exposures * camera.system_gain_dn_per_e * stored_per_raw
+    dark_units = {
+        sigma: reduce_linear(
+            Sensor(camera_with_dark(camera, 1.0, float(sigma))).mean_dark_electrons(1.0),
+            camera.mosaic,
+            shape,
+        ).ravel()
+        for sigma in _DSNU_GRID
+    }
+    best = (np.inf, DarkFit(0.0, 0.0))
+    for fraction in _DEFECT_GRID:
+        unit_camera = camera_with_dark(camera, 0.0, 0.0, float(fraction), 1.0)
+        defects = Sensor(unit_camera).defect_pixels().astype(np.float64)
+        per_offset = reduce_linear(defects, camera.mosaic, shape).ravel() * stored_per_raw
+        touched = per_offset > 1e-9
+        for sigma, unit in dark_units.items():
+            clean = _SortedTail(unit[~touched])
+            for offset in _DEFECT_OFFSET_GRID if fraction > 0 else (0.0,):
+                errors = clean.errors(
+                    unit[touched], per_offset[touched] * offset, scales, measured, unit.size
+                )
+                index = int(np.argmin(errors))
+                if errors[index] < best[0]:
+                    fit = DarkFit(
+                        float(_DARK_CURRENT_GRID[index]), float(sigma), float(fraction), offset
+                    )
+                    best = (errors[index], fit)
+    return best[1]
+
+
+class _SortedTail:
+    """The unit dark signal of the pixels no defect reaches, sorted, with suffix sums: a stored
+    pixel is non-zero from 0.5 DN up, so one search gives how many are, and the suffix sums their
+    sum and sum of squares (rounding adds 1/12 DN^2 of variance per pixel above zero)."""
+
+    def __init__(self, values: np.ndarray):
+        self.ordered = np.sort(values)
+        self.sums = np.concatenate([np.cumsum(self.ordered[::-1])[::-1], [0.0]])
+        self.squares = np.concatenate([np.cumsum(self.ordered[::-1] ** 2)[::-1], [0.0]])
+
+    def errors(
+        self,
+        touched: np.ndarray,
+        defect_dn: np.ndarray,
+        scales: np.ndarray,
+        measured: np.ndarray,
+        count: int,
+    ) -> np.ndarray:
+        """Squared log errors of (mean, spread, above zero) for every dark current of the grid;
+        ``touched`` and ``defect_dn`` are the unit dark signal and defect offset (stored DN) of
+        the pixels a defect reaches, computed exactly."""
+        errors = np.zeros(_DARK_CURRENT_GRID.size)
+        for scale, target in zip(scales, measured, strict=True):
+            scaled = _DARK_CURRENT_GRID * scale  # stored DN per unit dark signal, per current
+            start = np.searchsorted(self.ordered, 0.5 / scaled)
+            above = self.ordered.size - start
+            near = np.rint(defect_dn[None, :] + touched[None, :] * scaled[:, None])
+            total = scaled * self.sums[start] + near.sum(axis=1)
+            squares = scaled**2 * self.squares[start] + above / 12 + np.sum(near**2, axis=1)
+            mean = total / count
+            spread = np.sqrt(np.clip(squares / count - mean**2, 0.0, None))
+            nonzero = (above + np.count_nonzero(near, axis=1)) / count
+            predicted = np.log(np.stack([mean, spread, nonzero], axis=1) + _FLOOR)
+            errors += np.sum((predicted - target) ** 2, axis=1)
+        return errors

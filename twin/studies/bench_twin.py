@@ -219,6 +219,7 @@ def bench_twin(
     real: RealCapture,
     *,
     camera: CameraConfig | None = None,
+    dark: DarkFit | None = None,
     spp: int = 64,
     seed: int = 0,
 ) -> BenchTwin:
@@ -233,6 +234,8 @@ def bench_twin(
     camera
         The camera, by default the bench's; another camera (another spectral response) shows
         how much the prediction rests on it.
+    dark
+        A dark-signal fit to reuse (of the same camera's dark frames); fitted when ``None``.
     spp, seed
         Samples per pixel and seed of the renders.
     """
@@ -318,10 +321,16 @@ def bench_twin(
         rms_log=lamp.rms_log,
     )
     rate_dn = rate_dn * np.exp(lamp.log_power)[:, None, None, None]
-    dark = fit_dark(bench, camera, real.dark_frames, real.dark_exposure_s)
+    dark = dark or fit_dark(bench, camera, real.dark_frames, real.dark_exposure_s)
     return BenchTwin(
         bench=bench,
-        camera=camera_with_dark(camera, dark.dark_current_e_per_s, dark.dsnu_sigma),
+        camera=camera_with_dark(
+            camera,
+            dark.dark_current_e_per_s,
+            dark.dsnu_sigma,
+            dark.defect_pixel_fraction,
+            dark.defect_offset_dn,
+        ),
         bands_nm=bands_nm,
         rate_dn=rate_dn,
         channel_index=channel_index,

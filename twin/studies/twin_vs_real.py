@@ -294,6 +294,8 @@ def _fit_report(twin: BenchTwin) -> dict:
             "lamp_fit_pixels": int(twin.lamp.pixels.sum()),
             "dark_current_e_per_s": twin.dark.dark_current_e_per_s,
             "dsnu_sigma": twin.dark.dsnu_sigma,
+            "defect_pixel_fraction": twin.dark.defect_pixel_fraction,
+            "defect_offset_dn": twin.dark.defect_offset_dn,
         },
         "geometry": {
             "chart_distance_m": bench.chart.distance_m,

@@ -53,3 +53,25 @@ def test_the_flea3_is_a_gbrg_colour_sensor_with_its_filter_band_ratios():
     qe = sensor.quantum_efficiency(WavelengthGrid(np.array([546.0, 640.0, 692.0])))
     # sensor.mat's R/G ratios behind the 550, 650 and 700 nm filters (Llanos 2019)
     assert qe.values[0] / qe.values[1] == pytest.approx([0.0145803, 8.67242, 1.99582], rel=1e-5)
+
+
+def test_defect_pixels_read_their_offset_at_every_exposure():
+    camera = load_camera_config("flea3_fl3_ge_50s5c")
+    pattern = camera.fixed_pattern.model_copy(
+        update={"defect_pixel_fraction": 1e-3, "defect_offset_dn": 1500.0}
+    )
+    sensor = Sensor(camera.model_copy(update={"fixed_pattern": pattern}), roi=(200, 200))
+    defects = sensor.defect_pixels()
+    assert 0.5e-3 < defects.mean() < 2e-3
+    for exposure in (0.001, 1.0):
+        frame = sensor.dark_frame(exposure, np.random.default_rng(2)).astype(float)
+        assert np.abs(frame[defects] - 1500).max() < 25  # read noise 3.3 DN
+        assert frame[~defects].mean() < 5
+    # without defects the camera's other patterns are the ones it had
+    plain = Sensor(camera, roi=(200, 200))
+    assert not plain.defect_pixels().any()
+    electrons = np.full((200, 200, 3), 1000.0, np.float32)
+    same = Sensor(camera.model_copy(update={"fixed_pattern": pattern}), roi=(200, 200))
+    first = plain.capture(electrons, 0.01, np.random.default_rng(5)).astype(float)
+    second = same.capture(electrons, 0.01, np.random.default_rng(5)).astype(float)
+    assert np.array_equal(first[~defects], second[~defects])

@@ -105,7 +105,9 @@ def test_another_camera_or_swapped_filters_predict_measurably_worse(bench, real,
             )
         }
     )
-    with_nikon = _median_error(bench, bench_twin(bench, real, camera=nikon, spp=SPP), real)
+    with_nikon = _median_error(
+        bench, bench_twin(bench, real, camera=nikon, dark=twin.dark, spp=SPP), real
+    )
     assert with_nikon["all"]["median"] > 2 * reference
     bands = sorted(bench.filters.columns)
     shifted = {
@@ -115,7 +117,7 @@ def test_another_camera_or_swapped_filters_predict_measurably_worse(bench, real,
         update={"filters": bench.filters.model_copy(update={"columns": shifted})}
     )
     with_wrong_filters = _median_error(
-        wrong_filters, bench_twin(wrong_filters, real, spp=SPP), real
+        wrong_filters, bench_twin(wrong_filters, real, dark=twin.dark, spp=SPP), real
     )
     assert with_wrong_filters["all"]["median"] > 5 * reference
 
