@@ -22,21 +22,22 @@ from pathlib import Path
 import numpy as np
 from scipy import io
 
+from recon.measured_data import read_spectra_columns
+
 FOLDER = Path(__file__).resolve().parents[1] / "recon" / "data" / "real" / "llanos2019"
 FILTER_COLUMNS = ("400 nm", "442 nm", "500 nm", "550 nm", "600 nm", "650 nm", "700 nm")
 MAIN_LOBE_NM = 20.0
 
 
 def filter_centroids() -> np.ndarray:
-    """Centroid of each filter's transmission within 20 nm of its peak."""
-    lines = (FOLDER / "spectral_data" / "spectra_averaged.csv").read_text().splitlines()
-    header = [column.strip() for column in lines[0].split(",")]
-    table = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
-    table = table[(table[:, 0] >= 380) & (table[:, 0] <= 780)]  # the camera's visible range
-    wavelengths = table[:, 0]
+    """Centroid of each filter's transmission within 20 nm of its peak (380-780 nm, the camera's
+    visible range)."""
+    filters = read_spectra_columns(
+        FOLDER / "spectral_data" / "spectra_averaged.csv", FILTER_COLUMNS, low_nm=380, high_nm=780
+    )
+    wavelengths = filters.wavelengths_nm
     centroids = []
-    for column in FILTER_COLUMNS:
-        transmission = np.clip(table[:, header.index(column)], 0, None)
+    for transmission in np.clip(filters.values, 0, None):
         lobe = np.abs(wavelengths - wavelengths[np.argmax(transmission)]) <= MAIN_LOBE_NM
         centroids.append(np.sum(wavelengths[lobe] * transmission[lobe]) / transmission[lobe].sum())
     return np.array(centroids)

@@ -49,7 +49,7 @@ from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra, WavelengthGrid, band_integrals
 from twin.rigs.camera_config import CameraConfig, load_camera_config
 
-__all__ = ["Sensor", "bayer_channel_index"]
+__all__ = ["Sensor", "bayer_channel_index", "mosaic_channels"]
 
 _ROW_BLOCKS = 8  # fixed, so the same seed gives the same frame whatever the thread count
 _THREADS = 2  # numpy's generators release the GIL: the row blocks are drawn on two threads
@@ -79,6 +79,12 @@ def bayer_channel_index(height: int, width: int, pattern: str = "RGGB") -> np.nd
         raise SpectwinInputError(f"pattern: expected a Bayer tile such as RGGB, got {pattern!r}")
     tile = np.array(["RGB".index(letter) for letter in pattern]).reshape(2, 2)
     return np.tile(tile, (height // 2 + 1, width // 2 + 1))[:height, :width]
+
+
+def mosaic_channels(image: np.ndarray, channel_index: np.ndarray) -> np.ndarray:
+    """``(H, W)``: each pixel of an ``(H, W, 3)`` image in its own channel of ``channel_index``
+    (:func:`bayer_channel_index`), as a Bayer sensor records it."""
+    return np.take_along_axis(image, channel_index[..., None], axis=-1)[..., 0]
 
 
 class Sensor:
@@ -312,7 +318,7 @@ class Sensor:
         )
         if self.is_colour:
             channel = bayer_channel_index(self.height, self.width, self.config.mosaic)
-            electrons = np.take_along_axis(electrons, channel[..., None], axis=-1)[..., 0]
+            electrons = mosaic_channels(electrons, channel)
         mean = electrons.astype(np.float32) * self._fixed_pattern["photo_response"]
         mean += self.mean_dark_electrons(exposure_s)
         blocks = np.array_split(np.arange(self.height), _ROW_BLOCKS)

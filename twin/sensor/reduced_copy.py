@@ -15,7 +15,7 @@ import numpy as np
 from skimage.transform import resize
 
 from recon.errors import SpectwinInputError
-from twin.sensor.model import bayer_channel_index
+from twin.sensor.model import bayer_channel_index, mosaic_channels
 
 __all__ = ["bilinear_demosaic", "reduce_linear", "reduce_raw_frame"]
 
@@ -50,8 +50,7 @@ def reduce_linear(raw: np.ndarray, pattern: str, shape: tuple[int, int]) -> np.n
         )
     rgb = bilinear_demosaic(raw, pattern)
     small = resize(rgb, (*shape, 3), order=1, anti_aliasing=True, preserve_range=True)
-    channel = bayer_channel_index(*shape, pattern)
-    return np.take_along_axis(small, channel[..., None], axis=-1)[..., 0]
+    return mosaic_channels(small, bayer_channel_index(*shape, pattern))
 
 
 def reduce_raw_frame(

@@ -27,10 +27,11 @@ import numpy as np
 from scipy import ndimage
 from scipy.optimize import least_squares
 
+from recon.chart_patches import patch_statistics
 from recon.errors import SpectwinDataError
 from twin.rigs.bench_config import BenchConfig
 from twin.rigs.camera_config import CameraConfig
-from twin.sensor.model import Sensor
+from twin.sensor.model import Sensor, mosaic_channels
 from twin.sensor.reduced_copy import reduce_linear
 
 __all__ = [
@@ -43,6 +44,7 @@ __all__ = [
     "fit_exposure_index",
     "fit_lamp",
     "lamp_irradiance_ratio",
+    "stored_per_raw_dn",
 ]
 
 _DSNU_GRID = np.arange(0.5, 6.01, 0.5)
@@ -181,18 +183,13 @@ def fit_pixels(
     """Choose one filter's fit exposure among its ``frames`` ``(n, H, W)`` and collect the fit
     patches' pixels in ``[min_dn, max_dn]`` (``rate_dn`` ``(H, W, 3)``: stored DN per second)."""
     order = np.argsort(exposures)
+    top = 2**bench.reduction.bit_depth - 1
     means = np.array(
-        [
-            [
-                [frames[k][mask & (channel_index == c)].mean() for c in range(3)]
-                for mask in fit_masks
-            ]
-            for k in order
-        ]
+        [patch_statistics(frames[k], fit_masks, channel_index, top_dn=top).mean for k in order]
     )
     chosen = order[fit_exposure_index(bench, means, exposures[order])]
     frame = frames[chosen]
-    rate = np.take_along_axis(rate_dn, channel_index[..., None], axis=-1)[..., 0]
+    rate = mosaic_channels(rate_dn, channel_index)
     use = fit_masks.any(axis=0) & (frame >= bench.fit.min_dn) & (frame <= bench.fit.max_dn)
     use &= rate > 0
     flat = np.flatnonzero(use)
@@ -244,6 +241,12 @@ def fit_lamp(
         pixels=np.array([item.flat_index.size for item in pixels]),
         rms_log=float(np.sqrt(np.mean(best.fun**2))),
     )
+
+
+def stored_per_raw_dn(bench: BenchConfig, camera: CameraConfig) -> float:
+    """Digital numbers of the stored frames per raw digital number: the reduction maps the raw
+    range onto the stored one."""
+    return (2**bench.reduction.bit_depth - 1) / (2**camera.bit_depth - 1)
 
 
 @dataclass(frozen=True, eq=False)
@@ -311,7 +314,7 @@ def fit_dark(
         np.array([[group.mean(), group.std(), np.mean(group > 0)] for group in groups]) + _FLOOR
     )
     shape = (bench.reduction.height, bench.reduction.width)
-    stored_per_raw = (2**bench.reduction.bit_depth - 1) / (2**camera.bit_depth - 1)
+    stored_per_raw = stored_per_raw_dn(bench, camera)
     scales = exposures * camera.system_gain_dn_per_e * stored_per_raw
     dark_units = {
         sigma: reduce_linear(

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import tempfile
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import cv2
@@ -28,7 +29,7 @@ from recon.spectra import SampledSpectra
 from twin.render.bench_scene import render_chart_bench
 from twin.rigs.bench_config import BenchConfig
 from twin.rigs.camera_config import CameraConfig, load_camera_config
-from twin.sensor.model import Sensor, bayer_channel_index
+from twin.sensor.model import Sensor, bayer_channel_index, mosaic_channels
 from twin.sensor.reduced_copy import reduce_raw_frame
 from twin.studies.bench_fit import (
     DarkFit,
@@ -38,6 +39,7 @@ from twin.studies.bench_fit import (
     fit_dark,
     fit_lamp,
     fit_pixels,
+    stored_per_raw_dn,
 )
 
 __all__ = ["BenchTwin", "RealCapture", "bench_twin", "check_bench", "read_real_capture"]
@@ -131,6 +133,11 @@ class BenchTwin:
     pitch_m: float
     pose_rms_px: float
 
+    @cached_property
+    def sensor(self) -> Sensor:
+        """The camera's sensor, its fixed patterns drawn once for all the frames it makes."""
+        return Sensor(self.camera)
+
     @property
     def top_dn(self) -> int:
         """The stored frames' largest value."""
@@ -147,8 +154,7 @@ class BenchTwin:
         """The noise-free stored frame ``(H, W)`` (float, before clipping) of one filter and
         exposure time."""
         rates = self.rate_dn[self.filter_index(band_nm)]
-        picked = np.take_along_axis(rates, self.channel_index[..., None], axis=-1)[..., 0]
-        return exposure_s * picked
+        return exposure_s * mosaic_channels(rates, self.channel_index)
 
     def simulate_frame(
         self, band_nm: float | None, exposure_s: float, rng: np.random.Generator
@@ -157,7 +163,7 @@ class BenchTwin:
         model's raw frame at full size (shot, read and fixed-pattern noise, dark signal,
         clipping), then the reduction (:func:`twin.sensor.reduce_raw_frame`). ``band_nm`` None
         gives a dark frame."""
-        sensor = Sensor(self.camera)
+        sensor = self.sensor
         if band_nm is None:
             electrons = np.zeros((sensor.height, sensor.width, 3), np.float32)
         else:
@@ -183,8 +189,7 @@ class BenchTwin:
 
 def _dn_per_electron(bench: BenchConfig, camera: CameraConfig) -> float:
     """Stored digital numbers per photo-electron: the system gain times the reduction's scale."""
-    scale = (2**bench.reduction.bit_depth - 1) / (2**camera.bit_depth - 1)
-    return camera.system_gain_dn_per_e * scale
+    return camera.system_gain_dn_per_e * stored_per_raw_dn(bench, camera)
 
 
 def _read_labels(bench: BenchConfig) -> np.ndarray:

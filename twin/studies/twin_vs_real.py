@@ -17,7 +17,7 @@ least 1 % of its pixels at the top value) predicted right for 95 % of patch-expo
 from __future__ import annotations
 
 import csv
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 
 import numpy as np
@@ -77,10 +77,11 @@ class FrameComparison:
 
 
 def _stack(statistics: list[PatchStatistics]) -> PatchStatistics:
+    """Stack per-frame statistics into ``(n_frames, n_patches, 3)`` arrays."""
     return PatchStatistics(
         *(
-            np.stack([getattr(item, name) for item in statistics])
-            for name in PatchStatistics.__dataclass_fields__
+            np.stack([getattr(item, field.name) for item in statistics])
+            for field in fields(PatchStatistics)
         )
     )
 
