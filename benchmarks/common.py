@@ -7,8 +7,10 @@ import os
 import platform
 import resource
 import time
-from collections.abc import Callable
-from typing import TypeVar
+from collections import defaultdict
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import Any, TypeVar
 
 Result = TypeVar("Result")
 
@@ -50,4 +52,78 @@ def dome_size_settings(arguments: argparse.Namespace) -> dict[str, int]:
     names = ("stage_positions", "leds", "rgb_cameras", "texels", "spp")
     return {
         name: getattr(arguments, name) for name in names if getattr(arguments, name) is not None
+    }
+
+
+def cpu_s() -> float:
+    """CPU seconds of this process so far (user and system, every thread)."""
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
+
+
+class StageTimer:
+    """Wall and CPU seconds spent in each stage of a capture: ``stages`` maps a stage's name to
+    the ``(owner, function name)`` places whose calls count for it (the outermost timed call
+    counts; a place the code does not have is skipped)."""
+
+    def __init__(self, stages: dict[str, list[tuple[Any, str]]]) -> None:
+        self.stages = stages
+        self.wall: defaultdict[str, float] = defaultdict(float)
+        self.cpu: defaultdict[str, float] = defaultdict(float)
+        self._inside = False
+
+    def wrap(self, stage: str, function):
+        def timed_call(*args, **kwargs):
+            if self._inside:
+                return function(*args, **kwargs)
+            self._inside = True
+            wall, cpu = time.perf_counter(), cpu_s()
+            try:
+                return function(*args, **kwargs)
+            finally:
+                self.wall[stage] += time.perf_counter() - wall
+                self.cpu[stage] += cpu_s() - cpu
+                self._inside = False
+
+        return timed_call
+
+    @contextmanager
+    def installed(self) -> Iterator[StageTimer]:
+        saved = []
+        for stage, places in self.stages.items():
+            for owner, name in places:
+                if owner is not None and hasattr(owner, name):
+                    saved.append((owner, name, getattr(owner, name)))
+                    setattr(owner, name, self.wrap(stage, getattr(owner, name)))
+        try:
+            yield self
+        finally:
+            for owner, name, original in saved:
+                setattr(owner, name, original)
+
+
+def timed_stages(
+    stages: dict[str, list[tuple[Any, str]]], work: Callable[[], object]
+) -> dict[str, dict[str, float]]:
+    """Run ``work``; its wall and CPU seconds in total and per stage (:class:`StageTimer`),
+    ``other`` the rest."""
+    timer = StageTimer(stages)
+    with timer.installed():
+        wall, cpu = time.perf_counter(), cpu_s()
+        work()
+        wall, cpu = time.perf_counter() - wall, cpu_s() - cpu
+    result = {stage: {"wall_s": timer.wall[stage], "cpu_s": timer.cpu[stage]} for stage in stages}
+    result["other"] = {
+        "wall_s": wall - sum(timer.wall.values()),
+        "cpu_s": cpu - sum(timer.cpu.values()),
+    }
+    result["total"] = {"wall_s": wall, "cpu_s": cpu}
+    return result
+
+
+def per_unit(stages: dict[str, dict[str, float]], units: float) -> dict[str, dict[str, float]]:
+    """:func:`timed_stages`' seconds per unit (pair, stage position), to the millisecond."""
+    return {
+        stage: {key: round(value / units, 3) for key, value in times.items()}
+        for stage, times in stages.items()
     }

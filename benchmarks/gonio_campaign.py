@@ -23,16 +23,14 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
 import tempfile
 import time
 from collections import defaultdict
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
-from benchmarks.common import machine_description, peak_rss_mib
+from benchmarks.common import machine_description, peak_rss_mib, per_unit, timed_stages
 from hwbridge import store as store_module
 from hwbridge.session import capture_steps, locked_session_store
 from recon.calibration.spectral import HMI_FLICKER_PERIOD_S
@@ -57,70 +55,9 @@ _STAGES = {
 }
 
 
-def _cpu_s() -> float:
-    usage = resource.getrusage(resource.RUSAGE_SELF)
-    return usage.ru_utime + usage.ru_stime
-
-
-class _Split:
-    """Wall and CPU seconds spent in each stage (the outermost timed call counts)."""
-
-    def __init__(self) -> None:
-        self.wall = defaultdict(float)
-        self.cpu = defaultdict(float)
-        self._inside = False
-
-    def wrap(self, stage: str, function):
-        def timed(*args, **kwargs):
-            if self._inside:
-                return function(*args, **kwargs)
-            self._inside = True
-            wall, cpu = time.perf_counter(), _cpu_s()
-            try:
-                return function(*args, **kwargs)
-            finally:
-                self.wall[stage] += time.perf_counter() - wall
-                self.cpu[stage] += _cpu_s() - cpu
-                self._inside = False
-
-        return timed
-
-    @contextmanager
-    def installed(self):
-        saved = []
-        for stage, places in _STAGES.items():
-            for owner, name in places:
-                if owner is not None and hasattr(owner, name):
-                    saved.append((owner, name, getattr(owner, name)))
-                    setattr(owner, name, self.wrap(stage, getattr(owner, name)))
-        try:
-            yield self
-        finally:
-            for owner, name, original in saved:
-                setattr(owner, name, original)
-
-
 def _phase(store, steps, devices, seed) -> dict[str, dict[str, float]]:
     """Capture ``steps``; wall and CPU seconds in total and per stage."""
-    split = _Split()
-    with split.installed():
-        wall, cpu = time.perf_counter(), _cpu_s()
-        capture_steps(store, steps, devices, seed=seed)
-        wall, cpu = time.perf_counter() - wall, _cpu_s() - cpu
-    stages = {stage: {"wall_s": split.wall[stage], "cpu_s": split.cpu[stage]} for stage in _STAGES}
-    stages["other"] = {
-        "wall_s": wall - sum(split.wall.values()),
-        "cpu_s": cpu - sum(split.cpu.values()),
-    }
-    stages["total"] = {"wall_s": wall, "cpu_s": cpu}
-    return stages
-
-
-def _per_pair(stages: dict[str, dict[str, float]], pairs: int) -> dict[str, dict[str, float]]:
-    return {
-        stage: {key: round(value / pairs, 3) for key, value in times.items()}
-        for stage, times in stages.items()
-    }
+    return timed_stages(_STAGES, lambda: capture_steps(store, steps, devices, seed=seed))
 
 
 def main() -> None:
@@ -170,11 +107,11 @@ def main() -> None:
         "store_creation_s": round(create_s, 2),
         "darks_and_white": {
             "frames": len(by_view[-1] + by_view[white]),
-            **_per_pair(before, 1),
+            **per_unit(before, 1),
         },
-        "first_pair": _per_pair(first, 1),
+        "first_pair": per_unit(first, 1),
         "pairs_timed": arguments.pairs,
-        "per_pair": _per_pair(steady, arguments.pairs),
+        "per_pair": per_unit(steady, arguments.pairs),
         "campaign_pairs": arguments.campaign,
         "campaign_projected_h": round(projection_s / 3600, 3),
         "campaign_projected_cpu_h": round(

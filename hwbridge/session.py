@@ -268,7 +268,7 @@ def locked_session_store(
         yield store
 
 
-_WRITE_STEPS = 64  # most steps held before they are written
+_WRITE_STEPS = 512  # most steps held before they are written
 _WRITE_BYTES = 64 << 20  # most frame bytes held
 
 
@@ -283,7 +283,7 @@ class _PendingWrites:
         self._frames: list[np.ndarray] = []
         self._records: list[FrameRecord] = []
         self._bytes = 0
-        self._pose: tuple[int, int] | None = None
+        self._view: int | None = None
         # A real frame cannot be taken again: it is written as soon as it is taken.
         self._most_steps = _WRITE_STEPS if store.attrs.get("backend") == "sim" else 1
 
@@ -292,13 +292,15 @@ class _PendingWrites:
         self._frames.append(frame)
         self._records.append(record)
         self._bytes += frame.nbytes
-        self._pose = (record.view_id, record.light_id)
+        self._view = record.view_id
 
-    def due(self, next_pose: tuple[int, int]) -> bool:
-        """Whether to write before the next step: it moves to another view or light, or enough
-        waits (a real capture's frame never waits)."""
+    def due(self, next_view: int) -> bool:
+        """Whether to write before the next step: it moves to another view (a gonio pair, a
+        dome stage position), or enough waits (a real capture's frame never waits). A dome
+        position's LEDs are written several at a time: each camera's frames of consecutive
+        LEDs lie in consecutive slots, so a write is a few long runs, not one per LED."""
         return bool(self._steps) and (
-            next_pose != self._pose
+            next_view != self._view
             or len(self._steps) >= self._most_steps
             or self._bytes >= _WRITE_BYTES
         )
@@ -328,8 +330,8 @@ def capture_steps(
 ) -> list[tuple[int, FrameRecord]]:
     """Capture ``steps`` of the store's plan into their slots and flag each one done.
 
-    The frames of consecutive steps of one view and light are written together (at most 64
-    steps or 64 MiB of a simulated capture; a real one writes every frame when it is taken), then
+    The frames of consecutive steps of one view are written together (at most 512 steps or
+    64 MiB of a simulated capture; a real one writes every frame when it is taken), then
     their index, then their flags; a step is flagged done only once its frame and
     index are written, also when the capture stops or fails on the way.
 
@@ -379,7 +381,7 @@ def capture_steps(
             if stop():
                 break
             settings = plan[step]
-            if pending.due((int(settings.get("view_id", -1)), int(settings.get("light_id", -1)))):
+            if pending.due(int(settings.get("view_id", -1))):
                 with stop.writing():
                     pending.flush()
             camera = cameras[settings["camera"]]

@@ -62,6 +62,11 @@ class Sampling(StrEnum):
     glossy = "glossy"
 
 
+class LedRenders(StrEnum):
+    pose = "pose"
+    single = "single"
+
+
 class Layout(StrEnum):
     per_band = "per_band"
     joint = "joint"
@@ -78,6 +83,7 @@ _PROGRAM_OPTIONS = {
     "fault_rate": {Program.demo, *_DOME},
     "stage_positions": {Program.dome_run},
     "leds": _DOME,
+    "led_renders": _DOME,
     "rgb_cameras": _DOME,
     "texels": _DOME,
     "dark_frames": {Program.dome_calibration},
@@ -95,6 +101,7 @@ _STORED = (
     "sampling",
     "stage_positions",
     "leds",
+    "led_renders",
     "rgb_cameras",
     "texels",
     "dark_frames",
@@ -198,6 +205,7 @@ def _program_of(
             dome["rgb_cameras"],
             dome["texels"],
             DEFAULT_SPP if spp is None else spp,
+            str(dome["led_renders"]),
         )
         if program is Program.dome_run:
             return dome_run_program(material, size=size, seed=seed, fault_rate=fault_rate), {}
@@ -353,6 +361,14 @@ def capture(
         int,
         typer.Option(min=1, max=11, help="dome programs: RGB cameras, spread over the arc."),
     ] = 11,
+    led_renders: Annotated[
+        LedRenders,
+        typer.Option(
+            help="dome programs: pose renders the LEDs of a stage position together, each "
+            "camera's paths traced once for all of them; single renders one LED at a time "
+            "(slower; other render noise, same physics). With --resume: the store's."
+        ),
+    ] = LedRenders.pose,
     texels: Annotated[
         int,
         typer.Option(
@@ -431,6 +447,7 @@ def capture(
         "rgb_cameras": rgb_cameras,
         "texels": texels,
         "dark_frames": dark_frames,
+        "led_renders": led_renders,
     }
     if resume:
         given = {

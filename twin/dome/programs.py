@@ -10,9 +10,10 @@ Two programs, as on the real rig (plans: :mod:`hwbridge.dome_plans`; store layou
    per LED the RGB cameras' HDR sets and the spectral camera's scheduled noisy bands.
 
 Every frame is rendered (:class:`twin.dome.signals.RenderedDomeSignal`: one render per stage
-position, LEDs, holder content and camera, reused for every exposure and band) and turned into
-a raw frame by the camera's sensor model (a Bayer mosaic for the RGB cameras). The exposures come
-from the rig and camera models (:mod:`twin.dome.exposure_plan`). A reduced capture
+position, LEDs, holder content and camera, reused for every exposure and band; by default the
+LEDs lit one at a time rendered together, in passes per camera and stage position) and turned
+into a raw frame by the camera's sensor model (a Bayer mosaic for the RGB cameras). The
+exposures come from the rig and camera models (:mod:`twin.dome.exposure_plan`). A reduced capture
 (:class:`DomeCaptureSize`) takes the first stage positions, LEDs spread over the dome and RGB
 cameras spread over the arc.
 
@@ -56,7 +57,7 @@ from twin.dome.exposure_plan import dome_exposures
 from twin.dome.holder import holder_content
 from twin.dome.render import DOME_SPP
 from twin.dome.setup import CALIBRATION_LIGHT, THESIS_LONGEST_BAND_S
-from twin.dome.signals import DomeScene, RenderedDomeSignal
+from twin.dome.signals import LED_RENDERS, DomeScene, RenderedDomeSignal, leds_per_pass
 from twin.materials import available_materials, load_material
 from twin.rigs.dome_geometry import dome_geometry
 from twin.rigs.rig_config import DomeConfig, load_rig
@@ -120,6 +121,9 @@ class DomeCaptureSize:
         Texels across a nominal 4 cm sample (:mod:`twin.dome.capture_geometry`).
     spp
         Samples per pixel of the renders.
+    led_renders
+        ``pose``: the LEDs of a stage position rendered in passes (the default); ``single``:
+        one render per LED (:data:`twin.dome.signals.LED_RENDERS`).
     """
 
     stage_positions: int = 24
@@ -127,6 +131,7 @@ class DomeCaptureSize:
     rgb_cameras: int = 11
     texels: int = 64
     spp: int = DEFAULT_SPP
+    led_renders: str = "pose"
 
     def check(self, config: DomeConfig) -> None:
         """Refuse a size the rig cannot take, naming the setting, its range and the value."""
@@ -141,6 +146,10 @@ class DomeCaptureSize:
                 raise SpectwinInputError(f"{name}: expected 1..{top} (the rig's), got {value}")
         if not is_whole(self.spp) or self.spp < 1:
             raise SpectwinInputError(f"spp: expected at least 1 sample per pixel, got {self.spp}")
+        if self.led_renders not in LED_RENDERS:
+            raise SpectwinInputError(
+                f"led_renders: expected one of {', '.join(LED_RENDERS)}, got {self.led_renders!r}"
+            )
         FrameSize(config, self.texels)
 
     def stage_views(self) -> list[int]:
@@ -271,6 +280,15 @@ class DomeCaptureProgram(ProgramCapture):
     seed: int
     timing: DomeTiming
 
+    def _render(self, step: dict, order: dict[int, int]) -> tuple:
+        """What one render (or pass of LEDs, :mod:`twin.dome.signals`) of ``step`` shows;
+        ``order`` numbers the LEDs lit one at a time in plan order."""
+        light = step.get("light_id", -1)
+        if self.rig["led_renders"] == "pose" and light >= 0:
+            channels = len(self.rig["bands_nm"]) if step["camera"] == SPECTRAL_CAMERA else 3
+            light = -3 - order[light] // leds_per_pass(self.rig["window_px"], channels)
+        return step["camera"], step.get("view_id"), light, step["kind"]
+
     def dry_run(self) -> dict[str, object]:
         """The plan in numbers, capturing nothing: steps, frames per camera and kind, stage
         positions, LEDs, renders, frame size, the estimated duration (cameras in parallel,
@@ -278,11 +296,9 @@ class DomeCaptureProgram(ProgramCapture):
         index uncompressed."""
         frames = Counter(step["camera"] for step in self.plan)
         side = self.rig["window_px"]
-        renders = {
-            (step["camera"], step.get("view_id"), step.get("light_id"), step["kind"])
-            for step in self.plan
-            if step["kind"] != "dark"
-        }
+        single = dict.fromkeys(s["light_id"] for s in self.plan if s.get("light_id", -1) >= 0)
+        order = {led: index for index, led in enumerate(single)}
+        renders = {self._render(step, order) for step in self.plan if step["kind"] != "dark"}
         duration_s = dome_duration_s(self.plan, self.timing)
         # frame, then light_id, view_id, band_nm (4 bytes each), exposure_s, timestamp (8 each),
         # pose (6 x 8) and the progress flag
@@ -295,6 +311,7 @@ class DomeCaptureProgram(ProgramCapture):
             "stage_positions": len({s.get("view_id", -1) for s in self.plan} - {-1}),
             "leds": len({s.get("light_id", -1) for s in self.plan} - {-1, -2}),
             "renders": len(renders),
+            "led_renders": self.rig["led_renders"],
             "frame_size": f"{side} x {side} px",
             "spp": self.rig["spp"],
             "estimated_duration_s": duration_s,
@@ -328,6 +345,8 @@ def _program(
         frame.window,
         size.spp,
         exposures.bands_nm,
+        size.led_renders,
+        tuple(dict.fromkeys(step["light_id"] for step in plan if step.get("light_id", -1) >= 0)),
     )
     roi = (frame.window, frame.window)
     cameras = []
@@ -356,6 +375,7 @@ def _program(
         **settings,
         "texels": size.texels,
         "spp": size.spp,
+        "led_renders": size.led_renders,
         "pixels": frame.pixels,
         "window_px": frame.window,
         "leds": size.leds,
@@ -458,9 +478,19 @@ def dome_calibration_program(
 
 def stored_dome_settings(store: CaptureStore) -> dict[str, Any]:
     """The program and settings a dome store was made with, as ``spectwin capture`` names them:
-    ``program``, ``seed``, ``stage_positions``, ``leds``, ``rgb_cameras``, ``texels``, ``spp``
+    ``program``, ``seed``, ``stage_positions``, ``leds``, ``rgb_cameras``, ``texels``, ``spp``,
+    ``led_renders`` (``single`` for a store that does not record it: made before the passes)
     and ``material`` (run) or ``dark_frames`` (calibration)."""
     rig = store.attrs.get("rig") or {}
-    settings = {"program": rig["program"], "seed": store.attrs["seed"]}
-    names = ("stage_positions", "leds", "rgb_cameras", "texels", "spp", "material", "dark_frames")
+    settings = {"program": rig["program"], "seed": store.attrs["seed"], "led_renders": "single"}
+    names = (
+        "stage_positions",
+        "leds",
+        "rgb_cameras",
+        "texels",
+        "spp",
+        "led_renders",
+        "material",
+        "dark_frames",
+    )
     return settings | {name: rig[name] for name in names if name in rig}

@@ -168,6 +168,25 @@ def dome_scene_rates(
     return (radiance.reshape(-1, count) @ view.weights).reshape(height, width, -1)
 
 
+def dome_scene_rates_each(
+    config: DomeConfig,
+    scene: NodeScene,
+    view: DomeView,
+    *,
+    stage_deg: float,
+    leds: Sequence[int],
+    spp: int = DOME_SPP,
+    seed: int = 0,
+) -> np.ndarray:
+    """Rates ``(n_leds, H, W, n_channels)`` of each LED of ``leds`` lit alone, the camera's
+    paths traced once for all of them (:meth:`twin.render.node_transport.NodeScene.
+    transport_each`): LED ``i``'s image equals :func:`dome_scene_rates` with ``leds=[leds[i]]``
+    and the same seed, to float rounding."""
+    to_sample = stage_matrix(stage_deg)[:3, :3].T
+    positions = dome_geometry(config).led_positions_m[np.asarray(leds, int)] @ to_sample.T
+    return scene.transport_each(view.rays(stage_deg), positions, view.weights, spp=spp, seed=seed)
+
+
 def dome_rates(
     config: DomeConfig,
     material: Material | None,

@@ -7,8 +7,15 @@ the drive current, the LED's nominal one at full scale). A render is a rate per 
 (e-/s; all of the tunable filter's bands at once for the spectral camera), so one render per
 (stage angle, LEDs, holder content, camera) serves every exposure of the HDR set and every
 band: the camera keeps its last render, and a plan that takes a camera's frames of one LED
-together renders it once. Each render's Monte Carlo seed follows from what it shows, so a
-resumed or distributed capture renders the same images as an uninterrupted one.
+together renders it once.
+
+By default (``led_renders="pose"``) the LEDs a plan switches on one at a time are rendered
+together, per camera, stage angle and holder content: one pass traces the camera's paths and
+gives every LED's image (:func:`twin.dome.render.dome_scene_rates_each`), in blocks of LEDs that
+keep a pass's images within :data:`PASS_MEMORY_BYTES`. ``led_renders="single"`` renders one LED
+at a time, as before. Each render's Monte Carlo seed follows from what it shows (with passes:
+the content, stage angle and camera; one LED's image does not depend on the others of its
+block), so a resumed or distributed capture renders the same images as an uninterrupted one.
 """
 
 from __future__ import annotations
@@ -21,12 +28,30 @@ import numpy as np
 from hwbridge.dome_layout import SPECTRAL_CAMERA
 from twin.devices.sim_devices import VirtualRig
 from twin.dome.holder import holder_scene_parts
-from twin.dome.render import DomeView, dome_scene_rates
+from twin.dome.render import DomeView, dome_scene_rates, dome_scene_rates_each
 from twin.materials import Material
 from twin.render.node_transport import NodeScene
 from twin.rigs.rig_config import DomeConfig
 
-__all__ = ["DomeScene", "RenderedDomeSignal"]
+__all__ = ["LED_RENDERS", "PASS_MEMORY_BYTES", "DomeScene", "RenderedDomeSignal", "leds_per_pass"]
+
+LED_RENDERS = ("pose", "single")
+"""How the LEDs lit one at a time are rendered: all of a stage position in passes (``pose``,
+the default), or one render per LED (``single``)."""
+
+PASS_MEMORY_BYTES = 128 * 2**20
+"""The most memory one camera's pass of LED images takes (float32 rates)."""
+
+
+def leds_per_pass(window: int, channels: int) -> int:
+    """LEDs per pass of a camera of ``channels`` channels and ``window`` pixels square within
+    :data:`PASS_MEMORY_BYTES`."""
+    return max(1, PASS_MEMORY_BYTES // (4 * window * window * channels))
+
+
+def _seed(name: str) -> int:
+    """The Monte Carlo seed of the render ``name`` (what it shows)."""
+    return zlib.crc32(name.encode()) & 0x7FFFFFFF
 
 
 @dataclass(eq=False)
@@ -50,6 +75,10 @@ class DomeScene:
         Samples per pixel of the renders.
     bands_nm
         The spectral camera's bands (one render channel each).
+    led_renders
+        ``pose`` (passes of the LEDs lit one at a time) or ``single`` (:data:`LED_RENDERS`).
+    single_leds
+        The LEDs the plan switches on one at a time, in plan order (the passes' blocks).
     """
 
     config: DomeConfig
@@ -60,7 +89,18 @@ class DomeScene:
     window: int
     spp: int
     bands_nm: tuple[float, ...]
+    led_renders: str = "pose"
+    single_leds: tuple[int, ...] = ()
     _scenes: dict = field(default_factory=dict, repr=False)
+
+    def led_block(self, led: int, channels: int) -> tuple[int, ...]:
+        """The LEDs rendered in one pass with ``led`` by a camera of ``channels`` channels:
+        consecutive LEDs of :attr:`single_leds`, as many as :func:`leds_per_pass` allows."""
+        if led not in self.single_leds:
+            return (led,)
+        size = leds_per_pass(self.window, channels)
+        start = self.single_leds.index(led) // size * size
+        return self.single_leds[start : start + size]
 
     def __getstate__(self) -> dict:
         return {**self.__dict__, "_scenes": {}}  # Mitsuba scenes stay in their process
@@ -81,38 +121,64 @@ class RenderedDomeSignal:
         self._scene, self._camera = scene, camera
         self._key: tuple | None = None
         self._rates: np.ndarray | None = None
+        self._pass_key: tuple | None = None
+        self._pass: np.ndarray | None = None
         self._view: DomeView | None = None
 
     def __getstate__(self) -> dict:
-        return {**self.__dict__, "_key": None, "_rates": None, "_view": None}
+        cached = ("_key", "_rates", "_pass_key", "_pass", "_view")
+        return {**self.__dict__, **dict.fromkeys(cached)}
+
+    @property
+    def view(self) -> DomeView:
+        """The camera's view (built on first use, in the process that renders)."""
+        if self._view is None:
+            scene = self._scene
+            self._view = DomeView(
+                scene.config,
+                self._camera,
+                scene.pixels,
+                window=scene.window,
+                bands_nm=scene.bands_nm,
+            )
+        return self._view
 
     def rates(self, content: str, stage_deg: float, leds: tuple[int, ...]) -> np.ndarray:
-        """Rates ``(H, W, n_channels)`` of one state at full-scale current (the last kept)."""
+        """Rates ``(H, W, n_channels)`` of one state at full-scale current (the last state and
+        the last pass of LEDs kept)."""
         key = (content, stage_deg, leds)
-        if key != self._key:
-            scene = self._scene
-            lit = "all" if len(leds) == scene.config.led_count else ",".join(map(str, leds))
-            name = f"{content}|{stage_deg:.6f}|{lit}|{self._camera}"
-            seed = zlib.crc32(name.encode()) & 0x7FFFFFFF
-            if self._view is None:
-                self._view = DomeView(
+        if key == self._key:
+            return self._rates
+        scene = self._scene
+        if len(leds) == 1 and scene.led_renders == "pose":
+            block = scene.led_block(leds[0], self.view.weights.shape[1])
+            if (content, stage_deg, block) != self._pass_key:
+                self._pass = None  # the last pass's memory is free for the next
+                self._pass = dome_scene_rates_each(
                     scene.config,
-                    self._camera,
-                    scene.pixels,
-                    window=scene.window,
-                    bands_nm=scene.bands_nm,
+                    scene.node_scene(content),
+                    self.view,
+                    stage_deg=stage_deg,
+                    leds=block,
+                    spp=scene.spp,
+                    seed=_seed(f"{content}|{stage_deg:.6f}|pose|{self._camera}"),
                 )
-            self._rates = dome_scene_rates(
+                self._pass_key = (content, stage_deg, block)
+            rates = np.ascontiguousarray(self._pass[block.index(leds[0])])
+        else:
+            self._pass = self._pass_key = None
+            lit = "all" if len(leds) == scene.config.led_count else ",".join(map(str, leds))
+            rates = dome_scene_rates(
                 scene.config,
                 scene.node_scene(content),
-                self._view,
+                self.view,
                 stage_deg=stage_deg,
                 leds=leds,
                 spp=scene.spp,
-                seed=seed,
+                seed=_seed(f"{content}|{stage_deg:.6f}|{lit}|{self._camera}"),
             ).astype(np.float32)
-            self._key = key
-        return self._rates
+        self._key, self._rates = key, rates
+        return rates
 
     def __call__(self, rig: VirtualRig, start_s: float, exposure_s: float) -> np.ndarray:
         content = self._scene.holders[rig.step]

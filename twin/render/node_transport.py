@@ -43,12 +43,13 @@ References
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import drjit as dr
 import mitsuba as mi
 import numpy as np
+from scipy import sparse
 
 from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra, resample
@@ -73,6 +74,9 @@ NODES_NM = MATERIAL_GRID.wavelengths_nm
 """Wavelengths at which the transport is evaluated: the materials' design grid."""
 
 _MAX_LANES = 1 << 20  # samples per kernel launch; larger renders run in passes
+_LANE_VALUES = 1 << 22  # most per-lane values of transport_each's lamps summed at once
+_EACH_LANES = 1 << 18  # samples per pass of transport_each (its node tables: 81 floats a lane)
+_EACH_FACTORS = 1 << 24  # most lamp factors of one lobe per pass (lamps x samples)
 
 
 def node_weights(responses: SampledSpectra) -> np.ndarray:
@@ -221,6 +225,75 @@ def _conductor_index(part: SurfacePart) -> tuple[np.ndarray, np.ndarray]:
     )
 
 
+def _lobes() -> list:
+    """Contexts that evaluate a BSDF's diffuse lobe and its glossy lobes (the variant active)."""
+    glossy = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.GlossyTransmission
+    return [
+        mi.BSDFContext(mi.TransportMode.Radiance, int(flag))
+        for flag in (mi.BSDFFlags.DiffuseReflection, glossy)
+    ]
+
+
+def _node_table(values: list, lanes: int) -> np.ndarray:
+    """``n_nodes`` Dr.Jit values (one per lane, or one for all lanes) as a table
+    ``(n_nodes, lanes)``."""
+    dr.eval(*values)
+    return np.stack([np.broadcast_to(np.asarray(value, np.float32), (lanes,)) for value in values])
+
+
+def _add_lanes(values: np.ndarray, pixels: np.ndarray, terms: list) -> None:
+    """Add lanes' values to their pixels: ``values`` ``(n_pixels, n_lamps, n_channels)``
+    gains, for each lane ``j`` and lamp ``l``, the sum over ``terms`` of ``factors[l, j]`` times
+    ``channels[j]`` (each term a pair ``factors`` ``(n_lamps, n_lanes)``, ``channels``
+    ``(n_lanes, n_channels)``) at pixel ``pixels[j]``; lamps in groups of at most
+    :data:`_LANE_VALUES` values."""
+    lamps, channels = values.shape[1:]
+    into = sparse.csr_matrix(
+        (np.ones(pixels.size, np.float32), (pixels, np.arange(pixels.size))),
+        shape=(values.shape[0], pixels.size),
+    )
+    group = max(1, _LANE_VALUES // max(1, pixels.size * channels))
+    for first in range(0, lamps, group):
+        chosen = slice(first, min(first + group, lamps))
+        per_lane = sum(
+            factors[chosen].T[:, :, None] * values_per_lane[:, None, :]
+            for factors, values_per_lane in terms
+        )
+        values[:, chosen] += (into @ per_lane.reshape(pixels.size, -1)).reshape(
+            values.shape[0], -1, channels
+        )
+
+
+@dataclass
+class _Vertex:
+    """One surface interaction of each lane's path: where (``si``, its BSDF and part), which
+    lanes reach it (``active``), the path's throughput to it and the reflectance there at the
+    nodes (``n_nodes`` Dr.Jit values each), the row of :attr:`NodeScene.reflectance` seen
+    (``texel``) and the lobes' weights (diffuse, glossy) of the bounce that led here (``None``
+    at the first surface)."""
+
+    si: object
+    bsdf: object
+    part: object
+    active: object
+    throughput: list
+    rho: list
+    texel: object
+    bounce: list | None
+
+
+@dataclass
+class _Bounced:
+    """A vertex after a bounce on the lanes that reach it (:meth:`NodeScene._bounced`): the
+    vertex compacted to them, the channel values per unit light of its diffuse and glossy
+    lobes ``(n_reached, n_channels)`` and the pixel of each lane ``(n_reached,)``."""
+
+    vertex: _Vertex
+    diffuse: np.ndarray
+    glossy: np.ndarray
+    pixels: np.ndarray
+
+
 class NodeScene:
     """Surface parts as one Mitsuba scene of unit-reflectance BSDFs, with their spectral
     factors at the nodes (module docstring); built once, rendered from many views.
@@ -307,12 +380,181 @@ class NodeScene:
         ]
         return np.concatenate(radiance).reshape(height, width, NODES_NM.size)
 
-    def _render_pixels(self, camera, light, seed, bounces, first, count, samples) -> np.ndarray:
-        """Mean node radiance ``(n, n_nodes)`` of ``samples`` stratified samples in each of the
-        ``count`` pixels (fewer at the image's end) from flat index ``first`` on. The random
-        numbers of a sample depend on the seed, the pixel and the sample's index alone."""
+    def transport_each(
+        self,
+        camera: PinholeRays | ParallelCamera,
+        positions_m: np.ndarray,
+        weights: np.ndarray,
+        *,
+        spp: int = 4,
+        seed: int = 0,
+        bounces: int = 1,
+    ) -> np.ndarray:
+        """Channel values ``(n_lamps, H, W, n_channels)`` of each point lamp at the rows of
+        ``positions_m`` ``(n_lamps, 3)`` lit alone, the node radiance projected on ``weights``
+        ``(n_nodes, n_channels)`` (:func:`node_weights`).
+
+        The camera's paths are traced once for all the lamps: light transport is linear in the
+        light, and the paths of :meth:`transport` with one :class:`PointLight` do not depend on
+        where the lamp is (its random numbers jitter the pixel and sample the bounce only). Per
+        path vertex the spectral factors are projected on the channels once (the diffuse lobe's
+        throughput times reflectance, the glossy lobe's throughput); each lamp then adds only
+        its shadow rays and the lobes' geometric factors. Lamp ``i``'s values equal
+        ``transport(camera, PointLight(positions_m[i]), spp=spp, seed=seed) @ weights`` to float
+        rounding (``tests/twin/render/test_node_transport_each.py``). A scene with a metal,
+        whose glossy spectrum depends on the light's direction, renders lamp by lamp
+        (:meth:`transport` with the same seed: the same values).
+
+        Parameters
+        ----------
+        camera, spp, seed, bounces
+            As for :meth:`transport`.
+        positions_m
+            The lamps, one row each, in the scene's frame.
+        weights
+            Node weights of the channels (the channels' responses times the lamps' spectrum).
+        """
+        if bounces < 0:
+            raise SpectwinInputError(f"bounces: expected 0 or more, got {bounces}")
+        positions = np.asarray(positions_m, np.float64).reshape(-1, 3)
+        weights = np.asarray(weights, np.float32).reshape(NODES_NM.size, -1)
         height, width = camera.shape
-        count = min(count, height * width - first)
+        if self._metal_index is not None:
+            return np.stack(
+                [
+                    self.transport(
+                        camera, PointLight(p), spp=spp, seed=seed, bounces=bounces
+                    ).astype(np.float32)
+                    @ weights
+                    for p in positions
+                ]
+            )
+        samples = rendered_spp(spp)
+        per_launch = max(1, min(_EACH_LANES, _EACH_FACTORS // len(positions)) // samples)
+        values = np.empty((height * width, len(positions), weights.shape[1]), np.float32)
+        for first in range(0, height * width, per_launch):
+            count = min(per_launch, height * width - first)
+            values[first : first + count] = self._each_pixels(
+                camera, positions, weights, seed, bounces, first, count, samples
+            )
+        return values.reshape(height, width, len(positions), -1).transpose(2, 0, 1, 3)
+
+    def _each_pixels(
+        self, camera, positions, weights, seed, bounces, first, count, samples
+    ) -> np.ndarray:
+        """:meth:`transport_each` of ``count`` pixels from flat index ``first`` on:
+        ``(n_lamps, count, n_channels)``.
+
+        At the first surface the diffuse lobe's channel values are the texel's reflectance
+        projected on the channels (a table) and the glossy lobe's the channels' sums, so a
+        pixel's values for all the lamps are one small matrix product (lamps x samples times
+        samples x channels). After a bounce only the lanes still on the scene are kept, with
+        their throughput at the nodes; each lamp's factors there are summed into the pixels by
+        a sparse matrix."""
+        _, rng, ray = self._lanes(camera, seed, first, count, samples)
+        table = self.reflectance.astype(np.float32)
+        vertices = list(self._walk(ray, rng, bounces))
+        first_vertex = vertices[0]
+        dr.eval(first_vertex.si, first_vertex.bsdf, first_vertex.part, first_vertex.active)
+        texel = np.asarray(first_vertex.texel)
+        bounced = self._bounced(vertices, table, weights, texel, samples)
+        lamps = mi.Float(np.asarray(positions, np.float32).ravel())
+        diffuse, glossy = self._lamp_factors(first_vertex, lamps, samples)
+        shape = (count, len(positions), samples)  # the first vertex's factors, pixel-major
+        diffuse, glossy = diffuse.reshape(shape), glossy.reshape(shape)
+        # each pixel's samples mostly see one texel: the first sample's, times the sum of the
+        # factors, plus for the samples on another texel the difference of the two
+        projected = table @ weights
+        texel = texel.reshape(count, samples)
+        reference = projected[texel[:, 0]]
+        values = diffuse.sum(axis=2)[..., None] * reference[:, None, :]
+        values += glossy.sum(axis=2)[..., None] * weights.sum(axis=0)
+        pixel, sample = np.nonzero(texel != texel[:, :1])
+        if pixel.size:
+            difference = projected[texel[pixel, sample]] - reference[pixel]
+            _add_lanes(values, pixel, [(diffuse[pixel, :, sample].T, difference)])
+        for after in bounced:
+            diffuse, glossy = self._lamp_factors(after.vertex, lamps)
+            _add_lanes(values, after.pixels, [(diffuse, after.diffuse), (glossy, after.glossy)])
+        return values * np.float32(1 / samples)
+
+    def _lamp_factors(self, vertex, lamps, samples: int | None = None):
+        """The diffuse and glossy lobes' geometric factors at ``vertex`` for each lamp of
+        ``lamps`` (flat positions), visibility included: two tables of ``n_lamps x lanes``,
+        lamp-major, or with ``samples`` pixel-major ``(pixels, n_lamps, samples)`` (lanes
+        ``samples`` to a pixel). One kernel loops over the lamps."""
+        lobes = _lobes()
+        width = dr.width(vertex.active)
+        count = dr.width(lamps) // 3
+        diffuse_out = dr.zeros(mi.Float, count * width)
+        glossy_out = dr.zeros(mi.Float, count * width)
+        lane = dr.arange(mi.UInt32, width)
+        total = dr.opaque(mi.UInt32, count)
+
+        def target(index):
+            if samples is None:
+                return index * width + lane
+            pixel = lane // samples
+            return (pixel * total + index) * samples + (lane - pixel * samples)
+
+        def add_lamp(index):
+            position = dr.gather(mi.Point3f, lamps, index)
+            diffuse, glossy = self._lit(
+                vertex.si, vertex.bsdf, vertex.part, vertex.active, lobes, position=position
+            )
+            dr.scatter(diffuse_out, diffuse, target(index))
+            dr.scatter(glossy_out, glossy[0], target(index))
+            return (index + 1,)
+
+        dr.while_loop(
+            (dr.zeros(mi.UInt32, width),), lambda index: index < total, add_lamp, label="each"
+        )
+        dr.eval(diffuse_out, glossy_out)
+        return (
+            np.asarray(diffuse_out).reshape(count, width),
+            np.asarray(glossy_out).reshape(count, width),
+        )
+
+    def _bounced(self, vertices, table, weights, texel, samples) -> list[_Bounced]:
+        """The vertices after the first, each on the lanes that reach it: their throughput at
+        the nodes (the product of the bounces' lobe weights and reflectances), the channel
+        values of their lobes per unit light and each lane's pixel."""
+        bounced = []
+        reached = np.arange(texel.size)
+        throughput = np.ones((texel.size, 1), np.float32)
+        for vertex in vertices[1:]:
+            active = np.asarray(vertex.active)
+            keep = active[reached]
+            diffuse_weight, glossy_weight = (np.asarray(w)[reached[keep]] for w in vertex.bounce)
+            throughput = throughput[keep] * (
+                diffuse_weight[:, None] * table[texel[reached[keep]]] + glossy_weight[:, None]
+            )
+            reached = reached[keep]
+            if not reached.size:  # every path has left the scene
+                break
+            texel = np.asarray(vertex.texel)
+            index = mi.UInt32(reached.astype(np.uint32))
+            si = dr.gather(type(vertex.si), vertex.si, index)
+            part = dr.gather(mi.UInt32, vertex.part, index)
+            compact = _Vertex(
+                si, si.bsdf(), part, dr.full(mi.Bool, True, reached.size), [], [], None, None
+            )
+            dr.eval(compact.si, compact.bsdf, compact.part, compact.active)
+            bounced.append(
+                _Bounced(
+                    compact,
+                    (throughput * table[texel[reached]]) @ weights,
+                    throughput @ weights,
+                    reached // samples,
+                )
+            )
+        return bounced
+
+    def _lanes(self, camera, seed, first, count, samples):
+        """The lanes of ``samples`` stratified samples in each of ``count`` pixels from flat
+        index ``first`` on: each lane's pixel slot, the random numbers (a PCG32 stream that
+        depends on the seed, the pixel and the sample's index alone) and the camera ray."""
+        height, width = camera.shape
         lane = dr.arange(mi.UInt32, count * samples)
         slot = lane // samples
         sample = lane - slot * samples
@@ -331,28 +573,34 @@ class NodeScene:
             mi.Float(column) + (stratum_x + rng.next_float32()) / strata,
             mi.Float(row) + (stratum_y + rng.next_float32()) / strata,
         )
+        return slot, rng, ray
+
+    def _render_pixels(self, camera, light, seed, bounces, first, count, samples) -> np.ndarray:
+        """Mean node radiance ``(n, n_nodes)`` of ``samples`` stratified samples in each of the
+        ``count`` pixels (fewer at the image's end) from flat index ``first`` on."""
+        height, width = camera.shape
+        count = min(count, height * width - first)
+        slot, rng, ray = self._lanes(camera, seed, first, count, samples)
         nodes = self._trace(ray, light, rng, bounces)
         means = dr.zeros(mi.Float, count * NODES_NM.size)
         for n, value in enumerate(nodes):
             dr.scatter_add(means, value * (1.0 / samples), slot * NODES_NM.size + n)
         return np.asarray(means).reshape(count, NODES_NM.size)
 
-    def _trace(self, ray, light, rng, bounces) -> list:
-        """Node radiance of each lane's path (list of ``n_nodes`` Float arrays)."""
+    def _walk(self, ray, rng, bounces) -> Iterator[_Vertex]:
+        """The vertices of each lane's path, first surface first; the bounce after a vertex is
+        sampled when the caller asks for the next one (so that the caller's random numbers for
+        the vertex's light come first)."""
         scene = self._scene
         part_of = mi.UInt32(self._part_of)
         reflectance = mi.Float(self.reflectance.ravel().astype(np.float32))
         texels = {name: mi.UInt32(values) for name, values in self._texels.items()}
         count = NODES_NM.size
-        glossy_lobes = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.GlossyTransmission
-        lobes = [
-            mi.BSDFContext(mi.TransportMode.Radiance, int(flag))
-            for flag in (mi.BSDFFlags.DiffuseReflection, glossy_lobes)
-        ]
-        radiance = [mi.Float(0.0) for _ in range(count)]
+        lobes = _lobes()
         throughput = [mi.Float(1.0) for _ in range(count)]
         si = scene.ray_intersect(ray)
         active = si.is_valid()
+        weight = None
         for depth in range(bounces + 1):
             part = dr.gather(mi.UInt32, part_of, dr.reinterpret_array(mi.UInt32, si.shape), active)
             texel = _texel_index(si.uv, part, texels, active)
@@ -360,12 +608,9 @@ class NodeScene:
                 dr.gather(mi.Float, reflectance, texel * count + n, active) for n in range(count)
             ]
             bsdf = si.bsdf()
-            chooser = rng if depth > 0 else None  # light after a bounce: one lamp of a group
-            diffuse, glossy = self._direct(si, bsdf, part, light, active, lobes, chooser)
-            for n in range(count):
-                radiance[n] += throughput[n] * (diffuse * rho[n] + glossy[min(n, len(glossy) - 1)])
+            yield _Vertex(si, bsdf, part, active, throughput, rho, texel, weight)
             if depth == bounces:
-                break
+                return
             sampled, _ = bsdf.sample(
                 mi.BSDFContext(),
                 si,
@@ -373,16 +618,31 @@ class NodeScene:
                 mi.Point2f(rng.next_float32(), rng.next_float32()),
                 active,
             )
-            active &= sampled.pdf > 0
+            # new values, not in-place updates: the vertices yielded keep theirs
+            active = active & (sampled.pdf > 0)
             weight = [
                 dr.select(active, bsdf.eval(ctx, si, sampled.wo, active)[0] / sampled.pdf, 0.0)
                 for ctx in lobes
             ]
             glossy = self._glossy_spectrum(si, sampled.wo, part, active) or [1.0]
-            for n in range(count):
-                throughput[n] *= weight[0] * rho[n] + weight[1] * glossy[min(n, len(glossy) - 1)]
+            throughput = [
+                value * (weight[0] * rho[n] + weight[1] * glossy[min(n, len(glossy) - 1)])
+                for n, value in enumerate(throughput)
+            ]
             si = scene.ray_intersect(si.spawn_ray(si.to_world(sampled.wo)), active)
-            active &= si.is_valid()
+            active = active & si.is_valid()
+
+    def _trace(self, ray, light, rng, bounces) -> list:
+        """Node radiance of each lane's path (list of ``n_nodes`` Float arrays)."""
+        lobes = _lobes()
+        radiance = [mi.Float(0.0) for _ in range(NODES_NM.size)]
+        for depth, vertex in enumerate(self._walk(ray, rng, bounces)):
+            chooser = rng if depth > 0 else None  # light after a bounce: one lamp of a group
+            diffuse, glossy = self._direct(
+                vertex.si, vertex.bsdf, vertex.part, light, vertex.active, lobes, chooser
+            )
+            for n, (throughput, rho) in enumerate(zip(vertex.throughput, vertex.rho, strict=True)):
+                radiance[n] += throughput * (diffuse * rho + glossy[min(n, len(glossy) - 1)])
         return radiance
 
     def _direct(self, si, bsdf, part, light, active, lobes, chooser=None):

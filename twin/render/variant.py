@@ -1,9 +1,12 @@
 """Choose, activate and report the Mitsuba variant: the one place that calls ``mi.set_variant``.
 
-``llvm_ad_spectral`` is the default. It needs a system libLLVM 16 or newer: Dr.Jit 1.5 crashes
-with Debian's LLVM 14/15 (ARCHITECTURE.md, "Mitsuba notes"), so with an older or missing LLVM the
-slower ``scalar_spectral`` variant is used and a warning says why. ``SPECTWIN_VARIANT`` overrides
-the choice; ``SPECTWIN_THREADS`` sets Dr.Jit's thread count (default: all cores).
+Where Dr.Jit finds CUDA (an NVIDIA GPU and its driver), ``cuda_ad_spectral`` is used: the
+renders (the node transport of both rigs, the BTF BSDF, the Figure 4.6 renders) run on the GPU.
+Elsewhere ``llvm_ad_spectral`` is the default. It needs a system libLLVM 16 or newer: Dr.Jit 1.5
+crashes with Debian's LLVM 14/15 (ARCHITECTURE.md, "Mitsuba notes"), so with an older or missing
+LLVM the slower ``scalar_spectral`` variant is used and a warning says why. ``SPECTWIN_VARIANT``
+overrides the choice (``llvm_ad_spectral`` keeps a GPU machine on its CPUs);
+``SPECTWIN_THREADS`` sets Dr.Jit's thread count on the CPU (default: all cores).
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ from recon.errors import SpectwinInputError
 __all__ = [
     "DEFAULT_VARIANT",
     "FALLBACK_VARIANT",
+    "GPU_VARIANT",
     "VariantReport",
     "activate",
     "choose_variant",
@@ -27,6 +31,7 @@ __all__ = [
 ]
 
 DEFAULT_VARIANT = "llvm_ad_spectral"
+GPU_VARIANT = "cuda_ad_spectral"
 FALLBACK_VARIANT = "scalar_spectral"
 MINIMUM_LLVM_MAJOR = 16
 
@@ -53,7 +58,11 @@ def llvm_version() -> tuple[int, int, int] | None:
     return tuple(dr.detail.llvm_version())
 
 
-def choose_variant(requested: str | None, found: tuple[int, int, int] | None) -> tuple[str, str]:
+def choose_variant(
+    requested: str | None, found: tuple[int, int, int] | None, *, cuda: bool = False
+) -> tuple[str, str]:
+    """The variant and why: ``requested`` (``SPECTWIN_VARIANT``) if given, else the GPU's where
+    ``cuda`` (Dr.Jit found CUDA), else by the LLVM version ``found`` (module docstring)."""
     if requested:
         if requested not in mi.variants():
             raise SpectwinInputError(
@@ -65,6 +74,8 @@ def choose_variant(requested: str | None, found: tuple[int, int, int] | None) ->
                 f"got {requested!r}"
             )
         return requested, "requested by SPECTWIN_VARIANT"
+    if cuda:
+        return GPU_VARIANT, "CUDA found: renders on the GPU"
     if found is None:
         return FALLBACK_VARIANT, "no libLLVM found"
     if found[0] < MINIMUM_LLVM_MAJOR:
@@ -80,7 +91,9 @@ def activate() -> VariantReport:
     if _active is not None:
         return _active
     found = llvm_version()
-    variant, reason = choose_variant(os.environ.get("SPECTWIN_VARIANT"), found)
+    variant, reason = choose_variant(
+        os.environ.get("SPECTWIN_VARIANT"), found, cuda=dr.has_backend(dr.JitBackend.CUDA)
+    )
     if variant == FALLBACK_VARIANT and "SPECTWIN_VARIANT" not in reason:
         warnings.warn(
             f"spectwin uses the slow Mitsuba variant {FALLBACK_VARIANT}: {reason}", stacklevel=2

@@ -13,7 +13,12 @@ from hwbridge.session import capture_steps, locked_session_store
 from hwbridge.store import CaptureStore
 from recon.errors import SpectwinInputError
 from twin.cli.app import app
-from twin.dome.programs import DomeCaptureSize, dome_plan_parts, dome_run_program
+from twin.dome.programs import (
+    DomeCaptureSize,
+    dome_plan_parts,
+    dome_run_program,
+    stored_dome_settings,
+)
 from twin.rigs.rig_config import load_rig
 
 runner = CliRunner()
@@ -31,7 +36,13 @@ def test_a_dry_run_of_the_reduced_dome_run_counts_its_frames_and_writes_nothing(
     rgb = 2 * (1 + 24 * 4)  # an alignment frame per position, the HDR set per LED
     assert plan["frames"] == {"rgb00": rgb, "rgb05": rgb, "rgb10": rgb, "spectral": spectral}
     assert plan["kinds"] == {"alignment": 2 * 4, "sample": 3 * rgb + spectral - 2 * 4}
-    assert plan["renders"] == 2 * (4 + 24 * 4)  # per position, LED set and camera
+    # per position: the alignment (all LEDs) per camera, then the LEDs in passes per camera
+    # (24 LEDs: one pass of an RGB camera, two of the spectral camera's 33 bands at 264 px)
+    assert plan["renders"] == 2 * (4 + 3 + 2) and plan["led_renders"] == "pose"
+    single = runner.invoke(
+        app, ["capture", str(store), "--dry-run", "--json", *arguments, "--led-renders", "single"]
+    )
+    assert json.loads(single.stdout)["renders"] == 2 * (4 + 24 * 4)  # per LED and camera
     assert plan["frame_size"] == "264 x 264 px" and plan["stage_positions"] == 2
     assert plan["estimated_duration_s"] > 48 * sum((0.05, 0.186, 0.666, 2.5))
     assert list(tmp_path.iterdir()) == []
@@ -95,6 +106,7 @@ def test_resume_of_a_dome_run_reads_its_settings_and_refuses_other_ones(tmp_path
         (["--material", "wallpaper"], "was captured with --material lego, not wallpaper"),
         (["--program", "dome-calibration"], "was captured with --program dome-run, not"),
         (["--pixels", "64"], "--pixels is not used by --program dome-run"),
+        (["--led-renders", "single"], "was captured with --led-renders pose, not single"),
     ]
     for arguments, message in probes:
         result = runner.invoke(app, ["capture", str(path), "--resume", *arguments])
@@ -106,6 +118,20 @@ def test_resume_of_a_dome_run_reads_its_settings_and_refuses_other_ones(tmp_path
     assert summary["complete"] and summary["program"] == "dome-run"
     assert sum(summary["frames"].values()) == len(program.plan)
     assert CaptureStore.open(path).pending_steps() == []
+
+
+def test_a_store_that_does_not_record_its_led_renders_resumes_one_render_per_led(tmp_path):
+    """Stores made before the passes rendered every LED alone: their resume does too."""
+    path = tmp_path / "older.capture.zarr"
+    program = dome_run_program("lego", size=DomeCaptureSize(1, 3, 1, 8, 4, "single"), seed=5)
+    rig = {name: value for name, value in program.rig.items() if name != "led_renders"}
+    with locked_session_store(
+        path, program.plan, program.devices(), rig=rig, backend="sim", seed=5
+    ):
+        pass
+    assert stored_dome_settings(CaptureStore.open(path))["led_renders"] == "single"
+    refused = runner.invoke(app, ["capture", str(path), "--resume", "--led-renders", "pose"])
+    assert "was captured with --led-renders single, not pose" in refused.stderr
 
 
 def test_estimate_dome_prints_the_plans_times_against_the_thesis():

@@ -6,7 +6,13 @@ import pytest
 
 from hwbridge.dome_layout import SPECTRAL_CAMERA
 from twin.dome.holder import holder_scene_parts
-from twin.dome.render import DOME_SPP, DomeView, dome_camera, dome_scene_rates
+from twin.dome.render import (
+    DOME_SPP,
+    DomeView,
+    dome_camera,
+    dome_scene_rates,
+    dome_scene_rates_each,
+)
 from twin.render.node_transport import NodeScene
 from twin.rigs.rig_config import load_rig
 
@@ -36,10 +42,40 @@ def test_a_white_fields_render_noise_is_far_below_the_sensors_temporal_noise(cam
     )
     mean = (first + second).mean(axis=0) / 2
     assert np.all(np.abs(first / mean - 1) < 0.05)  # all of the window sees the white field
-    relative_noise = (first - second).std(axis=0) / np.sqrt(2) / mean
+    ratio = _render_over_temporal_noise(config, camera, first, second)
+    assert ratio.size == (33 if camera == SPECTRAL_CAMERA else 3)
+    assert ratio.max() < 0.2, ratio
+
+
+def _render_over_temporal_noise(config, camera, first, second) -> np.ndarray:
+    """Per channel, the render noise of two renders ``(n_pixels, n_channels)`` of a white field
+    (their difference over sqrt 2, relative to the mean) at the sensor's saturation capacity
+    over the temporal noise there (shot and read noise)."""
+    relative_noise = (first - second).std(axis=0) / np.sqrt(2) / ((first + second).mean(0) / 2)
     _, sensor, _ = dome_camera(config, camera, 320)
     full = sensor.saturation_capacity_e
     read_e = sensor.config.read_noise_dn / sensor.config.system_gain_dn_per_e
-    ratio = relative_noise * full / np.sqrt(full + read_e**2)
-    assert ratio.size == (33 if camera == SPECTRAL_CAMERA else 3)
-    assert ratio.max() < 0.2, ratio
+    return relative_noise * full / np.sqrt(full + read_e**2)
+
+
+@pytest.mark.parametrize("camera", [0, SPECTRAL_CAMERA])
+def test_an_led_of_a_pass_renders_as_its_own_render_with_the_same_noise(camera):
+    """LED 60 in a pass of LEDs 58-62 (dome_scene_rates_each, the captures' default) equals its
+    one-LED render with the pass's seed to float rounding, so its render noise is the one-LED
+    renders' (the test above): against the one-LED render with another seed it differs by the
+    noise bound held there, a fifth of the temporal noise at saturation."""
+    config = load_rig("dome")
+    scene = NodeScene(holder_scene_parts("white", None))
+    view = DomeView(config, camera, 320, window=32)
+    leds = [58, 59, 60, 61, 62]
+    passed = dome_scene_rates_each(
+        config, scene, view, stage_deg=15.0, leds=leds, spp=DOME_SPP, seed=1
+    )[2]
+    alone, other = (
+        dome_scene_rates(config, scene, view, stage_deg=15.0, leds=[60], spp=DOME_SPP, seed=seed)
+        for seed in (1, 2)
+    )
+    np.testing.assert_allclose(passed, alone, rtol=1e-5)
+    channels = view.weights.shape[1]
+    first, second = (rates.reshape(-1, channels).astype(np.float64) for rates in (passed, other))
+    assert _render_over_temporal_noise(config, camera, first, second).max() < 0.2

@@ -214,3 +214,41 @@ def test_a_group_of_point_lights_renders_as_the_sum_of_its_lamps():
             np.testing.assert_allclose(group, single, rtol=1e-5, atol=1e-6 * single.max())
         else:
             assert group.mean() == pytest.approx(single.mean(), rel=0.015)
+
+
+def _oblique_view(pixels: int) -> PinholeRays:
+    """A camera 45 degrees off the holder's normal, seeing the sample and the holder's walls."""
+    return PinholeRays(
+        np.array([0.0, -0.7, 0.7]),
+        np.array([-1.0, 0.0, 0.0]),
+        np.array([0.0, 1.0, 1.0]) / np.sqrt(2),
+        np.array([0.0, 1.0, -1.0]) / np.sqrt(2),
+        0.06,
+        pixels,
+    )
+
+
+@pytest.mark.render
+@pytest.mark.parametrize(
+    ("material", "bounces"),
+    [("lego", 1), ("wallpaper", 1), ("colorchecker16", 2), ("lego", 0), ("red_fabric", 1)],
+)
+def test_each_lamp_of_one_pass_renders_as_that_lamp_alone(material, bounces):
+    """transport_each traces the camera's paths once for every lamp; each lamp's channels are
+    the one-lamp render with the same seed projected on the channels, to float rounding: on the
+    Lego bricks, the wallpaper and the colour checker (two bounces) on the holder, directly lit
+    only, and the red fabric (its metal threads render lamp by lamp). One lamp's image does not
+    depend on the others of its pass."""
+    scene = NodeScene(holder_parts() + list(load_material(material).parts))
+    camera = _oblique_view(24)
+    lamps = np.array([[0.3, 0.2, 0.8], [-0.4, 0.1, 0.7], [0.0, -0.5, 0.6], [0.5, -0.5, 0.2]])
+    bands = LiquidCrystalTunableFilter.varispec("VS-10").transmission(FINE_GRID)
+    weights = node_weights(bands).astype(np.float32)
+    each = scene.transport_each(camera, lamps, weights, spp=16, seed=5, bounces=bounces)
+    assert each.shape == (4, 24, 24, weights.shape[1])
+    for lamp, image in zip(lamps, each, strict=True):
+        alone = scene.transport(camera, PointLight(lamp), spp=16, seed=5, bounces=bounces)
+        expected = alone.astype(np.float32) @ weights
+        np.testing.assert_allclose(image, expected, rtol=1e-4, atol=1e-5 * expected.max())
+    first = scene.transport_each(camera, lamps[2:3], weights, spp=16, seed=5, bounces=bounces)
+    np.testing.assert_allclose(first[0], each[2], rtol=1e-6, atol=1e-7 * each.max())

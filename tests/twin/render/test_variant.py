@@ -3,7 +3,13 @@
 import pytest
 
 from recon.errors import SpectwinInputError
-from twin.render.variant import DEFAULT_VARIANT, FALLBACK_VARIANT, choose_variant, llvm_version
+from twin.render.variant import (
+    DEFAULT_VARIANT,
+    FALLBACK_VARIANT,
+    GPU_VARIANT,
+    choose_variant,
+    llvm_version,
+)
 
 
 @pytest.mark.parametrize(
@@ -33,3 +39,13 @@ def test_this_machine_has_a_usable_llvm():
     # The bootstrap installs libllvm19 where Debian's LLVM is older than 16.
     found = llvm_version()
     assert found is not None and found[0] >= 16
+
+
+def test_a_gpu_is_used_where_cuda_is_found_unless_a_variant_is_requested():
+    assert choose_variant(None, (19, 1, 7), cuda=True) == (
+        GPU_VARIANT,
+        "CUDA found: renders on the GPU",
+    )
+    assert choose_variant(None, None, cuda=True)[0] == GPU_VARIANT
+    assert choose_variant(DEFAULT_VARIANT, (19, 1, 7), cuda=True)[0] == DEFAULT_VARIANT
+    assert choose_variant(None, (19, 1, 7), cuda=False)[0] == DEFAULT_VARIANT
