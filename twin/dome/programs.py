@@ -271,6 +271,8 @@ class DomeCaptureProgram(ProgramCapture):
         The session seed.
     timing
         The rig's timing, for the duration of :meth:`dry_run`.
+    scene
+        What the cameras render (the passes of :meth:`dry_run`'s render count).
     """
 
     name: str
@@ -279,14 +281,15 @@ class DomeCaptureProgram(ProgramCapture):
     rig: dict[str, Any]
     seed: int
     timing: DomeTiming
+    scene: DomeScene
 
-    def _render(self, step: dict, order: dict[int, int]) -> tuple:
+    def _render(self, step: dict, order: dict[int, int], per_pass: dict[str, int]) -> tuple:
         """What one render (or pass of LEDs, :mod:`twin.dome.signals`) of ``step`` shows;
-        ``order`` numbers the LEDs lit one at a time in plan order."""
+        ``order`` numbers the LEDs lit one at a time in plan order, ``per_pass`` gives each
+        camera's LEDs per pass."""
         light = step.get("light_id", -1)
         if self.rig["led_renders"] == "pose" and light >= 0:
-            channels = len(self.rig["bands_nm"]) if step["camera"] == SPECTRAL_CAMERA else 3
-            light = -3 - order[light] // leds_per_pass(self.rig["window_px"], channels)
+            light = -3 - order[light] // per_pass[step["camera"]]
         return step["camera"], step.get("view_id"), light, step["kind"]
 
     def dry_run(self) -> dict[str, object]:
@@ -298,7 +301,13 @@ class DomeCaptureProgram(ProgramCapture):
         side = self.rig["window_px"]
         single = dict.fromkeys(s["light_id"] for s in self.plan if s.get("light_id", -1) >= 0)
         order = {led: index for index, led in enumerate(single)}
-        renders = {self._render(step, order) for step in self.plan if step["kind"] != "dark"}
+        per_pass = {
+            camera: leds_per_pass(side, self.scene.pass_channels(camera_arc_index(camera)))
+            for camera in frames
+        }
+        renders = {
+            self._render(step, order, per_pass) for step in self.plan if step["kind"] != "dark"
+        }
         duration_s = dome_duration_s(self.plan, self.timing)
         # frame, then light_id, view_id, band_nm (4 bytes each), exposure_s, timestamp (8 each),
         # pose (6 x 8) and the progress flag
@@ -318,6 +327,18 @@ class DomeCaptureProgram(ProgramCapture):
             "estimated_duration_h": duration_s / 3600,
             "storage_mb": len(self.plan) * per_frame / 1e6,
         }
+
+
+def _led_bands(plan: list[dict], bands_nm) -> dict[int, tuple[int, ...]]:
+    """Per LED lit alone, the spectral camera's bands (indices into ``bands_nm``) the plan takes
+    under it (:attr:`twin.dome.signals.DomeScene.led_bands`)."""
+    centres = np.asarray(bands_nm, np.float64)
+    bands: dict[int, set[int]] = {}
+    for step in plan:
+        if step["camera"] == SPECTRAL_CAMERA and step.get("light_id", -1) >= 0:
+            band = int(np.argmin(np.abs(centres - step["band_nm"])))
+            bands.setdefault(int(step["light_id"]), set()).add(band)
+    return {led: tuple(sorted(chosen)) for led, chosen in bands.items()}
 
 
 def _program(
@@ -347,6 +368,7 @@ def _program(
         exposures.bands_nm,
         size.led_renders,
         tuple(dict.fromkeys(step["light_id"] for step in plan if step.get("light_id", -1) >= 0)),
+        _led_bands(plan, exposures.bands_nm),
     )
     roi = (frame.window, frame.window)
     cameras = []
@@ -393,7 +415,7 @@ def _program(
             config, parts.cameras.all, frame, stage_views=views, tilts_deg=tilts
         ),
     }
-    return DomeCaptureProgram(name, plan, devices, rig, seed, timing)
+    return DomeCaptureProgram(name, plan, devices, rig, seed, timing, scene)
 
 
 def dome_run_program(

@@ -177,14 +177,17 @@ def dome_scene_rates_each(
     leds: Sequence[int],
     spp: int = DOME_SPP,
     seed: int = 0,
+    channels: Sequence[Sequence[int]] | None = None,
 ) -> np.ndarray:
     """Rates ``(n_leds, H, W, n_channels)`` of each LED of ``leds`` lit alone, the camera's
     paths traced once for all of them (:meth:`twin.render.node_transport.NodeScene.
-    transport_each`): LED ``i``'s image equals :func:`dome_scene_rates` with ``leds=[leds[i]]``
-    and the same seed, to float rounding."""
+    transport_each`, whose ``channels`` picks each LED's channels): LED ``i``'s image equals
+    :func:`dome_scene_rates` with ``leds=[leds[i]]`` and the same seed, to float rounding."""
     to_sample = stage_matrix(stage_deg)[:3, :3].T
     positions = dome_geometry(config).led_positions_m[np.asarray(leds, int)] @ to_sample.T
-    return scene.transport_each(view.rays(stage_deg), positions, view.weights, spp=spp, seed=seed)
+    return scene.transport_each(
+        view.rays(stage_deg), positions, view.weights, spp=spp, seed=seed, channels=channels
+    )
 
 
 def dome_rates(

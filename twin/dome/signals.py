@@ -79,6 +79,9 @@ class DomeScene:
         ``pose`` (passes of the LEDs lit one at a time) or ``single`` (:data:`LED_RENDERS`).
     single_leds
         The LEDs the plan switches on one at a time, in plan order (the passes' blocks).
+    led_bands
+        Per LED lit alone, the spectral camera's bands (indices into ``bands_nm``) the plan
+        takes under it: a pass renders only those (a run's band schedule gives each LED a few).
     """
 
     config: DomeConfig
@@ -91,14 +94,21 @@ class DomeScene:
     bands_nm: tuple[float, ...]
     led_renders: str = "pose"
     single_leds: tuple[int, ...] = ()
+    led_bands: dict[int, tuple[int, ...]] = field(default_factory=dict)
     _scenes: dict = field(default_factory=dict, repr=False)
 
-    def led_block(self, led: int, channels: int) -> tuple[int, ...]:
-        """The LEDs rendered in one pass with ``led`` by a camera of ``channels`` channels:
-        consecutive LEDs of :attr:`single_leds`, as many as :func:`leds_per_pass` allows."""
+    def pass_channels(self, camera: int | str) -> int:
+        """Channels per LED in a pass of ``camera``: R, G, B, or the most bands of an LED."""
+        if camera != SPECTRAL_CAMERA:
+            return 3
+        return max(map(len, self.led_bands.values()), default=len(self.bands_nm))
+
+    def led_block(self, led: int, camera: int | str) -> tuple[int, ...]:
+        """The LEDs rendered in one pass with ``led`` by ``camera``: consecutive LEDs of
+        :attr:`single_leds`, as many as :func:`leds_per_pass` allows."""
         if led not in self.single_leds:
             return (led,)
-        size = leds_per_pass(self.window, channels)
+        size = leds_per_pass(self.window, self.pass_channels(camera))
         start = self.single_leds.index(led) // size * size
         return self.single_leds[start : start + size]
 
@@ -151,7 +161,12 @@ class RenderedDomeSignal:
             return self._rates
         scene = self._scene
         if len(leds) == 1 and scene.led_renders == "pose":
-            block = scene.led_block(leds[0], self.view.weights.shape[1])
+            block = scene.led_block(leds[0], self._camera)
+            every = tuple(range(self.view.weights.shape[1]))
+            wanted = [
+                scene.led_bands.get(led, every) if self._camera == SPECTRAL_CAMERA else every
+                for led in block
+            ]
             if (content, stage_deg, block) != self._pass_key:
                 self._pass = None  # the last pass's memory is free for the next
                 self._pass = dome_scene_rates_each(
@@ -162,9 +177,13 @@ class RenderedDomeSignal:
                     leds=block,
                     spp=scene.spp,
                     seed=_seed(f"{content}|{stage_deg:.6f}|pose|{self._camera}"),
+                    channels=wanted,
                 )
                 self._pass_key = (content, stage_deg, block)
-            rates = np.ascontiguousarray(self._pass[block.index(leds[0])])
+            index = block.index(leds[0])
+            chosen = list(wanted[index])
+            rates = np.full((*self._pass.shape[1:3], len(every)), np.nan, np.float32)
+            rates[..., chosen] = self._pass[index, ..., : len(chosen)]  # NaN: not rendered
         else:
             self._pass = self._pass_key = None
             lit = "all" if len(leds) == scene.config.led_count else ",".join(map(str, leds))

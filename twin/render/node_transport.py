@@ -76,7 +76,7 @@ NODES_NM = MATERIAL_GRID.wavelengths_nm
 _MAX_LANES = 1 << 20  # samples per kernel launch; larger renders run in passes
 _LANE_VALUES = 1 << 22  # most per-lane values of transport_each's lamps summed at once
 _EACH_LANES = 1 << 18  # samples per pass of transport_each (its node tables: 81 floats a lane)
-_EACH_FACTORS = 1 << 24  # most lamp factors of one lobe per pass (lamps x samples)
+_EACH_FACTORS = 1 << 25  # most lamp factors of one lobe per pass (lamps x samples)
 
 
 def node_weights(responses: SampledSpectra) -> np.ndarray:
@@ -248,6 +248,8 @@ def _add_lanes(values: np.ndarray, pixels: np.ndarray, terms: list) -> None:
     ``(n_lanes, n_channels)``) at pixel ``pixels[j]``; lamps in groups of at most
     :data:`_LANE_VALUES` values."""
     lamps, channels = values.shape[1:]
+    if not pixels.size:
+        return
     into = sparse.csr_matrix(
         (np.ones(pixels.size, np.float32), (pixels, np.arange(pixels.size))),
         shape=(values.shape[0], pixels.size),
@@ -389,6 +391,7 @@ class NodeScene:
         spp: int = 4,
         seed: int = 0,
         bounces: int = 1,
+        channels: Sequence[Sequence[int]] | None = None,
     ) -> np.ndarray:
         """Channel values ``(n_lamps, H, W, n_channels)`` of each point lamp at the rows of
         ``positions_m`` ``(n_lamps, 3)`` lit alone, the node radiance projected on ``weights``
@@ -401,8 +404,8 @@ class NodeScene:
         throughput times reflectance, the glossy lobe's throughput); each lamp then adds only
         its shadow rays and the lobes' geometric factors. Lamp ``i``'s values equal
         ``transport(camera, PointLight(positions_m[i]), spp=spp, seed=seed) @ weights`` to float
-        rounding (``tests/twin/render/test_node_transport_each.py``). A scene with a metal,
-        whose glossy spectrum depends on the light's direction, renders lamp by lamp
+        rounding (``tests/twin/render/test_node_transport.py``). A scene with a metal, whose
+        glossy spectrum depends on the light's direction, renders lamp by lamp
         (:meth:`transport` with the same seed: the same values).
 
         Parameters
@@ -413,44 +416,57 @@ class NodeScene:
             The lamps, one row each, in the scene's frame.
         weights
             Node weights of the channels (the channels' responses times the lamps' spectrum).
+        channels
+            Per lamp, the channels wanted (indices into ``weights``' columns): lamp ``i``'s
+            values are then ``(H, W, k)`` in its first ``k = len(channels[i])`` entries, in that
+            order (the rest zero; ``n_channels`` is the longest list's length). Default: all.
         """
         if bounces < 0:
             raise SpectwinInputError(f"bounces: expected 0 or more, got {bounces}")
         positions = np.asarray(positions_m, np.float64).reshape(-1, 3)
         weights = np.asarray(weights, np.float32).reshape(NODES_NM.size, -1)
+        wanted = (
+            [tuple(range(weights.shape[1]))] * len(positions)
+            if channels is None
+            else [tuple(int(c) for c in chosen) for chosen in channels]
+        )
+        if len(wanted) != len(positions):
+            raise SpectwinInputError(
+                f"channels: expected one list per lamp ({len(positions)}), got {len(wanted)}"
+            )
         height, width = camera.shape
         if self._metal_index is not None:
-            return np.stack(
-                [
-                    self.transport(
-                        camera, PointLight(p), spp=spp, seed=seed, bounces=bounces
-                    ).astype(np.float32)
-                    @ weights
-                    for p in positions
-                ]
-            )
+            values = np.zeros((len(positions), height, width, max(map(len, wanted))), np.float32)
+            for lamp, (position, chosen) in enumerate(zip(positions, wanted, strict=True)):
+                alone = self.transport(
+                    camera, PointLight(position), spp=spp, seed=seed, bounces=bounces
+                )
+                values[lamp, ..., : len(chosen)] = alone.astype(np.float32) @ weights[:, chosen]
+            return values
         samples = rendered_spp(spp)
         per_launch = max(1, min(_EACH_LANES, _EACH_FACTORS // len(positions)) // samples)
-        values = np.empty((height * width, len(positions), weights.shape[1]), np.float32)
+        values = np.empty((height * width, len(positions), max(map(len, wanted))), np.float32)
         for first in range(0, height * width, per_launch):
             count = min(per_launch, height * width - first)
             values[first : first + count] = self._each_pixels(
-                camera, positions, weights, seed, bounces, first, count, samples
+                camera, positions, weights, wanted, seed, bounces, first, count, samples
             )
         return values.reshape(height, width, len(positions), -1).transpose(2, 0, 1, 3)
 
     def _each_pixels(
-        self, camera, positions, weights, seed, bounces, first, count, samples
+        self, camera, positions, weights, wanted, seed, bounces, first, count, samples
     ) -> np.ndarray:
         """:meth:`transport_each` of ``count`` pixels from flat index ``first`` on:
-        ``(n_lamps, count, n_channels)``.
+        ``(count, n_lamps, n_channels)``.
 
         At the first surface the diffuse lobe's channel values are the texel's reflectance
-        projected on the channels (a table) and the glossy lobe's the channels' sums, so a
-        pixel's values for all the lamps are one small matrix product (lamps x samples times
-        samples x channels). After a bounce only the lanes still on the scene are kept, with
-        their throughput at the nodes; each lamp's factors there are summed into the pixels by
-        a sparse matrix."""
+        projected on the channels (a table) and the glossy lobe's the channels' sums; each
+        pixel's samples mostly see one texel (the first sample's), so a pixel's values are the
+        sums of the lamps' factors times the first sample's texel, plus for the samples on
+        another texel the difference of the two. After a bounce only the lanes still on the
+        scene are kept, with their throughput at the nodes; each lamp's factors there are summed
+        into the pixels by a sparse matrix. Lamps that want the same channels are combined
+        together."""
         _, rng, ray = self._lanes(camera, seed, first, count, samples)
         table = self.reflectance.astype(np.float32)
         vertices = list(self._walk(ray, rng, bounces))
@@ -462,20 +478,31 @@ class NodeScene:
         diffuse, glossy = self._lamp_factors(first_vertex, lamps, samples)
         shape = (count, len(positions), samples)  # the first vertex's factors, pixel-major
         diffuse, glossy = diffuse.reshape(shape), glossy.reshape(shape)
-        # each pixel's samples mostly see one texel: the first sample's, times the sum of the
-        # factors, plus for the samples on another texel the difference of the two
+        diffuse_sum, glossy_sum = diffuse.sum(axis=2), glossy.sum(axis=2)
         projected = table @ weights
         texel = texel.reshape(count, samples)
         reference = projected[texel[:, 0]]
-        values = diffuse.sum(axis=2)[..., None] * reference[:, None, :]
-        values += glossy.sum(axis=2)[..., None] * weights.sum(axis=0)
         pixel, sample = np.nonzero(texel != texel[:, :1])
-        if pixel.size:
-            difference = projected[texel[pixel, sample]] - reference[pixel]
-            _add_lanes(values, pixel, [(diffuse[pixel, :, sample].T, difference)])
-        for after in bounced:
-            diffuse, glossy = self._lamp_factors(after.vertex, lamps)
-            _add_lanes(values, after.pixels, [(diffuse, after.diffuse), (glossy, after.glossy)])
+        difference = projected[texel[pixel, sample]] - reference[pixel]
+        edge = diffuse[pixel, :, sample].T  # (n_lamps, n_edge_lanes)
+        later = [self._lamp_factors(after.vertex, lamps) for after in bounced]
+        values = np.zeros((count, len(positions), max(map(len, wanted))), np.float32)
+        groups: dict[tuple[int, ...], list[int]] = {}
+        for lamp, chosen in enumerate(wanted):
+            groups.setdefault(chosen, []).append(lamp)
+        for chosen, members in groups.items():
+            ks = list(chosen)
+            lamp = slice(None) if len(members) == len(wanted) else np.array(members)
+            part = diffuse_sum[:, lamp, None] * reference[:, None, ks]
+            part += glossy_sum[:, lamp, None] * weights[:, ks].sum(axis=0)
+            _add_lanes(part, pixel, [(edge[lamp], difference[:, ks])])
+            for after, (after_diffuse, after_glossy) in zip(bounced, later, strict=True):
+                terms = [
+                    (after_diffuse[lamp], after.diffuse[:, ks]),
+                    (after_glossy[lamp], after.glossy[:, ks]),
+                ]
+                _add_lanes(part, after.pixels, terms)
+            values[:, lamp, : len(ks)] = part
         return values * np.float32(1 / samples)
 
     def _lamp_factors(self, vertex, lamps, samples: int | None = None):

@@ -37,8 +37,8 @@ def test_a_dry_run_of_the_reduced_dome_run_counts_its_frames_and_writes_nothing(
     assert plan["frames"] == {"rgb00": rgb, "rgb05": rgb, "rgb10": rgb, "spectral": spectral}
     assert plan["kinds"] == {"alignment": 2 * 4, "sample": 3 * rgb + spectral - 2 * 4}
     # per position: the alignment (all LEDs) per camera, then the LEDs in passes per camera
-    # (24 LEDs: one pass of an RGB camera, two of the spectral camera's 33 bands at 264 px)
-    assert plan["renders"] == 2 * (4 + 3 + 2) and plan["led_renders"] == "pose"
+    # (24 LEDs: one pass of each camera, the spectral camera's of each LED's scheduled bands)
+    assert plan["renders"] == 2 * (4 + 3 + 1) and plan["led_renders"] == "pose"
     single = runner.invoke(
         app, ["capture", str(store), "--dry-run", "--json", *arguments, "--led-renders", "single"]
     )

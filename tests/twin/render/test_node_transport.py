@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from recon.btf.specular_lobe import microfacet_specular
+from recon.errors import SpectwinInputError
 from recon.spectra import SampledSpectra
 from twin.components.lamps import FINE_GRID
 from twin.components.lctf import LiquidCrystalTunableFilter
@@ -252,3 +253,26 @@ def test_each_lamp_of_one_pass_renders_as_that_lamp_alone(material, bounces):
         np.testing.assert_allclose(image, expected, rtol=1e-4, atol=1e-5 * expected.max())
     first = scene.transport_each(camera, lamps[2:3], weights, spp=16, seed=5, bounces=bounces)
     np.testing.assert_allclose(first[0], each[2], rtol=1e-6, atol=1e-7 * each.max())
+
+
+@pytest.mark.render
+def test_each_lamp_renders_only_the_channels_it_is_asked_for():
+    """Lamps that want other channels (the dome's spectral camera: each LED's scheduled bands)
+    get those channels in that order, the same values as the pass of every channel."""
+    scene = NodeScene(holder_parts() + list(load_material("wallpaper").parts))
+    camera = _oblique_view(16)
+    lamps = np.array([[0.3, 0.2, 0.8], [-0.4, 0.1, 0.7], [0.0, -0.5, 0.6]])
+    weights = node_weights(
+        LiquidCrystalTunableFilter.varispec("VS-10").transmission(FINE_GRID)
+    ).astype(np.float32)
+    every = scene.transport_each(camera, lamps, weights, spp=4, seed=2)
+    wanted = [(4, 20), (7,), (4, 20)]
+    chosen = scene.transport_each(camera, lamps, weights, spp=4, seed=2, channels=wanted)
+    assert chosen.shape == (3, 16, 16, 2)
+    for lamp, channels in enumerate(wanted):
+        np.testing.assert_allclose(
+            chosen[lamp, ..., : len(channels)], every[lamp][..., channels], rtol=1e-5
+        )
+    assert not chosen[1, ..., 1].any()
+    with pytest.raises(SpectwinInputError, match="channels: expected one list per lamp"):
+        scene.transport_each(camera, lamps, weights, channels=[(1,)])
