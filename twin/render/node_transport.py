@@ -475,17 +475,37 @@ class NodeScene:
         texel = np.asarray(first_vertex.texel)
         bounced = self._bounced(vertices, table, weights, texel, samples)
         lamps = mi.Float(np.asarray(positions, np.float32).ravel())
-        diffuse, glossy = self._lamp_factors(first_vertex, lamps, samples)
-        shape = (count, len(positions), samples)  # the first vertex's factors, pixel-major
-        diffuse, glossy = diffuse.reshape(shape), glossy.reshape(shape)
-        diffuse_sum, glossy_sum = diffuse.sum(axis=2), glossy.sum(axis=2)
+        diffuse, glossy = self._lamp_factors(first_vertex, lamps)
+        # (n_lamps, pixels): the factors summed over each pixel's samples
+        diffuse_sum, glossy_sum = (
+            np.asarray(dr.block_sum(table_, samples)).reshape(len(positions), count).T
+            for table_ in (diffuse, glossy)
+        )
         projected = table @ weights
         texel = texel.reshape(count, samples)
         reference = projected[texel[:, 0]]
         pixel, sample = np.nonzero(texel != texel[:, :1])
         difference = projected[texel[pixel, sample]] - reference[pixel]
-        edge = diffuse[pixel, :, sample].T  # (n_lamps, n_edge_lanes)
-        later = [self._lamp_factors(after.vertex, lamps) for after in bounced]
+        edge_lane = (pixel * samples + sample).astype(np.uint32)
+        lanes = count * samples
+        edge = np.asarray(  # (n_lamps, n_edge_lanes): the diffuse factors of those samples
+            dr.gather(
+                mi.Float,
+                diffuse,
+                mi.UInt32(
+                    (
+                        np.arange(len(positions), dtype=np.uint32)[:, None] * lanes + edge_lane
+                    ).ravel()
+                ),
+            )
+        ).reshape(len(positions), -1)
+        later = [
+            [
+                np.asarray(factors).reshape(len(positions), -1)
+                for factors in self._lamp_factors(after.vertex, lamps)
+            ]
+            for after in bounced
+        ]
         values = np.zeros((count, len(positions), max(map(len, wanted))), np.float32)
         groups: dict[tuple[int, ...], list[int]] = {}
         for lamp, chosen in enumerate(wanted):
@@ -505,42 +525,32 @@ class NodeScene:
             values[:, lamp, : len(ks)] = part
         return values * np.float32(1 / samples)
 
-    def _lamp_factors(self, vertex, lamps, samples: int | None = None):
+    def _lamp_factors(self, vertex, lamps):
         """The diffuse and glossy lobes' geometric factors at ``vertex`` for each lamp of
-        ``lamps`` (flat positions), visibility included: two tables of ``n_lamps x lanes``,
-        lamp-major, or with ``samples`` pixel-major ``(pixels, n_lamps, samples)`` (lanes
-        ``samples`` to a pixel). One kernel loops over the lamps."""
+        ``lamps`` (flat positions), visibility included: two evaluated Dr.Jit tables of
+        ``n_lamps x lanes``, lamp-major. One kernel loops over the lamps."""
         lobes = _lobes()
         width = dr.width(vertex.active)
         count = dr.width(lamps) // 3
-        diffuse_out = dr.zeros(mi.Float, count * width)
-        glossy_out = dr.zeros(mi.Float, count * width)
+        diffuse_out = dr.empty(mi.Float, count * width)  # the loop writes every entry
+        glossy_out = dr.empty(mi.Float, count * width)
         lane = dr.arange(mi.UInt32, width)
-        total = dr.opaque(mi.UInt32, count)
-
-        def target(index):
-            if samples is None:
-                return index * width + lane
-            pixel = lane // samples
-            return (pixel * total + index) * samples + (lane - pixel * samples)
 
         def add_lamp(index):
             position = dr.gather(mi.Point3f, lamps, index)
             diffuse, glossy = self._lit(
                 vertex.si, vertex.bsdf, vertex.part, vertex.active, lobes, position=position
             )
-            dr.scatter(diffuse_out, diffuse, target(index))
-            dr.scatter(glossy_out, glossy[0], target(index))
+            dr.scatter(diffuse_out, diffuse, index * width + lane)
+            dr.scatter(glossy_out, glossy[0], index * width + lane)
             return (index + 1,)
 
+        total = dr.opaque(mi.UInt32, count)
         dr.while_loop(
             (dr.zeros(mi.UInt32, width),), lambda index: index < total, add_lamp, label="each"
         )
         dr.eval(diffuse_out, glossy_out)
-        return (
-            np.asarray(diffuse_out).reshape(count, width),
-            np.asarray(glossy_out).reshape(count, width),
-        )
+        return diffuse_out, glossy_out
 
     def _bounced(self, vertices, table, weights, texel, samples) -> list[_Bounced]:
         """The vertices after the first, each on the lanes that reach it: their throughput at
