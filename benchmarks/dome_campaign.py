@@ -13,10 +13,10 @@ is projected as 24 times the alignment plus ``198 / --leds`` times the LEDs' tim
 (response series, the white standard under every LED, the checkerboard) and ``--dark-share``
 of the dark frames (the sensor model alone), the darks projected to all of them.
 
-Every stage is timed where it is called: the renderer (``dome_scene_rates`` and
-``dome_scene_rates_each``), the sensor model (``Sensor.capture``, ``Sensor.dark_frame``) and the
-capture store; "other" is the rest (devices, the session). Wall and CPU time of the process,
-the load average before and after, the peak memory.
+Every stage is timed where it is called: the renderer (``dome_scene_rates``), the sensor model
+(``Sensor.capture``, ``Sensor.dark_frame``) and the capture store; "other" is the rest (devices,
+the session). Wall and CPU time of the process, the load average before and after, the peak
+memory.
 
 Run: .venv/bin/python -m benchmarks.dome_campaign [--program run|calibration] [--leds 198]
 [--texels 64] [--led-renders pose|single] [--material colorchecker16]
@@ -43,7 +43,6 @@ from twin.sensor import model as sensor_module
 _STAGES = {
     "render": [
         (signals_module, "dome_scene_rates"),
-        (signals_module, "dome_scene_rates_each"),
         (render_module, "dome_scene_rates"),
     ],
     "sensor": [(sensor_module.Sensor, "capture"), (sensor_module.Sensor, "dark_frame")],

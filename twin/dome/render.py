@@ -158,36 +158,26 @@ def dome_scene_rates(
     leds: Sequence[int],
     spp: int = DOME_SPP,
     seed: int = 0,
-) -> np.ndarray:
-    """:func:`dome_part_rates` of a scene of parts in the sample frame, seen by ``view``."""
-    to_sample = stage_matrix(stage_deg)[:3, :3].T
-    positions = dome_geometry(config).led_positions_m[np.asarray(leds, int)] @ to_sample.T
-    light = PointLight(positions[0]) if len(positions) == 1 else PointLights(positions)
-    radiance = scene.transport(view.rays(stage_deg), light, spp=spp, seed=seed)
-    height, width, count = radiance.shape
-    return (radiance.reshape(-1, count) @ view.weights).reshape(height, width, -1)
-
-
-def dome_scene_rates_each(
-    config: DomeConfig,
-    scene: NodeScene,
-    view: DomeView,
-    *,
-    stage_deg: float,
-    leds: Sequence[int],
-    spp: int = DOME_SPP,
-    seed: int = 0,
+    each: bool = False,
     channels: Sequence[Sequence[int]] | None = None,
 ) -> np.ndarray:
-    """Rates ``(n_leds, H, W, n_channels)`` of each LED of ``leds`` lit alone, the camera's
-    paths traced once for all of them (:meth:`twin.render.node_transport.NodeScene.
-    transport_each`, whose ``channels`` picks each LED's channels): LED ``i``'s image equals
-    :func:`dome_scene_rates` with ``leds=[leds[i]]`` and the same seed, to float rounding."""
+    """:func:`dome_part_rates` of a scene of parts in the sample frame, seen by ``view``.
+
+    With ``each``, the rates ``(n_leds, H, W, n_channels)`` of every LED of ``leds`` lit alone,
+    the camera's paths traced once for all of them (:meth:`twin.render.node_transport.
+    NodeScene.transport_each`, whose ``channels`` picks each LED's channels): LED ``i``'s image
+    equals the one-LED render of ``leds[i]`` with the same seed, to float rounding."""
     to_sample = stage_matrix(stage_deg)[:3, :3].T
     positions = dome_geometry(config).led_positions_m[np.asarray(leds, int)] @ to_sample.T
-    return scene.transport_each(
-        view.rays(stage_deg), positions, view.weights, spp=spp, seed=seed, channels=channels
-    )
+    rays = view.rays(stage_deg)
+    if each:
+        return scene.transport_each(
+            rays, positions, view.weights, spp=spp, seed=seed, channels=channels
+        )
+    light = PointLight(positions[0]) if len(positions) == 1 else PointLights(positions)
+    radiance = scene.transport(rays, light, spp=spp, seed=seed)
+    height, width, count = radiance.shape
+    return (radiance.reshape(-1, count) @ view.weights).reshape(height, width, -1)
 
 
 def dome_rates(

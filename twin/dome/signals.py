@@ -11,11 +11,12 @@ together renders it once.
 
 By default (``led_renders="pose"``) the LEDs a plan switches on one at a time are rendered
 together, per camera, stage angle and holder content: one pass traces the camera's paths and
-gives every LED's image (:func:`twin.dome.render.dome_scene_rates_each`), in blocks of LEDs that
-keep a pass's images within :data:`PASS_MEMORY_BYTES`. ``led_renders="single"`` renders one LED
-at a time, as before. Each render's Monte Carlo seed follows from what it shows (with passes:
-the content, stage angle and camera; one LED's image does not depend on the others of its
-block), so a resumed or distributed capture renders the same images as an uninterrupted one.
+gives every LED's image (:func:`twin.dome.render.dome_scene_rates` with ``each``), in blocks of
+LEDs that keep a pass's images within :data:`PASS_MEMORY_BYTES`. ``led_renders="single"``
+renders one LED at a time, as before. Each render's Monte Carlo seed follows from what it shows
+(with passes: the content, stage angle and camera; one LED's image does not depend on the
+others of its block), so a resumed or distributed capture renders the same images as an
+uninterrupted one.
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ import numpy as np
 from hwbridge.dome_layout import SPECTRAL_CAMERA
 from twin.devices.sim_devices import VirtualRig
 from twin.dome.holder import holder_scene_parts
-from twin.dome.render import DomeView, dome_scene_rates, dome_scene_rates_each
+from twin.dome.render import DomeView, dome_scene_rates
 from twin.materials import Material
 from twin.render.node_transport import NodeScene
 from twin.rigs.rig_config import DomeConfig
@@ -169,16 +170,7 @@ class RenderedDomeSignal:
             ]
             if (content, stage_deg, block) != self._pass_key:
                 self._pass = None  # the last pass's memory is free for the next
-                self._pass = dome_scene_rates_each(
-                    scene.config,
-                    scene.node_scene(content),
-                    self.view,
-                    stage_deg=stage_deg,
-                    leds=block,
-                    spp=scene.spp,
-                    seed=_seed(f"{content}|{stage_deg:.6f}|pose|{self._camera}"),
-                    channels=wanted,
-                )
+                self._pass = self._render(content, stage_deg, block, "pose", wanted)
                 self._pass_key = (content, stage_deg, block)
             index = block.index(leds[0])
             chosen = list(wanted[index])
@@ -187,17 +179,25 @@ class RenderedDomeSignal:
         else:
             self._pass = self._pass_key = None
             lit = "all" if len(leds) == scene.config.led_count else ",".join(map(str, leds))
-            rates = dome_scene_rates(
-                scene.config,
-                scene.node_scene(content),
-                self.view,
-                stage_deg=stage_deg,
-                leds=leds,
-                spp=scene.spp,
-                seed=_seed(f"{content}|{stage_deg:.6f}|{lit}|{self._camera}"),
-            ).astype(np.float32)
+            rates = self._render(content, stage_deg, leds, lit).astype(np.float32)
         self._key, self._rates = key, rates
         return rates
+
+    def _render(self, content, stage_deg, leds, lit: str, channels=None) -> np.ndarray:
+        """The render of ``leds`` together, or with ``channels`` (one list per LED) a pass of
+        each alone; its seed follows from the content, stage angle, ``lit`` and camera."""
+        scene = self._scene
+        return dome_scene_rates(
+            scene.config,
+            scene.node_scene(content),
+            self.view,
+            stage_deg=stage_deg,
+            leds=leds,
+            spp=scene.spp,
+            seed=_seed(f"{content}|{stage_deg:.6f}|{lit}|{self._camera}"),
+            each=channels is not None,
+            channels=channels,
+        )
 
     def __call__(self, rig: VirtualRig, start_s: float, exposure_s: float) -> np.ndarray:
         content = self._scene.holders[rig.step]

@@ -11,7 +11,6 @@ from twin.dome.render import (
     DomeView,
     dome_camera,
     dome_scene_rates,
-    dome_scene_rates_each,
 )
 from twin.render.node_transport import NodeScene
 from twin.rigs.rig_config import load_rig
@@ -60,7 +59,7 @@ def _render_over_temporal_noise(config, camera, first, second) -> np.ndarray:
 
 @pytest.mark.parametrize("camera", [0, SPECTRAL_CAMERA])
 def test_an_led_of_a_pass_renders_as_its_own_render_with_the_same_noise(camera):
-    """LED 60 in a pass of LEDs 58-62 (dome_scene_rates_each, the captures' default) equals its
+    """LED 60 in a pass of LEDs 58-62 (dome_scene_rates with each, the captures' default) equals its
     one-LED render with the pass's seed to float rounding, so its render noise is the one-LED
     renders' (the test above): against the one-LED render with another seed it differs by the
     noise bound held there, a fifth of the temporal noise at saturation."""
@@ -68,8 +67,8 @@ def test_an_led_of_a_pass_renders_as_its_own_render_with_the_same_noise(camera):
     scene = NodeScene(holder_scene_parts("white", None))
     view = DomeView(config, camera, 320, window=32)
     leds = [58, 59, 60, 61, 62]
-    passed = dome_scene_rates_each(
-        config, scene, view, stage_deg=15.0, leds=leds, spp=DOME_SPP, seed=1
+    passed = dome_scene_rates(
+        config, scene, view, stage_deg=15.0, leds=leds, spp=DOME_SPP, seed=1, each=True
     )[2]
     alone, other = (
         dome_scene_rates(config, scene, view, stage_deg=15.0, leds=[60], spp=DOME_SPP, seed=seed)
