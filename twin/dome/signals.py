@@ -163,6 +163,8 @@ class RenderedDomeSignal:
         scene = self._scene
         if len(leds) == 1 and scene.led_renders == "pose":
             block = scene.led_block(leds[0], self._camera)
+            if scene.node_scene(content).has_metal:  # rendered LED by LED: no pass to share
+                block = leds
             every = tuple(range(self.view.weights.shape[1]))
             wanted = [
                 scene.led_bands.get(led, every) if self._camera == SPECTRAL_CAMERA else every

@@ -344,6 +344,11 @@ class NodeScene:
                     eta[index], k[index] = _conductor_index(part)
             self._metal_index = eta, k, np.array([p.conductor is not None for p in parts])
 
+    @property
+    def has_metal(self) -> bool:
+        """Whether a part is a metal: :meth:`transport_each` then renders lamp by lamp."""
+        return self._metal_index is not None
+
     def transport(
         self,
         camera: PinholeRays | ParallelCamera,
@@ -435,7 +440,7 @@ class NodeScene:
                 f"channels: expected one list per lamp ({len(positions)}), got {len(wanted)}"
             )
         height, width = camera.shape
-        if self._metal_index is not None:
+        if self.has_metal:
             values = np.zeros((len(positions), height, width, max(map(len, wanted))), np.float32)
             for lamp, (position, chosen) in enumerate(zip(positions, wanted, strict=True)):
                 alone = self.transport(
