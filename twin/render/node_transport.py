@@ -22,6 +22,12 @@ path tracer instead samples four wavelengths per path, so each of 33 bands sees 
 paths: tens of percent of Monte Carlo noise per pixel and band at 64 samples, where the nodes
 leave none.
 
+Lamps lit one at a time (the dome's LEDs) share the camera's paths: the random numbers jitter
+the pixel and sample the bounce, whatever the lamp, so :meth:`NodeScene.transport_each` traces
+the paths once, projects each vertex's spectral factors on the channels once and adds per lamp
+only its shadow rays and the lobes' geometric factors, each lamp's image the one-lamp render's
+with the same seed.
+
 The integrator is matched to the scene: direct lighting by emitter sampling (one shadow ray to
 the delta light; to every lamp of a group of point lights at the first surface, to one lamp
 chosen at random after a bounce), the bounces by sampling the BSDF, pixel positions stratified
@@ -75,7 +81,7 @@ NODES_NM = MATERIAL_GRID.wavelengths_nm
 
 _MAX_LANES = 1 << 20  # samples per kernel launch; larger renders run in passes
 _LANE_VALUES = 1 << 22  # most per-lane values of transport_each's lamps summed at once
-_EACH_LANES = 1 << 18  # samples per pass of transport_each (its node tables: 81 floats a lane)
+_EACH_LANES = 1 << 18  # samples per pass of transport_each (its bounce's node tables)
 _EACH_FACTORS = 1 << 25  # most lamp factors of one lobe per pass (lamps x samples)
 
 
@@ -232,13 +238,6 @@ def _lobes() -> list:
         mi.BSDFContext(mi.TransportMode.Radiance, int(flag))
         for flag in (mi.BSDFFlags.DiffuseReflection, glossy)
     ]
-
-
-def _node_table(values: list, lanes: int) -> np.ndarray:
-    """``n_nodes`` Dr.Jit values (one per lane, or one for all lanes) as a table
-    ``(n_nodes, lanes)``."""
-    dr.eval(*values)
-    return np.stack([np.broadcast_to(np.asarray(value, np.float32), (lanes,)) for value in values])
 
 
 def _add_lanes(values: np.ndarray, pixels: np.ndarray, terms: list) -> None:
