@@ -57,7 +57,13 @@ from twin.dome.exposure_plan import dome_exposures
 from twin.dome.holder import holder_content
 from twin.dome.render import DOME_SPP
 from twin.dome.setup import CALIBRATION_LIGHT, THESIS_LONGEST_BAND_S
-from twin.dome.signals import LED_RENDERS, DomeScene, RenderedDomeSignal, leds_per_pass
+from twin.dome.signals import (
+    LED_RENDERS,
+    DomeScene,
+    RenderedDomeSignal,
+    band_index,
+    leds_per_pass,
+)
 from twin.materials import available_materials, load_material
 from twin.rigs.dome_geometry import dome_geometry
 from twin.rigs.rig_config import DomeConfig, load_rig
@@ -299,8 +305,7 @@ class DomeCaptureProgram(ProgramCapture):
         index uncompressed."""
         frames = Counter(step["camera"] for step in self.plan)
         side = self.rig["window_px"]
-        single = dict.fromkeys(s["light_id"] for s in self.plan if s.get("light_id", -1) >= 0)
-        order = {led: index for index, led in enumerate(single)}
+        order = {led: index for index, led in enumerate(self.scene.single_leds)}
         per_pass = {
             camera: leds_per_pass(side, self.scene.pass_channels(camera_arc_index(camera)))
             for camera in frames
@@ -332,11 +337,10 @@ class DomeCaptureProgram(ProgramCapture):
 def _led_bands(plan: list[dict], bands_nm) -> dict[int, tuple[int, ...]]:
     """Per LED lit alone, the spectral camera's bands (indices into ``bands_nm``) the plan takes
     under it (:attr:`twin.dome.signals.DomeScene.led_bands`)."""
-    centres = np.asarray(bands_nm, np.float64)
     bands: dict[int, set[int]] = {}
     for step in plan:
         if step["camera"] == SPECTRAL_CAMERA and step.get("light_id", -1) >= 0:
-            band = int(np.argmin(np.abs(centres - step["band_nm"])))
+            band = band_index(bands_nm, step["band_nm"])
             bands.setdefault(int(step["light_id"]), set()).add(band)
     return {led: tuple(sorted(chosen)) for led, chosen in bands.items()}
 

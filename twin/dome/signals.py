@@ -34,7 +34,14 @@ from twin.materials import Material
 from twin.render.node_transport import NodeScene
 from twin.rigs.rig_config import DomeConfig
 
-__all__ = ["LED_RENDERS", "PASS_MEMORY_BYTES", "DomeScene", "RenderedDomeSignal", "leds_per_pass"]
+__all__ = [
+    "LED_RENDERS",
+    "PASS_MEMORY_BYTES",
+    "DomeScene",
+    "RenderedDomeSignal",
+    "band_index",
+    "leds_per_pass",
+]
 
 LED_RENDERS = ("pose", "single")
 """How the LEDs lit one at a time are rendered: all of a stage position in passes (``pose``,
@@ -48,6 +55,12 @@ def leds_per_pass(window: int, channels: int) -> int:
     """LEDs per pass of a camera of ``channels`` channels and ``window`` pixels square within
     :data:`PASS_MEMORY_BYTES`."""
     return max(1, PASS_MEMORY_BYTES // (4 * window * window * channels))
+
+
+def band_index(bands_nm, band_nm: float) -> int:
+    """The index of the band of ``bands_nm`` nearest ``band_nm`` (the render channel of a
+    tuned filter)."""
+    return int(np.argmin(np.abs(np.asarray(bands_nm, np.float64) - band_nm)))
 
 
 def _seed(name: str) -> int:
@@ -213,6 +226,6 @@ class RenderedDomeSignal:
         if self._camera == SPECTRAL_CAMERA:
             if rig.band_nm is None:
                 raise ValueError("the filter has not been tuned yet")
-            band = int(np.argmin(np.abs(np.asarray(self._scene.bands_nm) - rig.band_nm)))
+            band = band_index(self._scene.bands_nm, rig.band_nm)
             return rates[..., band] * scale
         return rates * scale
