@@ -127,7 +127,7 @@ def band_response(
     >>> fine = WavelengthGrid.regular(400, 720, 1)
     >>> flat = SampledSpectra(fine, np.ones((3, fine.size)))
     >>> bands = WavelengthGrid.regular(410, 700, 10)
-    >>> band_response(flat, np.ones(fine.size), np.ones(30), bands).sum(axis=0).tolist()
+    >>> band_response(flat, np.ones(fine.size), np.ones(30), bands).sum(axis=0).round(12).tolist()
     [1.0, 1.0, 1.0]
     """
     lit = SampledSpectra(rgb_response.grid, rgb_response.values * np.asarray(led, np.float64))

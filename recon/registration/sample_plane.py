@@ -36,7 +36,7 @@ def texel_centres_m(texels: int, sample_size_m: float) -> np.ndarray:
 
     Examples
     --------
-    >>> texel_centres_m(2, 0.04)[0].tolist()
+    >>> texel_centres_m(2, 0.04)[0].round(12).tolist()
     [[-0.01, 0.01], [0.01, 0.01]]
     """
     centres = (np.arange(texels) + 0.5) / texels * sample_size_m - sample_size_m / 2
@@ -74,8 +74,9 @@ def sample_square_corners(
     --------
     >>> marks = np.array([[-1.0, 1, 0.1], [1, 1, 0.1], [1, -1, 0.1], [-1, -1, 0.1]])
     >>> image = (marks[:, :2] * [1, -1] + 1) * 50  # a camera straight above, 50 px per m
-    >>> sample_square_corners(image, marks, np.array([0.0, 0, 10]), 1.0).round(3).tolist()[0]
-    [25.125, 25.125]
+    >>> corners = sample_square_corners(image, marks, np.array([0.0, 0, 10]), 1.0)
+    >>> corners.round(3).tolist()[0]  # (-0.5, 0.5) on z = 0 is seen at (-0.495, 0.495) on z = 0.1
+    [25.25, 25.25]
     """
     image = validate_corners(marks_xy, "marks_xy")
     marks = np.asarray(marks_m, np.float64)
