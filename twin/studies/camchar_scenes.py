@@ -26,7 +26,7 @@ from twin.render.render import render_scene
 from twin.render.scene import PinholeCamera
 from twin.render.shapes import mitsuba_shape
 from twin.render.spectra import irregular_spectrum
-from twin.render.variant import activate
+from twin.render.transforms import look_at, rotate, scale, translate
 
 __all__ = ["CHARTS", "LIGHTS", "ChartPhoto", "ChartScenario", "render_chart_photo"]
 
@@ -94,9 +94,6 @@ def _bent(parts: list[SurfacePart], bend: float) -> list[SurfacePart]:
 
 def render_chart_photo(scenario: ChartScenario, *, seed: int = 0) -> ChartPhoto:
     """Render the chart photograph of ``scenario`` and extract the field means."""
-    activate()
-    import mitsuba as mi
-
     make_chart, _ = CHARTS[scenario.chart]
     parts = make_chart(_CHART_SIZE_M)
     if scenario.glossy:
@@ -116,9 +113,7 @@ def render_chart_photo(scenario: ChartScenario, *, seed: int = 0) -> ChartPhoto:
     if scenario.spot:
         scene["light"] = {
             "type": "spot",
-            "to_world": mi.ScalarTransform4f.look_at(
-                origin=[0.0, 0.5, 0.7], target=[0, 0, 0], up=[0, 0, 1]
-            ),
+            "to_world": look_at(origin=[0.0, 0.5, 0.7], target=[0, 0, 0], up=[0, 0, 1]),
             "intensity": irregular_spectrum(light * 2.0),
             "cutoff_angle": 20.0,
             "beam_width": 12.0,
@@ -126,9 +121,7 @@ def render_chart_photo(scenario: ChartScenario, *, seed: int = 0) -> ChartPhoto:
     else:
         scene["light"] = {
             "type": "rectangle",
-            "to_world": mi.ScalarTransform4f.translate([0.0, 0.3, 0.6])
-            @ mi.ScalarTransform4f.rotate([1, 0, 0], 150.0)
-            @ mi.ScalarTransform4f.scale(0.3),
+            "to_world": translate([0.0, 0.3, 0.6]) @ rotate([1, 0, 0], 150.0) @ scale(0.3),
             "emitter": {"type": "area", "radiance": irregular_spectrum(light)},
         }
     if scenario.occluder:

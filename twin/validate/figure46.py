@@ -40,7 +40,7 @@ from twin.render.plugins.spectral_envmap import SpectralMap, spectral_envmap
 from twin.render.scene import PinholeCamera
 from twin.render.shapes import mitsuba_shape
 from twin.render.spectra import irregular_spectrum
-from twin.render.variant import activate
+from twin.render.transforms import look_at, rotate, scale, translate
 from twin.validate.envmap_capture import capture_mirror_sphere
 
 __all__ = [
@@ -85,13 +85,10 @@ def _unit_emitter() -> dict[str, object]:
 def room_entries() -> dict[str, object]:
     """Mitsuba scene entries of the room's walls (grey, reflectance 0.5); the sample position is
     the origin, facing +z."""
-    activate()
-    import mitsuba as mi
-
     return {
         "room": {
             "type": "cube",
-            "to_world": mi.ScalarTransform4f().translate([0.0, 0.0, 0.7]).scale([2.0, 2.0, 1.5]),
+            "to_world": translate([0.0, 0.0, 0.7]) @ scale([2.0, 2.0, 1.5]),
             "flip_normals": True,
             "bsdf": _diffuse(0.5),
         }
@@ -111,16 +108,11 @@ def room_lights(
     photograph than through a mirror-sphere capture; with disks both differences are gone
     (0.01 % and within the map's resolution; measured in the session notes).
     """
-    activate()
-    import mitsuba as mi
-
-    transform = mi.ScalarTransform4f
     spots = {
         f"spot_{index}": {
             "type": "disk",
-            "to_world": transform()
-            .look_at(origin=position, target=[0.0, 0.0, 0.0], up=[0.0, 0.0, 1.0])
-            .scale(0.03),
+            "to_world": look_at(origin=position, target=[0.0, 0.0, 0.0], up=[0.0, 0.0, 1.0])
+            @ scale(0.03),
             "emitter": _unit_emitter(),
         }
         for index, position in enumerate(([0.9, 0.6, 1.4], [-0.7, 1.0, 1.2]))
@@ -128,10 +120,9 @@ def room_lights(
     tubes = {
         f"tube_{index}": {
             "type": "rectangle",
-            "to_world": transform()
-            .translate([x, 0.2, 2.15])
-            .rotate([1, 0, 0], 180)
-            .scale([0.05, 0.8, 1.0]),
+            "to_world": translate([x, 0.2, 2.15])
+            @ rotate([1, 0, 0], 180)
+            @ scale([0.05, 0.8, 1.0]),
             "emitter": _unit_emitter(),
         }
         for index, x in enumerate((-0.6, 0.5))
@@ -160,10 +151,7 @@ def _sample_square(size_m: float) -> dict[str, object]:
     """The BTF's square in its reference plane z = 0 (the plane its textures are rectified to:
     the holder's marks, the truth's sample plane); the parallax of the material's relief is in
     the view-dependent textures."""
-    activate()
-    import mitsuba as mi
-
-    return {"type": "rectangle", "to_world": mi.ScalarTransform4f().scale(size_m / 2)}
+    return {"type": "rectangle", "to_world": scale(size_m / 2)}
 
 
 def _cie_rgb_matrix() -> np.ndarray:
