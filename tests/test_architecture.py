@@ -62,6 +62,58 @@ def test_a_lower_twin_stage_importing_a_higher_one_breaks_the_layers(tmp_path):
     assert "twin.materials.geometry -> twin.gonio.capture" in result.stdout
 
 
+RECON_LAYERS = (
+    "recon's rooms in layers, each placed: the dome's processing over the BTF store over "
+    "calibration, experiments over spectralization, the spectral core at the bottom"
+)
+HWBRIDGE_LAYERS = (
+    "hwbridge's modules in layers, each placed: sessions and replay over the drivers, over the "
+    "store, over plans, targets and layouts, over the protocols"
+)
+
+
+@pytest.mark.parametrize(
+    ("offender", "line", "contract"),
+    [
+        (
+            "recon/calibration/gonio.py",
+            "import hwbridge.session",
+            "recon reads capture stores: of hwbridge it imports the store, its integrity checks "
+            "and the dome's store layout, nothing else",
+        ),
+        ("hwbridge/store.py", "import hwbridge.drivers", HWBRIDGE_LAYERS),
+        ("recon/emva/fit.py", "import recon.dome", RECON_LAYERS),
+        (
+            "twin/validate/figure46.py",
+            "import drjit",
+            "mitsuba and drjit are imported by twin.render alone (its modules and plugins)",
+        ),
+    ],
+)
+def test_an_import_across_a_boundary_breaks_its_contract(tmp_path, offender, line, contract):
+    tree = _copy_of_the_tree(tmp_path)
+    path = tree / offender
+    path.write_text(path.read_text() + f"\n{line}\n")
+    result = _lint_imports(tree)
+    assert result.returncode == 1
+    report = " ".join(result.stdout.split())
+    assert f"{contract} BROKEN" in report
+    assert " kept, 1 broken." in report
+
+
+@pytest.mark.parametrize(
+    ("package", "contract"), [("recon", RECON_LAYERS), ("hwbridge", HWBRIDGE_LAYERS)]
+)
+def test_a_module_outside_the_layers_breaks_the_exhaustive_contract(tmp_path, package, contract):
+    tree = _copy_of_the_tree(tmp_path)
+    (tree / package / "unplaced.py").write_text('"""A module no layer names."""\n')
+    result = _lint_imports(tree)
+    assert result.returncode == 1
+    report = " ".join(result.stdout.split())
+    assert f"{contract} BROKEN" in report
+    assert f"- {package}.unplaced" in result.stdout
+
+
 def test_the_longest_import_chain_in_twin_has_at_most_10_modules():
     spec = importlib.util.spec_from_file_location(
         "import_chains", ROOT / "scripts" / "import_chains.py"
