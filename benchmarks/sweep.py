@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks.common import machine_description
-from twin.cli.sweep import point_functions
 from twin.devices.cluster import dask_client
+from twin.kinds.registry import sweep_kind
 from twin.studies.sweep_file import check_points, load_sweep, value_label
 from twin.studies.sweep_run import run_sweep
 
@@ -33,8 +33,8 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--out", type=Path, default=None)
     arguments = parser.parse_args()
-    sweep = load_sweep(arguments.sweep)
-    check, measure = point_functions(sweep.kind)
+    sweep = load_sweep(arguments.sweep, sweep_kind)
+    check, measure = sweep_kind(sweep.kind).check, sweep_kind(sweep.kind).measure
     check_points(sweep, check)
     load_before = os.getloadavg()
     with tempfile.TemporaryDirectory() as folder:

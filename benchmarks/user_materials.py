@@ -34,15 +34,13 @@ def main() -> None:
     out.mkdir(parents=True)
     results: dict[str, object] = {"machine": machine_description()}
     written, _ = _run("material", "examples", "--out", out / "materials")
-    _, results["calibration_s"] = _run(
-        "capture", out / "cal.capture.zarr", "--program", "gonio-calibration"
-    )
+    _, results["calibration_s"] = _run("capture", "gonio-calibration", out / "cal.capture.zarr")
     _run("calibrate", out / "cal.capture.zarr", "--out", out / "cal.json")
     for path in written["materials"]:
         name = Path(path).stem
         capture, btf = out / f"{name}.capture.zarr", out / f"{name}.btf.zarr"
         captured, capture_s = _run(
-            "capture", capture, "--program", "gonio-run", "--calibration", out / "cal.json",
+            "capture", "gonio-run", capture, "--calibration", out / "cal.json",
             "--material", path,
         )  # fmt: skip
         processed, process_s = _run(

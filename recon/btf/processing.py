@@ -216,6 +216,7 @@ def open_btf_store(
         material=str(run.rig["material"]),
         source_capture=run.capture_path,
         calibration={"run_factors": run.factors.tolist(), "source": run.calibration.source},
+        rig=run.rig.get("rig"),
     )
 
 
@@ -245,6 +246,7 @@ def process_pairs(
     check_complete: bool = True,
     advance: Callable[[], None] = lambda: None,
     stop: Callable[[], bool] = lambda: False,
+    store: CaptureStore | None = None,
 ) -> PairOutcomes:
     """Calibrate, register and write ``pairs`` of ``run`` into ``btf`` (steps 2 to 4).
 
@@ -266,13 +268,16 @@ def process_pairs(
         Called after each pair (a progress bar).
     stop
         Asked before each pair: when it says so the remaining pairs are left (for a resume).
+    store
+        The run's capture store, already open (``None``: opened from ``run.capture_path``, as
+        a worker of a distributed run does).
 
     Returns
     -------
     PairOutcomes
         The pairs of ``pairs`` registered coarsely or not at all (those are left unwritten).
     """
-    store = CaptureStore.open(run.capture_path)
+    store = CaptureStore.open(run.capture_path) if store is None else store
     light_dirs = np.asarray(run.rig["light_dirs"], np.float64)
     expected = np.asarray(run.rig["expected_corners_xy"], np.float64)
     calibration = run.calibration

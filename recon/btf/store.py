@@ -227,6 +227,7 @@ class BTFStore:
         material: str,
         source_capture: str | Path | None = None,
         calibration: Mapping[str, Any] | None = None,
+        rig: str | None = None,
     ) -> BTFStore:
         """A new, empty store (no pair written); never overwrites an existing path.
 
@@ -247,6 +248,9 @@ class BTFStore:
             Path of the capture store the BTF is calibrated from (provenance), if any.
         calibration
             JSON-serialisable summary of the calibration (white reference, exposure plan, ...).
+        rig
+            The kind of rig the source capture was made with (its ``attrs["rig"]["rig"]``), or
+            ``None`` for a BTF from elsewhere (imported).
         """
         path = Path(path)
         if path.exists():
@@ -271,6 +275,7 @@ class BTFStore:
                 "format_version": BTF_FORMAT_VERSION,
                 "units": BTF_UNITS,
                 "material": material,
+                "rig": rig,
                 "source_capture": None if source_capture is None else str(source_capture),
                 "calibration": calibration,
                 "complete": False,

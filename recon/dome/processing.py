@@ -308,6 +308,7 @@ def _open_btf(work: DomeProcessing, out: Path, resume: bool) -> BTFStore:
             "p_dyn": P_DYN,
             "target_relative_noise": TARGET_RELATIVE_NOISE,
         },
+        rig=work.run.rig.get("rig"),
     )
 
 

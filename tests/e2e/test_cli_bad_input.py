@@ -54,83 +54,88 @@ PROBES: list[tuple[list[str], int, str]] = [
     (["gallery", "--spp", "0"], 2, "'--spp'"),
     (["gallery", "--out", "@PLAIN"], 2, "is a file; expected a folder"),
     # capture
-    (["capture", "@NEW", "--seed", "-1"], 2, "'--seed'"),
-    (["capture", "@NEW", "--program", "gonio-run", "--spp", "-3"], 2, "'--spp'"),
     (
-        ["capture", "@NEW", "--program", "gonio-run", "--calibration", "@CAL"]
+        ["capture", "@NEW"],
+        2,
+        "is not a capture program; expected one of demo, gonio-calibration, gonio-run, "
+        "dome-calibration, dome-run or resume, then the store",
+    ),
+    (["capture", "nosuch", "@NEW"], 2, "'nosuch' is not a capture program"),
+    (["capture", "demo", "@NEW", "--seed", "-1"], 2, "'--seed'"),
+    (["capture", "gonio-run", "@NEW", "--spp", "-3"], 2, "'--spp'"),
+    (
+        ["capture", "gonio-run", "@NEW", "--calibration", "@CAL"]
         + ["--window", "64", "--pixels", "32"],
         2,
         "--window 64 is larger than --pixels 32",
     ),
-    (["capture", "@NEW", "--fault-rate", "0.5"], 2, "'--fault-rate'"),
-    (["capture", "@NEW", "--fault-rate", "2"], 2, "'--fault-rate'"),
-    (["capture", "@NEW", "--fault-rate", "nan"], 2, "'--fault-rate'"),
-    (["capture", "@NEW", "--fault-rate", "-0.1"], 2, "'--fault-rate'"),
-    (["capture", "@NEW", "--pixels", "64"], 2, "--pixels is not used by --program demo"),
-    (["capture", "@NEW", "--spp", "16"], 2, "--spp is not used by --program demo"),
-    (["capture", "@NEW", "--material", "lego"], 2, "--material is not used by --program demo"),
-    (["capture", "@NEW", "--window", "32"], 2, "--window is not used by --program demo"),
-    (["capture", "@NEW", "--calibration", "@CAL"], 2, "--calibration is not used by --program"),
+    (["capture", "demo", "@NEW", "--fault-rate", "0.5"], 2, "'--fault-rate'"),
+    (["capture", "demo", "@NEW", "--fault-rate", "2"], 2, "'--fault-rate'"),
+    (["capture", "demo", "@NEW", "--fault-rate", "nan"], 2, "'--fault-rate'"),
+    (["capture", "demo", "@NEW", "--fault-rate", "-0.1"], 2, "'--fault-rate'"),
+    (["capture", "demo", "@NEW", "--pixels", "64"], 2, "No such option: --pixels"),
+    (["capture", "demo", "@NEW", "--spp", "16"], 2, "No such option: --spp"),
+    (["capture", "demo", "@NEW", "--material", "lego"], 2, "No such option: --material"),
+    (["capture", "demo", "@NEW", "--window", "32"], 2, "No such option: --window"),
+    (["capture", "demo", "@NEW", "--calibration", "@CAL"], 2, "No such option: --calibration"),
+    (["capture", "demo", "@NEW", "--program", "demo"], 2, "No such option: --program"),
     (
-        ["capture", "@NEW", "--program", "gonio-calibration", "--fault-rate", "0.05"],
+        ["capture", "gonio-calibration", "@NEW", "--fault-rate", "0.05"],
         2,
-        "--fault-rate is not used by --program gonio-calibration",
+        "No such option: --fault-rate",
     ),
     (
-        ["capture", "@NEW", "--program", "gonio-run", "--dry-run"]
-        + ["--window", "64", "--pixels", "32"],
+        ["capture", "gonio-run", "@NEW", "--dry-run"] + ["--window", "64", "--pixels", "32"],
         2,
         "--window 64 is larger than --pixels 32",
     ),
     (
-        ["capture", "@NEW", "--program", "gonio-run", "--calibration", "@CAL"]
+        ["capture", "gonio-run", "@NEW", "--calibration", "@CAL"]
         + ["--pixels", "4096", "--window", "512"],
         2,
         "pixels: expected 1..2048 pixels across the field of the Photometrics CoolSNAP K4",
     ),
     (
-        ["capture", "@NEW", "--program", "gonio-run", "--calibration", "@CAL", "--pixels", "4096"],
+        ["capture", "gonio-run", "@NEW", "--calibration", "@CAL", "--pixels", "4096"],
         2,
         "pixels: expected 1..2048",
     ),
-    (["capture", "@NEW", "--dry-run", "--seed", "3"], 2, "--seed is not used by --dry-run"),
-    (["capture", "@NEW", "--dry-run", "--resume"], 2, "--resume is not used by --dry-run"),
-    (["capture", "@NEW", "--resume"], 2, "does not exist: start the capture without --resume"),
+    (["capture", "demo", "@NEW", "--dry-run", "--seed", "3"], 2, "--seed is not used by --dry-run"),
+    (["capture", "resume", "@NEW", "--dry-run"], 2, "No such option: --dry-run"),
     (
-        ["capture", "@INCOMPLETE_CAPTURE", "--resume", "--seed", "3"],
+        ["capture", "resume", "@NEW"],
         2,
-        "was captured with --seed 0, not 3: leave --seed out to resume it",
+        "does not exist: start the capture with spectwin capture PROGRAM",
     ),
+    (["capture", "resume", "@INCOMPLETE_CAPTURE", "--seed", "3"], 2, "No such option: --seed"),
     (
-        ["capture", "@INCOMPLETE_CAPTURE", "--resume", "--program", "gonio-calibration"],
+        ["capture", "resume", "@INCOMPLETE_CAPTURE", "--program", "gonio-calibration"],
         2,
-        "was captured with --program demo, not gonio-calibration",
+        "No such option: --program",
     ),
+    (["capture", "resume", "@INCOMPLETE_CAPTURE", "--pixels", "64"], 2, "No such option: --pixels"),
+    (["capture", "resume", "@LOCKED_CAPTURE"], 1, "is being written by PID"),
+    (["capture", "demo", "@LOCKED_CAPTURE"], 1, "is being written by PID"),
+    (["capture", "demo", "@LOCKED_NEW"], 1, "is being created by PID"),
+    (["capture", "resume", "@LOCKED_NEW"], 1, "is being created by PID"),
     (
-        ["capture", "@INCOMPLETE_CAPTURE", "--resume", "--pixels", "64"],
+        ["capture", "gonio-run", "@NEW"],
         2,
-        "--pixels is not used by --program demo",
+        "gonio-run needs --calibration (the JSON of spectwin calibrate)",
     ),
-    (["capture", "@LOCKED_CAPTURE", "--resume"], 1, "is being written by PID"),
-    (["capture", "@LOCKED_CAPTURE"], 1, "is being written by PID"),
-    (["capture", "@LOCKED_NEW"], 1, "is being created by PID"),
-    (["capture", "@LOCKED_NEW", "--resume"], 1, "is being created by PID"),
-    (["capture", "@NEW", "--program", "gonio-run"], 2, "needs --calibration"),
-    (["capture", "@NEW", "--program", "nosuch"], 2, "'--program'"),
-    (["capture", "@CAPTURE"], 2, "exists: continue it with --resume"),
+    (["capture", "demo", "@CAPTURE"], 2, "exists: continue it with --resume"),
     (
-        ["capture", "@NEW", "--program", "gonio-run", "--calibration", "@CAL"]
-        + ["--material", "nosuch"],
+        ["capture", "gonio-run", "@NEW", "--calibration", "@CAL", "--material", "nosuch"],
         2,
         "material: no file",
     ),
     (
-        ["capture", "@NEW", "--program", "gonio-run", "--calibration", "@CAL_MISSING_KEY"],
+        ["capture", "gonio-run", "@NEW", "--calibration", "@CAL_MISSING_KEY"],
         2,
         "calibration lacks ['base_s']",
     ),
     (
-        ["capture", "@NEW", "--program", "gonio-run", "--calibration", "@NOSUCH"],
+        ["capture", "gonio-run", "@NEW", "--calibration", "@NOSUCH"],
         2,
         "not a readable calibration file",
     ),
@@ -210,6 +215,7 @@ PROBES: list[tuple[list[str], int, str]] = [
     (["evaluate", "@BTF", "--spp", "0"], 2, "'--spp'"),
     (["evaluate", "@BTF", "--figure", "@EMPTY"], 2, "is a folder; expected a file name"),
     (["evaluate", "@BTF"], 2, "records no source capture"),
+    (["evaluate", "@IMPORTED_BTF"], 2, "a BTF store that no rig of spectwin processed (imported)"),
     (["evaluate", "@DAMAGED_METADATA_BTF"], 1, "damaged store"),
     # validate
     (["validate", "@BTF", "--pixels", "8"], 2, "'--pixels'"),
@@ -267,8 +273,11 @@ def _capture(path: Path, *, complete: bool) -> None:
         store.mark_done(step)
 
 
-def _btf(path: Path, *, written: int, texels: int = 16) -> None:
-    """A 2-pair BTF of the colour checker, ``written`` pairs written."""
+def _btf(
+    path: Path, *, written: int, texels: int = 16, rig: str | None = "gonioreflectometer"
+) -> None:
+    """A 2-pair BTF of the colour checker, ``written`` pairs written, recording ``rig`` as
+    spectwin process does (``None``: as an imported BTF)."""
     directions = np.array([[0.0, 0.0, 1.0], [0.5, 0.0, np.sqrt(0.75)]])
     store = BTFStore.create(
         path,
@@ -277,6 +286,7 @@ def _btf(path: Path, *, written: int, texels: int = 16) -> None:
         texels=texels,
         grid=DEFAULT_GRID,
         material="colorchecker16",
+        rig=rig,
     )
     for pair in range(written):
         store.write_pair(pair, np.full((texels, texels, DEFAULT_GRID.size), 0.2, np.float32))
@@ -300,6 +310,7 @@ def make_inputs(root: Path) -> dict[str, Path]:
             "CAPTURE": "done.capture.zarr",
             "INCOMPLETE_CAPTURE": "half.capture.zarr",
             "BTF": "cc.btf.zarr",
+            "IMPORTED_BTF": "imported.btf.zarr",
             "EMPTY_BTF": "empty.btf.zarr",
             "INCOMPLETE_BTF": "half.btf.zarr",
             "SMALL_BTF": "small.btf.zarr",
@@ -328,6 +339,7 @@ def make_inputs(root: Path) -> dict[str, Path]:
     _capture(paths["CAPTURE"], complete=True)
     _capture(paths["INCOMPLETE_CAPTURE"], complete=False)
     _btf(paths["BTF"], written=2)
+    _btf(paths["IMPORTED_BTF"], written=2, rig=None)
     _btf(paths["EMPTY_BTF"], written=0)
     _btf(paths["INCOMPLETE_BTF"], written=1)
     _btf(paths["SMALL_BTF"], written=2, texels=8)
@@ -397,7 +409,7 @@ def test_a_device_that_keeps_failing_stops_the_capture_with_exit_1(inputs, monke
         raise DeviceTimeout("simulated timeout of k4.snap")
 
     monkeypatch.setattr("twin.gonio.capture.CaptureProgram.run", failing_session)
-    result = runner.invoke(app, ["capture", str(inputs["NEW"]), "--workers", "0"])
+    result = runner.invoke(app, ["capture", "demo", str(inputs["NEW"]), "--workers", "0"])
     assert result.exit_code == 1, result.output
     assert result.stderr.count("\n") == 1 and "--resume" in result.stderr
     assert "Traceback" not in result.output

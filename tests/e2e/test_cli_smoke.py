@@ -9,7 +9,7 @@ import pytest
 from typer.testing import CliRunner
 
 from recon.spectral_exr import read_spectral_exr
-from twin.cli import gonio
+from twin.cli import capture
 from twin.cli.app import app
 from twin.rigs.rig_config import load_rig
 
@@ -144,13 +144,13 @@ def test_camchar_cameras_characterizes_a_measured_camera_left_out_of_its_prior(t
 
 def test_capture_dry_run_then_capture_then_refuse_to_overwrite(tmp_path):
     store = tmp_path / "demo.capture.zarr"
-    dry = runner.invoke(app, ["capture", str(store), "--dry-run", "--json"])
+    dry = runner.invoke(app, ["capture", "demo", str(store), "--dry-run", "--json"])
     assert dry.exit_code == 0, dry.output
     assert json.loads(dry.output)["steps"] == 72 and not store.exists()
-    done = runner.invoke(app, ["capture", str(store), "--json"])
+    done = runner.invoke(app, ["capture", "demo", str(store), "--json"])
     assert done.exit_code == 0, done.output
     assert json.loads(done.output)["complete"] is True
-    again = runner.invoke(app, ["capture", str(store)])
+    again = runner.invoke(app, ["capture", "demo", str(store)])
     assert again.exit_code == 2 and "exists" in again.stderr and "--resume" in again.stderr
 
 
@@ -163,7 +163,7 @@ def test_dry_run_counts_the_pairs_whose_marks_leave_the_window(tmp_path):
     for window in (64, 96, 128):
         dry = runner.invoke(
             app,
-            ["capture", str(tmp_path / "run.capture.zarr"), "--program", "gonio-run"]
+            ["capture", "gonio-run", str(tmp_path / "run.capture.zarr")]
             + ["--dry-run", "--pixels", "256", "--window", str(window), "--json"],
         )
         assert dry.exit_code == 0, dry.output
@@ -177,17 +177,17 @@ def test_dry_run_counts_the_pairs_whose_marks_leave_the_window(tmp_path):
 def test_a_ctrl_c_as_a_finished_capture_returns_says_how_far_it_got(tmp_path, monkeypatch):
     """A Ctrl-C that arrives after the capture's last frame, as the command returns (here: as
     its context closes), ends with exit 130 and the line saying the capture is complete."""
-    checked = gonio._refuse_unused
+    captured = capture._capture
 
-    def check_then_ctrl_c_at_close(ctx, *args):
+    def capture_then_ctrl_c_at_close(ctx, *args, **kwargs):
         def ctrl_c():
             raise KeyboardInterrupt
 
         ctx.call_on_close(ctrl_c)
-        return checked(ctx, *args)
+        return captured(ctx, *args, **kwargs)
 
-    monkeypatch.setattr(gonio, "_refuse_unused", check_then_ctrl_c_at_close)
-    result = runner.invoke(app, ["capture", str(tmp_path / "demo.capture.zarr"), "--json"])
+    monkeypatch.setattr(capture, "_capture", capture_then_ctrl_c_at_close)
+    result = runner.invoke(app, ["capture", "demo", str(tmp_path / "demo.capture.zarr"), "--json"])
     assert result.exit_code == 130
     assert result.stderr.splitlines() == [
         "interrupted after 72 of 72 frames; the capture is complete"

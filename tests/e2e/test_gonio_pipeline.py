@@ -38,7 +38,7 @@ runner = CliRunner()
 @pytest.fixture(scope="module")
 def pipeline(tmp_path_factory, invoke_json):
     root = tmp_path_factory.mktemp("gonio")
-    invoke_json("capture", root / "cal.capture.zarr", "--program", "gonio-calibration", "--json")
+    invoke_json("capture", "gonio-calibration", root / "cal.capture.zarr", "--json")
     calibrated = invoke_json(
         "calibrate", root / "cal.capture.zarr", "--out", root / "cal.json", "--json"
     )
@@ -231,10 +231,8 @@ def test_process_refuses_a_calibration_capture_and_a_missing_calibration(pipelin
     )
     assert wrong.exit_code == 2 and "measurement run" in wrong.output
     assert not (tmp_path / "x.btf.zarr").exists()
-    missing = runner.invoke(
-        app, ["capture", str(tmp_path / "r.capture.zarr"), "--program", "gonio-run"]
-    )
-    assert missing.exit_code == 2 and "--calibration" in missing.output
+    missing = runner.invoke(app, ["capture", "gonio-run", str(tmp_path / "r.capture.zarr")])
+    assert missing.exit_code == 2 and "gonio-run needs --calibration" in missing.output
 
 
 def test_an_rgb_btf_imported_from_images_is_validated_and_said_to_be_rgb(pipeline, invoke_json):

@@ -1,5 +1,5 @@
 """Damaged stores at the command line: ``spectwin store check`` names the damage (exit 1),
-``capture --resume`` takes damaged simulated frames again, and ``process``, ``compress``,
+``capture resume`` takes damaged simulated frames again, and ``process``, ``compress``,
 ``evaluate`` and ``validate`` refuse a damaged input in one line (exit 1) without writing.
 
 The capture is the demo program (72 frames of 32 x 32 px, no render: about 8 s); the BTF is made
@@ -65,7 +65,7 @@ CHUNKS = ("deleted chunk", "truncated chunk", "flipped byte")
 @pytest.fixture(scope="module")
 def inputs(tmp_path_factory):
     root = tmp_path_factory.mktemp("integrity")
-    result = _run("capture", root / "demo.capture.zarr", "--json")
+    result = _run("capture", "demo", root / "demo.capture.zarr", "--json")
     assert result.exit_code == 0, result.output
     bands = DEFAULT_GRID.wavelengths_nm
     GonioCalibration.identity(np.full(bands.size, 2 / 15), bands, 1 / 15).save(root / "cal.json")
@@ -145,7 +145,7 @@ def test_process_never_accepts_a_damaged_capture(inputs, tmp_path, damage):
 @pytest.mark.parametrize("damage", CAPTURE_DAMAGE)
 def test_capture_resume_takes_damaged_simulated_frames_again(inputs, tmp_path, damage):
     store = _damaged_capture(inputs, tmp_path, damage)
-    result = _run("capture", store, "--resume", "--json")
+    result = _run("capture", "resume", store, "--json")
     if damage in ("deleted root metadata", "deleted index metadata"):
         assert CAPTURE_DAMAGE[damage][2] in _one_line_error(result, 1)
         return
@@ -262,7 +262,7 @@ def test_a_capture_killed_after_its_last_frame_but_before_marking_complete_resum
     shutil.copytree(inputs / "demo.capture.zarr", store)
     zarr.open_group(str(store), mode="r+").attrs["complete"] = False  # every flag set, no mark
     assert not CaptureStore.open(store).complete and CaptureStore.open(store).pending_steps() == []
-    result = _run("capture", store, "--resume", "--json")
+    result = _run("capture", "resume", store, "--json")
     assert result.exit_code == 0, result.output
     assert json.loads(result.stdout[result.stdout.index("{") :])["complete"] is True
     assert CaptureStore.open(store).complete

@@ -22,7 +22,7 @@ pytestmark = pytest.mark.render
 def evaluated(tmp_path_factory, invoke_json):
     root = tmp_path_factory.mktemp("user")
     written = invoke_json("material", "examples", "--out", root / "materials", "--json")
-    invoke_json("capture", root / "cal.capture.zarr", "--program", "gonio-calibration", "--json")
+    invoke_json("capture", "gonio-calibration", root / "cal.capture.zarr", "--json")
     invoke_json("calibrate", root / "cal.capture.zarr", "--out", root / "cal.json", "--json")
     exposures = GonioCalibration.load(root / "cal.json").planned_exposure_s
     pairs = GonioPairs(

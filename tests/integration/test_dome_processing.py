@@ -237,7 +237,7 @@ def test_process_refuses_workers_for_a_dome_run(root, tmp_path):
             "2",
         ],
     )
-    assert result.exit_code == 2 and "--workers is not used for a dome run" in result.output
+    assert result.exit_code == 2 and "--workers is not used by a dome run" in result.output
 
 
 def test_calibrate_refuses_a_json_file_for_a_dome_calibration(root, tmp_path):
@@ -245,4 +245,4 @@ def test_calibrate_refuses_a_json_file_for_a_dome_calibration(root, tmp_path):
     result = CliRunner().invoke(
         app, ["calibrate", str(root / "cal.capture.zarr"), "--out", str(tmp_path / "c.json")]
     )
-    assert result.exit_code == 2 and "a dome calibration is an .npz file" in result.output
+    assert result.exit_code == 2 and "a dome calibration is a .npz file" in result.output

@@ -26,8 +26,6 @@ SEED = 2027
 MATERIAL = "lego"
 SIZE = DomeCaptureSize(stage_positions=2, leds=2, rgb_cameras=1, texels=8, spp=4)
 ARGS = [
-    "--program",
-    "dome-run",
     "--material",
     MATERIAL,
     "--stage-positions",
@@ -90,12 +88,20 @@ def _check_done_steps(path, reference) -> tuple[int, int]:
     return len(done), len(plan)
 
 
+def _capture_args(path) -> list[str]:
+    """The reduced dome run of ``path`` at the seed, or its resume once the store exists (which
+    continues with the store's program and settings)."""
+    if path.exists():
+        return ["capture", "resume", str(path), "--json"]
+    return ["capture", "dome-run", str(path), "--json", *ARGS, "--seed", str(SEED)]
+
+
 def test_10_sigkills_at_random_moments_resume_to_the_uninterrupted_store(
     tmp_path, capture_kit, reference
 ):
-    """``spectwin capture --program dome-run`` killed by SIGKILL ten times, at seeded random
-    moments or once it has written the frames of a stage position (a capture writes them
-    together, a stage position at a time), and continued with ``--resume`` until complete
+    """``spectwin capture dome-run`` killed by SIGKILL ten times, at seeded random moments or
+    once it has written the frames of a stage position (a capture writes them together, a stage
+    position at a time), and continued with ``spectwin capture resume`` until complete
     (then begun afresh): after every kill every step flagged done holds the uninterrupted run's
     frame, and the completed store holds its frames and index (timestamps apart)."""
     captures = capture_kit.processes
@@ -104,9 +110,7 @@ def test_10_sigkills_at_random_moments_resume_to_the_uninterrupted_store(
     kills = completed = progressed = 0
     started = time.monotonic()
     while kills < 10:
-        args = ["capture", str(path), "--json"]
-        args += ["--resume"] if path.exists() else [*ARGS, "--seed", str(SEED)]
-        pid, stderr = captures.start(args)
+        pid, stderr = captures.start(_capture_args(path))
         deadline = time.monotonic() + 120
         while not capture_kit.lock_names(path, pid) and capture_kit.running(pid):
             assert time.monotonic() < deadline, stderr.read_text()
@@ -130,9 +134,7 @@ def test_10_sigkills_at_random_moments_resume_to_the_uninterrupted_store(
         if path.exists():
             done, total = _check_done_steps(path, reference)
             progressed += 0 < done < total
-    args = ["capture", str(path), "--json"]
-    args += ["--resume"] if path.exists() else [*ARGS, "--seed", str(SEED)]
-    pid, stderr = captures.start(args)
+    pid, stderr = captures.start(_capture_args(path))
     assert captures.wait(pid) == 0, stderr.read_text()
     store = CaptureStore.open(path)
     assert store.complete

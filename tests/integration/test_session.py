@@ -52,15 +52,24 @@ def _check_complete(path: Path, reference_frames: np.ndarray, reference_index: d
     assert not (path / ".writer.lock").exists()
 
 
+def _capture_args(path: Path) -> list[str]:
+    """The demo capture of ``path`` at the seed, or its resume once the store exists (which
+    continues with the store's seed)."""
+    if path.exists():
+        return ["capture", "resume", str(path), "--json"]
+    return ["capture", "demo", str(path), "--json", "--seed", str(SEED)]
+
+
 def test_20_sigkills_and_5_sigints_at_random_moments_resume_to_the_uninterrupted_frames(
     tmp_path, capture_kit
 ):
     """Captures of the demo program, each stopped at a seeded random moment by SIGKILL (20) or
-    SIGINT (5) and continued with --resume until complete (then begun afresh); in every capture,
-    at a random moment, a second writer is started (with the first held by SIGSTOP, so that it
-    cannot finish meanwhile) and must be refused, naming the first. Every store that completes
-    holds the uninterrupted run's frames; after every stop, every step flagged done holds its
-    frame; a SIGINT ends with exit 130 and the line saying how far it got."""
+    SIGINT (5) and continued with ``spectwin capture resume`` until complete (then begun
+    afresh); in every capture, at a random moment, a second writer is started (with the first
+    held by SIGSTOP, so that it cannot finish meanwhile) and must be refused, naming the first.
+    Every store that completes holds the uninterrupted run's frames; after every stop, every
+    step flagged done holds its frame; a SIGINT ends with exit 130 and the line saying how far
+    it got."""
     reference = run_demo_session(tmp_path / "reference.capture.zarr", SEED)
     reference_frames, reference_index = _frames_and_index(reference)
     path = tmp_path / "killed.capture.zarr"
@@ -74,9 +83,7 @@ def test_20_sigkills_and_5_sigints_at_random_moments_resume_to_the_uninterrupted
     try:
         while signals:
             before = _check_done_steps(path, reference_frames) if path.exists() else 0
-            args = ["capture", str(path), "--json"]
-            args += ["--resume"] if path.exists() else ["--seed", str(SEED)]
-            pid, stderr = captures.start(args)
+            pid, stderr = captures.start(_capture_args(path))
             deadline = time.monotonic() + 60
             while not capture_kit.lock_names(path, pid) and capture_kit.running(pid):
                 assert time.monotonic() < deadline, stderr.read_text()
@@ -87,7 +94,7 @@ def test_20_sigkills_and_5_sigints_at_random_moments_resume_to_the_uninterrupted
             os.kill(pid, signal.SIGSTOP)
             held = capture_kit.lock_names(path, pid)
             if held and (owner := lock_owner(path)) and owner.pid == pid:
-                second_args = ["capture", str(path)] + (["--resume"] if path.exists() else [])
+                second_args = ["capture", "resume" if path.exists() else "demo", str(path)]
                 second, second_stderr = captures.start(second_args)
                 assert captures.wait(second) == 1, second_stderr.read_text()
                 lines = second_stderr.read_text().splitlines()
@@ -116,7 +123,7 @@ def test_20_sigkills_and_5_sigints_at_random_moments_resume_to_the_uninterrupted
                 then = (
                     "the capture is complete"
                     if done == total
-                    else f"continue with: spectwin capture {path} --resume"
+                    else f"continue with: spectwin capture resume {path}"
                 )
                 assert stderr.read_text().splitlines() == [
                     f"interrupted after {done} of {total} frames; {then}"
@@ -126,14 +133,12 @@ def test_20_sigkills_and_5_sigints_at_random_moments_resume_to_the_uninterrupted
                 # leaves the lock file (not held; hwbridge.lock): the resume takes it over.
                 stale = number == signal.SIGKILL and (path / ".writer.lock").exists()
                 if stale or not CaptureStore.open(path).complete:  # or killed before the mark
-                    pid, stderr = captures.start(["capture", str(path), "--resume", "--json"])
+                    pid, stderr = captures.start(["capture", "resume", str(path), "--json"])
                     assert captures.wait(pid) == 0, stderr.read_text()
                 _check_complete(path, reference_frames, reference_index)
                 shutil.rmtree(path)
                 completed += 1
-        args = ["capture", str(path), "--json"]
-        args += ["--resume"] if path.exists() else ["--seed", str(SEED)]
-        pid, stderr = captures.start(args)
+        pid, stderr = captures.start(_capture_args(path))
         assert captures.wait(pid) == 0, stderr.read_text()
     finally:
         captures.close()

@@ -14,12 +14,13 @@ import typer
 from twin.cli.bench import register as register_bench
 from twin.cli.btf import register as register_btf
 from twin.cli.camera import register as register_camera
+from twin.cli.capture import register as register_capture
 from twin.cli.choices import Chart, Light, RGBCamera
 from twin.cli.dome import register as register_dome
 from twin.cli.errors import SpectwinGroup, require_output_folder, run_failed
-from twin.cli.gonio import register as register_gonio
 from twin.cli.material import register as register_material
 from twin.cli.output import JsonFlag, SeedOption, console, print_summary
+from twin.cli.pipeline import register as register_pipeline
 from twin.cli.store import register as register_store
 from twin.cli.sweep import register as register_sweep
 
@@ -86,23 +87,14 @@ def estimate(
     """Estimate the capture time of one material on a rig (thesis 4.1.1 and 10.2.2): the dome's
     from its calibration and run plans (HDR sets and scheduled bands per LED, cameras in
     parallel), against the thesis's figures."""
-    from twin.rigs.rig_config import GonioConfig, load_rig
+    from twin.kinds.registry import config_rig_kind
+    from twin.rigs.rig_config import load_rig
 
     config = load_rig(rig)
-    if isinstance(config, GonioConfig):
-        from twin.gonio.capture_time import estimate_gonio
-
-        with console.status("solving the kinematics of every direction pair"):
-            summary = estimate_gonio(config).as_dict()
-    else:
-        from twin.dome.capture_time import estimate_dome
-
-        with console.status("timing the dome's calibration and run plans"):
-            summary = estimate_dome(config).as_dict()
-    summary = {"rig": config.name, **summary}
-    print_summary(
-        summary, f"capture time: {config.name}", as_json, skip=("rig", "band_exposures_s")
-    )
+    with console.status("timing the capture plans"):
+        outcome = config_rig_kind(config).estimate(config)
+    summary = {"rig": config.name, **outcome.summary}
+    print_summary(summary, outcome.title, as_json, skip=("rig", "band_exposures_s"))
 
 
 @app.command()
@@ -263,7 +255,8 @@ def demo(
 register_bench(app)
 register_btf(app)
 register_camera(app)
-register_gonio(app)
+register_capture(app)
+register_pipeline(app)
 register_material(app)
 register_dome(app)
 register_store(app)

@@ -20,6 +20,7 @@ bug and keeps its traceback.
 
 from __future__ import annotations
 
+import inspect
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -114,8 +115,24 @@ def _shows_help(error: typer.TyperException) -> bool:
     return type(error).__name__ == "NoArgsIsHelpError"
 
 
+def reflowed(text: str | None) -> str | None:
+    """``text`` (a docstring) with each paragraph on one line, so that the help shows it as
+    prose wrapped to the terminal rather than broken where the source breaks it."""
+    if text is None:
+        return None
+    paragraphs = inspect.cleandoc(text).split("\n\n")
+    return "\n\n".join(" ".join(paragraph.split()) for paragraph in paragraphs)
+
+
 class SpectwinGroup(TyperGroup):
-    """The command group of ``spectwin``: every error of the user is one line on stderr."""
+    """The command group of ``spectwin``: every error of the user is one line on stderr, and
+    every help text flows as paragraphs."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.help = reflowed(self.help)
+        for command in self.commands.values():
+            command.help = reflowed(command.help)
 
     def parse_args(self, ctx: Any, args: list[str]) -> list[str]:
         try:

@@ -122,7 +122,7 @@ def require_sound_capture(capture: Any, path: Path) -> None:
     damage = report.damage()
     if damage:
         remedy = (
-            "spectwin capture --resume takes its damaged frames again"
+            f"spectwin capture resume {path} takes its damaged frames again"
             if report.provenance.get("backend") == "sim"
             else "restore it from a copy or capture again"
         )
@@ -130,7 +130,8 @@ def require_sound_capture(capture: Any, path: Path) -> None:
     if report.pending:
         fail(
             f"{path}: the capture is incomplete ({len(report.pending)} of {report.total} steps "
-            f"pending, first step {report.pending[0]}); finish it with spectwin capture --resume"
+            f"pending, first step {report.pending[0]}); finish it with spectwin capture resume "
+            f"{path}"
         )
 
 

@@ -11,19 +11,7 @@ import typer
 from twin.cli.errors import INTERRUPTED, fail, require_output_folder
 from twin.cli.output import JsonFlag, SchedulerOption, WorkersOption, console, print_summary
 
-__all__ = ["point_functions", "register"]
-
-
-def point_functions(kind: str):
-    """The check and the measure of a design point of ``kind`` (``gonioreflectometer``,
-    ``dome``): :mod:`twin.studies.sweep_gonio`, :mod:`twin.studies.sweep_dome`."""
-    if kind == "dome":
-        from twin.studies.sweep_dome import check_dome_point, measure_dome_point
-
-        return check_dome_point, measure_dome_point
-    from twin.studies.sweep_gonio import check_gonio_point, measure_gonio_point
-
-    return check_gonio_point, measure_gonio_point
+__all__ = ["register"]
 
 
 def sweep(
@@ -59,11 +47,12 @@ def sweep(
 
     Example: spectwin sweep gonio_lamp_filter_sampling --out out/sweep --workers 2
     """
+    from twin.kinds.registry import sweep_kind
     from twin.studies.sweep_file import check_points, load_sweep
 
-    loaded = load_sweep(sweep_file)
-    check, measure = point_functions(loaded.kind)
-    check_points(loaded, check)
+    loaded = load_sweep(sweep_file, sweep_kind)
+    kind = sweep_kind(loaded.kind)
+    check_points(loaded, kind.check)
     if dry_run:
         if workers != 1 or scheduler:
             fail("--dry-run runs nothing; leave out --workers and --scheduler")
@@ -78,7 +67,7 @@ def sweep(
 
     try:
         with dask_client(workers, scheduler) as client:
-            outcome = run_sweep(loaded, out, measure, client=client, progress=not as_json)
+            outcome = run_sweep(loaded, out, kind.measure, client=client, progress=not as_json)
     except KeyboardInterrupt:
         typer.echo(
             f"interrupted: finished points are kept in {out}; run the same command again to "

@@ -439,7 +439,7 @@ def _btf_lock(out: Path, resume: bool) -> StoreLock:
 
 
 def run_process(
-    capture: str | Path,
+    capture: str | Path | CaptureStore,
     calibration: GonioCalibration,
     out: str | Path,
     *,
@@ -465,14 +465,22 @@ def run_process(
         Another writer holds the BTF store.
     """
     with _btf_lock(Path(out), resume) as lock:
-        run = prepare_gonio_run(capture, calibration)
+        store = capture if isinstance(capture, CaptureStore) else CaptureStore.open(capture)
+        run = prepare_gonio_run(store, calibration)
         btf = open_btf_store(run, out, texels=texels, resume=resume)
         lock.move_into()
         pending = btf.pending_pairs()
         if client is None:
             with progress_steps("process", len(pending), enabled=show_progress) as advance:
                 outcomes = [
-                    process_pairs(run, btf, pending, manual_corners=manual_corners, advance=advance)
+                    process_pairs(
+                        run,
+                        btf,
+                        pending,
+                        manual_corners=manual_corners,
+                        advance=advance,
+                        store=store,
+                    )
                 ]
             record_outcomes(btf, outcomes)
             return btf

@@ -341,7 +341,7 @@ def stored_settings(store: CaptureStore) -> dict[str, Any]:
     if attrs.get("backend") != "sim":
         raise SpectwinInputError(
             f"{store.path}: a {attrs.get('backend')!r} store, not made by spectwin capture; only "
-            "simulated captures continue with --resume"
+            "simulated captures continue where they stopped"
         )
     settings: dict[str, Any] = {"program": rig.get("program", "demo"), "seed": attrs["seed"]}
     if settings["program"] == "gonio-run":

@@ -41,7 +41,7 @@ from pydantic import Field, field_validator
 from recon.errors import SpectwinInputError
 from twin.materials import available_materials
 from twin.output_format import format_value
-from twin.rigs.rig_config import DomeConfig, GonioConfig, load_rig
+from twin.rigs.rig_config import load_rig
 from twin.rigs.yaml_config import (
     StrictModel,
     read_yaml_mapping,
@@ -49,12 +49,12 @@ from twin.rigs.yaml_config import (
     scene_folder,
     validate_document,
 )
-from twin.studies.sweep_plans import DOME_MEASURES, GONIO_MEASURES, DomePlan, GonioPlan
 
 __all__ = [
     "SWEEP_DIR",
     "DesignPoint",
     "Sweep",
+    "SweepKind",
     "SweepRange",
     "check_points",
     "load_sweep",
@@ -63,10 +63,20 @@ __all__ = [
 
 SWEEP_DIR = scene_folder("sweeps")
 _MAX_POINTS = 10_000
-_KINDS = {
-    "gonioreflectometer": (GonioConfig, GonioPlan, GONIO_MEASURES),
-    "dome": (DomeConfig, DomePlan, DOME_MEASURES),
-}
+
+
+@dataclass(frozen=True)
+class SweepKind:
+    """What a sweep needs of a kind of rig: the models of its rig file (``config``) and of a
+    point's plan (``plan``), its measures with their units, and the functions that ``check``
+    a design point against what the rig can take and ``measure`` it (``measure(point,
+    folder)``)."""
+
+    config: type[StrictModel]
+    plan: type[StrictModel]
+    measures: dict[str, str]
+    check: Callable[[DesignPoint], None]
+    measure: Callable[[DesignPoint, Path], dict]
 
 
 class SweepRange(StrictModel):
@@ -122,8 +132,8 @@ class DesignPoint:
     index: int
     values: dict[str, Any]
     material: str
-    rig: GonioConfig | DomeConfig
-    plan: GonioPlan | DomePlan
+    rig: StrictModel
+    plan: StrictModel
     seed: int
     where: str
 
@@ -236,7 +246,7 @@ def _check_path(path: str, rig: dict, plan_fields: set[str]) -> None:
 
 
 def _point(
-    index: int, values: dict[str, Any], sweep: SweepFile, rig: dict, kind: str, path: Path
+    index: int, values: dict[str, Any], sweep: SweepFile, rig: dict, kind: SweepKind, path: Path
 ) -> DesignPoint:
     document, plan, material = copy.deepcopy(rig), dict(sweep.plan), sweep.material
     for name, value in values.items():
@@ -252,9 +262,8 @@ def _point(
         raise SpectwinInputError(
             f"{where}: material: expected one of {available_materials()}, got {material!r}"
         )
-    config_model, plan_model, _ = _KINDS[kind]
-    config = validate_document(config_model, document, Path(f"{where}: rig"))
-    plan_model = validate_document(plan_model, plan, Path(f"{where}: plan"))
+    config = validate_document(kind.config, document, Path(f"{where}: rig"))
+    plan_model = validate_document(kind.plan, plan, Path(f"{where}: plan"))
     return DesignPoint(index, values, material, config, plan_model, sweep.seed, where)
 
 
@@ -269,15 +278,17 @@ def check_points(sweep: Sweep, check: Callable[[DesignPoint], None]) -> None:
             raise SpectwinInputError(f"{point.where}: plan: {error}") from None
 
 
-def load_sweep(name_or_path: str | Path) -> Sweep:
+def load_sweep(name_or_path: str | Path, kind_of: Callable[[str], SweepKind]) -> Sweep:
     """Read and validate a sweep file (a name in ``scenes/sweeps`` or a path), every design
     point's rig and plan included (what the rig can take of a plan: :func:`check_points`);
-    raises :class:`SpectwinInputError` naming the first problem."""
+    ``kind_of(rig)`` gives the :class:`SweepKind` of the rig named in the rig file. Raises
+    :class:`SpectwinInputError` naming the first problem."""
     path = resolve_scene_file(name_or_path, SWEEP_DIR, "sweep file")
     sweep = validate_document(SweepFile, read_yaml_mapping(path), path)
     rig_path = resolve_scene_file(sweep.rig, scene_folder("rigs"), "rig")
-    kind = "dome" if isinstance(load_rig(rig_path), DomeConfig) else "gonioreflectometer"
-    _, plan_model, measures = _KINDS[kind]
+    kind_name = load_rig(rig_path).rig
+    kind = kind_of(kind_name)
+    plan_model, measures = kind.plan, kind.measures
     rig = read_yaml_mapping(rig_path)
     unknown = [name for name in sweep.objectives if name not in measures]
     if unknown or sweep.objectives[0] == sweep.objectives[1]:
@@ -305,4 +316,4 @@ def load_sweep(name_or_path: str | Path) -> Sweep:
         _point(index, dict(zip(parameters, combination, strict=True)), sweep, rig, kind, path)
         for index, combination in enumerate(itertools.product(*parameters.values()))
     ]
-    return Sweep(path, sweep.name, kind, parameters, points, sweep.objectives, measures)
+    return Sweep(path, sweep.name, kind_name, parameters, points, sweep.objectives, measures)

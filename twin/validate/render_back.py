@@ -21,6 +21,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from recon.btf.rgb_import import rgb_source
 from recon.btf.store import BTFStore
@@ -28,7 +29,6 @@ from recon.errors import SpectwinInputError
 from twin.materials import load_material
 from twin.output_format import dumps
 from twin.render.plugins.btf_bsdf import store_table
-from twin.validate.dome_evaluation import spectral_passbands
 from twin.validate.figure46 import field_interiors, render_figure46, write_figure46
 from twin.validate.spectrophotometer import compare_45_0, field_spots, write_45_0_figure
 
@@ -57,6 +57,7 @@ def validate_btf(
     pixels: int = 96,
     spp: int = 256,
     map_height: int = 64,
+    passbands: Callable[[Any], Any] | None = None,
     step: Callable[[str], None] = lambda name: None,
 ) -> dict[str, object]:
     """Render Figure 4.6 and the 45/0 comparison for the BTF at ``btf_path`` into ``out``.
@@ -79,6 +80,10 @@ def validate_btf(
         field mean 0.74 vs 2.76 and 0.53 vs 2.66.
     map_height
         Rows of the captured lat-long map (twice as many columns).
+    passbands
+        ``passbands(wavelengths_nm)``: the passbands the BTF's bands stand for in the 45/0
+        comparison (the rig's, :attr:`twin.kinds.registry.RigKind.passbands`); ``None``: narrow
+        bands.
     step
         Called with the name of each stage as it starts (progress display).
 
@@ -132,8 +137,8 @@ def validate_btf(
 
     step("45/0 spectrophotometer comparison")
     start = time.perf_counter()
-    passbands = spectral_passbands(btf.grid.wavelengths_nm) if "dome_pairs" in btf.attrs else None
-    forty_five = compare_45_0(table, material, spp=spp, passbands=passbands)
+    bands = None if passbands is None else passbands(btf.grid.wavelengths_nm)
+    forty_five = compare_45_0(table, material, spp=spp, passbands=bands)
     write_45_0_figure(forty_five, btf.grid.wavelengths_nm, out / "spectrophotometer_45_0.png")
     timings["spectrophotometer_s"] = round(time.perf_counter() - start, 1)
 

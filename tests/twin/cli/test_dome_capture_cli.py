@@ -1,5 +1,6 @@
-"""``spectwin capture --program dome-calibration|dome-run`` and ``spectwin estimate dome``: dry
-runs write nothing, options of other programs are refused, --resume reads the store's settings.
+"""``spectwin capture dome-calibration|dome-run`` and ``spectwin estimate dome``: dry runs write
+nothing, options of other programs are unknown options, ``spectwin capture resume`` reads the
+store's settings.
 """
 
 from __future__ import annotations
@@ -19,6 +20,8 @@ from twin.dome.programs import (
     dome_run_program,
     stored_dome_settings,
 )
+from twin.kinds.dome import DomeRunSettings
+from twin.kinds.registry import capture_program
 from twin.rigs.rig_config import load_rig
 
 runner = CliRunner()
@@ -27,8 +30,9 @@ REDUCED = ["--stage-positions", "2", "--leds", "24", "--rgb-cameras", "3"]
 
 def test_a_dry_run_of_the_reduced_dome_run_counts_its_frames_and_writes_nothing(tmp_path):
     store = tmp_path / "out" / "lego.capture.zarr"
-    arguments = ["--program", "dome-run", "--material", "lego", *REDUCED, "--texels", "64"]
-    result = runner.invoke(app, ["capture", str(store), "--dry-run", "--json", *arguments])
+    arguments = ["capture", "dome-run", str(store), "--material", "lego", *REDUCED]
+    arguments += ["--texels", "64", "--dry-run", "--json"]
+    result = runner.invoke(app, arguments)
     assert result.exit_code == 0, result.output
     plan = json.loads(result.stdout)
     schedule = dome_plan_parts(load_rig("dome"), DomeCaptureSize(2, 24, 3)).exposures.schedule
@@ -39,9 +43,7 @@ def test_a_dry_run_of_the_reduced_dome_run_counts_its_frames_and_writes_nothing(
     # per position: the alignment (all LEDs) per camera, then the LEDs in passes per camera
     # (24 LEDs: one pass of each camera, the spectral camera's of each LED's scheduled bands)
     assert plan["renders"] == 2 * (4 + 3 + 1) and plan["led_renders"] == "pose"
-    single = runner.invoke(
-        app, ["capture", str(store), "--dry-run", "--json", *arguments, "--led-renders", "single"]
-    )
+    single = runner.invoke(app, [*arguments, "--led-renders", "single"])
     assert json.loads(single.stdout)["renders"] == 2 * (4 + 24 * 4)  # per LED and camera
     assert plan["frame_size"] == "264 x 264 px" and plan["stage_positions"] == 2
     assert plan["estimated_duration_s"] > 48 * sum((0.05, 0.186, 0.666, 2.5))
@@ -50,8 +52,8 @@ def test_a_dry_run_of_the_reduced_dome_run_counts_its_frames_and_writes_nothing(
 
 def test_a_dry_run_of_the_calibration_takes_200_darks_per_spectral_exposure(tmp_path):
     store = tmp_path / "cal.capture.zarr"
-    arguments = ["--program", "dome-calibration", "--leds", "24", "--rgb-cameras", "3"]
-    result = runner.invoke(app, ["capture", str(store), "--dry-run", "--json", *arguments])
+    arguments = ["dome-calibration", str(store), "--leds", "24", "--rgb-cameras", "3"]
+    result = runner.invoke(app, ["capture", *arguments, "--dry-run", "--json"])
     assert result.exit_code == 0, result.output
     plan = json.loads(result.stdout)
     exposures = dome_plan_parts(load_rig("dome"), DomeCaptureSize(24, 24, 3)).exposures
@@ -65,20 +67,24 @@ def test_a_dry_run_of_the_calibration_takes_200_darks_per_spectral_exposure(tmp_
 @pytest.mark.parametrize(
     ("arguments", "message"),
     [
-        (["--program", "dome-run", "--pixels", "64"], "--pixels is not used by --program dome-run"),
-        (
-            ["--program", "dome-calibration", "--stage-positions", "2"],
-            "--stage-positions is not used by --program dome-calibration",
-        ),
-        (["--program", "dome-run", "--dark-frames", "5"], "--dark-frames is not used"),
-        (["--program", "gonio-run", "--leds", "5"], "--leds is not used by --program gonio-run"),
-        (["--program", "dome-run", "--material", "nosuch"], "material: expected one of"),
+        (["dome-run", "--pixels", "64"], "No such option: --pixels"),
+        (["dome-calibration", "--stage-positions", "2"], "No such option: --stage-positions"),
+        (["dome-run", "--dark-frames", "5"], "No such option: --dark-frames"),
+        (["gonio-run", "--leds", "5"], "No such option: --leds"),
+        (["dome-run", "--material", "nosuch"], "material: expected one of"),
     ],
 )
 def test_options_a_dome_program_does_not_use_are_refused(tmp_path, arguments, message):
-    result = runner.invoke(app, ["capture", str(tmp_path / "x.capture.zarr"), *arguments])
+    program, *options = arguments
+    result = runner.invoke(
+        app,
+        ["capture", program, str(tmp_path / "x.capture.zarr"), *options],
+        prog_name="spectwin",
+    )
     assert result.exit_code == 2, result.output
     assert message in result.stderr and result.stderr.count("\n") == 1, result.stderr
+    if message.startswith("No such option"):  # the help that lists the program's options
+        assert f"(see 'spectwin capture {program} --help')" in result.stderr
     assert list(tmp_path.iterdir()) == []
 
 
@@ -92,7 +98,7 @@ def test_sizes_the_rig_cannot_take_are_refused():
 
 
 @pytest.mark.render
-def test_resume_of_a_dome_run_reads_its_settings_and_refuses_other_ones(tmp_path):
+def test_resume_of_a_dome_run_reads_its_settings_and_takes_no_others(tmp_path):
     path = tmp_path / "run.capture.zarr"
     program = dome_run_program("lego", size=DomeCaptureSize(1, 3, 1, 8, 4), seed=5)
     devices = program.devices()
@@ -100,19 +106,31 @@ def test_resume_of_a_dome_run_reads_its_settings_and_refuses_other_ones(tmp_path
         path, program.plan, devices, rig=program.rig, backend="sim", seed=5
     ) as store:
         capture_steps(store, range(2), devices, seed=5)  # the alignment frames
-    probes = [
-        (["--leds", "5"], "was captured with --leds 3, not 5"),
-        (["--texels", "16"], "was captured with --texels 8, not 16"),
-        (["--material", "wallpaper"], "was captured with --material lego, not wallpaper"),
-        (["--program", "dome-calibration"], "was captured with --program dome-run, not"),
-        (["--pixels", "64"], "--pixels is not used by --program dome-run"),
-        (["--led-renders", "single"], "was captured with --led-renders pose, not single"),
-    ]
-    for arguments, message in probes:
-        result = runner.invoke(app, ["capture", str(path), "--resume", *arguments])
-        assert result.exit_code == 2, (arguments, result.output)
-        assert message in result.stderr and result.stderr.count("\n") == 1, result.stderr
-    resumed = runner.invoke(app, ["capture", str(path), "--resume", "--leds", "3", "--json"])
+    kind, stored = capture_program(CaptureStore.open(path))
+    assert (kind.name, stored.name) == ("dome", "dome-run")
+    assert stored.stored(CaptureStore.open(path)) == DomeRunSettings(
+        seed=5,
+        material="lego",
+        stage_positions=1,
+        leds=3,
+        rgb_cameras=1,
+        texels=8,
+        spp=4,
+        led_renders="pose",
+    )
+    for option, value in [
+        ("--leds", "5"),
+        ("--texels", "16"),
+        ("--material", "wallpaper"),
+        ("--program", "dome-calibration"),
+        ("--pixels", "64"),
+        ("--led-renders", "single"),
+    ]:
+        result = runner.invoke(app, ["capture", "resume", str(path), option, value])
+        assert result.exit_code == 2, (option, result.output)
+        assert f"No such option: {option}" in result.stderr, result.stderr
+        assert result.stderr.count("\n") == 1, result.stderr
+    resumed = runner.invoke(app, ["capture", "resume", str(path), "--json"])
     assert resumed.exit_code == 0, resumed.output
     summary = json.loads(resumed.stdout)
     assert summary["complete"] and summary["program"] == "dome-run"
@@ -129,9 +147,14 @@ def test_a_store_that_does_not_record_its_led_renders_resumes_one_render_per_led
         path, program.plan, program.devices(), rig=rig, backend="sim", seed=5
     ):
         pass
-    assert stored_dome_settings(CaptureStore.open(path))["led_renders"] == "single"
-    refused = runner.invoke(app, ["capture", str(path), "--resume", "--led-renders", "pose"])
-    assert "was captured with --led-renders single, not pose" in refused.stderr
+    capture = CaptureStore.open(path)
+    assert stored_dome_settings(capture)["led_renders"] == "single"
+    _, stored = capture_program(capture)
+    settings = stored.stored(capture)  # what spectwin capture resume continues with
+    assert settings.led_renders == "single"
+    resumed, _ = stored.build(settings, 0.0, True)
+    assert resumed.dry_run()["led_renders"] == "single"
+    assert resumed.dry_run()["renders"] == program.dry_run()["renders"]
 
 
 def test_estimate_dome_prints_the_plans_times_against_the_thesis():

@@ -1,5 +1,6 @@
-"""``spectwin capture``: a dry run of every program writes nothing, settings that cannot work
-leave no store, and --resume continues with the program and settings of the store."""
+"""``spectwin capture PROGRAM``: a dry run of every program writes nothing, settings that cannot
+work leave no store, and ``spectwin capture resume`` continues with the program and settings of
+the store (it takes none of its own)."""
 
 from __future__ import annotations
 
@@ -21,6 +22,8 @@ from twin.gonio.capture import (
     run_gonio_measurement,
 )
 from twin.gonio.sim_session import demo_program, run_demo_session
+from twin.kinds.gonio import GonioRunSettings
+from twin.kinds.registry import capture_program
 
 runner = CliRunner()
 EXPOSURES_S = np.full(DEFAULT_GRID.size, 2 / 15)
@@ -44,18 +47,18 @@ def _partial(path, program, steps: int) -> None:
 @pytest.mark.parametrize(
     ("arguments", "steps", "frame_size"),
     [
-        (["--program", "demo"], 72, "32 x 32 px"),
-        (["--program", "gonio-calibration"], 591, "64 x 64 px"),
-        (["--program", "gonio-run"], 5213, "256 x 256 px"),  # the rig model's exposures
+        (["demo"], 72, "32 x 32 px"),
+        (["gonio-calibration"], 591, "64 x 64 px"),
+        (["gonio-run"], 5213, "256 x 256 px"),  # the rig model's exposures
         (
-            ["--program", "gonio-run", "--calibration", "@CAL", "--pixels", "96"]
+            ["gonio-run", "--calibration", "@CAL", "--pixels", "96"]
             + ["--window", "64", "--material", "lego", "--spp", "4"],
             5189,  # one exposure for every band: 8 dark frames, not 32
             "64 x 64 px",
         ),
         # Sattler's 57 directions to 60 degrees: 3192 pairs x 33 bands + darks and white
         (
-            ["--program", "gonio-run", "--sampling", "glossy", "--window", "64"],
+            ["gonio-run", "--sampling", "glossy", "--window", "64"],
             105401,
             "64 x 64 px",
         ),
@@ -66,8 +69,8 @@ def test_a_dry_run_of_every_program_prints_the_plan_and_writes_nothing(
     tmp_path, calibration, arguments, steps, frame_size
 ):
     store = tmp_path / "out" / "x.capture.zarr"
-    arguments = [str(calibration) if a == "@CAL" else a for a in arguments]
-    result = runner.invoke(app, ["capture", str(store), "--dry-run", "--json", *arguments])
+    program, *options = [str(calibration) if a == "@CAL" else a for a in arguments]
+    result = runner.invoke(app, ["capture", program, str(store), "--dry-run", "--json", *options])
     assert result.exit_code == 0, result.output
     plan = json.loads(result.stdout)
     assert plan["steps"] == steps and plan["frames"] == {"k4": steps}
@@ -132,57 +135,68 @@ def test_a_refused_capture_leaves_no_store_behind(tmp_path):
     with pytest.raises(SpectwinInputError, match="fault_rate"):
         run_demo_session(store, 0, fault_rate=2.0)
     assert list(tmp_path.iterdir()) == []
-    result = runner.invoke(app, ["capture", str(store), "--program", "gonio-run", "--spp", "0"])
+    result = runner.invoke(app, ["capture", "gonio-run", str(store), "--spp", "0"])
     assert result.exit_code == 2 and "'--spp'" in result.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def _one_line(result, code: int, message: str) -> None:
+    assert result.exit_code == code, result.output
+    assert message in result.stderr and result.stderr.count("\n") == 1, result.stderr
 
 
 def test_resume_continues_with_the_seed_and_program_of_the_store(tmp_path):
     path = tmp_path / "seven.capture.zarr"
     _partial(path, demo_program(7), 20)
-    refused = runner.invoke(app, ["capture", str(path), "--resume", "--seed", "3"])
-    assert refused.exit_code == 2
-    assert "was captured with --seed 7, not 3" in refused.stderr
-    agreeing = runner.invoke(app, ["capture", str(path), "--resume", "--seed", "7", "--json"])
-    assert agreeing.exit_code == 0, agreeing.output  # the store's value, given: fine
+    refused = runner.invoke(app, ["capture", "resume", str(path), "--seed", "3"])
+    _one_line(refused, 2, "No such option: --seed")  # the seed is the store's
+    resumed = runner.invoke(app, ["capture", "resume", str(path), "--json"])
+    assert resumed.exit_code == 0, resumed.output
+    assert json.loads(resumed.stdout)["program"] == "demo"
     reference = run_demo_session(tmp_path / "reference.capture.zarr", 7)
     np.testing.assert_array_equal(
         CaptureStore.open(path).frames("k4")[:], reference.frames("k4")[:]
     )
     other = tmp_path / "other.capture.zarr"
     _partial(other, demo_program(7), 5)
-    resumed = runner.invoke(app, ["capture", str(other), "--resume", "--json"])
-    assert resumed.exit_code == 0, resumed.output  # no --seed: the store's 7
+    resumed = runner.invoke(app, ["capture", "resume", str(other), "--json"])
+    assert resumed.exit_code == 0, resumed.output  # the store's seed 7
     np.testing.assert_array_equal(
         CaptureStore.open(other).frames("k4")[:], reference.frames("k4")[:]
     )
 
 
-def test_resume_of_a_run_reads_its_settings_and_refuses_other_ones(tmp_path, calibration):
+def test_resume_of_a_run_reads_its_settings_and_takes_no_others(tmp_path, calibration):
     path = tmp_path / "run.capture.zarr"
     program = gonio_measurement_program(
         EXPOSURES_S, material="lego", pixels=64, window=48, spp=4, seed=5
     )
     _partial(path, program, 3)  # dark frames only: nothing rendered
-    other_plan = tmp_path / "other.json"
-    GonioCalibration.identity(
-        np.full(DEFAULT_GRID.size, 3 / 15), DEFAULT_GRID.wavelengths_nm, 1 / 15
-    ).save(other_plan)
+    kind, stored = capture_program(CaptureStore.open(path))
+    assert (kind.name, stored.name) == ("gonioreflectometer", "gonio-run")
+    assert stored.stored(CaptureStore.open(path)) == GonioRunSettings(
+        seed=5,
+        material="lego",
+        pixels=64,
+        window=48,
+        sampling="reduced",
+        spp=4,
+        exposures_s=tuple(EXPOSURES_S),
+    )
     probes = [
-        (["--pixels", "128"], "was captured with --pixels 64, not 128"),
-        (["--window", "32"], "was captured with --window 48, not 32"),
-        (["--spp", "16"], "was captured with --spp 4, not 16"),
-        (["--sampling", "glossy"], "was captured with --sampling reduced, not glossy"),
-        (["--material", "wallpaper"], "was captured with --material lego, not wallpaper"),
-        (["--seed", "0"], "was captured with --seed 5, not 0"),
-        (["--program", "demo"], "was captured with --program gonio-run, not demo"),
-        (["--calibration", str(other_plan)], "plans other band exposures than the store's run"),
-        (["--fault-rate", "0.01"], "--fault-rate is not used by --program gonio-run"),
+        (["--pixels", "128"], "No such option: --pixels"),
+        (["--window", "32"], "No such option: --window"),
+        (["--spp", "16"], "No such option: --spp"),
+        (["--sampling", "glossy"], "No such option: --sampling"),
+        (["--material", "wallpaper"], "No such option: --material"),
+        (["--seed", "0"], "No such option: --seed"),
+        (["--program", "demo"], "No such option: --program"),
+        (["--calibration", str(calibration)], "No such option: --calibration"),
+        (["--fault-rate", "0.01"], "--fault-rate is not used by gonio-run; leave it out"),
     ]
     for arguments, message in probes:
-        result = runner.invoke(app, ["capture", str(path), "--resume", *arguments])
-        assert result.exit_code == 2, (arguments, result.output)
-        assert message in result.stderr and result.stderr.count("\n") == 1, result.stderr
+        result = runner.invoke(app, ["capture", "resume", str(path), *arguments])
+        _one_line(result, 2, message)
     assert CaptureStore.open(path).pending_steps() == list(range(3, len(program.plan)))
 
 
@@ -195,12 +209,15 @@ def test_the_capture_renders_at_the_rigs_sample_count_unless_told(tmp_path):
     assert gonio_measurement_program(EXPOSURES_S).rig["spp"] == GONIO_SPP
     dome = ["--leds", "2", "--rgb-cameras", "1", "--texels", "8"]
     for arguments, spp in [
-        (["--program", "gonio-run"], GONIO_SPP),
-        (["--program", "gonio-run", "--spp", "40"], 40),
-        (["--program", "dome-run", *dome, "--stage-positions", "1"], DEFAULT_SPP),
-        (["--program", "dome-calibration", *dome, "--spp", "9"], 9),
+        (["gonio-run"], GONIO_SPP),
+        (["gonio-run", "--spp", "40"], 40),
+        (["dome-run", *dome, "--stage-positions", "1"], DEFAULT_SPP),
+        (["dome-calibration", *dome, "--spp", "9"], 9),
     ]:
         store = tmp_path / "x.capture.zarr"
-        result = runner.invoke(app, ["capture", str(store), "--dry-run", "--json", *arguments])
+        program, *options = arguments
+        result = runner.invoke(
+            app, ["capture", program, str(store), "--dry-run", "--json", *options]
+        )
         assert result.exit_code == 0, result.output
         assert json.loads(result.stdout)["spp"] == spp, arguments

@@ -319,8 +319,10 @@ def test_cluster_errors_name_the_scheduler_and_the_conflict(tmp_path):
         with dask_client(scheduler=address, connect_timeout_s=0.5):
             pass
     store = tmp_path / "x.capture.zarr"
-    both = runner.invoke(app, ["capture", str(store), "--workers", "2", "--scheduler", address])
+    both = runner.invoke(
+        app, ["capture", "demo", str(store), "--workers", "2", "--scheduler", address]
+    )
     assert both.exit_code == 2 and "scheduler" in both.output
-    negative = runner.invoke(app, ["capture", str(store), "--workers", "-1"])
+    negative = runner.invoke(app, ["capture", "demo", str(store), "--workers", "-1"])
     assert negative.exit_code == 2
     assert not store.exists()

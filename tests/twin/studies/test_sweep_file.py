@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 
 from recon.errors import SpectwinInputError
 from twin.cli.app import app
-from twin.cli.sweep import point_functions
+from twin.kinds.registry import sweep_kind
 from twin.studies.sweep_file import SweepRange, check_points, load_sweep
 from twin.studies.sweep_report import pareto_front
 
@@ -32,7 +32,7 @@ def _write(tmp_path: Path, **changes) -> Path:
 
 
 def test_builtin_gonio_sweep_is_the_product_of_its_parameters():
-    sweep = load_sweep("gonio_lamp_filter_sampling")
+    sweep = load_sweep("gonio_lamp_filter_sampling", sweep_kind)
     assert len(sweep.points) == 2 * 3 * 3
     expected = itertools.product(["hmi", "qth"], ["VS-07", "VS-10", "VS-20"], [5, 9, 13])
     for point, (lamp, filter_model, directions) in zip(sweep.points, expected, strict=True):
@@ -47,7 +47,7 @@ def test_builtin_gonio_sweep_is_the_product_of_its_parameters():
 
 
 def test_builtin_dome_sweep_varies_schedule_exposure_and_filter():
-    sweep = load_sweep("dome_schedule_tbase_filter")
+    sweep = load_sweep("dome_schedule_tbase_filter", sweep_kind)
     assert sweep.kind == "dome" and len(sweep.points) == 3 * 2 * 3
     point = sweep.points[-1]
     assert (point.plan.schedule_images, point.plan.longest_band_s) == (12, 5.48)
@@ -63,7 +63,7 @@ def test_a_range_gives_evenly_spaced_values(tmp_path):
         tmp_path,
         parameters={"rig.exposure.white_fill": {"start": 0.6, "stop": 0.8, "num": 3}},
     )
-    fills = [point.rig.exposure.white_fill for point in load_sweep(path).points]
+    fills = [point.rig.exposure.white_fill for point in load_sweep(path, sweep_kind).points]
     assert fills == pytest.approx([0.6, 0.7, 0.8])
 
 
@@ -117,8 +117,8 @@ BAD_FILES = [
 @pytest.mark.parametrize(("changes", "phrase"), BAD_FILES, ids=[p for _, p in BAD_FILES])
 def test_bad_sweep_files_are_refused_naming_the_problem(tmp_path, changes, phrase):
     with pytest.raises(SpectwinInputError) as error:
-        sweep = load_sweep(_write(tmp_path, **changes))
-        check_points(sweep, point_functions(sweep.kind)[0])
+        sweep = load_sweep(_write(tmp_path, **changes), sweep_kind)
+        check_points(sweep, sweep_kind(sweep.kind).check)
     assert phrase in str(error.value)
 
 

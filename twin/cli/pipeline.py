@@ -1,0 +1,342 @@
+"""``spectwin`` commands of the pipeline after a capture: calibrate, process, compress,
+evaluate, validate, for every kind of rig (:mod:`twin.kinds.registry`: what a command does with
+a store is found by the rig the store records).
+
+A full twin run at reduced sampling (thesis 3.3 and 4.1)::
+
+    spectwin capture gonio-calibration out/cal.capture.zarr
+    spectwin calibrate out/cal.capture.zarr --out out/cal.json
+    spectwin capture gonio-run out/run.capture.zarr --calibration out/cal.json
+    spectwin process out/run.capture.zarr --calibration out/cal.json --out out/cc.btf.zarr
+    spectwin compress out/cc.btf.zarr --layout joint
+    spectwin evaluate out/cc.btf.zarr --figure out/cc_vs_truth.png
+    spectwin validate out/cc.btf.zarr --out out/validation
+
+The dome's::
+
+    spectwin capture dome-calibration out/cal.capture.zarr --leds 24 --rgb-cameras 3
+    spectwin calibrate out/cal.capture.zarr --out out/dome_cal.npz
+    spectwin capture dome-run out/lego.capture.zarr --material lego --stage-positions 2 \\
+        --leds 24 --rgb-cameras 3
+    spectwin process out/lego.capture.zarr --calibration out/dome_cal.npz --out out/lego.btf.zarr
+    spectwin evaluate out/lego.btf.zarr --figure out/lego_vs_truth.png
+"""
+
+from __future__ import annotations
+
+import shlex
+from enum import StrEnum
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from twin.cli.errors import (
+    INTERRUPTED,
+    fail,
+    require_output_file,
+    require_output_folder,
+    run_failed,
+)
+from twin.cli.output import JsonFlag, SchedulerOption, WorkersOption, console, print_summary
+from twin.cli.store import require_sound_btf, require_sound_capture
+
+__all__ = ["register"]
+
+
+class Layout(StrEnum):
+    per_band = "per_band"
+    joint = "joint"
+
+
+def _given(ctx: typer.Context, name: str) -> bool:
+    """Whether option ``name`` was given on the command line."""
+    source = ctx.get_parameter_source(name)
+    return source is not None and source.name == "COMMANDLINE"
+
+
+def _option(ctx: typer.Context, name: str) -> str:
+    return next(p.opts[0] for p in ctx.command.params if p.name == name)
+
+
+def _refuse_unused(ctx: typer.Context, names: tuple[str, ...], used: frozenset[str], what: str):
+    """Refuse an option of ``names`` given on the command line that ``used`` does not hold."""
+    for name in names:
+        if name not in used and _given(ctx, name):
+            fail(f"{_option(ctx, name)} is not used by {what}; leave it out")
+
+
+def _show(outcome, as_json: bool) -> None:
+    """Print a rig hook's outcome; a failure exits 1 after the summary."""
+    summary = outcome.as_json if as_json and outcome.as_json is not None else outcome.summary
+    print_summary(summary, outcome.title, as_json)
+
+
+def calibrate(
+    ctx: typer.Context,
+    store: Annotated[
+        Path, typer.Argument(help="A gonio-calibration or dome-calibration capture store.")
+    ],
+    out: Annotated[
+        Path | None,
+        typer.Option(
+            help="Calibration to write: JSON for the gonioreflectometer (default cal.json), "
+            ".npz for the dome (default dome_cal.npz)."
+        ),
+    ] = None,
+    white_fill: Annotated[
+        float,
+        typer.Option(
+            min=0.01,
+            max=0.99,
+            help="gonio: fraction of the range the white standard should reach.",
+        ),
+    ] = 0.7,
+    as_json: JsonFlag = False,
+) -> None:
+    """Gonioreflectometer: response curve (Robertson), white factors F' (Eq. 3.3) and the
+    exposure plan (Eq. 3.4, multiples of 1/15 s for the HMI lamp). Dome: every camera's
+    geometry (checkerboard frames, OpenCV), the spectral camera's low-SNR calibration (10.3),
+    the RGB cameras' responses and the white standard under every LED.
+
+    Example: spectwin calibrate out/cal.capture.zarr --out out/cal.json
+    """
+    from hwbridge.store import CaptureStore
+    from twin.kinds.registry import capture_rig_kind
+
+    capture = CaptureStore.open(store)
+    kind = capture_rig_kind(capture)
+    _refuse_unused(ctx, ("white_fill",), kind.calibrate_options, f"a {kind.name} calibration")
+    out = kind.calibration_file if out is None else out
+    if kind.calibration_suffix is not None and out.suffix != kind.calibration_suffix:
+        fail(
+            f"--out {out}: a {kind.name} calibration is a {kind.calibration_suffix} file; "
+            f"expected a name ending in {kind.calibration_suffix}"
+        )
+    require_output_file(out)
+    require_sound_capture(capture, store)
+    options = {"white_fill": white_fill}
+    _show(kind.calibrate(capture, out, options, not as_json), as_json)
+
+
+def process(
+    ctx: typer.Context,
+    store: Annotated[Path, typer.Argument(help="A gonio-run or dome-run capture store.")],
+    calibration: Annotated[
+        Path, typer.Option(help="spectwin calibrate's JSON (gonio) or .npz (dome).")
+    ],
+    out: Annotated[Path, typer.Option(help="BTF store to write (<name>.btf.zarr).")],
+    texels: Annotated[
+        int | None,
+        typer.Option(
+            min=16,
+            max=1024,
+            help="Texture resolution per side (at least 16: evaluate and validate need texels "
+            "inside every chart field). Default: 128 (gonio), the capture's texels (dome).",
+        ),
+    ] = None,
+    manual_corners: Annotated[
+        Path | None, typer.Option(help="Manual corner file for frames detection misses.")
+    ] = None,
+    resume: Annotated[
+        bool, typer.Option("--resume", help="Continue an interrupted process.")
+    ] = False,
+    workers: WorkersOption = 1,
+    scheduler: SchedulerOption = None,
+    as_json: JsonFlag = False,
+) -> None:
+    """Calibrate and register a measurement run into a spectral BTF store: the
+    gonioreflectometer's (Eq. 3.6, 4.1.2), or the dome's, spectralized from its RGB images and
+    noisy bands (Eq. 10.12, jointly over each cycle of the band schedule, 10.4.2).
+
+    With --workers N (a local cluster) or --scheduler ADDRESS the gonioreflectometer's direction
+    pairs are Dask tasks; the BTF is the same as from one process.
+
+    Example: spectwin process out/run.capture.zarr --calibration out/cal.json --out out/cc.btf.zarr
+    """
+    from hwbridge.lock import require_new_store, require_no_writer
+    from hwbridge.store import CaptureStore
+    from recon.registration.border import read_manual_corners
+    from twin.kinds.registry import capture_rig_kind
+
+    # Everything that can be checked is, before the first frame is read: the options, the
+    # calibration, the output, the store's integrity and progress, its kind and bands.
+    if out.resolve() == store.resolve():
+        fail(f"--out {out} is the capture store itself; choose another --out")
+    require_no_writer(out)
+    if not resume:
+        require_new_store(out)
+    capture = CaptureStore.open(store)
+    kind = capture_rig_kind(capture)
+    _refuse_unused(ctx, ("workers", "scheduler"), kind.process_options, f"a {kind.name} run")
+    options = {
+        "texels": texels,
+        "manual_corners": read_manual_corners(manual_corners) if manual_corners else None,
+        "resume": resume,
+        "workers": workers,
+        "scheduler": scheduler,
+    }
+    require_output_folder(out)
+    require_sound_capture(capture, store)
+    try:
+        outcome = kind.process(capture, calibration, out, options, not as_json)
+    except KeyboardInterrupt:
+        again = ["spectwin", "process", str(store), "--calibration", str(calibration)]
+        again += ["--out", str(out)] + ([] if texels is None else ["--texels", str(texels)])
+        typer.echo(f"interrupted; continue with: {shlex.join([*again, '--resume'])}", err=True)
+        raise typer.Exit(INTERRUPTED) from None
+    _show(outcome, as_json)
+    if outcome.failure is not None:
+        run_failed(f"{outcome.failure}, and run again with --manual-corners FILE --resume")
+
+
+def compress(
+    btf: Annotated[Path, typer.Argument(help="A complete BTF store (spectwin process).")],
+    brightness: Annotated[
+        int, typer.Option(min=1, max=100000, help="PCA components of the brightness.")
+    ] = 250,
+    spectral: Annotated[
+        int,
+        typer.Option(
+            min=1,
+            max=100000,
+            help="PCA components of the normalized spectra (per band or joint).",
+        ),
+    ] = 60,
+    layout: Annotated[
+        Layout,
+        typer.Option(
+            help="per_band: one PCA per band (the thesis); joint: one PCA over all bands."
+        ),
+    ] = Layout.per_band,
+    as_json: JsonFlag = False,
+) -> None:
+    """Compress a BTF by PCA of brightness and normalized spectra (thesis 4.1.2: 250 and 60
+    components) into the store's pca/ group; report size and Eq. 6.8 error against the store.
+
+    Example: spectwin compress out/cc.btf.zarr --layout joint --json
+    """
+    from hwbridge.lock import StoreLock, require_no_writer
+    from recon.btf.compression import compress_btf, compression_report, save_compressed
+    from recon.btf.store import BTFStore
+
+    require_no_writer(btf)
+    require_sound_btf(btf, "compress")
+    store = BTFStore.open(btf, writable=True)
+    with StoreLock.acquire(btf), console.status("compressing"):
+        reflectance = store.read()
+        compressed = compress_btf(
+            reflectance,
+            store.grid,
+            n_brightness=brightness,
+            n_spectral=spectral,
+            layout=layout.value,
+        )
+        save_compressed(store, compressed)
+        report = compression_report(compressed, reflectance)
+    print_summary({"btf": str(btf), **report.as_dict()}, "BTF compression", as_json)
+
+
+def evaluate(
+    btf: Annotated[Path, typer.Argument(help="A BTF store made by spectwin process.")],
+    figure: Annotated[Path | None, typer.Option(help="PNG of errors and spectra.")] = None,
+    spp: Annotated[
+        int, typer.Option(min=1, max=65536, help="Samples per pixel of the truth renders.")
+    ] = 64,
+    as_json: JsonFlag = False,
+) -> None:
+    """Compare a processed BTF with the twin's true BTF: per-field Eq. 6.8 and corner errors
+    (a material without chart fields: per texel, Eq. 6.8 and Delta E94); for a dome BTF also
+    Delta E94 (diffuse fields, or the material's texels) and the texture's
+    shift against the truth.
+
+    Example: spectwin evaluate out/cc.btf.zarr --figure out/cc_vs_truth.png --json
+    """
+    from twin.kinds.registry import btf_rig_kind
+
+    require_sound_btf(btf, "evaluate", allow_unregistered=True)
+    if figure is not None:
+        require_output_file(figure, "--figure")
+    kind = btf_rig_kind(btf)
+    with console.status("rendering the truth and comparing"):
+        outcome = kind.evaluate(btf, spp, figure)
+    _show(outcome, as_json)
+
+
+def validate(
+    btf: Annotated[Path, typer.Argument(help="A BTF store of the twin's colour checker.")],
+    out: Annotated[Path, typer.Option(help="Folder for the PNGs and metrics.json.")] = Path(
+        "validation"
+    ),
+    compressed: Annotated[
+        bool, typer.Option("--compressed", help="Render the store's PCA form (spectwin compress).")
+    ] = False,
+    pixels: Annotated[
+        int,
+        typer.Option(
+            min=23,
+            max=2048,
+            help="Image size of the three panels (at least 23: every chart field keeps an "
+            "interior pixel).",
+        ),
+    ] = 96,
+    spp: Annotated[
+        int,
+        typer.Option(
+            min=4, max=65536, help="Samples per pixel (the photograph's noise adds to Delta E)."
+        ),
+    ] = 256,
+    map_height: Annotated[
+        int,
+        typer.Option(
+            min=4, max=2048, help="Rows of the captured environment map (2x as many columns)."
+        ),
+    ] = 64,
+    as_json: JsonFlag = False,
+) -> None:
+    """Render the BTF back (thesis 4.2): Figure 4.6 (photograph, spectral and RGB renderings,
+    Delta E94 maps) and the 45/0 spectrophotometer comparison, with a metrics JSON.
+
+    Example: spectwin validate out/cc.btf.zarr --out out/validation --compressed
+    """
+    from recon.btf.store import BTFStore
+    from twin.kinds.registry import rig_kind
+    from twin.validate.render_back import validate_btf
+
+    require_output_folder(out)
+    require_sound_btf(btf, "validate", allow_unregistered=True, compressed=compressed)
+    rig = BTFStore.open(btf).attrs.get("rig")  # None: imported, narrow bands
+    with console.status("validating") as status:
+        metrics = validate_btf(
+            btf,
+            out,
+            compressed=compressed,
+            pixels=pixels,
+            spp=spp,
+            map_height=map_height,
+            passbands=None if rig is None else rig_kind(rig).passbands,
+            step=lambda name: status.update(name),
+        )
+    if as_json:
+        print_summary(metrics, "", as_json)
+        return
+    figure46, forty_five = metrics["figure46"], metrics["spectrophotometer_45_0"]
+    summary = {
+        "out": str(out),
+        "form": metrics["form"],
+        "measured_as": metrics["measured_as"],
+        "field_mean_delta_e94_spectral": figure46["field_mean_delta_e94_spectral"],
+        "field_mean_delta_e94_rgb": figure46["field_mean_delta_e94_rgb"],
+        "field_ratio_rgb_over_spectral": figure46["field_ratio_rgb_over_spectral"],
+        "mean_delta_e94_spectral": figure46["mean_delta_e94_spectral"],
+        "mean_delta_e94_rgb": figure46["mean_delta_e94_rgb"],
+        "45/0_mean_error_matte_fields_pct": forty_five["mean_error_matte_fields_pct"],
+        "45/0_max_error_matte_fields_pct": forty_five["max_error_matte_fields_pct"],
+    }
+    print_summary(summary, "BTF rendered back (Figure 4.6, 45/0)")
+
+
+def register(app: typer.Typer) -> None:
+    """Add the commands to ``app``."""
+    for command in (calibrate, process, compress, evaluate, validate):
+        app.command()(command)
