@@ -117,7 +117,7 @@ PROBES: list[tuple[list[str], int, str]] = [
     (["capture", "@LOCKED_NEW", "--resume"], 1, "is being created by PID"),
     (["capture", "@NEW", "--program", "gonio-run"], 2, "needs --calibration"),
     (["capture", "@NEW", "--program", "nosuch"], 2, "'--program'"),
-    (["capture", "@CAPTURE"], 2, "exists: continue it with --resume"),
+    (["capture", "@CAPTURE"], 2, "overwritten); continue it with --resume or choose another name"),
     (
         ["capture", "@NEW", "--program", "gonio-run", "--calibration", "@CAL"]
         + ["--material", "nosuch"],
@@ -175,7 +175,7 @@ PROBES: list[tuple[list[str], int, str]] = [
     (
         ["process", "@CAPTURE", "--calibration", "@CAL", "--out", "@BTF"],
         2,
-        "exists: continue it with --resume",
+        "(nothing was overwritten); continue it with --resume or choose another name",
     ),
     (
         ["process", "@CAPTURE", "--calibration", "@CAL", "--out", "@NEW_BTF"]
