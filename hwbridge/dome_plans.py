@@ -42,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hwbridge.dome_layout import ALL_LEDS, NO_LIGHT
-from hwbridge.errors import BridgeInputError
+from hwbridge.errors import InputError
 from hwbridge.plans import dark_series, plan_step
 
 __all__ = [
@@ -65,11 +65,9 @@ class DomeCameraIds:
 
     def __post_init__(self) -> None:
         if not self.rgb:
-            raise BridgeInputError("rgb: expected at least one RGB camera")
+            raise InputError("rgb: expected at least one RGB camera")
         if len(set(self.rgb)) != len(self.rgb) or self.spectral in self.rgb:
-            raise BridgeInputError(
-                f"cameras: expected distinct ids, got {self.rgb + (self.spectral,)}"
-            )
+            raise InputError(f"cameras: expected distinct ids, got {self.rgb + (self.spectral,)}")
 
     @property
     def all(self) -> tuple[str, ...]:
@@ -107,20 +105,20 @@ class DomeExposures:
 
     def __post_init__(self) -> None:
         if len(self.bands_nm) != len(self.band_s) or not self.bands_nm:
-            raise BridgeInputError(
+            raise InputError(
                 f"band_s: expected one exposure per band ({len(self.bands_nm)}), got "
                 f"{len(self.band_s)}"
             )
         if not self.rgb_hdr_s:
-            raise BridgeInputError("rgb_hdr_s: expected at least one RGB exposure")
+            raise InputError("rgb_hdr_s: expected at least one RGB exposure")
         scheduled = sorted({band for image in self.schedule for band in image})
         if scheduled != list(range(len(self.bands_nm))):
-            raise BridgeInputError(
+            raise InputError(
                 f"schedule: expected every band index 0..{len(self.bands_nm) - 1} in some image, "
                 f"got {scheduled}"
             )
         if self.reference_band_nm not in self.bands_nm:
-            raise BridgeInputError(
+            raise InputError(
                 f"reference_band_nm: {self.reference_band_nm} nm is not among the bands"
             )
 
@@ -166,9 +164,9 @@ def _all_leds_frames(cameras, exposures, kind, **settings) -> list[dict]:
 def _check_ids(name: str, values: Sequence[int], count: int | None = None) -> list[int]:
     ids = [int(value) for value in values]
     if not ids or len(set(ids)) != len(ids) or min(ids) < 0:
-        raise BridgeInputError(f"{name}: expected distinct non-negative indices, got {ids}")
+        raise InputError(f"{name}: expected distinct non-negative indices, got {ids}")
     if count is not None and max(ids) >= count:
-        raise BridgeInputError(f"{name}: expected indices below {count}, got {max(ids)}")
+        raise InputError(f"{name}: expected indices below {count}, got {max(ids)}")
     return ids
 
 
@@ -262,9 +260,9 @@ def dome_calibration(
     """
     lights = _check_ids("leds", leds)
     if not exposures.rgb_series_s or not exposures.spectral_series_s:
-        raise BridgeInputError("exposures: the calibration needs both response series")
+        raise InputError("exposures: the calibration needs both response series")
     if not geometric_views:
-        raise BridgeInputError("geometric_views: expected at least one stage position and tilt")
+        raise InputError("geometric_views: expected at least one stage position and tilt")
     spectral_times = _distinct(
         [*exposures.band_s, *exposures.spectral_series_s, exposures.all_leds_s[cameras.spectral]]
     )
@@ -311,7 +309,7 @@ def _timeline(plan: list[dict], timing: DomeTiming) -> tuple[np.ndarray, float]:
     """Exposure starts of every step and the end of the plan (module docstring)."""
     unknown = sorted({step["camera"] for step in plan} - set(timing.frame_overhead_s))
     if unknown:
-        raise BridgeInputError(f"timing: no frame overhead for cameras {unknown}")
+        raise InputError(f"timing: no frame overhead for cameras {unknown}")
     starts = np.empty(len(plan))
     clock, slot, view, light = 0.0, None, None, NO_LIGHT
     cameras: dict[str, float] = {}
@@ -357,5 +355,5 @@ def dome_start_times_s(plan: list[dict], timing: DomeTiming) -> np.ndarray:
 def dome_duration_s(plan: list[dict], timing: DomeTiming) -> float:
     """How long ``plan`` takes, cameras in parallel (module docstring)."""
     if not plan:
-        raise BridgeInputError("plan: expected at least one step")
+        raise InputError("plan: expected at least one step")
     return _timeline(plan, timing)[1]

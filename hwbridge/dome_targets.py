@@ -2,7 +2,7 @@
 
 The simulated devices (``twin.devices``) and the real drivers (``hwbridge.drivers``) check a
 request the same way, so they refuse the same requests with the same one-line
-:class:`~hwbridge.errors.BridgeInputError`. The dome (thesis 10.2.2) turns its sample in 24 steps
+:class:`~hwbridge.errors.InputError`. The dome (thesis 10.2.2) turns its sample in 24 steps
 of 15 deg and switches its 198 LEDs on one at a time, all of them for the alignment frames.
 """
 
@@ -12,7 +12,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from hwbridge.errors import BridgeInputError
+from hwbridge.errors import InputError
 
 __all__ = ["check_current_ma", "led_pattern", "single_led", "stage_angle_deg"]
 
@@ -45,7 +45,7 @@ def stage_angle_deg(
 
     Raises
     ------
-    BridgeInputError
+    InputError
         A target with other keys than one of those two, or an angle outside ``range_deg``.
     """
     if set(target) == {"angle_deg"}:
@@ -53,23 +53,23 @@ def stage_angle_deg(
     elif set(target) == {"view_id"}:
         angle = int(target["view_id"]) * step_deg
     else:
-        raise BridgeInputError(
+        raise InputError(
             f"{name}: expected a target {{'angle_deg': a}} or {{'view_id': k}}, got "
             f"{sorted(target)}"
         )
     low, high = range_deg
     if not low <= angle <= high:  # NaN fails too
-        raise BridgeInputError(
+        raise InputError(
             f"{name}: angle {angle:g} deg is outside the stage's range {low:g}-{high:g} deg"
         )
     return angle
 
 
 def led_pattern(pattern: object, count: int, name: str) -> np.ndarray:
-    """``pattern`` as a boolean array of ``count`` LEDs, or a :class:`BridgeInputError`."""
+    """``pattern`` as a boolean array of ``count`` LEDs, or a :class:`InputError`."""
     pattern = np.asarray(pattern)
     if pattern.shape != (count,) or not (pattern.dtype == bool or np.isin(pattern, (0, 1)).all()):
-        raise BridgeInputError(
+        raise InputError(
             f"{name}: expected an on/off pattern of {count} LEDs, got shape {pattern.shape} "
             f"of {pattern.dtype}"
         )
@@ -77,9 +77,9 @@ def led_pattern(pattern: object, count: int, name: str) -> np.ndarray:
 
 
 def single_led(led: int, count: int, name: str) -> np.ndarray:
-    """The pattern with LED ``led`` alone on, or a :class:`BridgeInputError`."""
+    """The pattern with LED ``led`` alone on, or a :class:`InputError`."""
     if not 0 <= led < count:
-        raise BridgeInputError(f"{name}: LED {led} is not in 0..{count - 1}")
+        raise InputError(f"{name}: LED {led} is not in 0..{count - 1}")
     return np.arange(count) == led
 
 
@@ -87,12 +87,12 @@ def check_current_ma(current_ma: float, current_range_ma: tuple[float, float], n
     """``current_ma`` if it is a positive current within ``current_range_ma`` (both included)."""
     low, high = current_range_ma
     if not current_ma > 0:  # NaN fails too
-        raise BridgeInputError(
+        raise InputError(
             f"{name}: expected a positive LED current, got {current_ma} mA (switch LEDs off with "
             "an all-off pattern)"
         )
     if not low <= current_ma <= high:
-        raise BridgeInputError(
+        raise InputError(
             f"{name}: current {current_ma:g} mA is outside the driver's range {low:.4g}-{high:g} mA"
         )
     return float(current_ma)

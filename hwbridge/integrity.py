@@ -309,7 +309,7 @@ class IntegrityReport:
         return None
 
     def summary(self) -> dict[str, Any]:
-        """The report as a flat summary (``spectwin store check``)."""
+        """The report as a flat summary, one value per line of a table."""
         first = [str(problem) for problem in self.problems[:4]]
         return {
             "store": str(self.path),
@@ -327,7 +327,7 @@ class IntegrityReport:
         }
 
     def as_dict(self) -> dict[str, Any]:
-        """Everything, for ``--json``."""
+        """Everything, for JSON."""
         return {
             **self.summary(),
             "first_damaged": [str(problem) for problem in self.problems[:4]],

@@ -1,7 +1,7 @@
 """One writer per store: an advisory lock file inside the store folder.
 
-A writer (``spectwin capture`` and its ``--resume``, ``spectwin process`` and ``compress``
-writing a BTF store) holds ``<store>/.writer.lock`` for its whole run: an exclusive
+A writer (a capture and its resumption, the processing and the compression writing a BTF
+store) holds ``<store>/.writer.lock`` for its whole run: an exclusive
 ``fcntl.flock`` on the file, which records the owner (PID, host, start time, command line). A
 second writer is refused with :class:`~hwbridge.errors.StoreBusy`, whose one-line message names
 the owner. The workers of a distributed capture or processing write their chunks inside the lock
@@ -40,7 +40,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from hwbridge.errors import BridgeInputError, StoreBusy
+from hwbridge.errors import InputError, Remedy, StoreBusy
 
 __all__ = [
     "LOCK_NAME",
@@ -135,8 +135,7 @@ def _busy(store: Path, lock_file: Path, creating: bool) -> StoreBusy:
     who = owner.describe() if owner else "another process (it has not written its name yet)"
     doing = "created" if creating else "written"
     return StoreBusy(
-        f"{store} is being {doing} by {who}; one writer at a time: wait for it to end, or stop "
-        "it and continue with --resume"
+        f"{store} is being {doing} by {who}; one writer at a time: wait for it to end, or stop it"
     )
 
 
@@ -156,7 +155,7 @@ def _try_lock(lock_file: Path) -> int | None:
         try:
             fd = os.open(lock_file, os.O_RDWR | os.O_CREAT, 0o644)
         except OSError as error:
-            raise BridgeInputError(
+            raise InputError(
                 f"{lock_file}: cannot open the writer lock of the store ({error.strerror})"
             ) from None
         try:
@@ -167,9 +166,9 @@ def _try_lock(lock_file: Path) -> int | None:
         except OSError as error:
             os.close(fd)
             if error.errno in (errno.ENOLCK, errno.EOPNOTSUPP, errno.ENOSYS):
-                raise BridgeInputError(
+                raise InputError(
                     f"{lock_file.parent}: the filesystem does not support file locks (flock), "
-                    "so spectwin cannot make sure that only one process writes the store; use a "
+                    "so nothing can make sure that only one process writes the store; use a "
                     "local or NFSv4 folder"
                 ) from None
             raise
@@ -243,7 +242,7 @@ class StoreLock:
         ------
         StoreBusy
             Another writer holds the store's lock, or is still creating the store.
-        BridgeInputError
+        InputError
             ``store`` is not a folder.
         """
         store = Path(store)
@@ -259,7 +258,7 @@ class StoreLock:
         """Lock the file inside the existing store folder ``store``."""
         if not store.is_dir():
             what = "is a file" if store.exists() else "does not exist"
-            raise BridgeInputError(f"{store} {what}: expected a store folder")
+            raise InputError(f"{store} {what}: expected a store folder")
         lock_file = store / LOCK_NAME
         fd = _try_lock(lock_file)
         if fd is None:
@@ -275,8 +274,8 @@ class StoreLock:
         ------
         StoreBusy
             Another writer is creating or writing ``store``.
-        BridgeInputError
-            ``store`` exists already (continue it with --resume).
+        InputError
+            ``store`` exists already (to continue a store, :meth:`acquire` its lock).
         """
         store = Path(store)
         if store.exists():
@@ -349,7 +348,7 @@ class StoreLock:
 
 def require_new_store(store: str | Path) -> None:
     """Refuse ``store`` if it exists: :class:`StoreBusy` naming its writer when one holds it,
-    else :class:`~hwbridge.errors.BridgeInputError` (continue it with --resume)."""
+    else :class:`~hwbridge.errors.InputError`."""
     store = Path(store)
     if store.exists():
         _refuse_existing(store)
@@ -371,9 +370,9 @@ def _refuse_existing(store: Path) -> None:
     lock_file = store / LOCK_NAME
     if _held_by_other(lock_file):
         raise _busy(store, lock_file, creating=False)
-    raise BridgeInputError(
-        f"{store} exists: continue it with --resume or choose another name (nothing was "
-        "overwritten)"
+    raise InputError(
+        f"{store} exists: expected a new store (nothing was overwritten)",
+        remedy=Remedy.resume_or_rename,
     )
 
 

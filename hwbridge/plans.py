@@ -18,7 +18,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from hwbridge.errors import BridgeInputError
+from hwbridge.errors import InputError
 
 __all__ = [
     "chart_photographs",
@@ -38,7 +38,7 @@ def plan_step(
     """One step: ``camera`` takes a frame of ``kind`` at ``exposure_s`` after ``settings`` (view,
     light, band, ...) are set; a non-positive or non-finite exposure is refused."""
     if not np.isfinite(exposure_s) or exposure_s <= 0:
-        raise BridgeInputError(f"exposure_s: expected a positive exposure, got {exposure_s}")
+        raise InputError(f"exposure_s: expected a positive exposure, got {exposure_s}")
     return {"camera": camera, "kind": kind, "exposure_s": float(exposure_s), **settings}
 
 
@@ -47,7 +47,7 @@ def dark_series(
 ) -> list[dict]:
     """Dark frames: ``frames_per_exposure`` per exposure time, shutter closed (thesis 3.3)."""
     if frames_per_exposure < 1:
-        raise BridgeInputError("frames_per_exposure: expected at least one frame")
+        raise InputError("frames_per_exposure: expected at least one frame")
     return [
         plan_step(camera, "dark", t, light_id=-1)
         for t in exposures_s
@@ -72,9 +72,7 @@ def gonio_sample_run(
     bands = list(band_centres_nm)
     exposures = list(band_exposures_s)
     if len(bands) != len(exposures):
-        raise BridgeInputError(
-            f"band_exposures_s: expected {len(bands)} exposures, got {len(exposures)}"
-        )
+        raise InputError(f"band_exposures_s: expected {len(bands)} exposures, got {len(exposures)}")
     return [
         plan_step(camera, "sample", t, view_id=int(view), band_nm=float(band), light_id=0)
         for view in view_ids

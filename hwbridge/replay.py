@@ -16,7 +16,7 @@ import numpy as np
 import tifffile
 import yaml
 
-from hwbridge.errors import BridgeInputError
+from hwbridge.errors import InputError
 from hwbridge.lock import StoreLock
 from hwbridge.store import FRAME_KINDS, CaptureStore, FrameRecord
 
@@ -32,15 +32,13 @@ def load_mapping(name_or_path: str | Path) -> dict:
         path = MAPPING_DIR / f"{name_or_path}.yaml"
     if not path.is_file():
         known = sorted(p.stem for p in MAPPING_DIR.glob("*.yaml"))
-        raise BridgeInputError(f"mapping: no file {path}; expected a path or one of {known}")
+        raise InputError(f"mapping: no file {path}; expected a path or one of {known}")
     mapping = yaml.safe_load(path.read_text())
     if not isinstance(mapping, dict) or not {"camera", "files"} <= set(mapping):
-        raise BridgeInputError(f"{path}: expected a mapping with 'camera' and 'files'")
+        raise InputError(f"{path}: expected a mapping with 'camera' and 'files'")
     for entry in mapping["files"]:
         if entry.get("kind") not in FRAME_KINDS:
-            raise BridgeInputError(
-                f"{path}: kind {entry.get('kind')!r} is not one of {FRAME_KINDS}"
-            )
+            raise InputError(f"{path}: kind {entry.get('kind')!r} is not one of {FRAME_KINDS}")
         re.compile(entry["pattern"])
     return mapping
 
@@ -50,14 +48,14 @@ def _exposure_s(groups: dict[str, str], path: str) -> float:
         return float(groups["exposure_s"])
     if "exposure_ms" in groups:
         return float(groups["exposure_ms"]) / 1000
-    raise BridgeInputError(f"{path}: the mapping's pattern gives no exposure_ms or exposure_s")
+    raise InputError(f"{path}: the mapping's pattern gives no exposure_ms or exposure_s")
 
 
 def ingest(source: str | Path, mapping: str | Path, store_path: str | Path) -> CaptureStore:
     """Read every mapped frame of ``source`` into a new capture store at ``store_path``."""
     source = Path(source)
     if not source.is_dir():
-        raise BridgeInputError(f"source: {source} is not a folder")
+        raise InputError(f"source: {source} is not a folder")
     spec = load_mapping(mapping)
     matched = []
     for entry in spec["files"]:
@@ -68,7 +66,7 @@ def ingest(source: str | Path, mapping: str | Path, store_path: str | Path) -> C
             if found:
                 matched.append((relative, entry, found.groupdict()))
     if not matched:
-        raise BridgeInputError(f"{source}: no file matches the mapping's patterns")
+        raise InputError(f"{source}: no file matches the mapping's patterns")
     first = tifffile.imread(source / matched[0][0])
     camera = spec["camera"]
     plan = []
@@ -95,9 +93,7 @@ def ingest(source: str | Path, mapping: str | Path, store_path: str | Path) -> C
         for step, ((relative, entry, _), settings) in enumerate(zip(matched, plan, strict=True)):
             frame = tifffile.imread(source / relative)
             if frame.shape != first.shape:
-                raise BridgeInputError(
-                    f"{relative}: shape {frame.shape} differs from {first.shape}"
-                )
+                raise InputError(f"{relative}: shape {frame.shape} differs from {first.shape}")
             record = FrameRecord(
                 kind=settings["kind"],
                 exposure_s=settings["exposure_s"],

@@ -50,9 +50,9 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
 from hwbridge.errors import (
-    BridgeInputError,
     DeviceDisconnected,
     DeviceTimeout,
+    InputError,
     SessionInterrupted,
 )
 from hwbridge.lock import StoreLock
@@ -166,11 +166,11 @@ class SessionDevices(TypedDict, total=False):
 def _check_devices(plan: list[dict], devices: SessionDevices) -> None:
     unknown = sorted({step["camera"] for step in plan} - set(devices["cameras"]))
     if unknown:
-        raise BridgeInputError(f"plan: names cameras {unknown} that the session was not given")
+        raise InputError(f"plan: names cameras {unknown} that the session was not given")
     if any("band_nm" in step for step in plan) and devices.get("tunable_filter") is None:
-        raise BridgeInputError("plan: steps name filter bands but no tunable_filter was given")
+        raise InputError("plan: steps name filter bands but no tunable_filter was given")
     if any(step.get("view_id", -1) != -1 for step in plan) and devices.get("positioner") is None:
-        raise BridgeInputError("plan: steps name views but no positioner was given")
+        raise InputError("plan: steps name views but no positioner was given")
 
 
 def open_session_store(
@@ -212,7 +212,7 @@ def open_session_store(
         stored = store.attrs
         if stored["plan"] != plan or stored["seed"] != seed:
             differ = "seed" if stored["plan"] == plan else "plan"
-            raise BridgeInputError(
+            raise InputError(
                 f"{path}: resume needs the same plan and seed as the stored session (the "
                 f"{differ} differs; the store's seed is {stored['seed']}, its plan "
                 f"{len(stored['plan'])} steps; this session's seed {seed}, plan {len(plan)} steps)"

@@ -57,7 +57,7 @@ from typing import Any
 import numpy as np
 import zarr
 
-from hwbridge.errors import BridgeInputError, StoreDamagedError
+from hwbridge.errors import DamagedDataError, InputError, Remedy
 from hwbridge.integrity import (
     ChunkChecker,
     ChunkProblem,
@@ -107,13 +107,11 @@ class FrameRecord:
 
     def __post_init__(self) -> None:
         if self.kind not in FRAME_KINDS:
-            raise BridgeInputError(f"kind: expected one of {FRAME_KINDS}, got {self.kind!r}")
+            raise InputError(f"kind: expected one of {FRAME_KINDS}, got {self.kind!r}")
         if not np.isfinite(self.exposure_s) or self.exposure_s < 0:
-            raise BridgeInputError(
-                f"exposure_s: expected a non-negative time, got {self.exposure_s}"
-            )
+            raise InputError(f"exposure_s: expected a non-negative time, got {self.exposure_s}")
         if len(self.pose) != 6:
-            raise BridgeInputError(f"pose: expected 6 numbers, got {len(self.pose)}")
+            raise InputError(f"pose: expected 6 numbers, got {len(self.pose)}")
 
 
 class CaptureStore:
@@ -153,17 +151,17 @@ class CaptureStore:
         """A new, empty store for ``plan`` (each step names its ``camera``); never overwrites."""
         path = Path(path)
         if path.exists():
-            raise BridgeInputError(
-                f"{path} exists: continue it with --resume or choose another name (nothing was "
-                "overwritten)"
+            raise InputError(
+                f"{path} exists: expected a new store (nothing was overwritten)",
+                remedy=Remedy.resume_or_rename,
             )
         if backend not in ("sim", "real", "replay"):
-            raise BridgeInputError(f"backend: expected 'sim', 'real' or 'replay', got {backend!r}")
+            raise InputError(f"backend: expected 'sim', 'real' or 'replay', got {backend!r}")
         if not plan:
-            raise BridgeInputError("plan: expected at least one step")
+            raise InputError("plan: expected at least one step")
         unknown = sorted({str(step.get("camera")) for step in plan} - set(cameras))
         if unknown:
-            raise BridgeInputError(
+            raise InputError(
                 f"plan: steps name cameras {unknown} that are not among {sorted(cameras)}"
             )
         # Build the store beside its final name and rename it into place when its plan and
@@ -247,30 +245,28 @@ class CaptureStore:
     def open(cls, path: str | Path) -> CaptureStore:
         path = Path(path)
         if not path.exists():
-            raise BridgeInputError(f"{path} does not exist: expected a capture store")
+            raise InputError(f"{path} does not exist: expected a capture store")
         if not path.is_dir():
-            raise BridgeInputError(f"{path} is a file: expected a capture store (a folder)")
+            raise InputError(f"{path} is a file: expected a capture store (a folder)")
         root_problem = metadata_problem(path, "")
         if root_problem and any((path / name).is_dir() for name in ("frames", "index", "progress")):
-            raise StoreDamagedError(
+            raise DamagedDataError(
                 f"damaged capture store: {root_problem}: the root metadata (plan, seed, backend) "
                 "is gone, so no frame can be placed; restore the store from a copy or capture again"
             )
         try:
             group = zarr.open_group(str(path), mode="r+")
         except (OSError, ValueError) as error:
-            raise BridgeInputError(
-                f"{path} is not a capture store (not a Zarr group: {error})"
-            ) from None
+            raise InputError(f"{path} is not a capture store (not a Zarr group: {error})") from None
         if "plan" not in group.attrs:
-            raise BridgeInputError(f"{path} is not a capture store (no plan or progress)")
+            raise InputError(f"{path} is not a capture store (no plan or progress)")
         cameras = sorted({str(step.get("camera")) for step in group.attrs["plan"]})
         for node in _layout(cameras):
             problem = metadata_problem(path, node)
             # lamp_monitor exists only where the rig has a monitor: missing is fine, unless its
             # chunks are there without their metadata.
             if problem and (not node.endswith("/lamp_monitor") or (path / node).is_dir()):
-                raise StoreDamagedError(
+                raise DamagedDataError(
                     f"damaged capture store: {problem} (the metadata of {node}); restore the "
                     "store from a copy or capture again"
                 )
@@ -291,7 +287,7 @@ class CaptureStore:
             array = self._group[f"frames/{camera}"]
             stack = np.stack([np.asarray(frames[position]) for position in positions])
             if stack.shape[1:] != array.shape[1:] or stack.dtype != np.uint16:
-                raise BridgeInputError(
+                raise InputError(
                     f"frame: expected uint16 {array.shape[1:]} for camera {camera!r}, got "
                     f"{stack.dtype} {stack.shape[1:]}"
                 )
@@ -310,9 +306,7 @@ class CaptureStore:
             if not monitored:
                 continue
             if "lamp_monitor" not in index:
-                raise BridgeInputError(
-                    "lamp_monitor: this store was created without monitor samples"
-                )
+                raise InputError("lamp_monitor: this store was created without monitor samples")
             spectra = np.array([chosen[i].lamp_monitor for i in monitored], np.float32)
             if len(monitored) == slots.stop - slots.start:
                 index["lamp_monitor"][slots] = spectra
@@ -397,7 +391,7 @@ class CaptureStore:
 
     def read_frames(self, camera: str, slots: Sequence[int]) -> np.ndarray:
         """The frames ``(n, H, W)`` of ``camera`` at ``slots``; a frame whose chunk is missing
-        (it would read as zeros) or corrupt raises :class:`~hwbridge.errors.StoreDamagedError`
+        (it would read as zeros) or corrupt raises :class:`~hwbridge.errors.DamagedDataError`
         naming camera, step and chunk key."""
         frames = self.frames(camera)
         stack = np.empty((len(slots), *frames.shape[1:]), dtype=frames.dtype)
@@ -405,14 +399,14 @@ class CaptureStore:
             coords = (int(slot), 0, 0)
             name = self._step_name(self._steps[camera][int(slot)])
             if not (self.path / chunk_key(frames, coords)).is_file():
-                raise StoreDamagedError(
+                raise DamagedDataError(
                     f"{self.path}: damaged capture store: {name}: {chunk_key(frames, coords)} is "
                     "missing"
                 )
             try:
                 stack[position] = frames[int(slot)]
             except (ValueError, RuntimeError) as error:  # checksum or decompression
-                raise StoreDamagedError(
+                raise DamagedDataError(
                     f"{self.path}: damaged capture store: {name}: {chunk_key(frames, coords)} "
                     f"is corrupt ({' '.join(str(error).split())[:120]})"
                 ) from None
@@ -486,7 +480,7 @@ class CaptureStore:
         the step): the damaged steps' corrupt chunks are deleted (so that no step shares an
         unreadable chunk with its rewrite) and their flags cleared. A real rig or a replay cannot
         take a frame again: a damaged frame or index chunk raises
-        :class:`~hwbridge.errors.StoreDamagedError` naming the first bad frame. An unreadable
+        :class:`~hwbridge.errors.DamagedDataError` naming the first bad frame. An unreadable
         progress flag only makes its step pending, on every backend (as a lost flag does).
 
         Returns
@@ -503,9 +497,9 @@ class CaptureStore:
         backend = self._group.attrs.get("backend")
         if data and backend != "sim":
             damage = replace(report, problems=data).damage()
-            raise StoreDamagedError(
+            raise DamagedDataError(
                 f"{self.path}: damaged capture store: {damage}; a {backend} capture cannot "
-                "take its frames again, so --resume would leave them wrong: restore the store "
+                "take its frames again, so resuming would leave them wrong: restore the store "
                 "from a copy, or capture again into a new store"
             )
         progress = self._group["progress"]
@@ -538,20 +532,20 @@ class CaptureStore:
         except (ValueError, RuntimeError) as error:
             _, problems = read_flags(ChunkChecker(self.path), progress, self._step_name)
             first = problems[0] if problems else f"progress cannot be read ({error})"
-            raise StoreDamagedError(f"{self.path}: damaged capture store: {first}") from None
+            raise DamagedDataError(f"{self.path}: damaged capture store: {first}") from None
 
     def _read(self, array: zarr.Array) -> np.ndarray:
         try:
             return array[:]
         except (ValueError, RuntimeError) as error:
-            raise StoreDamagedError(
+            raise DamagedDataError(
                 f"{self.path}: damaged capture store: {array.path} cannot be read "
                 f"({' '.join(str(error).split())[:120]})"
             ) from None
 
     def _camera_and_slot(self, step: int) -> tuple[str, int]:
         if not 0 <= step < len(self._cameras):
-            raise BridgeInputError(f"step: expected 0..{len(self._cameras) - 1}, got {step}")
+            raise InputError(f"step: expected 0..{len(self._cameras) - 1}, got {step}")
         return self._cameras[step], self._slots[step]
 
 

@@ -46,7 +46,7 @@ from scipy import linalg, ndimage, optimize, spatial
 from threadpoolctl import threadpool_limits
 
 from recon.camera_prior import PRIOR_WEIGHT, ResponsePrior
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = [
     "CharacterizationResult",
@@ -74,43 +74,39 @@ class CharacterizationResult:
 def _as_photos(chart_rgb, reflectances, illuminant, wavelengths):
     wavelengths = np.asarray(wavelengths, np.float64)
     if wavelengths.ndim != 1 or wavelengths.size < 4 or np.any(np.diff(wavelengths) <= 0):
-        raise SpectwinInputError(
-            "wavelengths: expected at least 4 strictly increasing values in nm"
-        )
+        raise InputError("wavelengths: expected at least 4 strictly increasing values in nm")
     reflectances = np.asarray(reflectances, np.float64)
     if reflectances.ndim != 2 or reflectances.shape[1] != wavelengths.size:
-        raise SpectwinInputError(
+        raise InputError(
             f"reflectances: expected (fields, {wavelengths.size}), got {reflectances.shape}"
         )
     rgb = np.asarray(chart_rgb, np.float64)
     rgb = rgb[None] if rgb.ndim == 2 else rgb
     light = np.atleast_2d(np.asarray(illuminant, np.float64))
     if rgb.ndim != 3 or rgb.shape[1:] != (reflectances.shape[0], 3):
-        raise SpectwinInputError(
+        raise InputError(
             f"chart_rgb: expected ({reflectances.shape[0]}, 3) or (photos, "
             f"{reflectances.shape[0]}, 3), got {np.shape(chart_rgb)}"
         )
     if light.shape != (rgb.shape[0], wavelengths.size):
-        raise SpectwinInputError(
+        raise InputError(
             f"illuminant: expected ({wavelengths.size},) or ({rgb.shape[0]}, {wavelengths.size}), "
             f"got {np.shape(illuminant)}"
         )
     for name, values in (("chart_rgb", rgb), ("reflectances", reflectances), ("illuminant", light)):
         if not np.all(np.isfinite(values)):
-            raise SpectwinInputError(f"{name}: expected finite values, found NaN or infinity")
+            raise InputError(f"{name}: expected finite values, found NaN or infinity")
         if np.any(values < 0):
-            raise SpectwinInputError(f"{name}: expected non-negative values")
+            raise InputError(f"{name}: expected non-negative values")
     if np.any(reflectances > 1):
-        raise SpectwinInputError("reflectances: expected diffuse reflectances in [0, 1]")
+        raise InputError("reflectances: expected diffuse reflectances in [0, 1]")
     return rgb, reflectances, light, wavelengths
 
 
 def illuminant_from_temperature(temperature_k: float, wavelengths: np.ndarray) -> np.ndarray:
     """Relative spectrum of a black body at ``temperature_k`` (thesis 9.5.5), mean one."""
     if not temperature_k > 0:
-        raise SpectwinInputError(
-            f"temperature_k: expected a positive temperature, got {temperature_k}"
-        )
+        raise InputError(f"temperature_k: expected a positive temperature, got {temperature_k}")
     spectrum = colour.colorimetry.planck_law(
         np.asarray(wavelengths, np.float64) * 1e-9, temperature_k
     )
@@ -442,27 +438,25 @@ def estimate_response(
     rgb_scale = rgb.mean(axis=(1, 2), keepdims=True)
     light_scale = light.mean(axis=1, keepdims=True)
     if np.any(rgb_scale <= 0) or np.any(light_scale <= 0):
-        raise SpectwinInputError("chart_rgb, illuminant: expected some signal in every photograph")
+        raise InputError("chart_rgb, illuminant: expected some signal in every photograph")
     # Normalize each photograph (thesis 9.4.2); the first photograph sets the output units.
     rgb_n = rgb / rgb_scale
     light_n = light / light_scale
     units = rgb_scale[0, 0, 0] / light_scale[0, 0]
     if prior is not None and method != "extended":
-        raise SpectwinInputError(f"prior: only the extended method takes a prior, not {method!r}")
+        raise InputError(f"prior: only the extended method takes a prior, not {method!r}")
     if method == "basic":
         response = _basic(rgb_n, reflectances, light_n, 1e-6 if alpha is None else alpha) * units
         if not return_details:
             return response
         return CharacterizationResult(response, np.ones(rgb.shape[:2]), np.zeros(rgb.shape[:2]), 1)
     if method != "extended":
-        raise SpectwinInputError(f"method: expected 'basic' or 'extended', got {method!r}")
+        raise InputError(f"method: expected 'basic' or 'extended', got {method!r}")
     if field_positions is None:
-        raise SpectwinInputError(
-            "field_positions: the extended method needs the (J, 2) field centres"
-        )
+        raise InputError("field_positions: the extended method needs the (J, 2) field centres")
     positions = np.asarray(field_positions, np.float64)
     if positions.shape != (reflectances.shape[0], 2):
-        raise SpectwinInputError(
+        raise InputError(
             f"field_positions: expected ({reflectances.shape[0]}, 2), got {positions.shape}"
         )
     params = {
@@ -497,17 +491,17 @@ def estimate_response(
 
 def _check_prior(prior: ResponsePrior, wavelengths: np.ndarray, weight: float) -> None:
     if not isinstance(prior, ResponsePrior):
-        raise SpectwinInputError(
+        raise InputError(
             f"prior: expected a ResponsePrior (recon.camera_prior), got {type(prior).__name__}"
         )
     if not np.array_equal(prior.wavelengths_nm, wavelengths):
-        raise SpectwinInputError(
+        raise InputError(
             f"prior: learned on {prior.wavelengths_nm.size} wavelengths "
             f"({prior.wavelengths_nm[0]:g}-{prior.wavelengths_nm[-1]:g} nm), expected the "
             f"estimate's {wavelengths.size} ({wavelengths[0]:g}-{wavelengths[-1]:g} nm)"
         )
     if not weight > 0:
-        raise SpectwinInputError(f"prior_weight: expected a positive weight, got {weight}")
+        raise InputError(f"prior_weight: expected a positive weight, got {weight}")
 
 
 def reference_response(
@@ -526,7 +520,7 @@ def reference_response(
     transmissions = np.asarray(band_transmissions, np.float64)
     band_rgb = np.asarray(band_rgb, np.float64)
     if transmissions.shape[1] != wavelengths.size or band_rgb.shape != (transmissions.shape[0], 3):
-        raise SpectwinInputError(
+        raise InputError(
             "band_rgb, band_transmissions: expected (n_bands, 3) and (n_bands, K) on the grid"
         )
     product = np.linalg.pinv(transmissions) @ band_rgb  # R (.) rho (.) L

@@ -19,7 +19,7 @@ from __future__ import annotations
 import colour
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = ["jiang2013_response"]
 
@@ -63,28 +63,24 @@ def jiang2013_response(
     wavelengths = np.asarray(wavelengths, np.float64)
     steps = np.diff(wavelengths)
     if wavelengths.ndim != 1 or wavelengths.size < 4 or not np.allclose(steps, steps[0]):
-        raise SpectwinInputError("wavelengths: expected at least 4 regularly spaced values in nm")
+        raise InputError("wavelengths: expected at least 4 regularly spaced values in nm")
     reflectances = np.asarray(reflectances, np.float64)
     chart_rgb = np.asarray(chart_rgb, np.float64)
     training = np.asarray(training_responses, np.float64)
     bands = wavelengths.size
     if reflectances.ndim != 2 or reflectances.shape[1] != bands:
-        raise SpectwinInputError(
-            f"reflectances: expected (fields, {bands}), got {reflectances.shape}"
-        )
+        raise InputError(f"reflectances: expected (fields, {bands}), got {reflectances.shape}")
     if chart_rgb.shape != (reflectances.shape[0], 3):
-        raise SpectwinInputError(
-            f"chart_rgb: expected ({reflectances.shape[0]}, 3), got {chart_rgb.shape}"
-        )
+        raise InputError(f"chart_rgb: expected ({reflectances.shape[0]}, 3), got {chart_rgb.shape}")
     if np.shape(illuminant) != (bands,):
-        raise SpectwinInputError(f"illuminant: expected ({bands},), got {np.shape(illuminant)}")
+        raise InputError(f"illuminant: expected ({bands},), got {np.shape(illuminant)}")
     if training.ndim != 3 or training.shape[1:] != (bands, 3) or training.shape[0] <= components:
-        raise SpectwinInputError(
+        raise InputError(
             f"training_responses: expected (cameras > {components}, {bands}, 3), "
             f"got {training.shape}"
         )
     if not 1 <= components < bands:
-        raise SpectwinInputError(f"components: expected 1 to {bands - 1}, got {components}")
+        raise InputError(f"components: expected 1 to {bands - 1}, got {components}")
     shape = colour.SpectralShape(wavelengths[0], wavelengths[-1], steps[0])
     cameras = {
         f"camera {index}": colour.MultiSpectralDistributions(

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 from sklearn.decomposition import PCA
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = ["PRIOR_COMPONENTS", "PRIOR_WEIGHT", "ResponsePrior", "learn_response_prior"]
 
@@ -87,7 +87,7 @@ class ResponsePrior:
         multiple of the mean, about ``K`` for a typical camera)."""
         response = np.asarray(response, np.float64)
         if response.shape != self.mean.shape:
-            raise SpectwinInputError(
+            raise InputError(
                 f"response: expected {self.mean.shape} on the prior's grid, got {response.shape}"
             )
         shape = response / np.abs(response).max(axis=0)
@@ -136,30 +136,26 @@ def learn_response_prior(
     responses = np.asarray(responses, np.float64)
     wavelengths = np.asarray(wavelengths, np.float64)
     if responses.ndim != 3 or responses.shape[1:] != (wavelengths.size, 3):
-        raise SpectwinInputError(
+        raise InputError(
             f"responses: expected (cameras, {wavelengths.size}, 3) on the wavelengths, "
             f"got {responses.shape}"
         )
     if not 1 <= components < wavelengths.size:
-        raise SpectwinInputError(
-            f"components: expected 1 to {wavelengths.size - 1}, got {components}"
-        )
+        raise InputError(f"components: expected 1 to {wavelengths.size - 1}, got {components}")
     if responses.shape[0] < components + 2:
-        raise SpectwinInputError(
+        raise InputError(
             f"responses: expected at least components + 2 = {components + 2} cameras, "
             f"got {responses.shape[0]}"
         )
     peaks = responses.max(axis=1, keepdims=True)
     if not np.all(np.isfinite(responses)) or np.any(peaks <= 0):
-        raise SpectwinInputError(
-            "responses: expected finite values with a positive peak in every channel"
-        )
+        raise InputError("responses: expected finite values with a positive peak in every channel")
     shapes = responses / peaks
     means, precisions = [], []
     for channel in range(3):
         model = PCA(n_components=components, svd_solver="full").fit(shapes[:, :, channel])
         if not model.noise_variance_ > 0:
-            raise SpectwinInputError(
+            raise InputError(
                 f"responses: {components} components leave no residual variation: use fewer"
             )
         means.append(model.mean_)

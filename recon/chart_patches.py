@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = [
     "DarkStatistics",
@@ -53,15 +53,13 @@ def patch_masks(labels: np.ndarray, count: int, *, erode_px: int) -> np.ndarray:
     ``erode_px`` pixels."""
     labels = np.asarray(labels)
     if labels.ndim != 2:
-        raise SpectwinInputError(f"labels: expected a 2-D label image, got shape {labels.shape}")
+        raise InputError(f"labels: expected a 2-D label image, got shape {labels.shape}")
     masks = np.stack([labels == index for index in range(1, count + 1)])
     if erode_px > 0:
         masks = np.stack([ndimage.binary_erosion(mask, iterations=erode_px) for mask in masks])
     empty = [index + 1 for index, mask in enumerate(masks) if not mask.any()]
     if empty:
-        raise SpectwinInputError(
-            f"labels: patches {empty} have no pixels left after eroding {erode_px} px"
-        )
+        raise InputError(f"labels: patches {empty} have no pixels left after eroding {erode_px} px")
     return masks
 
 
@@ -72,7 +70,7 @@ def patch_statistics(
     of ``channel_index`` ``(H, W)`` (0 = R, 1 = G, 2 = B)."""
     frame = np.asarray(frame, dtype=np.float64)
     if frame.shape != masks.shape[1:] or frame.shape != channel_index.shape:
-        raise SpectwinInputError(
+        raise InputError(
             f"frame: expected shape {masks.shape[1:]} like the masks and channels, got "
             f"{frame.shape}"
         )
@@ -105,7 +103,7 @@ def dark_statistics(frames: np.ndarray) -> DarkStatistics:
     """Statistics of the dark frames ``(n, H, W)`` of one exposure time."""
     frames = np.asarray(frames, dtype=np.float64)
     if frames.ndim != 3 or frames.shape[0] < 1:
-        raise SpectwinInputError(f"frames: expected (n, H, W) dark frames, got {frames.shape}")
+        raise InputError(f"frames: expected (n, H, W) dark frames, got {frames.shape}")
     temporal = (
         float(np.std(frames[1] - frames[0]) / np.sqrt(2)) if frames.shape[0] > 1 else float("nan")
     )

@@ -1,9 +1,20 @@
-"""Exceptions raised for bad input anywhere in spectwin."""
+"""The exceptions of spectwin, for ``recon``: the tree of :mod:`hwbridge.errors`, whose root is
+:class:`SpectwinError` (``hwbridge`` imports no ``recon``, so the tree lives there)."""
 
+from hwbridge.errors import (
+    DamagedDataError,
+    DataError,
+    InputError,
+    MissingDataError,
+    Remedy,
+    SpectwinError,
+)
 
-class SpectwinInputError(ValueError):
-    """Input that is malformed: the message names the field and what was expected."""
-
-
-class SpectwinDataError(FileNotFoundError):
-    """A data file that spectwin needs could not be found or read."""
+__all__ = [
+    "DamagedDataError",
+    "DataError",
+    "InputError",
+    "MissingDataError",
+    "Remedy",
+    "SpectwinError",
+]

@@ -32,7 +32,7 @@ from skimage import io as skimage_io
 
 from hwbridge.store import CaptureStore
 from recon.calibration.capture_io import select_frames
-from recon.errors import SpectwinDataError, SpectwinInputError
+from recon.errors import DamagedDataError, InputError, MissingDataError
 from recon.measured_data import data_path, read_spectra_columns
 from recon.spectra import SampledSpectra
 
@@ -125,14 +125,14 @@ class Llanos2019ChartCapture:
 
 def _match(folder: Path, pattern: re.Pattern[str]) -> list[tuple[Path, dict[str, str]]]:
     if not folder.is_dir():
-        raise SpectwinDataError(f"Llanos 2019 capture folder {folder} does not exist")
+        raise MissingDataError(f"Llanos 2019 capture folder {folder} does not exist")
     found = []
     for path in sorted(folder.iterdir()):
         match = pattern.fullmatch(path.name)
         if match:
             found.append((path, match.groupdict()))
     if not found:
-        raise SpectwinDataError(f"{folder}: no file matches {pattern.pattern}")
+        raise MissingDataError(f"{folder}: no file matches {pattern.pattern}")
     return found
 
 
@@ -155,7 +155,7 @@ def read_llanos2019_chart_capture() -> Llanos2019ChartCapture:
     exposures_ms = sorted({key[0] for key in keys})
     bands = sorted({key[1] for key in keys})
     if len(set(keys)) != len(keys) or len(keys) != len(exposures_ms) * len(bands):
-        raise SpectwinDataError(
+        raise DamagedDataError(
             f"{root}: expected one chart frame per band and exposure time, got {len(keys)} frames "
             f"for {len(bands)} bands and {len(exposures_ms)} exposure times"
         )
@@ -185,7 +185,7 @@ def _assemble(
     """Add the patch labels, check that everything fits together and freeze the arrays."""
     label_path = data_path(_FOLDER) / "colorChecker_labels" / "d2_colorChecker30cm_550nm_labels.png"
     if not label_path.is_file():
-        raise SpectwinDataError(f"Llanos 2019 patch labels {label_path} do not exist")
+        raise MissingDataError(f"Llanos 2019 patch labels {label_path} do not exist")
     labels = np.asarray(skimage_io.imread(label_path))
     if (
         frames.dtype != np.uint8
@@ -193,7 +193,7 @@ def _assemble(
         or labels.shape != frames.shape[2:]
         or labels.max() != len(LLANOS2019_PATCH_NAMES)
     ):
-        raise SpectwinDataError(
+        raise DamagedDataError(
             f"{source}: expected uint8 frames, dark frames and 24 patch labels of one shape, got "
             f"{frames.dtype} {frames.shape[2:]}, {dark_frames.shape[1:]} and {labels.shape} with "
             f"{labels.max()} labels"
@@ -213,7 +213,7 @@ def _assemble(
 
 def _as_uint8(frames: np.ndarray, source: str) -> np.ndarray:
     if frames.min() < 0 or frames.max() > 255 or np.any(frames != np.round(frames)):
-        raise SpectwinInputError(f"{source}: expected 8-bit frames (integers 0-255)")
+        raise InputError(f"{source}: expected 8-bit frames (integers 0-255)")
     return frames.astype(np.uint8)
 
 
@@ -240,7 +240,7 @@ def chart_capture_from_store(
     bands = np.unique(chart.band_nm)
     exposures = np.unique(chart.exposure_s)
     if len(chart.frames) != bands.size * exposures.size:
-        raise SpectwinInputError(
+        raise InputError(
             f"{camera}: expected one chart frame per band and exposure time, got "
             f"{len(chart.frames)} for {bands.size} bands and {exposures.size} exposure times"
         )

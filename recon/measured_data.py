@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 from scipy import io
 
-from recon.errors import SpectwinDataError, SpectwinInputError
+from recon.errors import DamagedDataError, InputError, MissingDataError, Remedy
 from recon.spectra import SampledSpectra, WavelengthGrid
 
 __all__ = [
@@ -40,14 +40,15 @@ def data_path(relative_path: str | Path = "") -> Path:
 
     Raises
     ------
-    SpectwinDataError
+    MissingDataError
         When the file or folder is not part of the installed package.
     """
     path = Path(str(resources.files("recon").joinpath("data"))) / relative_path
     if not path.exists():
-        raise SpectwinDataError(
-            f"measured data {relative_path!s} is missing from the installed spectwin package "
-            f"(expected {path}): reinstall spectwin"
+        raise MissingDataError(
+            f"measured data {relative_path!s} is missing from the installed package (expected "
+            f"{path})",
+            remedy=Remedy.reinstall,
         )
     return path
 
@@ -67,13 +68,11 @@ def read_spectra_csv(relative_path: str | Path) -> SampledSpectra:
     """
     path = Path(relative_path) if Path(relative_path).is_absolute() else data_path(relative_path)
     if not path.is_file():
-        raise SpectwinDataError(f"spectra file {path} does not exist: expected a CSV file")
+        raise MissingDataError(f"spectra file {path} does not exist: expected a CSV file")
     lines = [line for line in path.read_text().splitlines() if line and not line.startswith("#")]
     header = [column.strip() for column in lines[0].split(",")]
     if header[0] != "wavelength_nm" or len(header) < 2:
-        raise SpectwinInputError(
-            f"{path}: expected a header 'wavelength_nm,<name>,...', got {lines[0]!r}"
-        )
+        raise InputError(f"{path}: expected a header 'wavelength_nm,<name>,...', got {lines[0]!r}")
     table = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
     return SampledSpectra(WavelengthGrid(table[:, 0]), table[:, 1:].T, tuple(header[1:]))
 
@@ -100,16 +99,16 @@ def read_spectra_columns(
     """
     path = Path(path)
     if not path.is_file():
-        raise SpectwinDataError(f"spectra file {path} does not exist: expected a CSV file")
+        raise MissingDataError(f"spectra file {path} does not exist: expected a CSV file")
     lines = path.read_text().splitlines()
     header = [column.strip() for column in lines[0].split(",")]
     missing = [name for name in columns if name not in header]
     if header[0] != "Wavelength" or missing:
-        raise SpectwinDataError(f"{path}: expected a 'Wavelength' column and {missing}")
+        raise DamagedDataError(f"{path}: expected a 'Wavelength' column and {missing}")
     table = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
     keep = (table[:, 0] >= low_nm) & (table[:, 0] <= high_nm)
     if keep.sum() < 2:
-        raise SpectwinDataError(f"{path}: fewer than 2 wavelengths in [{low_nm}, {high_nm}] nm")
+        raise DamagedDataError(f"{path}: fewer than 2 wavelengths in [{low_nm}, {high_nm}] nm")
     values = table[keep][:, [header.index(name) for name in columns]].T
     return SampledSpectra(WavelengthGrid(table[keep, 0]), values, tuple(columns))
 
@@ -134,7 +133,7 @@ def camera_name(name: str) -> str:
 
     Raises
     ------
-    SpectwinInputError
+    InputError
         For a name that is not one of the cameras, naming the closest ones.
     """
     names = camera_names()
@@ -142,7 +141,7 @@ def camera_name(name: str) -> str:
     if wanted not in names:
         close = difflib.get_close_matches(wanted, names, n=3, cutoff=0.5)
         hint = f"; closest: {', '.join(close)}" if close else f"; e.g. {names[0]!r}"
-        raise SpectwinInputError(
+        raise InputError(
             f"camera {name!r}: expected one of the {len(names)} measured cameras{hint}"
         )
     return wanted
@@ -159,7 +158,7 @@ def read_camera_sensitivities(name: str) -> SampledSpectra:
     file_name = camera_name(name).replace(" ", "_")
     spectra = read_spectra_csv(_CAMERAS_FOLDER / f"{file_name}.csv")
     if spectra.names != ("R", "G", "B"):
-        raise SpectwinDataError(
+        raise DamagedDataError(
             f"camera {name!r}: expected the columns R, G, B, got {spectra.names}"
         )
     return spectra
@@ -219,11 +218,11 @@ class Llanos2019Multispectral:
 
 def _load_mat(path: Path, names: tuple[str, ...]) -> dict[str, np.ndarray]:
     if not path.is_file():
-        raise SpectwinDataError(f"Llanos 2019 data file {path} does not exist")
+        raise MissingDataError(f"Llanos 2019 data file {path} does not exist")
     contents = io.loadmat(path)
     missing = [name for name in names if name not in contents]
     if missing:
-        raise SpectwinDataError(f"{path}: expected the variables {list(names)}, missing {missing}")
+        raise DamagedDataError(f"{path}: expected the variables {list(names)}, missing {missing}")
     return {name: contents[name] for name in names}
 
 
@@ -249,7 +248,7 @@ def read_llanos2019_multispectral() -> Llanos2019Multispectral:
     sensor_map = np.ascontiguousarray(np.asarray(sensor["sensor_map"], dtype=np.float64).T)
     bands = wavelengths.size
     if image.ndim != 3 or image.shape[-1] != bands or sensor_map.shape != (bands, 3):
-        raise SpectwinDataError(
+        raise DamagedDataError(
             f"{folder}: expected I_hyper (H, W, K), bands (K,) and sensor_map (3, K), got "
             f"{image.shape}, {wavelengths.shape} and {sensor_map.T.shape}"
         )

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import linalg
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.metrics import relative_error
 from recon.spectra import SampledSpectra
 
@@ -29,7 +29,7 @@ def camera_signal(
     """Camera values :math:`\\int \\rho E R_c d\\lambda` per channel, ``(..., n_channels)``."""
     for name, spectra in (("response", response), ("illuminant", illuminant)):
         if spectra.grid != reflectance.grid:
-            raise SpectwinInputError(f"{name}: expected the reflectance's grid")
+            raise InputError(f"{name}: expected the reflectance's grid")
     weights = reflectance.grid.quadrature_weights() * illuminant.values
     return (reflectance.values * weights) @ response.values.T
 
@@ -65,11 +65,11 @@ def design_metamer(
         Random directions tried; the one reaching the target with most headroom wins.
     """
     if not isinstance(rng, np.random.Generator):
-        raise SpectwinInputError("rng: expected a numpy.random.Generator")
+        raise InputError("rng: expected a numpy.random.Generator")
     low, high = bounds
     base = reflectance.values
     if base.ndim != 1 or np.any(base < low) or np.any(base > high):
-        raise SpectwinInputError(f"reflectance: expected one spectrum within bounds {bounds}")
+        raise InputError(f"reflectance: expected one spectrum within bounds {bounds}")
     weights = reflectance.grid.quadrature_weights() * illuminant.values
     null = linalg.null_space(response.values * weights)
     wavelengths = reflectance.wavelengths_nm
@@ -92,7 +92,7 @@ def design_metamer(
             step = largest_step * relative_difference_percent / reached
             best, best_headroom = base + step * black, headroom
     if best is None:
-        raise SpectwinInputError(
+        raise InputError(
             f"design_metamer: no smooth metamer {relative_difference_percent:g} % away within "
             f"bounds {bounds} after {attempts} attempts"
         )

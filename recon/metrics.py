@@ -21,7 +21,7 @@ from functools import lru_cache
 import colour
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import WavelengthGrid
 
 __all__ = [
@@ -60,11 +60,11 @@ def relative_error(estimate: np.ndarray, truth: np.ndarray, eps: float = 1e-3) -
     """
     estimate, truth = np.asarray(estimate, np.float64), np.asarray(truth, np.float64)
     if estimate.shape != truth.shape:
-        raise SpectwinInputError(
+        raise InputError(
             f"relative_error: estimate {estimate.shape} and truth {truth.shape} differ in shape"
         )
     if not eps > 0:
-        raise SpectwinInputError(f"eps: expected a positive constant, got {eps}")
+        raise InputError(f"eps: expected a positive constant, got {eps}")
     return 100.0 * np.mean(np.abs(estimate - truth) / (np.abs(truth) + eps), axis=-1)
 
 
@@ -78,7 +78,7 @@ def peak_relative_rmse(
     """
     estimate, truth = np.asarray(estimate, np.float64), np.asarray(truth, np.float64)
     if estimate.shape != truth.shape:
-        raise SpectwinInputError(
+        raise InputError(
             f"peak_relative_rmse: estimate {estimate.shape} and truth {truth.shape} differ in shape"
         )
     scale = np.sum(estimate * truth) / np.sum(estimate * estimate) if fit_scale else 1.0
@@ -91,18 +91,16 @@ def _spectra_pair(
     """Both inputs as float64 of one shape ``(..., K)``, finite; raise naming ``what`` if not."""
     estimate, truth = np.asarray(estimate, np.float64), np.asarray(truth, np.float64)
     if estimate.shape != truth.shape:
-        raise SpectwinInputError(
+        raise InputError(
             f"{what}: estimate {estimate.shape} and truth {truth.shape} differ in shape"
         )
     if estimate.ndim == 0 or estimate.shape[-1] < 1:
-        raise SpectwinInputError(
+        raise InputError(
             f"{what}: expected spectra of shape (..., K) with K >= 1, got shape {estimate.shape}"
         )
     for name, values in (("estimate", estimate), ("truth", truth)):
         if not np.all(np.isfinite(values)):
-            raise SpectwinInputError(
-                f"{what}: {name} contains NaN or infinity; expected finite spectra"
-            )
+            raise InputError(f"{what}: {name} contains NaN or infinity; expected finite spectra")
     return estimate, truth
 
 
@@ -176,7 +174,7 @@ def _regular_shape(wavelengths: np.ndarray) -> colour.SpectralShape:
     """The ``colour.SpectralShape`` of a regular grid; raise for an irregular one."""
     steps = np.diff(wavelengths)
     if not np.allclose(steps, steps[0], rtol=1e-9, atol=1e-9):
-        raise SpectwinInputError(
+        raise InputError(
             f"wavelengths_nm: delta_e94 needs a regular grid (constant step), got steps from "
             f"{steps.min():g} to {steps.max():g} nm; resample with recon.spectra.resample"
         )
@@ -184,7 +182,7 @@ def _regular_shape(wavelengths: np.ndarray) -> colour.SpectralShape:
     if shape.wavelengths.size != wavelengths.size or not np.allclose(
         shape.wavelengths, wavelengths, rtol=0, atol=1e-6
     ):
-        raise SpectwinInputError(
+        raise InputError(
             f"wavelengths_nm: could not describe the grid {wavelengths[0]:g}-{wavelengths[-1]:g} "
             f"nm in {steps[0]:g} nm steps as a colour.SpectralShape"
         )
@@ -275,16 +273,16 @@ def delta_e94(
         else WavelengthGrid(wavelengths_nm)
     )
     if grid.size != truth.shape[-1]:
-        raise SpectwinInputError(
+        raise InputError(
             f"wavelengths_nm: expected {truth.shape[-1]} wavelengths to match the band axis of "
             f"the spectra {truth.shape}, got {grid.size}"
         )
     names = (illuminants,) if isinstance(illuminants, str) else tuple(illuminants)
     if not names:
-        raise SpectwinInputError("illuminants: expected at least one illuminant name, got none")
+        raise InputError("illuminants: expected at least one illuminant name, got none")
     unknown = [name for name in names if name not in colour.SDS_ILLUMINANTS]
     if unknown:
-        raise SpectwinInputError(
+        raise InputError(
             f"illuminants: {unknown} are not keys of colour.SDS_ILLUMINANTS (e.g. 'D65', 'FL4')"
         )
     key = tuple(float(wavelength) for wavelength in grid.wavelengths_nm)

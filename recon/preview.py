@@ -11,7 +11,7 @@ from __future__ import annotations
 import colour
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import SampledSpectra, WavelengthGrid, band_integrals, from_colour, resample
 
 __all__ = ["spectral_to_srgb", "spectral_to_xyz"]
@@ -23,7 +23,7 @@ def spectral_to_xyz(cube: np.ndarray, grid: WavelengthGrid) -> np.ndarray:
     """Tristimulus values :math:`X = \\int L \\bar{x} d\\lambda` etc. of ``cube`` ``(..., K)``."""
     cube = np.asarray(cube, dtype=np.float64)
     if cube.shape[-1] != grid.size:
-        raise SpectwinInputError(
+        raise InputError(
             f"cube: expected the band axis last with {grid.size} bands, got shape {cube.shape}"
         )
     observer = resample(from_colour(colour.MSDS_CMFS[_OBSERVER]), grid, out_of_range="zero")
@@ -45,7 +45,7 @@ def spectral_to_srgb(
     xyz = spectral_to_xyz(cube, grid)
     scale = np.percentile(xyz[..., 1], percentile)
     if not scale > 0:
-        raise SpectwinInputError("cube: expected some positive luminance to show, got none")
+        raise InputError("cube: expected some positive luminance to show, got none")
     illuminant = colour.CCS_ILLUMINANTS[_OBSERVER]["D65"]
     if white is not None:
         illuminant = colour.XYZ_to_xy(spectral_to_xyz(white.values, white.grid))

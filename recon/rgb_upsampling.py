@@ -32,7 +32,7 @@ import colour
 import numpy as np
 from colour.recovery import LUT3D_Jakob2019
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.measured_data import data_path
 from recon.spectra import DEFAULT_GRID, SampledSpectra, from_colour, resample
 
@@ -59,13 +59,13 @@ def read_srgb_image(path: str | Path, data: bytes | None = None) -> np.ndarray:
 
     path = Path(path)
     if data is None and not path.is_file():
-        raise SpectwinInputError(f"{path}: no such image file; expected a PNG, JPEG or TIFF")
+        raise InputError(f"{path}: no such image file; expected a PNG, JPEG or TIFF")
     try:
         pixels = io.imread(path if data is None else BytesIO(data))
     except (OSError, ValueError) as error:
-        raise SpectwinInputError(f"{path}: not a readable image ({error})") from None
+        raise InputError(f"{path}: not a readable image ({error})") from None
     if pixels.ndim != 3 or pixels.shape[2] not in (3, 4) or pixels.dtype.kind != "u":
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: expected an 8- or 16-bit RGB image, got {pixels.dtype} of shape "
             f"{pixels.shape}"
         )
@@ -151,9 +151,7 @@ def upsample_srgb(
         for colours within [0, 1], above for brighter ones.
     """
     if method not in UPSAMPLING_METHODS:
-        raise SpectwinInputError(
-            f"method: expected one of {', '.join(UPSAMPLING_METHODS)}, got {method!r}"
-        )
+        raise InputError(f"method: expected one of {', '.join(UPSAMPLING_METHODS)}, got {method!r}")
     if method == "jakob2019":
         return SampledSpectra(DEFAULT_GRID, _jakob2019(linear))
     return SampledSpectra(
@@ -165,25 +163,25 @@ def _spectralized(linear, known_pixels, known_spectra) -> np.ndarray:
     from recon.spectralize import spectralize
 
     if known_pixels is None or known_spectra is None:
-        raise SpectwinInputError(
+        raise InputError(
             "known spectra: spectralization needs spectra measured at known pixels of the image"
         )
     pixels = np.asarray(known_pixels, int).reshape(-1, 2)
     height, width = linear.shape[:2]
     inside = (pixels >= 0).all(axis=1) & (pixels[:, 0] < height) & (pixels[:, 1] < width)
     if not inside.all():
-        raise SpectwinInputError(
+        raise InputError(
             f"known pixels: {pixels[~inside].tolist()} lie outside the {height} x {width} image"
         )
     spectra = np.atleast_2d(known_spectra.values)
     if len(spectra) != len(pixels):
-        raise SpectwinInputError(
+        raise InputError(
             f"known spectra: {len(spectra)} spectra for {len(pixels)} known pixels; expected one "
             "spectrum per pixel"
         )
     covered = known_spectra.grid.wavelengths_nm
     if covered[0] > _COVERED_NM[0] or covered[-1] < _COVERED_NM[1]:
-        raise SpectwinInputError(
+        raise InputError(
             f"known spectra: cover {covered[0]:g}-{covered[-1]:g} nm; expected at least "
             f"{_COVERED_NM[0]:g}-{_COVERED_NM[1]:g} nm"
         )

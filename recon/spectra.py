@@ -25,7 +25,7 @@ import colour
 import numpy as np
 from scipy import integrate, interpolate
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = [
     "DEFAULT_GRID",
@@ -63,16 +63,16 @@ class WavelengthGrid:
     def __post_init__(self) -> None:
         wavelengths = np.array(self.wavelengths_nm, dtype=np.float64)
         if wavelengths.ndim != 1 or wavelengths.size < 2:
-            raise SpectwinInputError(
+            raise InputError(
                 f"wavelengths_nm: expected a 1-D array of at least 2 samples, got shape "
                 f"{wavelengths.shape}"
             )
         if not np.all(np.isfinite(wavelengths)) or wavelengths[0] <= 0:
-            raise SpectwinInputError("wavelengths_nm: expected finite, positive wavelengths in nm")
+            raise InputError("wavelengths_nm: expected finite, positive wavelengths in nm")
         steps = np.diff(wavelengths)
         if np.any(steps <= 0):
             bad = int(np.argmax(steps <= 0))
-            raise SpectwinInputError(
+            raise InputError(
                 f"wavelengths_nm: expected strictly increasing wavelengths, but sample {bad + 1} "
                 f"({wavelengths[bad + 1]:g} nm) does not exceed sample {bad} "
                 f"({wavelengths[bad]:g} nm)"
@@ -84,13 +84,13 @@ class WavelengthGrid:
     def regular(cls, start_nm: float, stop_nm: float, step_nm: float) -> WavelengthGrid:
         """Regular grid from ``start_nm`` to ``stop_nm`` inclusive in steps of ``step_nm``."""
         if not step_nm > 0 or not stop_nm > start_nm:
-            raise SpectwinInputError(
+            raise InputError(
                 f"regular grid: expected start < stop and step > 0, got start={start_nm}, "
                 f"stop={stop_nm}, step={step_nm}"
             )
         count = (stop_nm - start_nm) / step_nm
         if abs(count - round(count)) > 1e-9 * max(1.0, count):
-            raise SpectwinInputError(
+            raise InputError(
                 f"regular grid: (stop - start) / step must be an integer, got {count:g}"
             )
         return cls(start_nm + step_nm * np.arange(round(count) + 1))
@@ -162,20 +162,20 @@ class SampledSpectra:
 
     def __post_init__(self) -> None:
         if not isinstance(self.grid, WavelengthGrid):
-            raise SpectwinInputError(f"grid: expected a WavelengthGrid, got {type(self.grid)}")
+            raise InputError(f"grid: expected a WavelengthGrid, got {type(self.grid)}")
         values = np.asarray(self.values, dtype=np.float64)
         if values.ndim == 0 or values.shape[-1] != self.grid.size:
-            raise SpectwinInputError(
+            raise InputError(
                 f"values: expected the last axis to match the grid ({self.grid.describe()}), got "
                 f"shape {values.shape}"
             )
         if not np.all(np.isfinite(values)):
-            raise SpectwinInputError("values: expected finite spectra, found NaN or infinity")
+            raise InputError("values: expected finite spectra, found NaN or infinity")
         object.__setattr__(self, "values", values)
         if self.names is not None:
             names = tuple(str(name) for name in self.names)
             if values.ndim != 2 or len(names) != values.shape[0]:
-                raise SpectwinInputError(
+                raise InputError(
                     f"names: expected one name per row of 2-D values, got {len(names)} names "
                     f"for values of shape {values.shape}"
                 )
@@ -189,7 +189,7 @@ class SampledSpectra:
         """Return ``self``, or raise if any value is negative (for powers, reflectances, QE)."""
         if np.any(self.values < 0):
             index = np.unravel_index(np.argmin(self.values), self.values.shape)
-            raise SpectwinInputError(
+            raise InputError(
                 f"{what}: expected non-negative spectra, found {self.values[index]:g} at "
                 f"{self.wavelengths_nm[index[-1]]:g} nm"
             )
@@ -198,7 +198,7 @@ class SampledSpectra:
     def row(self, name: str) -> SampledSpectra:
         """The single spectrum labelled ``name``."""
         if self.names is None or name not in self.names:
-            raise SpectwinInputError(f"name: expected one of {self.names}, got {name!r}")
+            raise InputError(f"name: expected one of {self.names}, got {name!r}")
         return SampledSpectra(self.grid, self.values[self.names.index(name)])
 
     def __mul__(self, other: SampledSpectra | float) -> SampledSpectra:
@@ -216,7 +216,7 @@ class SampledSpectra:
 
 def _require_same_grid(first: WavelengthGrid, second: WavelengthGrid, what: str) -> None:
     if first != second:
-        raise SpectwinInputError(
+        raise InputError(
             f"{what}: grids differ ({first.describe()} vs {second.describe()}); resample one "
             f"explicitly with recon.spectra.resample"
         )
@@ -288,16 +288,14 @@ def resample(
     (33,)
     """
     if method not in ("linear", "pchip", "box"):
-        raise SpectwinInputError(f"method: expected 'linear', 'pchip' or 'box', got {method!r}")
+        raise InputError(f"method: expected 'linear', 'pchip' or 'box', got {method!r}")
     if out_of_range not in ("error", "zero", "clamp"):
-        raise SpectwinInputError(
-            f"out_of_range: expected 'error', 'zero' or 'clamp', got {out_of_range!r}"
-        )
+        raise InputError(f"out_of_range: expected 'error', 'zero' or 'clamp', got {out_of_range!r}")
     source = spectra.wavelengths_nm
     target = grid.wavelengths_nm
     outside = (target < source[0]) | (target > source[-1])
     if out_of_range == "error" and np.any(outside):
-        raise SpectwinInputError(
+        raise InputError(
             f"resample: target grid ({grid.describe()}) leaves the source range "
             f"({spectra.grid.describe()}); pass out_of_range='zero' or 'clamp' to extend it"
         )
@@ -349,9 +347,7 @@ def to_colour(
         return colour.MultiSpectralDistributions(
             spectra.values.T, spectra.wavelengths_nm, name=name, labels=labels
         )
-    raise SpectwinInputError(
-        f"to_colour: expected 1-D or 2-D values, got shape {spectra.values.shape}"
-    )
+    raise InputError(f"to_colour: expected 1-D or 2-D values, got shape {spectra.values.shape}")
 
 
 def from_colour(
@@ -368,7 +364,7 @@ def from_colour(
         return SampledSpectra(
             WavelengthGrid(distribution.wavelengths), np.asarray(distribution.values)
         )
-    raise SpectwinInputError(
+    raise InputError(
         f"from_colour: expected a colour SpectralDistribution or MultiSpectralDistributions, got "
         f"{type(distribution)}"
     )

@@ -25,7 +25,7 @@ from typing import Literal
 import numpy as np
 import OpenEXR
 
-from recon.errors import SpectwinDataError, SpectwinInputError
+from recon.errors import InputError, MissingDataError
 from recon.spectra import WavelengthGrid
 
 __all__ = ["SpectralImage", "channel_name", "read_spectral_exr", "write_spectral_exr"]
@@ -83,18 +83,18 @@ def write_spectral_exr(
         The written file.
     """
     if kind not in _COMPONENT:
-        raise SpectwinInputError(f"kind: expected 'emissive' or 'reflective', got {kind!r}")
+        raise InputError(f"kind: expected 'emissive' or 'reflective', got {kind!r}")
     cube = np.asarray(cube)
     if cube.ndim != 3 or cube.shape[-1] != grid.size:
-        raise SpectwinInputError(
+        raise InputError(
             f"cube: expected shape (H, W, {grid.size}) for a grid of {grid.describe()}, got "
             f"{cube.shape}"
         )
     if cube.dtype not in _PIXEL_TYPES:
-        raise SpectwinInputError(f"cube: expected float32 or float16 pixels, got {cube.dtype}")
+        raise InputError(f"cube: expected float32 or float16 pixels, got {cube.dtype}")
     path = Path(path)
     if not path.parent.is_dir():
-        raise SpectwinInputError(f"path: folder {path.parent} does not exist")
+        raise InputError(f"path: folder {path.parent} does not exist")
     header: dict[str, object] = {
         "compression": OpenEXR.ZIP_COMPRESSION,
         "type": OpenEXR.scanlineimage,
@@ -127,7 +127,7 @@ def read_spectral_exr(path: str | Path) -> SpectralImage:
     """
     path = Path(path)
     if not path.is_file():
-        raise SpectwinDataError(f"spectral EXR {path} does not exist")
+        raise MissingDataError(f"spectral EXR {path} does not exist")
     found: dict[str, dict[float, np.ndarray]] = {"S0": {}, "T": {}}
     with OpenEXR.File(str(path)) as exr:
         # The header and channel dicts are views into the open file: copy what is needed.
@@ -145,7 +145,7 @@ def read_spectral_exr(path: str | Path) -> SpectralImage:
                 found[match.group(1)][float(match.group(2).replace(",", "."))] = pixels
     component = "S0" if found["S0"] else "T"
     if not found[component]:
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: expected spectral channels named like 'S0.550,0nm' or 'T.550,0nm' "
             f"(Fichet et al. 2021), found {channel_names}"
         )

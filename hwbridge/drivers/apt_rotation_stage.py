@@ -34,7 +34,13 @@ import serial
 
 import hwbridge.emulators  # noqa: F401  (registers the apt:// URL handler)
 from hwbridge.dome_targets import stage_angle_deg
-from hwbridge.errors import DeviceDisconnected, DeviceError, DeviceTimeout, DriverNotInstalled
+from hwbridge.errors import (
+    DeviceDisconnected,
+    DeviceError,
+    DeviceTimeout,
+    DriverNotInstalled,
+    Remedy,
+)
 from hwbridge.protocols import description, reading
 
 __all__ = ["K10CR1_COUNTS_PER_DEG", "AptRotationStage"]
@@ -57,8 +63,9 @@ def _protocol_library() -> Any:
         import thorlabs_apt_protocol
     except ImportError as error:
         raise DriverNotInstalled(
-            "the Thorlabs APT stage driver needs thorlabs-apt-protocol: "
-            "pip install 'spectwin[rotation-stage]'"
+            "the Thorlabs APT stage driver needs thorlabs-apt-protocol (the optional "
+            "dependencies rotation-stage)",
+            remedy=Remedy.install_rotation_stage,
         ) from error
     return thorlabs_apt_protocol
 

@@ -30,7 +30,7 @@ import serial
 
 import hwbridge.emulators  # noqa: F401  (registers the dmxusbpro:// URL handler)
 from hwbridge.dome_targets import check_current_ma, led_pattern, single_led
-from hwbridge.errors import BridgeInputError, DeviceDisconnected, DeviceError, DeviceTimeout
+from hwbridge.errors import DeviceDisconnected, DeviceError, DeviceTimeout, InputError
 from hwbridge.protocols import description, reading
 
 __all__ = ["DmxLedArray"]
@@ -74,7 +74,7 @@ class DmxLedArray:
         timeout_s: float = 1.0,
     ):
         if not (count >= 1 and first_address >= 1 and first_address + count - 1 <= _UNIVERSE_SLOTS):
-            raise BridgeInputError(
+            raise InputError(
                 f"{name}: {count} LEDs from slot {first_address} do not fit the "
                 f"{_UNIVERSE_SLOTS} slots of a DMX universe"
             )

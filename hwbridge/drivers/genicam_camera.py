@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from hwbridge.errors import BridgeInputError, DeviceError, DeviceTimeout
+from hwbridge.errors import DeviceError, DeviceTimeout, InputError
 from hwbridge.protocols import description, reading
 
 __all__ = ["GenICamCamera", "simulated_producer"]
@@ -48,7 +48,7 @@ class GenICamCamera:
         from harvesters.core import Harvester
 
         if not self._cti.is_file():
-            raise BridgeInputError(f"{self.name}: GenTL producer {self._cti} does not exist")
+            raise InputError(f"{self.name}: GenTL producer {self._cti} does not exist")
         self.unstage()
         self._harvester = Harvester()
         try:
@@ -94,9 +94,7 @@ class GenICamCamera:
     def set_exposure(self, exposure_s: float) -> None:
         """Set ``ExposureTime`` (microseconds) where the camera has it; kept for the metadata."""
         if not np.isfinite(exposure_s) or exposure_s <= 0:
-            raise BridgeInputError(
-                f"{self.name}: expected a positive exposure time, got {exposure_s}"
-            )
+            raise InputError(f"{self.name}: expected a positive exposure time, got {exposure_s}")
         self._exposure_s = float(exposure_s)
         node_map = self._node_map()
         if hasattr(node_map, "ExposureTime"):

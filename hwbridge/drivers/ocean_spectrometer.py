@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from hwbridge.errors import BridgeInputError, DeviceError
+from hwbridge.errors import DeviceError, InputError
 from hwbridge.protocols import description, reading
 
 __all__ = ["OceanSpectrometer"]
@@ -28,7 +28,7 @@ class OceanSpectrometer:
         name: str = "monitor",
     ):
         if not integration_s > 0:
-            raise BridgeInputError(f"integration_s: expected a positive time, got {integration_s}")
+            raise InputError(f"integration_s: expected a positive time, got {integration_s}")
         self.name, self._serial, self._integration_s = name, serial_number, integration_s
         self._device = None
         self._last: tuple[np.ndarray, np.ndarray, float] | None = None

@@ -14,7 +14,7 @@ from typing import Any
 import serial
 
 import hwbridge.emulators  # noqa: F401  (registers the varispec:// URL handler)
-from hwbridge.errors import BridgeInputError, DeviceError, DeviceTimeout
+from hwbridge.errors import DeviceError, DeviceTimeout, InputError
 from hwbridge.protocols import description, reading
 
 __all__ = ["VariSpec"]
@@ -82,7 +82,7 @@ class VariSpec:
         """Tune and wait until the liquid crystals have settled."""
         low, high = self.range_nm
         if not low <= wavelength_nm <= high:
-            raise BridgeInputError(
+            raise InputError(
                 f"{self.name}: wavelength {wavelength_nm} nm is outside the filter's range "
                 f"{low}-{high} nm"
             )

@@ -12,7 +12,7 @@ Every function recovers spectra from RGB (or any ``C``-channel broadband) data. 
   image's leading dimensions** (``rgb.shape[:-1]``), one per row of ``known_spectra``, all
   distinct. For a 2-D image use ``np.ravel_multi_index((rows, cols), rgb.shape[:2])``; for a
   boolean mask ``np.flatnonzero(mask)`` (then the spectra must be in the mask's row-major order).
-- Bad input raises :class:`recon.errors.SpectwinInputError` naming the argument.
+- Bad input raises :class:`recon.errors.InputError` naming the argument.
 
 Methods (the thesis compares them with spectralization in chapter 7, Sec. 7.1-7.6, and in
 Sec. 10.4.3-10.4.4), one module per method, each registered by its short name in
@@ -65,7 +65,7 @@ from recon.baselines.imai_berns1999 import imai
 from recon.baselines.jakob_hanika2019 import jakob_2019
 from recon.baselines.murakami2007 import murakami_2007
 from recon.baselines.smits1999 import smits_1999
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = [
     "RECOVERY_METHODS",
@@ -140,13 +140,13 @@ def recover(rgb: np.ndarray, *args: Any, method: str, **kwargs: Any) -> np.ndarr
 
     Raises
     ------
-    recon.errors.SpectwinInputError
+    recon.errors.InputError
         If ``method`` names no registered method (the message lists the valid names), or for
         bad input to the method itself.
     """
     function = RECOVERY_METHODS.get(method.lower()) if isinstance(method, str) else None
     if function is None:
-        raise SpectwinInputError(
+        raise InputError(
             f"method: unknown spectral recovery method {method!r}; expected one of "
             f"{', '.join(RECOVERY_METHODS)}"
         )

@@ -34,7 +34,7 @@ from recon.baselines.common import (
     check_response,
     check_spectra,
 )
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = ["aplus", "spectral_a_plus"]
 
@@ -148,7 +148,7 @@ def spectral_a_plus(
     flat = pixels.reshape(-1, channels)
     if known_pixels is None and training_rgb is None:
         if matrix is None:
-            raise SpectwinInputError(
+            raise InputError(
                 "training_rgb: expected training_rgb, known_pixels or response to know the RGB "
                 "of the training spectra, got none of them"
             )
@@ -171,7 +171,7 @@ def spectral_a_plus(
     rgb_norm = np.linalg.norm(train_rgb, axis=1)
     usable = rgb_norm > 0
     if not np.any(usable) or not np.any(spectra):
-        raise SpectwinInputError(
+        raise InputError(
             "training_spectra / training_rgb: all training samples are black (zero RGB or zero "
             "spectrum); nothing to learn from"
         )
@@ -181,7 +181,7 @@ def spectral_a_plus(
     spectra_norm = np.linalg.norm(spectra, axis=1, keepdims=True)
     shapes = spectra[spectra_norm[:, 0] > 0] / spectra_norm[spectra_norm[:, 0] > 0]
     if len(shapes) < n_atoms:
-        raise SpectwinInputError(
+        raise InputError(
             f"n_atoms: expected at most the number of non-zero training spectra "
             f"({len(shapes)}), got {n_atoms}"
         )

@@ -23,7 +23,7 @@ from recon.baselines.common import (
     check_response,
     check_spectra,
 )
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = ["dong_2016"]
 
@@ -79,12 +79,12 @@ def dong_2016(
     check_count("max_iter", max_iter, 1)
     tol = check_positive("tol", tol)
     if spectra.min() < 0:
-        raise SpectwinInputError(
+        raise InputError(
             f"known_spectra: NMF needs non-negative spectra, found a minimum of "
             f"{spectra.min():g}; clip noise below zero first"
         )
     if not np.any(spectra):
-        raise SpectwinInputError("known_spectra: all zero, no basis can be learned")
+        raise InputError("known_spectra: all zero, no basis can be learned")
     factorization = NMF(
         n_components=components,
         init="nndsvda",

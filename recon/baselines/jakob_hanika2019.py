@@ -19,7 +19,7 @@ import numpy as np
 from colour.recovery import LUT3D_Jakob2019
 
 from recon.baselines.common import CHUNK_ELEMENTS, check_count, check_reflectance_rgb
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import WavelengthGrid
 
 __all__ = ["jakob_2019"]
@@ -152,7 +152,7 @@ def jakob_2019(
         size = check_count("lut_size", lut_size, 2)
         steps = np.diff(wl)
         if not np.allclose(steps, steps[0], rtol=1e-9, atol=0):
-            raise SpectwinInputError(
+            raise InputError(
                 "wavelengths_nm: the LUT path (lut_size) needs a regular grid; use "
                 "lut_size=None for irregular grids"
             )

@@ -21,7 +21,7 @@ from recon.baselines.common import (
     check_response,
     check_spectra,
 )
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = ["murakami_2007"]
 
@@ -97,7 +97,7 @@ def murakami_2007(
     """
     image = check_image("rgb", rgb)
     if image.ndim != 3:
-        raise SpectwinInputError(
+        raise InputError(
             f"rgb: murakami_2007 needs a 2-D image of shape (H, W, C) for the pixel positions, "
             f"got shape {image.shape}"
         )

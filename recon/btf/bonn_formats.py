@@ -58,7 +58,7 @@ from pathlib import Path
 import numpy as np
 
 from recon.btf.rgb_images import RGBImageSet
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.rgb_upsampling import read_srgb_image
 
 __all__ = ["ARCHIVE_NAME", "YUV_TO_RGB", "read_image_archive", "read_ubo2014"]
@@ -81,7 +81,7 @@ def read_image_archive(path: str | Path) -> RGBImageSet:
     try:
         archive = zipfile.ZipFile(path)
     except (OSError, zipfile.BadZipFile) as error:
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: not a readable zip archive ({error}); expected a UBO2003 or ATRIUM archive"
         ) from None
     entries: dict[tuple[int, ...], str] = {}
@@ -92,19 +92,19 @@ def read_image_archive(path: str | Path) -> RGBImageSet:
             continue
         angles = tuple(int(value) for value in match.groups()[:4])
         if angles in entries:
-            raise SpectwinInputError(
+            raise InputError(
                 f"{path}: {entries[angles]} and {name} have the same angles; expected one image "
                 "per direction pair"
             )
         entries[angles] = name
         suffixes.add(match.group(5).lower())
     if not entries:
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: no images named like 'tl000 pl000 tv000 pv000.jpg' (or .hdr); expected a "
             "UBO2003 or ATRIUM archive"
         )
     if len(suffixes) > 1:
-        raise SpectwinInputError(f"{path}: both JPEG and HDR images; expected one kind")
+        raise InputError(f"{path}: both JPEG and HDR images; expected one kind")
     keys = sorted(entries)
     hdr = suffixes == {"hdr"}
 
@@ -133,7 +133,7 @@ def _decode_flipped_radiance(data: bytes, label: str) -> np.ndarray:
 
     match = _RADIANCE_FLIPPED.search(data)
     if match is None:
-        raise SpectwinInputError(
+        raise InputError(
             f"{label}: no '+X W -Y H' resolution line; expected an ATRIUM Radiance image"
         )
     width, height = match.groups()
@@ -142,7 +142,7 @@ def _decode_flipped_radiance(data: bytes, label: str) -> np.ndarray:
         np.frombuffer(usual + data[match.end() :], np.uint8), cv2.IMREAD_UNCHANGED
     )
     if pixels is None or pixels.ndim != 3:
-        raise SpectwinInputError(f"{label}: not a readable Radiance image")
+        raise InputError(f"{label}: not a readable Radiance image")
     return pixels[::-1, :, ::-1].astype(np.float64)
 
 
@@ -155,7 +155,7 @@ class _Cursor:
     def take(self, dtype: str, count: int, what: str) -> np.ndarray:
         size = np.dtype(dtype).itemsize * count
         if self.position + size > len(self.data):
-            raise SpectwinInputError(
+            raise InputError(
                 f"{self.path}: ends at byte {len(self.data)} inside {what}; expected a complete "
                 "UBO2014 file"
             )
@@ -178,11 +178,9 @@ def read_ubo2014(path: str | Path) -> RGBImageSet:
         with path.open("rb") as handle:
             data = mmap.mmap(handle.fileno(), 0, access=mmap.ACCESS_READ)
     except (OSError, ValueError) as error:
-        raise SpectwinInputError(
-            f"{path}: not readable ({error}); expected a UBO2014 .btf file"
-        ) from None
+        raise InputError(f"{path}: not readable ({error}); expected a UBO2014 .btf file") from None
     if data[: len(_SIGNATURE)] != _SIGNATURE:
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: starts {bytes(data[:9])!r}; expected {_SIGNATURE!r} (a UBO2014 file in the "
             "DFMF layout)"
         )
@@ -191,7 +189,7 @@ def read_ubo2014(path: str | Path) -> RGBImageSet:
     lights_deg, views_deg, width, height = _read_header(cursor, rotations)
     channels = _read_factors(cursor, len(lights_deg) ** 2, width * height)
     if cursor.position != len(data):
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: {len(data) - cursor.position} bytes after the last channel; expected the "
             "file to end there"
         )
@@ -234,7 +232,7 @@ def _read_header(cursor: _Cursor, rotations: bool) -> tuple[np.ndarray, np.ndarr
     size, version = (int(value) for value in cursor.take("<u4", 2, "the header"))
     cursor.skip(3 * 80 + 4 * 4, "the header")
     if version > 1 and cursor.number("the header"):
-        raise SpectwinInputError(
+        raise InputError(
             f"{cursor.path}: cosine-weighted values; expected plain reflectance (cosine flag 0)"
         )
     if version > 2:
@@ -244,11 +242,9 @@ def _read_header(cursor: _Cursor, rotations: bool) -> tuple[np.ndarray, np.ndarr
         for _ in range(channel_count):
             cursor.skip(cursor.number("the channel names"), "the channel names")
         if channel_count != 3:
-            raise SpectwinInputError(
-                f"{cursor.path}: {channel_count} channels; expected 3 (RGB or YUV)"
-            )
+            raise InputError(f"{cursor.path}: {channel_count} channels; expected 3 (RGB or YUV)")
     if cursor.position - start != size:
-        raise SpectwinInputError(
+        raise InputError(
             f"{cursor.path}: header of {cursor.position - start} bytes, declared {size}; "
             "expected a UBO2014 header"
         )
@@ -261,12 +257,12 @@ def _read_header(cursor: _Cursor, rotations: bool) -> tuple[np.ndarray, np.ndarr
         if lights is None:
             lights = angles
         elif count != len(lights):
-            raise SpectwinInputError(
+            raise InputError(
                 f"{cursor.path}: view {view} lists {count} lights, view 0 {len(lights)}; "
                 "expected the same lights for every view"
             )
     if lights is None or len(lights) != view_count:
-        raise SpectwinInputError(
+        raise InputError(
             f"{cursor.path}: {view_count} views and {0 if lights is None else len(lights)} "
             "lights; expected the same, non-empty set of directions for both"
         )
@@ -285,7 +281,7 @@ def _read_factors(
     cursor.number("the factorization")
     model = cursor.number("the colour model")
     if model not in (0, 11):
-        raise SpectwinInputError(
+        raise InputError(
             f"{cursor.path}: colour model {model}; expected 0 (RGB) or 11 (logarithmic YUV)"
         )
     cursor.skip(12 * 4, "the colour transform")
@@ -294,13 +290,13 @@ def _read_factors(
         what = f"channel {channel}"
         scalar = int(cursor.take("u1", 1, what)[0])
         if scalar not in _SCALARS:
-            raise SpectwinInputError(
+            raise InputError(
                 f"{cursor.path}: {what} stores {scalar}-byte numbers; expected 2, 4 or 8"
             )
         components = cursor.number(what)
         stored_rows, stored_columns = cursor.number(what), cursor.number(what)
         if (stored_rows, stored_columns) != (rows, columns):
-            raise SpectwinInputError(
+            raise InputError(
                 f"{cursor.path}: {what} is {stored_rows} x {stored_columns}; expected {rows} "
                 f"direction pairs x {columns} texels"
             )

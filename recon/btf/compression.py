@@ -60,7 +60,7 @@ import scipy.linalg
 from sklearn.utils.extmath import randomized_svd
 
 from recon.btf.store import BTFStore
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.metrics import relative_error
 from recon.spectra import WavelengthGrid
 
@@ -190,11 +190,11 @@ class CompressedBTF:
         shape = _check_shape(self.shape)
         object.__setattr__(self, "shape", shape)
         if not isinstance(self.grid, WavelengthGrid) or self.grid.size != shape[3]:
-            raise SpectwinInputError(
+            raise InputError(
                 f"grid: expected a WavelengthGrid of {shape[3]} bands, got {self.grid!r}"
             )
         if self.layout not in LAYOUTS:
-            raise SpectwinInputError(f"layout: expected one of {LAYOUTS}, got {self.layout!r}")
+            raise InputError(f"layout: expected one of {LAYOUTS}, got {self.layout!r}")
         n_pairs, height, width, n_bands = shape
         n_texels = height * width
         c_b = np.shape(self.brightness_scores)[-1] if np.ndim(self.brightness_scores) else -1
@@ -211,13 +211,13 @@ class CompressedBTF:
         for name, want in expected.items():
             values = np.asarray(getattr(self, name))
             if values.shape != want:
-                raise SpectwinInputError(
+                raise InputError(
                     f"{name}: expected shape {want} for a {self.layout} BTF of shape {shape}, "
                     f"got {values.shape}"
                 )
             values = np.ascontiguousarray(values, dtype=np.float32)
             if not np.all(np.isfinite(values)):
-                raise SpectwinInputError(f"{name}: expected finite factors, found NaN")
+                raise InputError(f"{name}: expected finite factors, found NaN")
             object.__setattr__(self, name, values)
 
     # -- sizes --
@@ -311,9 +311,9 @@ class CompressedBTF:
     @staticmethod
     def _check_index(index: int, size: int, name: str) -> int:
         if isinstance(index, bool) or not isinstance(index, int | np.integer):
-            raise SpectwinInputError(f"{name}: expected an integer index, got {index!r}")
+            raise InputError(f"{name}: expected an integer index, got {index!r}")
         if not 0 <= index < size:
-            raise SpectwinInputError(f"{name}: expected an index in 0..{size - 1}, got {index}")
+            raise InputError(f"{name}: expected an index in 0..{size - 1}, got {index}")
         return int(index)
 
     def __repr__(self) -> str:
@@ -336,20 +336,18 @@ def _check_shape(shape: tuple[int, ...]) -> tuple[int, int, int, int]:
     if len(shape) != 4 or not all(
         isinstance(n, int | np.integer) and not isinstance(n, bool) and n > 0 for n in shape
     ):
-        raise SpectwinInputError(
-            f"shape: expected (n_pairs, H, W, K) of positive ints, got {shape!r}"
-        )
+        raise InputError(f"shape: expected (n_pairs, H, W, K) of positive ints, got {shape!r}")
     return tuple(int(n) for n in shape)
 
 
 def _check_options(n_brightness: int, n_spectral: int, layout: str, svd: str) -> None:
     for name, value in (("n_brightness", n_brightness), ("n_spectral", n_spectral)):
         if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
-            raise SpectwinInputError(f"{name}: expected a positive integer, got {value!r}")
+            raise InputError(f"{name}: expected a positive integer, got {value!r}")
     if layout not in LAYOUTS:
-        raise SpectwinInputError(f"layout: expected one of {LAYOUTS}, got {layout!r}")
+        raise InputError(f"layout: expected one of {LAYOUTS}, got {layout!r}")
     if svd not in _SVD_METHODS:
-        raise SpectwinInputError(f"svd: expected one of {_SVD_METHODS}, got {svd!r}")
+        raise InputError(f"svd: expected one of {_SVD_METHODS}, got {svd!r}")
 
 
 def _pca(
@@ -424,27 +422,23 @@ def compress_btf(
     """
     _check_options(n_brightness, n_spectral, layout, svd)
     if not isinstance(grid, WavelengthGrid):
-        raise SpectwinInputError(f"grid: expected a WavelengthGrid, got {type(grid).__name__}")
+        raise InputError(f"grid: expected a WavelengthGrid, got {type(grid).__name__}")
     values = np.asarray(reflectance)
     if values.ndim != 4:
-        raise SpectwinInputError(
-            f"reflectance: expected (n_pairs, H, W, K), got shape {values.shape}"
-        )
+        raise InputError(f"reflectance: expected (n_pairs, H, W, K), got shape {values.shape}")
     if values.shape[3] != grid.size:
-        raise SpectwinInputError(
+        raise InputError(
             f"reflectance: its last axis has {values.shape[3]} bands, the grid {grid.describe()}"
         )
     if not np.issubdtype(values.dtype, np.number) or np.issubdtype(
         values.dtype, np.complexfloating
     ):
-        raise SpectwinInputError(f"reflectance: expected real numbers, got {values.dtype}")
+        raise InputError(f"reflectance: expected real numbers, got {values.dtype}")
     values = values.astype(np.float32, copy=False)
     if not np.all(np.isfinite(values)):
-        raise SpectwinInputError("reflectance: expected finite values, found NaN or infinity")
+        raise InputError("reflectance: expected finite values, found NaN or infinity")
     if not 0 <= brightness_floor < 1:
-        raise SpectwinInputError(
-            f"brightness_floor: expected a fraction in [0, 1), got {brightness_floor}"
-        )
+        raise InputError(f"brightness_floor: expected a fraction in [0, 1), got {brightness_floor}")
     shape = _check_shape(values.shape)
     n_pairs, height, width, n_bands = shape
     n_texels = height * width
@@ -548,7 +542,7 @@ def compression_report(
     """
     if isinstance(reference, BTFStore):
         if reference.grid != compressed.grid:
-            raise SpectwinInputError(
+            raise InputError(
                 f"reference: store grid {reference.grid.describe()} differs from the compressed "
                 f"BTF's {compressed.grid.describe()}"
             )
@@ -565,7 +559,7 @@ def compression_report(
             return reference[pair]
 
     if tuple(store_shape) != compressed.shape:
-        raise SpectwinInputError(
+        raise InputError(
             f"reference: shape {tuple(store_shape)} differs from the compressed BTF's "
             f"{compressed.shape}"
         )
@@ -610,7 +604,7 @@ def save_compressed(store: BTFStore | str | Path, compressed: CompressedBTF) -> 
     grid (replacing an earlier compressed form; marked complete only once fully written)."""
     store = _as_store(store, writable=True)
     if store.shape != compressed.shape or store.grid != compressed.grid:
-        raise SpectwinInputError(
+        raise InputError(
             f"compressed: shape {compressed.shape} on {compressed.grid.describe()} does not "
             f"match the store's {store.shape} on {store.grid.describe()}"
         )
@@ -636,7 +630,7 @@ def load_compressed(store: BTFStore | str | Path) -> CompressedBTF:
     arrays, attrs = store.read_compressed()
     missing = [name for name in _ARRAY_NAMES if name not in arrays]
     if missing:
-        raise SpectwinInputError(f"{store.path}: the compressed form lacks arrays {missing}")
+        raise InputError(f"{store.path}: the compressed form lacks arrays {missing}")
     return CompressedBTF(
         shape=tuple(attrs["shape"]),
         grid=store.grid,

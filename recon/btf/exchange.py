@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from recon.btf.store import BTF_UNITS, BTFStore
-from recon.errors import SpectwinDataError, SpectwinInputError
+from recon.errors import DamagedDataError, InputError, Remedy
 from recon.progress import progress_steps
 from recon.spectra import WavelengthGrid
 from recon.spectral_exr import read_spectral_exr, write_spectral_exr
@@ -67,13 +67,14 @@ def export_btf(store: BTFStore, out_dir: str | Path, *, progress: bool = False) 
     """
     out_dir = Path(out_dir)
     if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())):
-        raise SpectwinInputError(
+        raise InputError(
             f"{out_dir}: expected a new or empty folder for the slices (nothing was overwritten)"
         )
     if not store.complete:
-        raise SpectwinInputError(
+        raise InputError(
             f"{store.path}: cannot export an incomplete BTF store ({len(store.pending_pairs())} "
-            "pairs pending); finish it with spectwin process --resume"
+            "pairs pending)",
+            remedy=Remedy.finish_processing,
         )
     out_dir.mkdir(parents=True, exist_ok=True)
     corners = store.corners_xy()
@@ -115,39 +116,40 @@ def export_btf(store: BTFStore, out_dir: str | Path, *, progress: bool = False) 
 def _read_index(folder: Path) -> dict[str, Any]:
     path = folder / INDEX_NAME
     if not folder.is_dir():
-        raise SpectwinInputError(
-            f"{folder}: expected a folder of spectral EXR slices with {INDEX_NAME} (as spectwin "
-            "btf export writes)"
+        raise InputError(
+            f"{folder}: expected a folder of spectral EXR slices with {INDEX_NAME}",
+            remedy=Remedy.export_btf,
         )
     if not path.is_file():
-        raise SpectwinInputError(
-            f"{folder}: no {INDEX_NAME}; expected the direction index of spectwin btf export (a "
-            "folder without it is an export that did not finish)"
+        raise InputError(
+            f"{folder}: no {INDEX_NAME}; expected the direction index of an export of a BTF store "
+            "(a folder without it is an export that did not finish)",
+            remedy=Remedy.export_btf,
         )
     try:
         index = json.loads(path.read_text())
     except (OSError, UnicodeDecodeError, ValueError) as error:
-        raise SpectwinDataError(f"{path}: unreadable direction index ({error})") from error
+        raise DamagedDataError(f"{path}: unreadable direction index ({error})") from error
     if not isinstance(index, dict) or index.get("format") != EXCHANGE_FORMAT:
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: format {index.get('format') if isinstance(index, dict) else None!r}, "
             f"expected {EXCHANGE_FORMAT!r}"
         )
     if index.get("format_version") != EXCHANGE_VERSION:
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: format version {index.get('format_version')!r} is not supported "
             f"(expected {EXCHANGE_VERSION})"
         )
     if index.get("units") != BTF_UNITS:
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: units {index.get('units')!r}, expected {BTF_UNITS!r} (BTF reflectance)"
         )
     for field, kind in (("pairs", list), ("wavelengths_nm", list), ("texels", list)):
         if not isinstance(index.get(field), kind) or not index[field]:
-            raise SpectwinInputError(f"{path}: field {field!r} must be a non-empty list")
+            raise InputError(f"{path}: field {field!r} must be a non-empty list")
     for number, entry in enumerate(index["pairs"]):
         if not isinstance(entry, dict) or not {"file", "light_dir", "view_dir"} <= set(entry):
-            raise SpectwinInputError(
+            raise InputError(
                 f"{path}: pairs[{number}] must name 'file', 'light_dir' and 'view_dir'"
             )
     return index
@@ -188,7 +190,7 @@ def import_exr_slices(
         for pair, entry in enumerate(entries):
             image = read_spectral_exr(folder / str(entry["file"]))
             if image.grid != grid or image.cube.shape[:2] != texels:
-                raise SpectwinDataError(
+                raise DamagedDataError(
                     f"{folder / str(entry['file'])}: {image.cube.shape[:2]} px on "
                     f"{image.grid.describe()}, expected {texels} px on {grid.describe()} as "
                     f"{INDEX_NAME} says"

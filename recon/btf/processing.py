@@ -47,7 +47,7 @@ from recon.calibration.gonio import (
     store_white_factors,
 )
 from recon.calibration.spectral import drift_factors, reflectance
-from recon.errors import SpectwinInputError
+from recon.errors import InputError, Remedy
 from recon.progress import progress_steps
 from recon.registration.border import (
     MarksNotFoundError,
@@ -84,7 +84,7 @@ def inset_corners(corners_xy: np.ndarray, fraction: float) -> np.ndarray:
     """Image corners of the centred sub-square of side ``fraction`` of the registered square
     (the sample inside its registration marks), through the marks' homography."""
     if not 0 < fraction <= 1:
-        raise SpectwinInputError(f"sample_fraction: expected a fraction in (0, 1], got {fraction}")
+        raise InputError(f"sample_fraction: expected a fraction in (0, 1], got {fraction}")
     margin = (1 - fraction) / 2
     square = np.array([[0.0, 0.0], [1, 0], [1, 1], [0, 1]]) * fraction + margin
     return texture_transform(corners_xy).inverse(square)
@@ -94,9 +94,10 @@ def _rig(store: CaptureStore) -> dict:
     rig = store.attrs["rig"]
     missing = [key for key in _RIG_KEYS if key not in rig]
     if missing:
-        raise SpectwinInputError(
+        raise InputError(
             f"{store.path}: the capture's rig attribute lacks {missing}; expected a measurement "
-            "run of the gonioreflectometer (spectwin capture --program gonio-run)"
+            "run of the gonioreflectometer (program gonio-run)",
+            remedy=Remedy.capture_gonio_run,
         )
     return rig
 
@@ -114,7 +115,7 @@ def check_gonio_run(
     if white_bands.shape != calibration.bands_nm.shape or not np.allclose(
         white_bands, calibration.bands_nm
     ):
-        raise SpectwinInputError(
+        raise InputError(
             f"{store.path}: white photographs at {white_bands.tolist()} nm, the calibration has "
             f"{calibration.bands_nm.tolist()} nm"
         )
@@ -229,7 +230,7 @@ def _pair_frames(
     slots = np.flatnonzero((index["kind"] == "sample") & (index["view_id"] == view))
     slots = slots[np.argsort(index["band_nm"][slots])]
     if not np.allclose(index["band_nm"][slots], bands_nm):
-        raise SpectwinInputError(
+        raise InputError(
             f"{store.path}: pair {view} has bands {index['band_nm'][slots].tolist()}, the "
             f"calibration {bands_nm.tolist()}"
         )

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from recon.directions import direction
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = ["RGBImageSet"]
 
@@ -56,7 +56,7 @@ class RGBImageSet:
         outside = np.flatnonzero(~np.all((polar >= 0) & (polar < 90), axis=1))
         if outside.size:
             first = outside[0]
-            raise SpectwinInputError(
+            raise InputError(
                 f"{self.source}: {self.names[first]} has polar angles "
                 f"{polar[first, 0]:g}, {polar[first, 1]:g} deg; expected 0 to below 90 (above "
                 "the sample)"

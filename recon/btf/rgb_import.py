@@ -18,7 +18,7 @@ The spectral pipelines take spectra, so the import upsamples every texel by a na
 (:mod:`recon.rgb_upsampling`; ``"jakob2019"``, brightness above 1 carried by scaling a colour
 into the table's range and back) and records in the store's ``rgb_source`` attribute that it
 came from RGB: the colour space, the source's format and encoding, the method, the scale, the
-texel reduction and the source. Anything rendered from it (``spectwin validate``) says so. The
+texel reduction and the source, so anything rendered from it can say so. The
 upsampled spectra have the images' sRGB colours under D65; under other lights they are one
 metamer among many.
 """
@@ -33,7 +33,7 @@ import numpy as np
 from recon.btf.bonn_formats import read_image_archive, read_ubo2014
 from recon.btf.rgb_images import RGBImageSet
 from recon.btf.store import BTFStore
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.progress import progress_steps
 from recon.rgb_upsampling import read_srgb_image, reduce_image, upsample_srgb
 from recon.spectra import DEFAULT_GRID
@@ -70,12 +70,12 @@ def open_rgb_images(path: str | Path) -> RGBImageSet:
     path = Path(path)
     if path.suffix.lower() in _READERS:
         if not path.is_file():
-            raise SpectwinInputError(
+            raise InputError(
                 f"{path}: no such file; expected a UBO2003/ATRIUM .zip or a UBO2014 .btf"
             )
         return _READERS[path.suffix.lower()](path)
     if not path.is_dir():
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: not a folder, .zip or .btf; expected images with {DIRECTION_TABLE}, a "
             "UBO2003/ATRIUM archive or a UBO2014 file"
         )
@@ -93,24 +93,24 @@ def open_rgb_images(path: str | Path) -> RGBImageSet:
 def _read_table(folder: Path) -> list[dict[str, str]]:
     path = folder / DIRECTION_TABLE
     if not path.is_file():
-        raise SpectwinInputError(
+        raise InputError(
             f"{folder}: no {DIRECTION_TABLE}; expected a table with the header "
             f"{','.join(RGB_COLUMNS)}"
         )
     with path.open(newline="") as handle:
         reader = csv.DictReader(handle)
         if tuple(reader.fieldnames or ()) != RGB_COLUMNS:
-            raise SpectwinInputError(
+            raise InputError(
                 f"{path}: header {reader.fieldnames}; expected {','.join(RGB_COLUMNS)}"
             )
         rows = list(reader)
     if not rows:
-        raise SpectwinInputError(f"{path}: no rows; expected one row per image")
+        raise InputError(f"{path}: no rows; expected one row per image")
     for number, row in enumerate(rows, start=2):
         try:
             [float(row[column]) for column in RGB_COLUMNS[1:]]
         except (TypeError, ValueError):
-            raise SpectwinInputError(
+            raise InputError(
                 f"{path}, line {number}: expected four angles in degrees after the file name"
             ) from None
     return rows
@@ -141,7 +141,7 @@ def import_rgb_images(
         Reflectance factor of a linear image value of 1.
     material
         The store's material name (default: the source's name); the twin's colour checker
-        (``colorchecker16``) makes the store one that ``spectwin validate`` compares.
+        (``colorchecker16``) makes the store one that the twin's validation compares.
     texels
         Largest side of the stored texture: images are reduced by area averaging
         (:func:`recon.rgb_upsampling.reduce_image`); ``None`` keeps them whole.
@@ -152,14 +152,14 @@ def import_rgb_images(
         The new, complete store; an import cut short leaves an incomplete one.
     """
     if upsampling != "jakob2019":
-        raise SpectwinInputError(
+        raise InputError(
             f"upsampling: {upsampling!r}; expected 'jakob2019' (the spectralization needs known "
             "spectra, which a BTF's images do not carry)"
         )
     if not np.isfinite(scale) or scale <= 0:
-        raise SpectwinInputError(f"scale: expected a positive number, got {scale}")
+        raise InputError(f"scale: expected a positive number, got {scale}")
     if texels is not None and texels < 1:
-        raise SpectwinInputError(f"texels: expected a positive side in texels, got {texels}")
+        raise InputError(f"texels: expected a positive side in texels, got {texels}")
     images = open_rgb_images(source)
     first, factor = _reduced(images.read(0), texels)
     store = BTFStore.create(
@@ -186,7 +186,7 @@ def import_rgb_images(
         for pair in range(images.n_pairs):
             linear = first if pair == 0 else _reduced(images.read(pair), texels)[0]
             if linear.shape != first.shape:
-                raise SpectwinInputError(
+                raise InputError(
                     f"{images.source}: {images.names[pair]} is {linear.shape[0]} x "
                     f"{linear.shape[1]} px, expected {first.shape[0]} x {first.shape[1]} like "
                     f"{images.names[0]}"

@@ -50,7 +50,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = [
     "COATING_IOR",
@@ -218,7 +218,7 @@ def fit_specular_lobes(
     """
     reflectance = np.asarray(reflectance)
     if reflectance.ndim != 4 or not reflectance.shape[0] == len(light_dirs) == len(view_dirs):
-        raise SpectwinInputError(
+        raise InputError(
             f"reflectance: expected (n_pairs, H, W, K) for {len(light_dirs)} pairs, got "
             f"{reflectance.shape}"
         )
@@ -249,7 +249,7 @@ def fit_specular_lobes(
         peak_values.append(weight * lobe.max())
         used.append((alpha, beckmann))
     if not used:
-        raise SpectwinInputError(
+        raise InputError(
             "light_dirs, view_dirs: no pair near a mirror configuration; no lobe can be fitted"
         )
     errors, weights = np.array(errors), np.array(weights)  # (n_candidates, T)

@@ -32,8 +32,8 @@ chunk altered on disk raises on read; :meth:`BTFStore.check` checks every pair f
 against its reflectance chunk (a missing chunk would read as NaN) and the compressed form's
 chunks, and names the damaged pairs and chunk keys; :meth:`BTFStore.open` refuses missing or
 unreadable metadata, naming the file; reading a pair whose chunk is missing or corrupt raises
-:class:`~recon.errors.SpectwinDataError`. :meth:`BTFStore.prepare_resume` flags damaged pairs
-pending again, so ``spectwin process --resume`` processes them again. Stores made before
+:class:`~recon.errors.DamagedDataError`. :meth:`BTFStore.prepare_resume` flags damaged pairs
+pending again, so a resumed processing writes them again. Stores made before
 checksums open and are checked for missing and undecodable chunks.
 
 References
@@ -64,7 +64,7 @@ from hwbridge.integrity import (
     read_flags,
     with_empty_chunks,
 )
-from recon.errors import SpectwinDataError, SpectwinInputError
+from recon.errors import DamagedDataError, InputError, Remedy
 from recon.spectra import WavelengthGrid
 
 __all__ = [
@@ -91,25 +91,25 @@ def _check_directions(name: str, directions: np.ndarray, n_pairs: int | None) ->
     """``directions`` as float64 ``(n, 3)`` finite unit vectors in the upper hemisphere."""
     directions = np.asarray(directions, dtype=np.float64)
     if directions.ndim != 2 or directions.shape[1] != 3 or directions.shape[0] == 0:
-        raise SpectwinInputError(
+        raise InputError(
             f"{name}: expected an (n_pairs, 3) array of unit vectors, got shape {directions.shape}"
         )
     if n_pairs is not None and directions.shape[0] != n_pairs:
-        raise SpectwinInputError(
+        raise InputError(
             f"{name}: expected {n_pairs} directions (one per pair), got {directions.shape[0]}"
         )
     if not np.all(np.isfinite(directions)):
-        raise SpectwinInputError(f"{name}: expected finite unit vectors, found NaN or infinity")
+        raise InputError(f"{name}: expected finite unit vectors, found NaN or infinity")
     norms = np.linalg.norm(directions, axis=1)
     bad = np.flatnonzero(np.abs(norms - 1.0) > _UNIT_TOLERANCE)
     if bad.size:
-        raise SpectwinInputError(
+        raise InputError(
             f"{name}: expected unit vectors (|d| = 1 within {_UNIT_TOLERANCE:g}), but pair "
             f"{bad[0]} has |d| = {norms[bad[0]]:.9g} ({bad.size} such pairs)"
         )
     below = np.flatnonzero(directions[:, 2] < 0)
     if below.size:
-        raise SpectwinInputError(
+        raise InputError(
             f"{name}: expected directions above the sample (z >= 0 in the sample frame), but "
             f"pair {below[0]} has z = {directions[below[0], 2]:.6g}"
         )
@@ -121,7 +121,7 @@ def _texel_shape(texels: int | tuple[int, int]) -> tuple[int, int]:
     if len(shape) != 2 or not all(
         isinstance(n, int | np.integer) and not isinstance(n, bool) and n > 0 for n in shape
     ):
-        raise SpectwinInputError(
+        raise InputError(
             f"texels: expected a positive int or (height, width) of positive ints, got {texels!r}"
         )
     return int(shape[0]), int(shape[1])
@@ -131,7 +131,7 @@ def _json_attr(name: str, value: Any) -> Any:
     try:
         return json.loads(json.dumps(value))
     except (TypeError, ValueError) as error:
-        raise SpectwinInputError(
+        raise InputError(
             f"{name}: expected JSON-serialisable data (numbers, strings, lists, dicts), got "
             f"{type(value).__name__}: {error}"
         ) from None
@@ -160,12 +160,12 @@ class BTFStore:
         self.writable = writable
         attrs = group.attrs
         if attrs.get("format") != BTF_FORMAT:
-            raise SpectwinInputError(
+            raise InputError(
                 f"{path}: not a BTF store (format attribute {attrs.get('format')!r}, expected "
                 f"{BTF_FORMAT!r})"
             )
         if attrs.get("format_version") != BTF_FORMAT_VERSION:
-            raise SpectwinInputError(
+            raise InputError(
                 f"{path}: BTF store format version {attrs.get('format_version')!r} is not "
                 f"supported (expected {BTF_FORMAT_VERSION})"
             )
@@ -173,12 +173,12 @@ class BTFStore:
         if problems["written"] and not (path / "written").is_dir():
             # ``written`` is created last: without it (and its chunks) the creation stopped.
             missing = [name for name, problem in problems.items() if problem]
-            raise SpectwinInputError(
+            raise InputError(
                 f"{path}: BTF store lacks arrays {missing} (its creation was interrupted?)"
             )
         for name, problem in problems.items():
             if problem:
-                raise SpectwinDataError(
+                raise DamagedDataError(
                     f"{path}: damaged store: {problem} (the metadata of {name}); process the "
                     "capture again"
                 )
@@ -186,7 +186,7 @@ class BTFStore:
         for name in ("wavelengths", "light_dirs", "view_dirs"):
             array = group[name]
             if checker.check(array, (0,) * array.ndim):
-                raise SpectwinDataError(
+                raise DamagedDataError(
                     f"{path}: damaged store: {chunk_key(array, (0,) * array.ndim)} is missing "
                     f"(the {name}); process the capture again"
                 )
@@ -207,7 +207,7 @@ class BTFStore:
             or self.view_dirs.shape != (n_pairs, 3)
             or group["written"].shape != (n_pairs,)
         ):
-            raise SpectwinInputError(
+            raise InputError(
                 f"{path}: inconsistent BTF store: reflectance {shape}, light_dirs "
                 f"{self.light_dirs.shape}, view_dirs {self.view_dirs.shape}, "
                 f"{self.grid.size} wavelengths, written {group['written'].shape}"
@@ -254,17 +254,17 @@ class BTFStore:
         """
         path = Path(path)
         if path.exists():
-            raise SpectwinInputError(
-                f"{path} exists: continue it (spectwin process --resume) or choose another "
-                "name (nothing was overwritten)"
+            raise InputError(
+                f"{path} exists: expected a new store (nothing was overwritten)",
+                remedy=Remedy.resume_or_rename,
             )
         light_dirs = _check_directions("light_dirs", light_dirs, None)
         view_dirs = _check_directions("view_dirs", view_dirs, light_dirs.shape[0])
         height, width = _texel_shape(texels)
         if not isinstance(grid, WavelengthGrid):
-            raise SpectwinInputError(f"grid: expected a WavelengthGrid, got {type(grid).__name__}")
+            raise InputError(f"grid: expected a WavelengthGrid, got {type(grid).__name__}")
         if not isinstance(material, str) or not material.strip():
-            raise SpectwinInputError(f"material: expected a non-empty name, got {material!r}")
+            raise InputError(f"material: expected a non-empty name, got {material!r}")
         calibration = _json_attr("calibration", dict(calibration or {}))
         n_pairs, n_bands = light_dirs.shape[0], grid.size
 
@@ -333,29 +333,27 @@ class BTFStore:
         """Open an existing store, read-only unless ``writable`` (to resume writing pairs)."""
         path = Path(path)
         if not path.exists():
-            raise SpectwinInputError(
-                f"{path} does not exist: expected a BTF store made by spectwin process"
-            )
+            raise InputError(f"{path} does not exist: expected a BTF store", remedy=Remedy.process)
         if not path.is_dir():
-            raise SpectwinInputError(
-                f"{path} is a file: expected a BTF store (a folder made by spectwin process)"
+            raise InputError(
+                f"{path} is a file: expected a BTF store (a folder)", remedy=Remedy.process
             )
         root_problem = metadata_problem(path, "")
         if root_problem and any((path / name).is_dir() for name in _ARRAYS):
-            raise SpectwinDataError(
+            raise DamagedDataError(
                 f"{path}: damaged store: {root_problem}: the root metadata (format, material, "
                 "calibration, complete) is gone; process the capture again"
             )
         try:
             group = zarr.open_group(str(path), mode="r+" if writable else "r", zarr_format=3)
         except (OSError, ValueError, TypeError) as error:
-            raise SpectwinInputError(
-                f"{path}: not a BTF store made by spectwin process (not a Zarr v3 group: {error})"
+            raise InputError(
+                f"{path}: not a BTF store (not a Zarr v3 group: {error})", remedy=Remedy.process
             ) from None
         try:
             return cls(group, path, writable=writable)
         except json.JSONDecodeError as error:
-            raise SpectwinDataError(
+            raise DamagedDataError(
                 f"{path}: damaged store: unreadable metadata of an array ({error}); process the "
                 "capture again"
             ) from error
@@ -398,8 +396,8 @@ class BTFStore:
         except (ValueError, RuntimeError) as error:
             _, problems = read_flags(ChunkChecker(self.path), written, self._pair_name)
             first = problems[0] if problems else f"written cannot be read ({error})"
-            raise SpectwinDataError(
-                f"{self.path}: damaged store: {first}; process the capture again with --resume"
+            raise DamagedDataError(
+                f"{self.path}: damaged store: {first}", remedy=Remedy.reprocess_pairs
             ) from None
         return self._known_written.copy()
 
@@ -454,7 +452,7 @@ class BTFStore:
         self._require_writable()
         pair = self._check_pair(pair)
         if grid is not None and grid != self.grid:
-            raise SpectwinInputError(
+            raise InputError(
                 f"grid: the texture is on {grid.describe()}, the store on {self.grid.describe()}; "
                 "resample explicitly (recon.spectra.resample)"
             )
@@ -465,26 +463,26 @@ class BTFStore:
             if given is not None and not np.allclose(
                 np.asarray(given, np.float64), stored[pair], rtol=0, atol=_UNIT_TOLERANCE
             ):
-                raise SpectwinInputError(
+                raise InputError(
                     f"{name}: pair {pair} of the store has {name} {stored[pair].tolist()}, got "
                     f"{np.asarray(given).tolist()}"
                 )
         values = np.asarray(reflectance)
         expected = self.shape[1:]
         if values.shape != expected:
-            raise SpectwinInputError(
+            raise InputError(
                 f"reflectance: expected a texture of shape (H, W, K) = {expected}, got "
                 f"{values.shape}"
             )
         if not np.issubdtype(values.dtype, np.floating) and not np.issubdtype(
             values.dtype, np.integer
         ):
-            raise SpectwinInputError(f"reflectance: expected real numbers, got {values.dtype}")
+            raise InputError(f"reflectance: expected real numbers, got {values.dtype}")
         with np.errstate(over="ignore"):
             values = values.astype(np.float32)
         if not np.all(np.isfinite(values)):
             bad = np.argwhere(~np.isfinite(values))[0].tolist()
-            raise SpectwinInputError(
+            raise InputError(
                 f"reflectance: expected finite values in 1/sr, found NaN or infinity (or a value "
                 f"beyond float32) at (y, x, band) = {tuple(bad)} of pair {pair}"
             )
@@ -498,7 +496,7 @@ class BTFStore:
         if corners_xy is not None:
             corners = np.asarray(corners_xy, dtype=np.float64)
             if corners.shape != (4, 2) or not np.all(np.isfinite(corners)):
-                raise SpectwinInputError(
+                raise InputError(
                     f"corners_xy: expected finite (4, 2) image corners, got shape {corners.shape}"
                 )
             self._group["corners_xy"][pair] = corners
@@ -533,7 +531,7 @@ class BTFStore:
         pending = self.pending_pairs()
         if pending:
             self._set_complete(False)
-            raise SpectwinInputError(
+            raise InputError(
                 f"{self.path}: cannot mark complete, {len(pending)} pairs pending "
                 f"(first {pending[:5]})"
             )
@@ -559,7 +557,7 @@ class BTFStore:
         pair = self._check_pair(pair)
         self._require_complete(allow_incomplete, f"read pair {pair} of")
         if not self._group["written"][pair]:
-            raise SpectwinInputError(f"{self.path}: pair {pair} is not written yet")
+            raise InputError(f"{self.path}: pair {pair} is not written yet")
         self._require_chunks([pair])
         return self._decoded(pair)
 
@@ -612,11 +610,11 @@ class BTFStore:
     def read_compressed(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         """The arrays and attributes of the ``pca/`` group; raise if absent or incomplete."""
         if COMPRESSED_GROUP not in self._group:
-            raise SpectwinInputError(f"{self.path}: no compressed form ({COMPRESSED_GROUP}/)")
+            raise InputError(f"{self.path}: no compressed form ({COMPRESSED_GROUP}/)")
         group = self._group[COMPRESSED_GROUP]
         attrs = dict(group.attrs)
         if attrs.get("complete") is not True:
-            raise SpectwinInputError(
+            raise InputError(
                 f"{self.path}: the compressed form ({COMPRESSED_GROUP}/) was not completely "
                 "written; compress again"
             )
@@ -625,7 +623,7 @@ class BTFStore:
             try:
                 arrays[name] = group[name][...]
             except (KeyError, ValueError, RuntimeError) as error:
-                raise SpectwinDataError(
+                raise DamagedDataError(
                     f"{self.path}: damaged store: the compressed form's array "
                     f"{COMPRESSED_GROUP}/{name} cannot be read ({error}); compress again"
                 ) from None
@@ -735,11 +733,9 @@ class BTFStore:
 
     def _check_pair(self, pair: int) -> int:
         if isinstance(pair, bool) or not isinstance(pair, int | np.integer):
-            raise SpectwinInputError(f"pair: expected an integer index, got {pair!r}")
+            raise InputError(f"pair: expected an integer index, got {pair!r}")
         if not 0 <= pair < self.n_pairs:
-            raise SpectwinInputError(
-                f"pair: expected an index in 0..{self.n_pairs - 1}, got {pair}"
-            )
+            raise InputError(f"pair: expected an index in 0..{self.n_pairs - 1}, got {pair}")
         return int(pair)
 
     def _pair_name(self, pair: int) -> str:
@@ -750,7 +746,7 @@ class BTFStore:
         try:
             return array[:]
         except (ValueError, RuntimeError) as error:
-            raise SpectwinDataError(
+            raise DamagedDataError(
                 f"{self.path}: damaged store: {array.path} cannot be read "
                 f"({' '.join(str(error).split())[:120]}); process the capture again"
             ) from None
@@ -761,9 +757,9 @@ class BTFStore:
         for pair in pairs:
             key = chunk_key(reflectance, (int(pair), 0, 0, 0))
             if not (self.path / key).is_file():
-                raise SpectwinDataError(
-                    f"{self.path}: damaged store: pair {pair}: {key} is missing; process the "
-                    "capture again with --resume"
+                raise DamagedDataError(
+                    f"{self.path}: damaged store: pair {pair}: {key} is missing",
+                    remedy=Remedy.reprocess_pairs,
                 )
 
     def _decoded(self, pairs: int | slice) -> np.ndarray:
@@ -772,24 +768,22 @@ class BTFStore:
             return self._group["reflectance"][pairs]
         except (ValueError, RuntimeError) as error:  # checksum and decompression errors
             where = f"pair {pairs}: " if isinstance(pairs, int) else ""
-            raise SpectwinDataError(
+            raise DamagedDataError(
                 f"{self.path}: damaged store: {where}a reflectance chunk cannot be decoded "
                 f"({' '.join(str(error).split())[:120]}); process the capture again"
             ) from None
 
     def _require_writable(self) -> None:
         if not self.writable:
-            raise SpectwinInputError(
-                f"{self.path}: the store was opened read-only and cannot be written"
-            )
+            raise InputError(f"{self.path}: the store was opened read-only and cannot be written")
 
     def _require_complete(self, allow_incomplete: bool, action: str) -> None:
         if not allow_incomplete and not self.complete:
             pending = self.pending_pairs()
-            raise SpectwinInputError(
+            raise InputError(
                 f"{self.path}: cannot {action} an incomplete BTF store ({len(pending)} of "
-                f"{self.n_pairs} pairs pending, first {pending[:5]}); finish it with spectwin "
-                "process --resume"
+                f"{self.n_pairs} pairs pending, first {pending[:5]})",
+                remedy=Remedy.finish_processing,
             )
 
     def _all_written(self) -> bool:
@@ -837,16 +831,14 @@ def write_btf(
     """Create a store and write a whole ``(n_pairs, H, W, K)`` BTF into it, pair by pair."""
     values = np.asarray(reflectance)
     if values.ndim != 4:
-        raise SpectwinInputError(
-            f"reflectance: expected (n_pairs, H, W, K), got shape {values.shape}"
-        )
+        raise InputError(f"reflectance: expected (n_pairs, H, W, K), got shape {values.shape}")
     if values.shape[3] != getattr(grid, "size", None):
-        raise SpectwinInputError(
+        raise InputError(
             f"reflectance: its last axis ({values.shape[3]}) does not match the grid "
             f"({grid.describe() if isinstance(grid, WavelengthGrid) else grid!r})"
         )
     if values.shape[0] != np.asarray(light_dirs).shape[0]:
-        raise SpectwinInputError(
+        raise InputError(
             f"reflectance: {values.shape[0]} pairs, but {np.asarray(light_dirs).shape[0]} "
             "light directions"
         )

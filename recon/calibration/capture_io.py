@@ -14,7 +14,7 @@ import numpy as np
 
 from hwbridge.dome_layout import camera_steps
 from hwbridge.store import CaptureStore
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = ["FrameSelection", "plan_frames", "select_frames"]
 
@@ -42,7 +42,7 @@ def select_frames(
     """The frames of ``camera`` of one ``kind``, optionally one band and/or exposure time."""
     store = store if isinstance(store, CaptureStore) else CaptureStore.open(store)
     if not store.complete:
-        raise SpectwinInputError(
+        raise InputError(
             f"{store.path}: the capture is incomplete ({len(store.pending_steps())} steps pending)"
         )
     index = store.index(camera, ("kind", "band_nm", "exposure_s", "light_id", "view_id"))
@@ -53,7 +53,7 @@ def select_frames(
         mask &= np.isclose(index["exposure_s"], exposure_s)
     slots = np.flatnonzero(mask)
     if slots.size == 0:
-        raise SpectwinInputError(
+        raise InputError(
             f"{store.path}: no {kind!r} frames of camera {camera!r} match band={band_nm}, "
             f"exposure={exposure_s}"
         )
@@ -81,6 +81,6 @@ def plan_frames(
         if all(plan[step].get(name) == value for name, value in settings.items())
     ]
     if not slots:
-        raise SpectwinInputError(f"{store.path}: no frames of camera {camera!r} with {settings}")
+        raise InputError(f"{store.path}: no frames of camera {camera!r} with {settings}")
     frames = store.read_frames(camera, slots).astype(np.float64)
     return frames, [plan[steps[slot]] for slot in slots]

@@ -33,7 +33,7 @@ import numpy as np
 from skimage.measure import block_reduce
 
 from recon.calibration.gonio import extend_curve
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.radiometric.dark_frames import average_dark_frames, dark_frames_at
 from recon.radiometric.demosaic import bin_quads
 from recon.radiometric.hdr import interpolate_curve, merge_hdr
@@ -66,7 +66,7 @@ lowest levels, 27-32, came out up to 3 DN above the line through the others, whi
 def texel_mean(image: np.ndarray, texel_px: int) -> np.ndarray:
     """Mean over ``texel_px x texel_px`` pixel blocks of the first two axes of ``image``."""
     if texel_px < 1 or image.shape[0] % texel_px or image.shape[1] % texel_px:
-        raise SpectwinInputError(
+        raise InputError(
             f"texel_px: expected a divisor of the image sides {image.shape[:2]}, got {texel_px}"
         )
     block = (texel_px, texel_px) + (1,) * (image.ndim - 2)
@@ -78,7 +78,7 @@ def curve_linearity(curve: np.ndarray, offset: float = 0.0) -> float:
     ``offset``, over its observed (finite) levels, relative to the curve's largest value."""
     levels = np.flatnonzero(np.isfinite(curve))
     if levels.size < 2:
-        raise SpectwinInputError("curve: fewer than two observed levels")
+        raise InputError("curve: fewer than two observed levels")
     shifted = levels - offset
     slope = np.sum(shifted * curve[levels]) / np.sum(shifted**2)
     return float(np.max(np.abs(curve[levels] - slope * shifted)) / np.max(np.abs(curve[levels])))
@@ -124,7 +124,7 @@ class SpectralCameraCalibration:
         values = np.asarray(frames, np.float64) - dark + DARK_VALUE_OFFSET
         top = self.inverse_response.size - 1
         if np.any(values < 0) or np.any(values > top):
-            raise SpectwinInputError(
+            raise InputError(
                 f"frames: dark-subtracted values outside the curve's range [-30, {top - 30}] "
                 "(saturated or wrong dark model)"
             )
@@ -192,13 +192,13 @@ def calibrate_spectral_camera(
     white = np.asarray(white_reflectance, np.float64)
     frames = np.asarray(white_frames)
     if frames.ndim != 3 or not (led.shape == white.shape == (frames.shape[0],)):
-        raise SpectwinInputError(
+        raise InputError(
             f"white_frames, led_per_band, white_reflectance: expected (n_bands, H, W), (n_bands,) "
             f"and (n_bands,), got {frames.shape}, {led.shape} and {white.shape}"
         )
     times, means = np.asarray(dark_exposure_s, np.float64), np.asarray(mean_dark_frames)
     if times.ndim != 1 or means.shape[:1] != times.shape or np.any(np.diff(times) <= 0):
-        raise SpectwinInputError(
+        raise InputError(
             f"dark_exposure_s, mean_dark_frames: expected increasing times (n,) and frames "
             f"(n, H, W), got {times.shape} and {means.shape}"
         )
@@ -222,7 +222,7 @@ def calibrate_spectral_camera(
     )
     region = np.ones(frames.shape[1:], bool) if white_region is None else white_region
     if np.shape(region) != frames.shape[1:] or not np.any(region):
-        raise SpectwinInputError(
+        raise InputError(
             f"white_region: expected a non-empty mask of the frames' shape {frames.shape[1:]}, "
             f"got shape {np.shape(region)}"
         )
@@ -275,7 +275,7 @@ class RgbCameraCalibration:
         """:math:`V` ``(H, W, 3)`` per texel of ``texel_px`` pixels (an even count): the HDR
         image relative to the white reference, per unit :math:`\\cos\\theta_i`."""
         if texel_px % 2:
-            raise SpectwinInputError(f"texel_px: expected whole Bayer quads, got {texel_px}")
+            raise InputError(f"texel_px: expected whole Bayer quads, got {texel_px}")
         return texel_mean(self.hdr(frames), texel_px // 2) / (self.white * cos_incidence)
 
 
@@ -300,7 +300,7 @@ def rgb_camera_response(
     curve = extend_curve(curve)
     dark_times, mean_darks = average_dark_frames(dark_frames, dark_exposure_s)
     if not np.array_equal(dark_times, np.sort(times)):
-        raise SpectwinInputError(
+        raise InputError(
             f"dark_exposure_s: expected dark frames at the HDR set {sorted(times)}, got "
             f"{dark_times.tolist()}"
         )

@@ -55,7 +55,7 @@ from recon.calibration.dome_geometric import (
     stage_rotation,
 )
 from recon.calibration.dome_lighting import field_scale, led_irradiance
-from recon.errors import SpectwinInputError
+from recon.errors import InputError, Remedy
 from recon.progress import progress_steps
 from recon.radiometric.demosaic import demosaic
 from recon.registration.border import extract_texture
@@ -86,19 +86,25 @@ WHITE_FRACTION = 0.9
 SERIES_SIGMA_PX = 2.0
 """Gaussian filter of the spectral camera's filtered Robertson recovery (Eq. 10.4)."""
 
+_CAPTURE_REMEDY = {
+    "dome-calibration": Remedy.capture_dome_calibration,
+    "dome-run": Remedy.capture_dome_run,
+}
+
 
 def dome_rig(store: CaptureStore, program: str, keys: Sequence[str]) -> dict[str, Any]:
     """The ``rig`` attribute of a dome capture made by ``program`` (``dome-calibration`` or
     ``dome-run``) that has ``keys``; anything else is refused, naming what it is or lacks."""
     rig = store.attrs.get("rig") or {}
     if rig.get("rig") != "dome" or rig.get("program") != program:
-        raise SpectwinInputError(
-            f"{store.path}: expected a {program} capture of the dome (spectwin capture "
-            f"--program {program}), got program {rig.get('program')!r}"
+        raise InputError(
+            f"{store.path}: expected a capture of the dome by program {program}, got program "
+            f"{rig.get('program')!r}",
+            remedy=_CAPTURE_REMEDY[program],
         )
     missing = [key for key in keys if key not in rig]
     if missing:
-        raise SpectwinInputError(f"{store.path}: the capture's rig attribute lacks {missing}")
+        raise InputError(f"{store.path}: the capture's rig attribute lacks {missing}")
     return rig
 
 
@@ -107,7 +113,7 @@ def rig_spectrum(rig: Mapping[str, Any], name: str, grid: WavelengthGrid) -> np.
     ``rgb_response``), linearly interpolated to ``grid`` (rows first)."""
     entry = rig.get(name)
     if not isinstance(entry, Mapping) or {"wavelengths_nm", "values"} - set(entry):
-        raise SpectwinInputError(
+        raise InputError(
             f"capture rig attribute {name}: expected {{'wavelengths_nm': [...], 'values': [...]}}"
         )
     source = WavelengthGrid(np.asarray(entry["wavelengths_nm"], np.float64))
@@ -197,7 +203,7 @@ class DomeCalibration:
         """Row of LED ``led`` in :attr:`spectral_white` and :attr:`rgb_white`."""
         rows = np.flatnonzero(self.leds == led)
         if rows.size == 0:
-            raise SpectwinInputError(
+            raise InputError(
                 f"LED {led}: not calibrated (the calibration has LEDs {self.leds.tolist()}); "
                 "calibrate with the run's LEDs"
             )
@@ -253,18 +259,18 @@ class DomeCalibration:
 
     @classmethod
     def load(cls, path: str | Path) -> DomeCalibration:
-        """Read a file written by :meth:`save` (``spectwin calibrate`` of a dome store)."""
+        """Read a file written by :meth:`save`."""
         path = Path(path)
         try:
             with np.load(path, allow_pickle=False) as file:
                 arrays = {name: file[name] for name in file.files}
             summary = json.loads(str(arrays["summary"]))
         except (OSError, ValueError, KeyError, json.JSONDecodeError) as error:
-            raise SpectwinInputError(
-                f"{path}: not a dome calibration written by spectwin calibrate ({error})"
+            raise InputError(
+                f"{path}: not a dome calibration file ({error})", remedy=Remedy.calibrate
             ) from None
         if summary.get("format") != DOME_FORMAT:
-            raise SpectwinInputError(
+            raise InputError(
                 f"{path}: expected a dome calibration (format {DOME_FORMAT}), got "
                 f"{summary.get('format')!r}"
             )
@@ -325,9 +331,7 @@ def _mean_darks(
     for exposure in times:
         slots = np.flatnonzero(dark & np.isclose(index["exposure_s"], exposure))
         if slots.size == 0:
-            raise SpectwinInputError(
-                f"{store.path}: no dark frames of camera {camera!r} at {exposure:g} s"
-            )
+            raise InputError(f"{store.path}: no dark frames of camera {camera!r} at {exposure:g} s")
         means.append(store.read_frames(camera, slots).mean(axis=0, dtype=np.float64))
     return np.asarray(times, np.float64), np.stack(means)
 
@@ -425,7 +429,7 @@ def reference_band_nm(store: CaptureStore) -> float:
     index = store.index(SPECTRAL_CAMERA, ("kind", "band_nm"))
     bands = np.unique(index["band_nm"][index["kind"] == "oecf"])
     if bands.size != 1:
-        raise SpectwinInputError(
+        raise InputError(
             f"{store.path}: expected the spectral camera's response series in one band, got "
             f"{bands.tolist()} nm"
         )

@@ -45,7 +45,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = [
     "CameraGeometry",
@@ -117,7 +117,7 @@ class CameraGeometry:
                 np.asarray(entry["position_m"], np.float64).reshape(3),
             )
         except (KeyError, TypeError, ValueError) as error:
-            raise SpectwinInputError(
+            raise InputError(
                 f"camera geometry: expected camera_matrix (3x3), distortion (5), "
                 f"rotation_world_to_camera (3x3) and position_m (3), got {error}"
             ) from None
@@ -288,7 +288,7 @@ def calibrate_camera_geometry(
     """
     points = np.asarray(board_points_m, np.float64)
     if len(images) != len(board_to_world) or points.shape != (np.prod(inner_corners), 3):
-        raise SpectwinInputError(
+        raise InputError(
             f"images, board_to_world, board_points_m: expected one pose per image and "
             f"{np.prod(inner_corners)} board points, got {len(images)}, {len(board_to_world)} "
             f"and {points.shape}"

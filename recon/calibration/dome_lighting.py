@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = ["field_scale", "led_irradiance"]
 
@@ -38,7 +38,7 @@ def led_irradiance(points_m: np.ndarray, led_position_m: np.ndarray) -> np.ndarr
     offset = np.asarray(led_position_m, np.float64) - np.asarray(points_m, np.float64)
     distance = np.linalg.norm(offset, axis=-1)
     if np.any(offset[..., 2] <= 0):
-        raise SpectwinInputError("led_position_m: expected a light above the plate")
+        raise InputError("led_position_m: expected a light above the plate")
     return offset[..., 2] / distance**3
 
 
@@ -55,7 +55,7 @@ def field_scale(values: np.ndarray, field: np.ndarray) -> np.ndarray:
     field = np.broadcast_to(np.asarray(field, np.float64)[..., None], values.shape)
     finite = np.isfinite(values) & np.isfinite(field)
     if not np.all(finite.sum(axis=tuple(range(values.ndim - 1)))):
-        raise SpectwinInputError("values: a channel has no finite value to scale")
+        raise InputError("values: a channel has no finite value to scale")
     numerator = np.where(finite, values * field, 0.0).reshape(-1, values.shape[-1]).sum(0)
     denominator = np.where(finite, field**2, 0.0).reshape(-1, values.shape[-1]).sum(0)
     return numerator / denominator

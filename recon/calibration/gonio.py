@@ -17,7 +17,7 @@ photographs of the white standard through every band (``white``):
    bringing the white standard to ``white_fill`` of the camera's range, rounded up to multiples
    of 1/15 s for the HMI lamp (section 3.2.2).
 
-The result, :class:`GonioCalibration`, is a small JSON document (``spectwin calibrate``) that
+The result, :class:`GonioCalibration`, is a small JSON document (:meth:`GonioCalibration.save`) that
 :mod:`recon.btf.processing` and the measurement run use.
 
 References
@@ -40,7 +40,7 @@ import numpy as np
 from hwbridge.store import CaptureStore
 from recon.calibration.capture_io import select_frames
 from recon.calibration.spectral import HMI_FLICKER_PERIOD_S, plan_exposures, run_white_factors
-from recon.errors import SpectwinInputError
+from recon.errors import InputError, Remedy
 from recon.radiometric.dark_frames import average_dark_frames, dark_frames_at
 from recon.radiometric.hdr import interpolate_curve
 from recon.radiometric.response_curve import robertson
@@ -99,7 +99,7 @@ def extend_curve(curve: np.ndarray, *, fit_levels: int = 64, trim_levels: int = 
         curve[observed[-trim_levels:]] = np.nan
         observed = observed[trim_levels:-trim_levels]
     if observed.size < 2 * fit_levels:
-        raise SpectwinInputError(
+        raise InputError(
             f"inverse_response: only {observed.size} levels observed; the exposure series must "
             "span more of the camera's range"
         )
@@ -116,7 +116,7 @@ def white_reflectance(rig: dict, bands_nm: np.ndarray) -> np.ndarray:
     at the band centres."""
     sheet = rig.get("white_reflectance")
     if not isinstance(sheet, dict) or {"wavelengths_nm", "values"} - set(sheet):
-        raise SpectwinInputError(
+        raise InputError(
             "capture rig attribute white_reflectance: expected {'wavelengths_nm': [...], "
             "'values': [...]} (the white standard's data sheet)"
         )
@@ -204,16 +204,15 @@ class GonioCalibration:
         try:
             document = json.loads(path.read_text())
         except (OSError, json.JSONDecodeError) as error:
-            raise SpectwinInputError(f"{path}: not a readable calibration file ({error})") from None
+            raise InputError(f"{path}: not a readable calibration file ({error})") from None
         if not isinstance(document, dict) or document.get("format") != _FORMAT:
-            raise SpectwinInputError(
-                f"{path}: expected a calibration written by spectwin calibrate (format {_FORMAT})"
+            raise InputError(
+                f"{path}: expected a calibration of the gonioreflectometer (format {_FORMAT})",
+                remedy=Remedy.calibrate,
             )
         missing = [name for name in _KEYS if name not in document]
         if missing:
-            raise SpectwinInputError(
-                f"{path}: calibration lacks {missing}; write it again with spectwin calibrate"
-            )
+            raise InputError(f"{path}: calibration lacks {missing}", remedy=Remedy.calibrate)
         arrays, numbers = {}, {}
         for name in _KEYS:
             try:
@@ -222,14 +221,14 @@ class GonioCalibration:
                 elif name in ("base_s", "white_fill"):
                     numbers[name] = float(document[name])
             except (TypeError, ValueError):
-                raise SpectwinInputError(
+                raise InputError(
                     f"{path}: {name}: expected numbers, got {str(document[name])[:40]!r}"
                 ) from None
         bands = arrays["bands_nm"].size
         if arrays["bands_nm"].shape != (bands,) or any(
             arrays[name].shape != (bands,) for name in ("run_factors", "planned_exposure_s")
         ):
-            raise SpectwinInputError(
+            raise InputError(
                 f"{path}: bands_nm, run_factors and planned_exposure_s need one value per band"
             )
         return cls(
@@ -261,7 +260,7 @@ def _response_series_curve(store: CaptureStore, camera: str, bit_depth: int) -> 
     series = [np.flatnonzero(oecf.band_nm == band) for band in bands]
     times = oecf.exposure_s[series[0]]
     if any(not np.array_equal(oecf.exposure_s[s], times) for s in series):
-        raise SpectwinInputError(
+        raise InputError(
             f"{store.path}: the response series of bands {bands.tolist()} nm need the same "
             "exposure times"
         )
@@ -302,16 +301,17 @@ def calibrate_gonio(
     """
     store = store if isinstance(store, CaptureStore) else CaptureStore.open(store)
     if not 0 < white_fill < 1:
-        raise SpectwinInputError(f"white_fill: expected a fraction in (0, 1), got {white_fill}")
+        raise InputError(f"white_fill: expected a fraction in (0, 1), got {white_fill}")
     camera = str(store.attrs["rig"].get("camera_id", "k4"))
     if camera not in {step["camera"] for step in store.attrs["plan"]}:
-        raise SpectwinInputError(f"{store.path}: no frames of camera {camera!r}")
+        raise InputError(f"{store.path}: no frames of camera {camera!r}")
     kinds = set(store.index(camera, ["kind"])["kind"].tolist())
     missing = [kind for kind in ("dark", "oecf", "white") if kind not in kinds]
     if missing:
-        raise SpectwinInputError(
+        raise InputError(
             f"{store.path}: no {', '.join(missing)} frames; expected a calibration capture "
-            "(spectwin capture --program gonio-calibration)"
+            "(program gonio-calibration)",
+            remedy=Remedy.capture_gonio_calibration,
         )
     darks = dark_model(store, camera)
     curve = extend_curve(_response_series_curve(store, camera, bit_depth))

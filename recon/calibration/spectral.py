@@ -30,7 +30,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = [
     "HMI_FLICKER_PERIOD_S",
@@ -55,22 +55,20 @@ def _band_vector(name: str, values: object, bands: int | None = None) -> np.ndar
     array = np.asarray(values, dtype=np.float64)
     if array.ndim != 1 or (bands is not None and array.size != bands):
         expected = f"({bands},)" if bands is not None else "1-D"
-        raise SpectwinInputError(
-            f"{name}: expected one value per band {expected}, got {array.shape}"
-        )
+        raise InputError(f"{name}: expected one value per band {expected}, got {array.shape}")
     if not np.all(np.isfinite(array)) or np.any(array <= 0):
-        raise SpectwinInputError(f"{name}: expected finite, positive values per band")
+        raise InputError(f"{name}: expected finite, positive values per band")
     return array
 
 
 def _band_images(name: str, values: object, bands: int) -> np.ndarray:
     array = np.asarray(values, dtype=np.float64)
     if array.ndim < 1 or array.shape[0] != bands:
-        raise SpectwinInputError(
+        raise InputError(
             f"{name}: expected the band axis first with {bands} bands, got shape {array.shape}"
         )
     if not np.all(np.isfinite(array)):
-        raise SpectwinInputError(f"{name}: values must be finite (found NaN or inf)")
+        raise InputError(f"{name}: values must be finite (found NaN or inf)")
     return array
 
 
@@ -82,7 +80,7 @@ def _mean_linear_signal(
     linear = inverse_response(white_values - white_dark).reshape(bands, -1)
     signal = linear.mean(axis=1)
     if np.any(signal <= 0):
-        raise SpectwinInputError(
+        raise InputError(
             "white_values: the white standard gives no signal above the dark level in band(s) "
             f"{np.flatnonzero(signal <= 0).tolist()}; lengthen the exposure"
         )
@@ -184,18 +182,18 @@ def plan_exposures(
         ``(K,)`` exposure times, s.
     """
     if not (np.isfinite(base_s) and base_s > 0):
-        raise SpectwinInputError(f"base_s: expected a positive time in s, got {base_s}")
+        raise InputError(f"base_s: expected a positive time in s, got {base_s}")
     factors = _band_vector("factors", factors)
     lamp = _band_vector("lamp", lamp, factors.size)
     times = base_s * factors / lamp
     if round_to_s is not None:
         if not round_to_s > 0:
-            raise SpectwinInputError(f"round_to_s: expected a positive period, got {round_to_s}")
+            raise InputError(f"round_to_s: expected a positive period, got {round_to_s}")
         times = np.maximum(np.ceil(times / round_to_s - 1e-9), 1.0) * round_to_s
     low, high = limits_s
     outside = np.flatnonzero((times < low) | (times > high))
     if outside.size:
-        raise SpectwinInputError(
+        raise InputError(
             f"plan_exposures: band(s) {outside.tolist()} need "
             f"{times[outside].round(4).tolist()} s, outside the camera's range [{low}, {high}] s; "
             "change base_s"
@@ -221,14 +219,14 @@ def drift_factors(monitor_spectra: np.ndarray, *, reference: int = 0) -> np.ndar
     """
     spectra = np.asarray(monitor_spectra, dtype=np.float64)
     if spectra.ndim != 2 or spectra.shape[0] < 1 or not np.all(np.isfinite(spectra)):
-        raise SpectwinInputError(
+        raise InputError(
             f"monitor_spectra: expected finite (n_points, K) spectra, got shape {spectra.shape}"
         )
     if not 0 <= reference < spectra.shape[0]:
-        raise SpectwinInputError(f"reference: expected an index below {spectra.shape[0]}")
+        raise InputError(f"reference: expected an index below {spectra.shape[0]}")
     power = np.einsum("ik,ik->i", spectra, spectra)
     if np.any(power <= 0):
-        raise SpectwinInputError("monitor_spectra: a point has an all-zero lamp spectrum")
+        raise InputError("monitor_spectra: a point has an all-zero lamp spectrum")
     return spectra @ spectra[reference] / power
 
 
@@ -269,6 +267,6 @@ def reflectance(
     exposure = _band_vector("exposure_s", exposure_s, bands)
     factors = _band_vector("run_factors", run_factors, bands)
     if not (np.isfinite(drift) and drift > 0):
-        raise SpectwinInputError(f"drift: expected a positive factor, got {drift}")
+        raise InputError(f"drift: expected a positive factor, got {drift}")
     scale = (factors * drift / exposure).reshape((bands,) + (1,) * (values.ndim - 1))
     return scale * inverse_response(values - dark)

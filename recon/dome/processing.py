@@ -54,7 +54,7 @@ from recon.dome.images import (
     white_balanced_rgb,
 )
 from recon.dome.run import DomeRun, joint_groups, open_dome_run
-from recon.errors import SpectwinInputError
+from recon.errors import InputError, Remedy
 from recon.progress import progress_steps
 from recon.registration.border import extract_texture
 from recon.scheduling.dome_schedule import FILTER_SIZE_PER_SIGMA, filter_sizes
@@ -110,23 +110,25 @@ def check_dome_run(run: DomeRun, calibration: DomeCalibration) -> None:
     if run.bands_nm.shape != calibration.bands_nm.shape or not np.allclose(
         run.bands_nm, calibration.bands_nm
     ):
-        raise SpectwinInputError(
+        raise InputError(
             f"{run.capture_path}: bands {run.bands_nm.tolist()} nm, the calibration's "
             f"{calibration.bands_nm.tolist()} nm"
         )
     if int(run.rig["window_px"]) != calibration.window_px:
-        raise SpectwinInputError(
+        raise InputError(
             f"{run.capture_path}: frames of {run.rig['window_px']} px, the calibration's of "
-            f"{calibration.window_px} px; calibrate with the run's --texels"
+            f"{calibration.window_px} px; expected a calibration at the run's texture size",
+            remedy=Remedy.calibrate_texels,
         )
     cameras = sorted({*run.rgb_cameras, SPECTRAL_CAMERA} - set(calibration.geometry))
     if cameras:
-        raise SpectwinInputError(f"{run.capture_path}: cameras {cameras} are not calibrated")
+        raise InputError(f"{run.capture_path}: cameras {cameras} are not calibrated")
     leds = sorted({light for _, light in run.images} - set(calibration.leds.tolist()))
     if leds:
-        raise SpectwinInputError(
+        raise InputError(
             f"{run.capture_path}: LEDs {leds[:5]} have no white frames in the calibration; "
-            "calibrate with the run's --leds"
+            "expected a calibration under the run's LEDs",
+            remedy=Remedy.calibrate_leds,
         )
 
 
@@ -200,7 +202,7 @@ class DomeProcessing:
             for view in self.run.views:
                 slot = self.run.slots(camera, "alignment", view)[:1]
                 if slot.size == 0:
-                    raise SpectwinInputError(
+                    raise InputError(
                         f"{self.run.capture_path}: no alignment frame of camera {camera!r} at "
                         f"stage position {view}"
                     )
@@ -287,7 +289,7 @@ def _open_btf(work: DomeProcessing, out: Path, resume: bool) -> BTFStore:
     if resume and out.exists():
         btf = BTFStore.open(out, writable=True)
         if btf.texels != (work.texels, work.texels):
-            raise SpectwinInputError(
+            raise InputError(
                 f"{out}: processed at {btf.texels[0]} texels, not {work.texels}; resume it with "
                 f"texels={btf.texels[0]} (or leave texels out)"
             )
@@ -411,12 +413,12 @@ def process_dome(
     if band_partner is None:
         band_partner = spectral_partner(run, calibration)
     elif band_partner not in run.rgb_cameras:
-        raise SpectwinInputError(
+        raise InputError(
             f"band_partner: expected one of the run's RGB cameras {run.rgb_cameras}, got "
             f"{band_partner!r}"
         )
     if not 0 < target_relative_noise < 1:
-        raise SpectwinInputError(
+        raise InputError(
             f"target_relative_noise: expected a fraction in (0, 1), got {target_relative_noise}"
         )
     work = DomeProcessing(

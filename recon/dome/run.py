@@ -23,7 +23,7 @@ import numpy as np
 from hwbridge.dome_layout import SPECTRAL_CAMERA
 from hwbridge.store import CaptureStore
 from recon.calibration.dome_capture import dome_rig
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = ["DomeRun", "joint_groups", "open_dome_run"]
 
@@ -103,7 +103,7 @@ def joint_groups(
     """
     count = len(bands_per_image)
     if cycle < 1 or count == 0:
-        raise SpectwinInputError(f"cycle, images: expected at least one each, got {cycle}, {count}")
+        raise InputError(f"cycle, images: expected at least one each, got {cycle}, {count}")
     groups = [list(range(start, min(start + cycle, count))) for start in range(0, count, cycle)]
     last = {band for image in groups[-1] for band in bands_per_image[image]}
     if len(groups) > 1 and len(last) < n_bands:
@@ -119,7 +119,7 @@ def open_dome_run(capture: str | Path | CaptureStore) -> DomeRun:
     rig = dome_rig(store, "dome-run", _RIG_KEYS)
     cameras = list(rig["geometry"]["cameras"])
     if SPECTRAL_CAMERA not in cameras or len(cameras) < 2:
-        raise SpectwinInputError(
+        raise InputError(
             f"{store.path}: expected RGB cameras and the {SPECTRAL_CAMERA!r} camera, got {cameras}"
         )
     index = {camera: store.index(camera, _FIELDS) for camera in cameras}

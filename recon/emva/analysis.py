@@ -36,7 +36,7 @@ from emva1288.process import Data1288, LoadImageData, ParseEmvaDescriptorFile, R
 
 from recon.emva._numpy2 import patch_emva1288
 from recon.emva.descriptor import EMVADescriptor, read_descriptor, read_frame
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = ["EMVAAnalysis", "PhotonTransfer", "analyse_measurement", "run_results1288"]
 
@@ -165,7 +165,7 @@ def analyse_measurement(descriptor: str | Path | EMVADescriptor) -> EMVAAnalysis
 
     Raises
     ------
-    SpectwinInputError
+    InputError
         A bad descriptor or image (one line naming it), or a measurement the analysis cannot
         use (no step below saturation for the fits).
 
@@ -193,7 +193,7 @@ def _analysis(descriptor: EMVADescriptor) -> EMVAAnalysis:
         linearity = results.linearity()
         linearity_range = (int(results.index_linearity_min), int(results.index_linearity_max))
     except (ValueError, IndexError) as error:  # no step between dark and saturation
-        raise SpectwinInputError(
+        raise InputError(
             f"{descriptor.path}: the analysis found no usable steps below saturation ({error}); "
             "expected bright steps from near dark up to beyond saturation"
         ) from error

@@ -35,7 +35,7 @@ from typing import Literal
 import numpy as np
 from PIL import Image
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = [
     "DESCRIPTOR_NAME",
@@ -116,8 +116,8 @@ def _beside(descriptor_path: Path | None, name: str) -> Path:
     return folder.joinpath(*PureWindowsPath(name).parts)
 
 
-def _fail(path: Path, line: int, message: str) -> SpectwinInputError:
-    return SpectwinInputError(f"{path}: line {line}: {message}")
+def _fail(path: Path, line: int, message: str) -> InputError:
+    return InputError(f"{path}: line {line}: {message}")
 
 
 def _parse_line(path: Path, number: int, text: str) -> tuple[str, tuple]:
@@ -143,13 +143,13 @@ def _parse_line(path: Path, number: int, text: str) -> tuple[str, tuple]:
 
 def _read_lines(path: Path) -> list[tuple[int, str]]:
     if not path.is_file():
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: no such descriptor file; expected an EMVA 1288 descriptor ({DESCRIPTOR_NAME})"
         )
     try:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as error:
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: not a readable text file ({error}); expected an EMVA 1288 descriptor"
         ) from error
     return [
@@ -202,14 +202,14 @@ def _check_structure(path: Path, steps: list[EMVAStep]) -> None:
     spatial_times = {step.exposure_ns for step in steps if step.spatial}
     spatial_bright = [step for step in steps if step.spatial and step.kind == "bright"]
     if len(spatial_times) != 1 or len(spatial_bright) != 1:
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: {len(spatial_bright)} spatial bright step(s) at {len(spatial_times)} "
             "exposure time(s); expected one bright and one dark step with more than two images "
             "each, at one exposure time (the spatial measurement)"
         )
     temporal_bright = [step for step in steps if not step.spatial and step.kind == "bright"]
     if len(temporal_bright) < 3:
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: {len(temporal_bright)} bright step(s) with two images; expected at least "
             "3 (the temporal measurement, up to saturation)"
         )
@@ -230,7 +230,7 @@ def read_descriptor(path: str | Path) -> EMVADescriptor:
 
     Raises
     ------
-    SpectwinInputError
+    InputError
         A malformed or unknown line, a missing ``n`` line, a step with fewer than two images,
         a bright step without a dark one, no spatial measurement, a missing image: one line
         naming the file, the line and what was expected. The images' contents are checked when
@@ -271,11 +271,9 @@ def read_descriptor(path: str | Path) -> EMVADescriptor:
             version = values[0]
     close_step()
     if size is None:
-        raise SpectwinInputError(
-            f"{path}: no 'n BITS WIDTH HEIGHT' line; expected one before the steps"
-        )
+        raise InputError(f"{path}: no 'n BITS WIDTH HEIGHT' line; expected one before the steps")
     if not steps:
-        raise SpectwinInputError(f"{path}: no b or d lines; expected the measurement's steps")
+        raise InputError(f"{path}: no b or d lines; expected the measurement's steps")
     _check_structure(path, steps)
     bits, width, height = size
     return EMVADescriptor(bits, width, height, tuple(steps), path, version)
@@ -296,7 +294,7 @@ def read_frame(path: Path, *, bit_depth: int, shape: tuple[int, int]) -> np.ndar
 
     Raises
     ------
-    SpectwinInputError
+    InputError
         An unreadable file, a colour or floating-point image, a wrong size, values or a
         container that do not fit the bit depth.
     """
@@ -306,25 +304,25 @@ def read_frame(path: Path, *, bit_depth: int, shape: tuple[int, int]) -> np.ndar
             frame = np.asarray(image)
     except (OSError, ValueError, Image.DecompressionBombError) as error:
         reason = str(error).replace(f" '{path}'", "")  # PIL repeats the path
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: unreadable image ({reason}); expected a greyscale PNG or TIFF"
         ) from error
     if len(bands) != 1 or frame.ndim != 2:
-        raise SpectwinInputError(f"{path}: {len(bands)} channels; expected one greyscale channel")
+        raise InputError(f"{path}: {len(bands)} channels; expected one greyscale channel")
     if frame.dtype.kind not in "ui":
-        raise SpectwinInputError(f"{path}: {frame.dtype} pixels; expected whole numbers")
+        raise InputError(f"{path}: {frame.dtype} pixels; expected whole numbers")
     if frame.dtype.itemsize * 8 < bit_depth:
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: {frame.dtype.itemsize * 8}-bit image for a {bit_depth}-bit measurement "
             f"(n line); expected images of at least {bit_depth} bits"
         )
     if frame.shape != tuple(shape):
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: {frame.shape[1]}x{frame.shape[0]} px; the n line says {shape[1]}x{shape[0]}"
         )
     top = 2**bit_depth - 1
     if frame.size and (frame.max() > top or frame.min() < 0):
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: values up to {int(frame.max())} do not fit the measurement's {bit_depth} "
             f"bits (n line); expected 0 to {top}"
         )
@@ -346,7 +344,7 @@ def write_descriptor(descriptor: EMVADescriptor, header: Iterable[str] = ()) -> 
     The images are written separately (:func:`write_frame`), step by step as they are made.
     """
     if descriptor.path is None:
-        raise SpectwinInputError("write_descriptor: the descriptor needs a path to write to")
+        raise InputError("write_descriptor: the descriptor needs a path to write to")
     lines = [f"# {line}".rstrip() for line in header]
     lines += [
         f"v {descriptor.version}",

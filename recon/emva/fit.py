@@ -48,7 +48,7 @@ from recon.emva.linear_model import (
     knee_oecf_slope,
     predicted_saturation_e,
 )
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = ["FittedSensor", "fit_sensor"]
 
@@ -156,7 +156,7 @@ def _fit_knee(
     photons, exposure_s = transfer.photons[chosen], transfer.exposure_s[chosen]
     signal = transfer.signal_dn[chosen]
     if signal.size < 3 or np.any(signal <= 0):
-        raise SpectwinInputError(
+        raise InputError(
             f"{analysis.descriptor.path}: {signal.size} steps in the linearity range, or a "
             "signal not above the dark level; expected at least 3 steps between 5 and 95 % of "
             "saturation"
@@ -206,7 +206,7 @@ def _full_well(
     try:
         return optimize.brentq(peak_offset, saturation_e, 1.5 * saturation_e, xtol=1e-3)
     except ValueError as error:
-        raise SpectwinInputError(
+        raise InputError(
             f"{source}: no full well puts the variance peak at the measured saturation "
             f"({saturation_e:.0f} e-); expected a measurement that saturates at its full well "
             "or at the ADC's top"
@@ -232,18 +232,18 @@ def fit_sensor(analysis: EMVAAnalysis, *, wavelength_nm: float) -> FittedSensor:
 
     Raises
     ------
-    SpectwinInputError
+    InputError
         A measurement without enough steps in the linearity range, or whose offset leaves no
         range for the signal.
     """
     if not (math.isfinite(wavelength_nm) and wavelength_nm > 0):
-        raise SpectwinInputError(f"wavelength_nm: expected a positive value, got {wavelength_nm}")
+        raise InputError(f"wavelength_nm: expected a positive value, got {wavelength_nm}")
     descriptor, transfer = analysis.descriptor, analysis.transfer
     max_dn = 2**descriptor.bit_depth - 1
     offset = analysis.dark_offset_dn
     top = max_dn - offset
     if top <= 0:
-        raise SpectwinInputError(
+        raise InputError(
             f"{descriptor.path}: dark offset {offset:.1f} DN at the ADC's top {max_dn}; expected "
             "dark frames below saturation"
         )

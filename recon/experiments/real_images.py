@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import colour
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.experiments.sampling import add_rgb_noise
 from recon.experiments.synthetic_images import material_mosaic, smooth_blend
 from recon.measured_data import (
@@ -107,7 +107,7 @@ def real_test_image(name: str, *, side: int = 192, seed: int = 0) -> RealTestIma
     """
     names = real_test_image_names()
     if name not in names:
-        raise SpectwinInputError(f"test image {name!r}: expected one of {', '.join(names)}")
+        raise InputError(f"test image {name!r}: expected one of {', '.join(names)}")
     if name == "llanos2019":
         real = read_llanos2019_multispectral()
         return RealTestImage(

@@ -31,7 +31,7 @@ import numpy as np
 from scipy import ndimage
 from skimage import measure
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = [
     "add_rgb_noise",
@@ -54,13 +54,11 @@ def _image_shape(shape: Sequence[int]) -> tuple[int, int]:
     try:
         height, width = (int(size) for size in shape)
     except (TypeError, ValueError):
-        raise SpectwinInputError(
+        raise InputError(
             f"shape: expected the image size (H, W) as two integers, got {shape!r}"
         ) from None
     if height < 1 or width < 1 or (height, width) != tuple(shape):
-        raise SpectwinInputError(
-            f"shape: expected two positive integers (H, W), got {tuple(shape)!r}"
-        )
+        raise InputError(f"shape: expected two positive integers (H, W), got {tuple(shape)!r}")
     return height, width
 
 
@@ -68,7 +66,7 @@ def _boolean_mask(mask: np.ndarray, what: str) -> np.ndarray:
     """A non-empty 2-D boolean array, or raise naming ``what``."""
     mask = np.asarray(mask)
     if mask.dtype != np.bool_ or mask.ndim != 2 or mask.size == 0:
-        raise SpectwinInputError(
+        raise InputError(
             f"{what}: expected a non-empty 2-D boolean (H, W) array, got dtype {mask.dtype} and "
             f"shape {mask.shape}"
         )
@@ -104,7 +102,7 @@ def grid_layout(shape: Sequence[int], n_spots: int) -> tuple[int, int]:
     """
     height, width = _image_shape(shape)
     if not isinstance(n_spots, (int, np.integer)) or n_spots < 1:
-        raise SpectwinInputError(f"n_spots: expected an integer >= 1, got {n_spots!r}")
+        raise InputError(f"n_spots: expected an integer >= 1, got {n_spots!r}")
     n_spots = int(n_spots)
     aspect = math.log(width / height)
 
@@ -154,18 +152,18 @@ def whisk_broom_mask(
     """
     height, width = _image_shape(shape)
     if not isinstance(n_spots, (int, np.integer)) or not 1 <= n_spots <= height * width:
-        raise SpectwinInputError(
+        raise InputError(
             f"n_spots: expected an integer from 1 to the number of pixels ({height * width}), "
             f"got {n_spots!r}"
         )
     if not 0 < spot_fraction < 1:
-        raise SpectwinInputError(
+        raise InputError(
             f"spot_fraction: expected a fraction of the image width in (0, 1), got {spot_fraction}"
         )
     side = max(1, _round_half_up(spot_fraction * width))
     rows, cols = grid_layout((height, width), int(n_spots))
     if height // rows < side or width // cols < side:
-        raise SpectwinInputError(
+        raise InputError(
             f"n_spots: {n_spots} spots of side {side} px on a {rows} x {cols} grid do not fit in "
             f"a {height} x {width} image (cells of {height // rows} x {width // cols} px); use "
             f"fewer spots or a smaller spot_fraction"
@@ -209,18 +207,18 @@ def push_broom_mask(
     height, width = _image_shape(shape)
     fractions = np.atleast_1d(np.asarray(line_heights, dtype=np.float64))
     if fractions.ndim != 1 or fractions.size == 0:
-        raise SpectwinInputError(
+        raise InputError(
             f"line_heights: expected one or more fractions of the image height, got "
             f"{line_heights!r}"
         )
     if not np.all((fractions >= 0) & (fractions < 1)):
-        raise SpectwinInputError(
+        raise InputError(
             f"line_heights: expected fractions of the image height in [0, 1), got "
             f"{fractions.tolist()}"
         )
     rows = [min(_round_half_up(fraction * height), height - 1) for fraction in fractions]
     if len(set(rows)) != len(rows):
-        raise SpectwinInputError(
+        raise InputError(
             f"line_heights: {fractions.tolist()} fall on rows {rows} of a {height}-row image; "
             f"expected distinct rows"
         )
@@ -257,17 +255,17 @@ def add_rgb_noise(
     """
     values = np.array(rgb, dtype=np.float64)
     if values.size == 0 or not np.all(np.isfinite(values)):
-        raise SpectwinInputError(
+        raise InputError(
             f"rgb: expected a non-empty array of finite values, got shape {values.shape}"
         )
     if not 0 <= sigma_fraction < 1:
-        raise SpectwinInputError(
+        raise InputError(
             f"sigma_fraction: expected a fraction of the mean signal in [0, 1), got "
             f"{sigma_fraction}"
         )
     mean = float(values.mean())
     if not mean > 0:
-        raise SpectwinInputError(
+        raise InputError(
             f"rgb: expected a positive mean signal to scale the noise by, got {mean:g}"
         )
     generator = np.random.default_rng(rng)
@@ -296,12 +294,10 @@ def exclude_region(mask: np.ndarray, region: np.ndarray) -> np.ndarray:
     mask = _boolean_mask(mask, "mask")
     region = _boolean_mask(region, "region")
     if region.shape != mask.shape:
-        raise SpectwinInputError(
-            f"region: expected the mask's shape {mask.shape}, got {region.shape}"
-        )
+        raise InputError(f"region: expected the mask's shape {mask.shape}, got {region.shape}")
     kept = mask & ~region
     if not kept.any():
-        raise SpectwinInputError(
+        raise InputError(
             f"region: covers all {int(mask.sum())} known pixels of the mask; expected some known "
             f"spectra to remain"
         )
@@ -311,16 +307,12 @@ def exclude_region(mask: np.ndarray, region: np.ndarray) -> np.ndarray:
 def _image_and_mask(spectral_image: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     image = np.asarray(spectral_image, dtype=np.float64)
     if image.ndim != 3 or image.shape[-1] < 1:
-        raise SpectwinInputError(
-            f"spectral_image: expected an (H, W, K) array, got shape {image.shape}"
-        )
+        raise InputError(f"spectral_image: expected an (H, W, K) array, got shape {image.shape}")
     mask = _boolean_mask(mask, "mask")
     if mask.shape != image.shape[:2]:
-        raise SpectwinInputError(
-            f"mask: expected the image's (H, W) = {image.shape[:2]}, got {mask.shape}"
-        )
+        raise InputError(f"mask: expected the image's (H, W) = {image.shape[:2]}, got {mask.shape}")
     if not mask.any():
-        raise SpectwinInputError("mask: expected at least one known pixel, got none")
+        raise InputError("mask: expected at least one known pixel, got none")
     return image, mask
 
 

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from recon import baselines
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.experiments.sampling import add_rgb_noise, known_spectra_from_mask, whisk_broom_mask
 from recon.metrics import relative_error
 from recon.spectralize.prior_choice import choose_prior
@@ -129,17 +129,17 @@ class ProtocolResult:
 
 def _check_case(truth: np.ndarray, response: np.ndarray, methods: Sequence[str]) -> None:
     if truth.ndim != 3 or not np.all(np.isfinite(truth)):
-        raise SpectwinInputError(
+        raise InputError(
             f"truth: expected a finite (H, W, K) spectral image, got shape {truth.shape}"
         )
     if response.ndim != 2 or response.shape[0] != truth.shape[-1]:
-        raise SpectwinInputError(
+        raise InputError(
             f"response: expected ({truth.shape[-1]}, channels) to match the truth's bands, got "
             f"{response.shape}"
         )
     unknown = sorted(set(methods) - set(METHODS))
     if unknown:
-        raise SpectwinInputError(f"methods: unknown {unknown}; expected some of {sorted(METHODS)}")
+        raise InputError(f"methods: unknown {unknown}; expected some of {sorted(METHODS)}")
 
 
 def run_protocol(

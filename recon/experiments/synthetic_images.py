@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = ["material_mosaic", "smooth_blend"]
 
@@ -48,13 +48,13 @@ def material_mosaic(
     """
     spectra = np.asarray(spectra, dtype=np.float64)
     if spectra.ndim != 2 or spectra.shape[0] < 1:
-        raise SpectwinInputError(f"spectra: expected (n_materials, K), got shape {spectra.shape}")
+        raise InputError(f"spectra: expected (n_materials, K), got shape {spectra.shape}")
     height, width = (int(v) for v in shape)
     if height < 1 or width < 1 or cells < 1:
-        raise SpectwinInputError(f"shape, cells: expected positive sizes, got {shape}, {cells}")
+        raise InputError(f"shape, cells: expected positive sizes, got {shape}, {cells}")
     low, high = shading
     if not 0 < low <= high:
-        raise SpectwinInputError(f"shading: expected 0 < low <= high, got {shading}")
+        raise InputError(f"shading: expected 0 < low <= high, got {shading}")
     rng = np.random.default_rng(seed)
     rows, cols = np.mgrid[0:height, 0:width]
     pixels = np.stack([rows.ravel() / height, cols.ravel() / width], axis=1)
@@ -98,15 +98,15 @@ def smooth_blend(
     """
     spectra = np.asarray(spectra, dtype=np.float64)
     if spectra.ndim != 2 or spectra.shape[0] < 1:
-        raise SpectwinInputError(f"spectra: expected (n_materials, K), got shape {spectra.shape}")
+        raise InputError(f"spectra: expected (n_materials, K), got shape {spectra.shape}")
     height, width_px = (int(v) for v in shape)
     if height < 1 or width_px < 1 or blobs < 1 or not width > 0:
-        raise SpectwinInputError(
+        raise InputError(
             f"shape, blobs, width: expected positive values, got {shape}, {blobs}, {width}"
         )
     low, high = shading
     if not 0 < low <= high:
-        raise SpectwinInputError(f"shading: expected 0 < low <= high, got {shading}")
+        raise InputError(f"shading: expected 0 < low <= high, got {shading}")
     rng = np.random.default_rng(seed)
     side = max(height, width_px)
     rows, cols = np.mgrid[0:height, 0:width_px] / side

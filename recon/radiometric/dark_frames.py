@@ -15,7 +15,7 @@ Interpolation is exact for a dark signal that is linear in the exposure time (of
 current times :math:`t`), which is what dark current is at a constant sensor temperature.
 
 Extrapolation policy: by default an exposure time outside the range of the averaged dark frames
-is refused (:class:`~recon.errors.SpectwinInputError`), since the thesis preselects the dark
+is refused (:class:`~recon.errors.InputError`), since the thesis preselects the dark
 exposure times to cover the capture; ``extrapolate="linear"`` continues the first or last
 segment linearly instead (right for a linear dark signal, and it amplifies the remaining noise
 of the two nearest averages by the extrapolation factor).
@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = [
     "EXTRAPOLATION",
@@ -52,15 +52,15 @@ def exposure_vector(name: str, exposure_s: object) -> np.ndarray:
     try:
         times = np.asarray(exposure_s, dtype=np.float64)
     except (TypeError, ValueError) as error:
-        raise SpectwinInputError(
+        raise InputError(
             f"{name}: expected exposure times in seconds, got {exposure_s!r}"
         ) from error
     if times.ndim > 1 or times.size == 0:
-        raise SpectwinInputError(
+        raise InputError(
             f"{name}: expected a scalar or a 1-D vector of exposure times, got shape {times.shape}"
         )
     if not np.all(np.isfinite(times)) or np.any(times <= 0):
-        raise SpectwinInputError(
+        raise InputError(
             f"{name}: expected finite, positive exposure times in seconds, got {times}"
         )
     return times
@@ -69,12 +69,12 @@ def exposure_vector(name: str, exposure_s: object) -> np.ndarray:
 def _stack(name: str, frames: object) -> np.ndarray:
     array = np.asarray(frames)
     if array.dtype.kind not in "iuf" or array.ndim < 2:
-        raise SpectwinInputError(
+        raise InputError(
             f"{name}: expected a real array (n_frames, ...) of frames, got dtype {array.dtype} "
             f"and shape {array.shape}"
         )
     if array.dtype.kind == "f" and not np.all(np.isfinite(array)):
-        raise SpectwinInputError(f"{name}: expected finite values, found NaN or infinity")
+        raise InputError(f"{name}: expected finite values, found NaN or infinity")
     return array
 
 
@@ -108,7 +108,7 @@ def average_dark_frames(
     frames = _stack("dark_frames", dark_frames)
     times = exposure_vector("exposure_s", exposure_s)
     if times.ndim != 1 or times.size != frames.shape[0]:
-        raise SpectwinInputError(
+        raise InputError(
             f"exposure_s: expected one exposure time per dark frame ({frames.shape[0]}), got "
             f"shape {times.shape}"
         )
@@ -124,12 +124,12 @@ def _dark_model(dark_exposure_s: object, mean_dark_frames: object) -> tuple[np.n
     times = np.atleast_1d(times)
     means = _stack("mean_dark_frames", mean_dark_frames).astype(np.float64, copy=False)
     if means.shape[0] != times.size:
-        raise SpectwinInputError(
+        raise InputError(
             f"mean_dark_frames: expected one frame per dark exposure time ({times.size}), got "
             f"{means.shape[0]}"
         )
     if np.any(np.diff(times) <= 0):
-        raise SpectwinInputError(
+        raise InputError(
             f"dark_exposure_s: expected strictly increasing exposure times (as returned by "
             f"average_dark_frames), got {times}"
         )
@@ -158,7 +158,7 @@ def dark_frames_at(
         their mean frames ``(n_times, ...)``.
     extrapolate
         ``"none"`` (default): an exposure time outside ``[dark_exposure_s[0],
-        dark_exposure_s[-1]]`` raises :class:`~recon.errors.SpectwinInputError`. ``"linear"``:
+        dark_exposure_s[-1]]`` raises :class:`~recon.errors.InputError`. ``"linear"``:
         the first or last segment is continued linearly (needs two dark exposure times).
 
     Returns
@@ -177,20 +177,18 @@ def dark_frames_at(
     times, means = _dark_model(dark_exposure_s, mean_dark_frames)
     wanted = exposure_vector("exposure_s", exposure_s)
     if extrapolate not in EXTRAPOLATION:
-        raise SpectwinInputError(
-            f"extrapolate: expected one of {EXTRAPOLATION}, got {extrapolate!r}"
-        )
+        raise InputError(f"extrapolate: expected one of {EXTRAPOLATION}, got {extrapolate!r}")
     flat = np.atleast_1d(wanted)
     outside = (flat < times[0]) | (flat > times[-1])
     if np.any(outside) and extrapolate == "none":
-        raise SpectwinInputError(
+        raise InputError(
             f"exposure_s: {flat[outside]} s lies outside the dark frames' exposure range "
             f"[{times[0]}, {times[-1]}] s; capture dark frames there or pass "
             "extrapolate='linear'"
         )
     if times.size == 1:
         if np.any(flat != times[0]):
-            raise SpectwinInputError(
+            raise InputError(
                 f"dark_exposure_s: a single dark exposure time ({times[0]} s) can neither be "
                 f"interpolated nor extrapolated to {flat} s"
             )
@@ -242,14 +240,14 @@ def subtract_dark(
     _, means = _dark_model(dark_exposure_s, mean_dark_frames)
     values = np.asarray(frames)
     if values.dtype.kind not in "iuf":
-        raise SpectwinInputError(f"frames: expected real pixel values, got dtype {values.dtype}")
+        raise InputError(f"frames: expected real pixel values, got dtype {values.dtype}")
     if values.dtype.kind == "f" and not np.all(np.isfinite(values)):
-        raise SpectwinInputError("frames: expected finite values, found NaN or infinity")
+        raise InputError("frames: expected finite values, found NaN or infinity")
     wanted = exposure_vector("exposure_s", exposure_s)
     pixel_shape = means.shape[1:]
     expected = pixel_shape if wanted.ndim == 0 else (wanted.size,) + pixel_shape
     if values.shape != expected:
-        raise SpectwinInputError(
+        raise InputError(
             f"frames: expected shape {expected} (one frame per exposure time, the dark frames' "
             f"pixel shape {pixel_shape}), got {values.shape}"
         )

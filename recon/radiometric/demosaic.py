@@ -15,7 +15,7 @@ from typing import Literal
 import colour_demosaicing
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = ["DEMOSAIC_METHODS", "bin_quads", "demosaic"]
 
@@ -35,13 +35,11 @@ def demosaic(
     """Interpolate a Bayer mosaic ``(H, W)`` (dark-subtracted, linear) to RGB ``(H, W, 3)``."""
     mosaic = np.asarray(mosaic, dtype=np.float64)
     if mosaic.ndim != 2:
-        raise SpectwinInputError(f"mosaic: expected a 2-D raw frame, got shape {mosaic.shape}")
+        raise InputError(f"mosaic: expected a 2-D raw frame, got shape {mosaic.shape}")
     if method not in DEMOSAIC_METHODS:
-        raise SpectwinInputError(
-            f"method: expected one of {sorted(DEMOSAIC_METHODS)}, got {method!r}"
-        )
+        raise InputError(f"method: expected one of {sorted(DEMOSAIC_METHODS)}, got {method!r}")
     if pattern not in ("RGGB", "BGGR", "GRBG", "GBRG"):
-        raise SpectwinInputError(f"pattern: expected RGGB, BGGR, GRBG or GBRG, got {pattern!r}")
+        raise InputError(f"pattern: expected RGGB, BGGR, GRBG or GBRG, got {pattern!r}")
     return np.asarray(DEMOSAIC_METHODS[method](mosaic, pattern))
 
 
@@ -54,11 +52,11 @@ def bin_quads(mosaic: np.ndarray, *, pattern: Literal["RGGB", "BGGR", "GRBG", "G
     """
     mosaic = np.asarray(mosaic, dtype=np.float64)
     if mosaic.ndim < 2 or mosaic.shape[-1] % 2 or mosaic.shape[-2] % 2:
-        raise SpectwinInputError(
+        raise InputError(
             f"mosaic: expected (..., 2H, 2W) with even sides, got shape {mosaic.shape}"
         )
     if pattern not in ("RGGB", "BGGR", "GRBG", "GBRG"):
-        raise SpectwinInputError(f"pattern: expected RGGB, BGGR, GRBG or GBRG, got {pattern!r}")
+        raise InputError(f"pattern: expected RGGB, BGGR, GRBG or GBRG, got {pattern!r}")
     sites = {(0, 0): pattern[0], (0, 1): pattern[1], (1, 0): pattern[2], (1, 1): pattern[3]}
     planes = {"R": [], "G": [], "B": []}
     for (row, column), channel in sites.items():

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.radiometric.dark_frames import exposure_vector
 
 __all__ = [
@@ -57,11 +57,11 @@ def exposure_times(exposure_s: object, count: int | None = None) -> np.ndarray:
     """Exposure times as a finite, positive float64 vector (``count`` entries when given)."""
     times = exposure_vector("exposure_s", exposure_s)
     if times.ndim != 1:
-        raise SpectwinInputError(
+        raise InputError(
             f"exposure_s: expected a 1-D vector of exposure times, got shape {times.shape}"
         )
     if count is not None and times.size != count:
-        raise SpectwinInputError(
+        raise InputError(
             f"exposure_s: expected one exposure time per frame ({count}), got {times.size}"
         )
     return times
@@ -71,16 +71,16 @@ def frame_stack(frames: object, name: str = "frames") -> np.ndarray:
     """A stack ``(n_exposures, ...)`` of at least two frames of finite real numbers."""
     array = np.asarray(frames)
     if array.dtype.kind not in "iuf" or array.ndim < 2:
-        raise SpectwinInputError(
+        raise InputError(
             f"{name}: expected a real array (n_exposures, ...) with at least 2 dimensions, got "
             f"dtype {array.dtype} and shape {array.shape}"
         )
     if array.shape[0] < 2:
-        raise SpectwinInputError(
+        raise InputError(
             f"{name}: expected an exposure series of at least 2 frames, got {array.shape[0]}"
         )
     if array.dtype.kind == "f" and not np.all(np.isfinite(array)):
-        raise SpectwinInputError(f"{name}: expected finite values, found NaN or infinity")
+        raise InputError(f"{name}: expected finite values, found NaN or infinity")
     return array
 
 
@@ -88,14 +88,12 @@ def _curve(inverse_response: object) -> np.ndarray:
     """An inverse response ``(levels,)``: finite where defined, NaN allowed outside the data."""
     curve = np.asarray(inverse_response, dtype=np.float64)
     if curve.ndim != 1 or curve.size < 2:
-        raise SpectwinInputError(
+        raise InputError(
             f"inverse_response: expected a vector (levels,) of at least 2 values, got shape "
             f"{curve.shape}"
         )
     if np.any(np.isinf(curve)) or np.all(np.isnan(curve)):
-        raise SpectwinInputError(
-            "inverse_response: expected finite values (NaN only at unobserved levels)"
-        )
+        raise InputError("inverse_response: expected finite values (NaN only at unobserved levels)")
     return curve
 
 
@@ -104,7 +102,7 @@ def _valid_mask(valid: object, shape: tuple[int, ...]) -> np.ndarray | None:
         return None
     mask = np.asarray(valid)
     if mask.dtype != bool or mask.shape != shape:
-        raise SpectwinInputError(
+        raise InputError(
             f"valid: expected a boolean mask of the frames' shape {shape}, got dtype "
             f"{mask.dtype} and shape {mask.shape}"
         )
@@ -150,11 +148,11 @@ def response_weights(levels: int, *, weighting: str | np.ndarray = "gaussian") -
     (0.0, 0.0, 1.0)
     """
     if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or levels < 3:
-        raise SpectwinInputError(f"levels: expected an integer of at least 3, got {levels!r}")
+        raise InputError(f"levels: expected an integer of at least 3, got {levels!r}")
     if not isinstance(weighting, str):
         table = np.asarray(weighting, dtype=np.float64)
         if table.shape != (levels,) or not np.all(np.isfinite(table)) or np.any(table < 0):
-            raise SpectwinInputError(
+            raise InputError(
                 f"weighting: expected one of {WEIGHTINGS} or {levels} finite non-negative "
                 f"weights, got an array of shape {table.shape}"
             )
@@ -169,7 +167,7 @@ def response_weights(levels: int, *, weighting: str | np.ndarray = "gaussian") -
     elif weighting == "uniform":
         table = np.ones(levels)
     else:
-        raise SpectwinInputError(f"weighting: expected one of {WEIGHTINGS}, got {weighting!r}")
+        raise InputError(f"weighting: expected one of {WEIGHTINGS}, got {weighting!r}")
     table[[0, -1]] = 0.0
     return table
 
@@ -379,7 +377,7 @@ class ResponseHistogram:
 def _edges(name: str, edges: object) -> np.ndarray:
     array = np.asarray(edges, dtype=np.float64)
     if array.ndim != 1 or array.size < 2 or not np.all(np.diff(array) > 0):
-        raise SpectwinInputError(
+        raise InputError(
             f"{name}: expected at least 2 strictly increasing bin edges, got {edges!r}"
         )
     return array
@@ -446,12 +444,12 @@ def response_histogram(
     times = exposure_times(exposure_s, values.shape[0])
     x = np.asarray(irradiance, dtype=np.float64)
     if x.shape != values.shape[1:]:
-        raise SpectwinInputError(
+        raise InputError(
             f"irradiance: expected the frames' pixel shape {values.shape[1:]}, got {x.shape}"
         )
     mask = _valid_mask(valid, values.shape)
     if isinstance(energy_bins, bool) or not isinstance(energy_bins, int) or energy_bins < 1:
-        raise SpectwinInputError(f"energy_bins: expected a positive integer, got {energy_bins!r}")
+        raise InputError(f"energy_bins: expected a positive integer, got {energy_bins!r}")
     y = values.reshape(values.shape[0], -1).astype(np.float64)
     energy = times[:, None] * x.reshape(1, -1)
     keep = np.isfinite(energy) & np.broadcast_to(np.isfinite(x.reshape(1, -1)), energy.shape)
@@ -459,7 +457,7 @@ def response_histogram(
         keep &= mask.reshape(y.shape)
     y, energy = y[keep], energy[keep]
     if y.size == 0:
-        raise SpectwinInputError("irradiance: no pixel has a finite irradiance to histogram")
+        raise InputError("irradiance: no pixel has a finite irradiance to histogram")
     if value_edges is None:
         value_edges = np.arange(np.floor(y.min()), np.ceil(y.max()) + 1.0) - 0.5
         value_edges = np.append(value_edges, value_edges[-1] + 1.0)

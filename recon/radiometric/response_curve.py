@@ -52,7 +52,7 @@ import warnings
 import numpy as np
 from scipy import ndimage
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.radiometric.hdr import (
     exposure_times,
     frame_stack,
@@ -79,7 +79,7 @@ def _bit_depth(bit_depth: object, values: np.ndarray) -> int:
     if bit_depth is None:
         if values.dtype == np.uint8:
             return 8
-        raise SpectwinInputError(
+        raise InputError(
             f"bit_depth: expected the bit depth of the camera's values (e.g. 12) for frames of "
             f"dtype {values.dtype}; only uint8 frames imply it"
         )
@@ -88,7 +88,7 @@ def _bit_depth(bit_depth: object, values: np.ndarray) -> int:
         or not isinstance(bit_depth, (int, np.integer))
         or not 2 <= bit_depth <= _MAX_BIT_DEPTH
     ):
-        raise SpectwinInputError(
+        raise InputError(
             f"bit_depth: expected an integer from 2 to {_MAX_BIT_DEPTH}, got {bit_depth!r}"
         )
     return int(bit_depth)
@@ -100,20 +100,16 @@ def _iteration_options(max_iterations: object, tolerance: object) -> tuple[int, 
         or not isinstance(max_iterations, (int, np.integer))
         or max_iterations < 1
     ):
-        raise SpectwinInputError(
-            f"max_iterations: expected a positive integer, got {max_iterations!r}"
-        )
+        raise InputError(f"max_iterations: expected a positive integer, got {max_iterations!r}")
     if not isinstance(tolerance, (int, float)) or not np.isfinite(tolerance) or tolerance <= 0:
-        raise SpectwinInputError(f"tolerance: expected a positive number, got {tolerance!r}")
+        raise InputError(f"tolerance: expected a positive number, got {tolerance!r}")
     return int(max_iterations), float(tolerance)
 
 
 def _check_distinct(times: np.ndarray) -> None:
     distinct = np.unique(times)
     if distinct.size < 2:
-        raise SpectwinInputError(
-            f"exposure_s: expected at least 2 different exposure times, got {times}"
-        )
+        raise InputError(f"exposure_s: expected at least 2 different exposure times, got {times}")
     steps = np.log(distinct / distinct[0])
     multiples = steps / steps[1]
     if np.all(np.abs(multiples - np.round(multiples)) < 0.02):
@@ -128,9 +124,9 @@ def _check_distinct(times: np.ndarray) -> None:
 
 def _sigma(sigma_px: object) -> float:
     if isinstance(sigma_px, bool) or not isinstance(sigma_px, (int, float, np.floating)):
-        raise SpectwinInputError(f"sigma_px: expected a number of pixels >= 0, got {sigma_px!r}")
+        raise InputError(f"sigma_px: expected a number of pixels >= 0, got {sigma_px!r}")
     if not np.isfinite(sigma_px) or sigma_px < 0:
-        raise SpectwinInputError(f"sigma_px: expected a number of pixels >= 0, got {sigma_px}")
+        raise InputError(f"sigma_px: expected a number of pixels >= 0, got {sigma_px}")
     return float(sigma_px)
 
 
@@ -141,11 +137,11 @@ def _clip_limits(clip_limits: object, levels: int | None) -> tuple[float, float]
     try:
         low, high = (float(limit) for limit in clip_limits)
     except (TypeError, ValueError) as error:
-        raise SpectwinInputError(
+        raise InputError(
             f"clip_limits: expected (low, high) raw values, got {clip_limits!r}"
         ) from error
     if not (np.isfinite(low) and np.isfinite(high) and low < high):
-        raise SpectwinInputError(
+        raise InputError(
             f"clip_limits: expected finite raw values with low < high, got {clip_limits!r}"
         )
     return low, high
@@ -157,7 +153,7 @@ def _clipped(values: np.ndarray, limits: tuple[float, float]) -> np.ndarray:
 
 def _image_axes(values: np.ndarray) -> tuple[int, int]:
     if values.ndim < 3:
-        raise SpectwinInputError(
+        raise InputError(
             f"frames: expected images (n_exposures, ..., H, W) to filter, got shape {values.shape}"
         )
     return values.ndim - 2, values.ndim - 1
@@ -222,7 +218,7 @@ def _recover(
     )
     observed = (left_total > 0) | (right_total > 0)
     if np.count_nonzero(observed) < 2:
-        raise SpectwinInputError(
+        raise InputError(
             "frames: expected samples at 2 or more pixel values within [0, levels - 1] in "
             "pixels with a usable (non-clipped) exposure"
         )
@@ -238,13 +234,13 @@ def _recover(
             or not isinstance(reference_level, (int, np.integer))
             or not first <= reference_level <= last
         ):
-            raise SpectwinInputError(
+            raise InputError(
                 f"reference_level: expected an integral pixel value within the observed range "
                 f"[{first}, {last}], got {reference_level!r}"
             )
         reference = int(reference_level)
     if reference - offset == 0:
-        raise SpectwinInputError(
+        raise InputError(
             f"reference_level: {reference} equals the offset {offset}, where the response is zero"
         )
     all_levels = np.arange(levels, dtype=np.float64)
@@ -284,7 +280,7 @@ def _recover(
         update = np.interp(all_levels, observed_levels, update[observed_levels])
         scale = update[reference]
         if not np.isfinite(scale) or scale == 0:
-            raise SpectwinInputError(
+            raise InputError(
                 f"reference_level: the response at {reference} came out {scale}; choose a level "
                 "with a non-zero response"
             )
@@ -387,7 +383,7 @@ def robertson(
     """
     values = frame_stack(frames)
     if values.dtype.kind not in "iu":
-        raise SpectwinInputError(
+        raise InputError(
             f"frames: expected integer pixel values, got dtype {values.dtype}; use "
             "robertson_filtered for dark-subtracted or filtered (fractional) values"
         )
@@ -397,7 +393,7 @@ def robertson(
     levels = 2**bits
     low, high = int(values.min()), int(values.max())
     if low < 0 or high > levels - 1:
-        raise SpectwinInputError(
+        raise InputError(
             f"frames: expected values in [0, {levels - 1}] for bit_depth {bits}, got "
             f"[{low}, {high}]"
         )
@@ -474,22 +470,22 @@ def filter_frames(
     axes = _image_axes(values)
     sigma = _sigma(sigma_px)
     if not isinstance(offset, (int, float, np.number)) or not np.isfinite(offset):
-        raise SpectwinInputError(f"offset: expected a finite number, got {offset!r}")
+        raise InputError(f"offset: expected a finite number, got {offset!r}")
     if dark is not None:
         dark_values = np.asarray(dark, dtype=np.float64)
         try:
             np.broadcast_shapes(dark_values.shape, values.shape)
         except ValueError as error:
-            raise SpectwinInputError(
+            raise InputError(
                 f"dark: expected a shape broadcastable to the frames' {values.shape}, e.g. "
                 f"{values.shape[-2:]}, got {dark_values.shape}"
             ) from error
         if np.broadcast_shapes(dark_values.shape, values.shape) != values.shape:
-            raise SpectwinInputError(
+            raise InputError(
                 f"dark: shape {dark_values.shape} would enlarge the frames {values.shape}"
             )
         if not np.all(np.isfinite(dark_values)):
-            raise SpectwinInputError("dark: expected finite values, found NaN or infinity")
+            raise InputError("dark: expected finite values, found NaN or infinity")
         values = values - dark_values
     if sigma > 0:
         sigmas = [0.0] * values.ndim

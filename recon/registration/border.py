@@ -63,7 +63,7 @@ from typing import Literal, NamedTuple
 import numpy as np
 from skimage import measure, transform
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.registration.corners import (
     TEXTURE_CORNERS_UV,
     frame_intensity,
@@ -92,7 +92,7 @@ __all__ = [
 MANUAL_CORNERS_VERSION = 1
 
 
-class MarksNotFoundError(SpectwinInputError):
+class MarksNotFoundError(InputError):
     """No border quadrilateral was found in a frame, even at the lowest threshold tried."""
 
 
@@ -139,11 +139,11 @@ def local_pca_lines(
     The thesis, section 4.1.2, step 4(a); [KL97].
     """
     if not (isinstance(n_clusters, (int, np.integer)) and n_clusters >= 1):
-        raise SpectwinInputError(f"n_clusters: expected a positive integer, got {n_clusters!r}")
+        raise InputError(f"n_clusters: expected a positive integer, got {n_clusters!r}")
     points = np.asarray(points_xy, dtype=np.float64)
     count = len(points)
     if points.ndim != 2 or points.shape[1] != 2 or count < 2 * n_clusters:
-        raise SpectwinInputError(
+        raise InputError(
             f"points_xy: expected (n, 2) contour points with n >= {2 * n_clusters}, "
             f"got shape {points.shape}"
         )
@@ -276,7 +276,7 @@ def _adequate(
     contour's."""
     try:
         validate_corners(corners)
-    except SpectwinInputError:
+    except InputError:
         return False
     sides = np.linalg.norm(np.roll(corners, -1, axis=0) - corners, axis=1)
     inside = np.all((corners >= 0) & (corners <= np.array(shape[::-1], dtype=np.float64)))
@@ -290,9 +290,9 @@ def _positive_range(value: object, name: str) -> tuple[float, float]:
     try:
         low, high = (float(item) for item in value)  # type: ignore[union-attr]
     except (TypeError, ValueError) as error:
-        raise SpectwinInputError(f"{name}: expected (min, max) in pixels, got {value!r}") from error
+        raise InputError(f"{name}: expected (min, max) in pixels, got {value!r}") from error
     if not (np.isfinite(low) and np.isfinite(high) and 0 <= low < high):
-        raise SpectwinInputError(f"{name}: expected 0 <= min < max in pixels, got {value!r}")
+        raise InputError(f"{name}: expected 0 <= min < max in pixels, got {value!r}")
     return low, high
 
 
@@ -354,7 +354,7 @@ def detect_corners(
     MarksNotFoundError
         No adequate quadrilateral at any threshold tried; give the frame's corners in a manual
         corner file.
-    SpectwinInputError
+    InputError
         Bad arguments.
 
     References
@@ -367,20 +367,18 @@ def detect_corners(
     if threshold is None:
         threshold = 0.5 * float(np.percentile(intensity, 99))
     if not (np.isfinite(threshold) and threshold > 0):
-        raise SpectwinInputError(
+        raise InputError(
             f"threshold: expected a positive finite value (or None), got {threshold!r}; "
             "the frame must have positive intensities"
         )
     if not 0 < threshold_step < 1:
-        raise SpectwinInputError(
-            f"threshold_step: expected a factor in (0, 1), got {threshold_step}"
-        )
+        raise InputError(f"threshold_step: expected a factor in (0, 1), got {threshold_step}")
     if not (isinstance(max_attempts, (int, np.integer)) and max_attempts >= 1):
-        raise SpectwinInputError(f"max_attempts: expected an integer >= 1, got {max_attempts!r}")
+        raise InputError(f"max_attempts: expected an integer >= 1, got {max_attempts!r}")
     if not (isinstance(n_clusters, (int, np.integer)) and n_clusters >= 4):
-        raise SpectwinInputError(f"n_clusters: expected an integer >= 4, got {n_clusters!r}")
+        raise InputError(f"n_clusters: expected an integer >= 4, got {n_clusters!r}")
     if not 0 <= min_angle_deg < 90:
-        raise SpectwinInputError(f"min_angle_deg: expected [0, 90) degrees, got {min_angle_deg}")
+        raise InputError(f"min_angle_deg: expected [0, 90) degrees, got {min_angle_deg}")
     extent_range = _positive_range(
         contour_extent_px or (max(8.0, 0.05 * min(height, width)), 0.95 * max(height, width)),
         "contour_extent_px",
@@ -466,7 +464,7 @@ def extract_texture(
     """
     array = validate_frame(image)
     if not (isinstance(resolution, (int, np.integer)) and resolution >= 1):
-        raise SpectwinInputError(f"resolution: expected a positive integer, got {resolution!r}")
+        raise InputError(f"resolution: expected a positive integer, got {resolution!r}")
     to_image = texture_transform(corners_xy).inverse.params
     texel_to_texture = np.array(
         [[1 / resolution, 0, 0.5 / resolution], [0, 1 / resolution, 0.5 / resolution], [0, 0, 1]]
@@ -499,31 +497,31 @@ def parse_manual_corners(document: Mapping[str, object]) -> dict[str, np.ndarray
         Frame id to ``(4, 2)`` float64 corners in texture order.
     """
     if not isinstance(document, Mapping):
-        raise SpectwinInputError(
+        raise InputError(
             f"manual corners: expected a JSON object with 'version' and 'frames', got "
             f"{type(document).__name__}"
         )
     unknown = set(document) - {"version", "frames", "comment"}
     if unknown:
-        raise SpectwinInputError(
+        raise InputError(
             f"manual corners: unknown keys {sorted(unknown)}; expected 'version', 'frames' and "
             "optionally 'comment'"
         )
     if document.get("version") != MANUAL_CORNERS_VERSION:
-        raise SpectwinInputError(
+        raise InputError(
             f"manual corners.version: expected {MANUAL_CORNERS_VERSION}, "
             f"got {document.get('version')!r}"
         )
     frames = document.get("frames")
     if not isinstance(frames, Mapping):
-        raise SpectwinInputError(
+        raise InputError(
             "manual corners.frames: expected an object mapping frame ids to four [x, y] corners, "
             f"got {type(frames).__name__}"
         )
     corners = {}
     for frame_id, points in frames.items():
         if not isinstance(frame_id, str) or not frame_id:
-            raise SpectwinInputError(
+            raise InputError(
                 f"manual corners.frames: expected non-empty string frame ids, got {frame_id!r}"
             )
         corners[frame_id] = validate_corners(points, f"manual corners.frames[{frame_id!r}]")
@@ -546,9 +544,9 @@ def read_manual_corners(path: str | Path) -> dict[str, np.ndarray]:
     try:
         document = json.loads(Path(path).read_text(encoding="utf-8"))
     except OSError as error:
-        raise SpectwinInputError(f"path: cannot read manual corner file {path}: {error}") from error
+        raise InputError(f"path: cannot read manual corner file {path}: {error}") from error
     except json.JSONDecodeError as error:
-        raise SpectwinInputError(
+        raise InputError(
             f"path: manual corner file {path} is not valid JSON ({error}); expected the format "
             "in recon.registration.border's docstring"
         ) from error
@@ -601,7 +599,7 @@ def register_frame(
         corners = validate_corners(manual_corners[frame_id], f"manual_corners[{frame_id!r}]")
         height, width = array.shape[:2]
         if np.any(corners < 0) or np.any(corners > np.array([width, height])):
-            raise SpectwinInputError(
+            raise InputError(
                 f"manual_corners[{frame_id!r}]: expected corners inside the {width} x {height} "
                 f"frame, got {corners.tolist()}"
             )

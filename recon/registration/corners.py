@@ -45,7 +45,7 @@ import numpy as np
 from scipy import optimize, special
 from skimage import transform
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = [
     "CORNER_PIECE_SIZE",
@@ -71,7 +71,7 @@ TEXTURE_CORNERS_UV.setflags(write=False)
 MARKS = ("dark", "bright")
 
 
-class CornerRefinementError(SpectwinInputError):
+class CornerRefinementError(InputError):
     """The two-region model put a corner at the edge of its piece: no border corner was found
     near the coarse corner (too few pixels across the border, e.g. at grazing views)."""
 
@@ -93,29 +93,29 @@ def validate_corners(corners_xy: object, name: str = "corners_xy") -> np.ndarray
 
     Raises
     ------
-    SpectwinInputError
+    InputError
         Wrong shape, non-finite values, or four points that are not the corners of a convex
         quadrilateral in order (self-intersecting, collinear or repeated points).
     """
     try:
         corners = np.array(corners_xy, dtype=np.float64)
     except (TypeError, ValueError) as error:
-        raise SpectwinInputError(
+        raise InputError(
             f"{name}: expected four (x, y) points as numbers, got {corners_xy!r}"
         ) from error
     if corners.shape != (4, 2):
-        raise SpectwinInputError(
+        raise InputError(
             f"{name}: expected shape (4, 2) (four (x, y) corners), got {corners.shape}"
         )
     if not np.all(np.isfinite(corners)):
-        raise SpectwinInputError(f"{name}: expected finite corner coordinates, got {corners}")
+        raise InputError(f"{name}: expected finite corner coordinates, got {corners}")
     edges = np.roll(corners, -1, axis=0) - corners
     turns = (
         edges[:, 0] * np.roll(edges, -1, axis=0)[:, 1] - edges[:, 1] * np.roll(edges, -1, 0)[:, 0]
     )
     scale = max(float(np.abs(edges).max()), 1e-300) ** 2
     if not (np.all(turns > 1e-9 * scale) or np.all(turns < -1e-9 * scale)):
-        raise SpectwinInputError(
+        raise InputError(
             f"{name}: expected the corners of a convex quadrilateral in order around it "
             f"(no repeated, collinear or crossing corners), got {corners.tolist()}"
         )
@@ -149,7 +149,7 @@ def texture_transform(corners_xy: np.ndarray) -> transform.ProjectiveTransform:
     corners = validate_corners(corners_xy)
     estimated = transform.ProjectiveTransform.from_estimate(corners, TEXTURE_CORNERS_UV)
     if not estimated:
-        raise SpectwinInputError(
+        raise InputError(
             f"corners_xy: no homography to the texture square exists for {corners.tolist()}"
         )
     return estimated
@@ -160,20 +160,20 @@ def validate_frame(image: object, name: str = "image") -> np.ndarray:
 
     Raises
     ------
-    SpectwinInputError
+    InputError
         Not numeric, wrong number of axes, too small, NaN or inf.
     """
     try:
         array = np.asarray(image, dtype=np.float64)
     except (TypeError, ValueError) as error:
-        raise SpectwinInputError(f"{name}: expected a numeric array, got {type(image)}") from error
+        raise InputError(f"{name}: expected a numeric array, got {type(image)}") from error
     if array.ndim not in (2, 3) or min(array.shape[:2]) < 8 or array.size == 0:
-        raise SpectwinInputError(
+        raise InputError(
             f"{name}: expected a frame (H, W) or (H, W, K) of at least 8 x 8 pixels, "
             f"got shape {array.shape}"
         )
     if not np.all(np.isfinite(array)):
-        raise SpectwinInputError(f"{name}: expected finite pixel values, found NaN or inf")
+        raise InputError(f"{name}: expected finite pixel values, found NaN or inf")
     return array
 
 
@@ -183,9 +183,9 @@ def frame_intensity(image: np.ndarray) -> np.ndarray:
 
 
 def validate_marks(marks: str) -> None:
-    """Raise :class:`SpectwinInputError` unless ``marks`` is ``"dark"`` or ``"bright"``."""
+    """Raise :class:`InputError` unless ``marks`` is ``"dark"`` or ``"bright"``."""
     if marks not in MARKS:
-        raise SpectwinInputError(f"marks: expected one of {MARKS}, got {marks!r}")
+        raise InputError(f"marks: expected one of {MARKS}, got {marks!r}")
 
 
 def corner_pieces(
@@ -246,7 +246,7 @@ def corner_pieces(
         )
         low, high = np.percentile(piece, percentiles)
         if not high > low:
-            raise SpectwinInputError(
+            raise InputError(
                 f"image: the piece around corner {index} at {np.round(corners[index], 2)} has no "
                 f"contrast between its {percentiles} percentiles; expected the border's edges there"
             )
@@ -258,16 +258,14 @@ def _validate_piece_options(
     piece_size: float, piece_texels: int, percentiles: tuple[float, float]
 ) -> None:
     if not (np.isfinite(piece_size) and 0.0 < piece_size <= 0.5):
-        raise SpectwinInputError(
+        raise InputError(
             f"piece_size: expected a width in texture units in (0, 0.5], got {piece_size!r}"
         )
     if not (isinstance(piece_texels, (int, np.integer)) and piece_texels >= 8):
-        raise SpectwinInputError(
-            f"piece_texels: expected an integer of at least 8, got {piece_texels!r}"
-        )
+        raise InputError(f"piece_texels: expected an integer of at least 8, got {piece_texels!r}")
     low, high = (float(value) for value in percentiles)
     if not 0.0 <= low < high <= 100.0:
-        raise SpectwinInputError(
+        raise InputError(
             f"percentiles: expected (low, high) with 0 <= low < high <= 100, got {percentiles!r}"
         )
 
@@ -338,18 +336,18 @@ def fit_corner_model(
     """
     values = np.asarray(piece, dtype=np.float64)
     if values.ndim != 2 or values.shape[0] != values.shape[1] or values.shape[0] < 4:
-        raise SpectwinInputError(f"piece: expected a square (n, n) array, got {values.shape}")
+        raise InputError(f"piece: expected a square (n, n) array, got {values.shape}")
     if tuple(inside) not in {(1, 1), (1, -1), (-1, 1), (-1, -1)}:
-        raise SpectwinInputError(f"inside: expected (+-1, +-1), got {inside!r}")
+        raise InputError(f"inside: expected (+-1, +-1), got {inside!r}")
     widths = None
     if edge_width is not None:
         widths = np.asarray(edge_width, dtype=np.float64)
         if widths.shape != (2,) or not np.all(np.isfinite(widths) & (widths > 0)):
-            raise SpectwinInputError(
+            raise InputError(
                 f"edge_width: expected two positive widths in texels, got {edge_width!r}"
             )
     elif fit_edge_width:
-        raise SpectwinInputError("edge_width: expected start widths when fit_edge_width is set")
+        raise InputError("edge_width: expected start widths when fit_edge_width is set")
     size = values.shape[0]
     centres = np.arange(size) + 0.5
     contrast = inside_value - outside_value
@@ -422,7 +420,7 @@ def refine_corners(
 
     Raises
     ------
-    SpectwinInputError
+    InputError
         Bad arguments, or a corner that moves out of its piece (no corner edge was found there).
 
     References
@@ -431,11 +429,11 @@ def refine_corners(
     """
     validate_marks(marks)
     if not (isinstance(iterations, (int, np.integer)) and iterations >= 1):
-        raise SpectwinInputError(f"iterations: expected an integer >= 1, got {iterations!r}")
+        raise InputError(f"iterations: expected an integer >= 1, got {iterations!r}")
     image = validate_frame(image)
     corners = validate_corners(corners_xy)
     if edge_model not in ("blurred", "sharp"):
-        raise SpectwinInputError(f"edge_model: expected 'blurred' or 'sharp', got {edge_model!r}")
+        raise InputError(f"edge_model: expected 'blurred' or 'sharp', got {edge_model!r}")
     inside_value, outside_value = (1.0, 0.0) if marks == "bright" else (0.0, 1.0)
     step = piece_size / piece_texels
     for _ in range(int(iterations)):

@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 from skimage import transform
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.registration.corners import validate_corners
 
 __all__ = ["sample_square_corners", "texel_centres_m"]
@@ -82,17 +82,17 @@ def sample_square_corners(
     marks = np.asarray(marks_m, np.float64)
     centre = np.asarray(camera_position_m, np.float64)
     if marks.shape != (4, 3) or centre.shape != (3,) or not centre[2] > marks[:, 2].max():
-        raise SpectwinInputError(
+        raise InputError(
             f"marks_m, camera_position_m: expected (4, 3) marks below a camera (3,), got "
             f"{marks.shape} and {centre.tolist()}"
         )
     if not 0 < sample_size_m < 2 * np.abs(marks[:, :2]).max():
-        raise SpectwinInputError(
+        raise InputError(
             f"sample_size_m: expected a square inside the marks, got {sample_size_m} m"
         )
     homography = transform.ProjectiveTransform.from_estimate(marks[:, :2], image)
     if not homography:
-        raise SpectwinInputError(f"marks_xy: no homography for {image.tolist()}")
+        raise InputError(f"marks_xy: no homography for {image.tolist()}")
     half = sample_size_m / 2
     square = np.array([[-half, half, 0], [half, half, 0], [half, -half, 0], [-half, -half, 0]])
     along_rays = square + (marks[:, 2].mean() / centre[2]) * (centre - square)

@@ -39,7 +39,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = [
     "DEFAULT_NODE_LIMIT",
@@ -67,13 +67,13 @@ def _positive_vector(name: str, values: object, size: int | None = None) -> np.n
     array = np.asarray(values, dtype=np.float64)
     if array.ndim != 1 or array.size == 0 or (size is not None and array.size != size):
         expected = f"({size},)" if size is not None else "a non-empty 1-D array"
-        raise SpectwinInputError(
+        raise InputError(
             f"{name}: expected one value per band, shape {expected}, got shape {array.shape}"
         )
     if not np.all(np.isfinite(array)):
-        raise SpectwinInputError(f"{name}: expected finite values, found NaN or infinity")
+        raise InputError(f"{name}: expected finite values, found NaN or infinity")
     if np.any(array <= 0):
-        raise SpectwinInputError(
+        raise InputError(
             f"{name}: expected positive values, got {array[array <= 0][0]:g} at index "
             f"{int(np.flatnonzero(array <= 0)[0])}"
         )
@@ -82,9 +82,9 @@ def _positive_vector(name: str, values: object, size: int | None = None) -> np.n
 
 def _positive_scalar(name: str, value: object) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise SpectwinInputError(f"{name}: expected a positive number, got {value!r}")
+        raise InputError(f"{name}: expected a positive number, got {value!r}")
     if not (math.isfinite(value) and value > 0):
-        raise SpectwinInputError(f"{name}: expected a finite, positive number, got {value}")
+        raise InputError(f"{name}: expected a finite, positive number, got {value}")
     return float(value)
 
 
@@ -134,7 +134,7 @@ def spectral_exposures(
         return exposures
     limits = np.asarray(limits_s, dtype=np.float64)
     if limits.shape != (2,) or not np.all(np.isfinite(limits)) or not 0 < limits[0] <= limits[1]:
-        raise SpectwinInputError(
+        raise InputError(
             f"limits_s: expected (shortest, longest) with 0 < shortest <= longest, got {limits_s}"
         )
     return np.clip(exposures, limits[0], limits[1])
@@ -176,7 +176,7 @@ def gaussian_noise_factor(sigma_px: float | np.ndarray) -> np.ndarray:
     """
     sigma = np.asarray(sigma_px, dtype=np.float64)
     if not np.all(np.isfinite(sigma)) or np.any(sigma <= 0):
-        raise SpectwinInputError("sigma_px: expected finite, positive standard deviations in px")
+        raise InputError("sigma_px: expected finite, positive standard deviations in px")
     return 1.0 / (2.0 * np.sqrt(np.pi) * sigma)
 
 
@@ -214,12 +214,12 @@ def filter_sizes(relative_noise: np.ndarray, target_relative_noise: float) -> np
     """
     noise = np.asarray(relative_noise, dtype=np.float64)
     if noise.ndim != 1 or noise.size == 0:
-        raise SpectwinInputError(
+        raise InputError(
             f"relative_noise: expected one value per band, a non-empty 1-D array, got shape "
             f"{noise.shape}"
         )
     if not np.all(np.isfinite(noise)) or np.any(noise < 0):
-        raise SpectwinInputError("relative_noise: expected finite, non-negative values per band")
+        raise InputError("relative_noise: expected finite, non-negative values per band")
     target = _positive_scalar("target_relative_noise", target_relative_noise)
     sigma = noise / (2.0 * np.sqrt(np.pi) * target)
     return np.where(noise > target, FILTER_SIZE_PER_SIGMA * sigma, 0.0)
@@ -287,7 +287,7 @@ def _instance(
         or np.any((repeats < 0) | (repeats >= exposures.size))
         or np.unique(repeats).size != repeats.size
     ):
-        raise SpectwinInputError(
+        raise InputError(
             f"repeat_bands: expected distinct band indices in [0, {exposures.size}), got "
             f"{list(repeat_bands)}"
         )
@@ -295,7 +295,7 @@ def _instance(
     order = np.argsort(-exposures[bands], kind="stable")
     limit = None if image_limit_s is None else _positive_scalar("image_limit_s", image_limit_s)
     if limit is not None and limit < exposures.max():
-        raise SpectwinInputError(
+        raise InputError(
             f"image_limit_s: {limit:g} s is shorter than the longest band exposure "
             f"({exposures.max():g} s), which must fit into one image"
         )
@@ -304,9 +304,9 @@ def _instance(
 
 def _n_images(n_images: object, instance: _Instance) -> int:
     if isinstance(n_images, bool) or not isinstance(n_images, (int, np.integer)) or n_images < 1:
-        raise SpectwinInputError(f"n_images: expected a positive integer, got {n_images!r}")
+        raise InputError(f"n_images: expected a positive integer, got {n_images!r}")
     if np.unique(instance.bands).size < instance.bands.size and n_images < 2:
-        raise SpectwinInputError(
+        raise InputError(
             "n_images: a band taken twice needs two different images, expected at least 2"
         )
     return int(n_images)
@@ -645,7 +645,7 @@ def _node_limit(node_limit: object) -> int:
         or not isinstance(node_limit, (int, np.integer))
         or node_limit < 1
     ):
-        raise SpectwinInputError(f"node_limit: expected a positive integer, got {node_limit!r}")
+        raise InputError(f"node_limit: expected a positive integer, got {node_limit!r}")
     return int(node_limit)
 
 
@@ -699,7 +699,7 @@ def schedule_bands(
 
     Raises
     ------
-    SpectwinInputError
+    InputError
         On malformed input, or when no assignment keeps every image within ``image_limit_s``.
 
     References
@@ -718,12 +718,12 @@ def schedule_bands(
     limit = _node_limit(node_limit)
     schedule, decided = _solve(instance, n, limit)
     if schedule is None and decided:
-        raise SpectwinInputError(
+        raise InputError(
             f"n_images: no schedule of {instance.exposures_s.size} band exposures in {n} images "
             f"keeps every image within image_limit_s = {instance.image_limit_s:g} s"
         )
     if schedule is None:
-        raise SpectwinInputError(
+        raise InputError(
             f"node_limit: the search found no schedule of {instance.exposures_s.size} band "
             f"exposures in {n} images within {limit} nodes; allow it more nodes"
         )
@@ -784,7 +784,7 @@ def fewest_images(
         if schedule is not None:
             return replace(schedule, optimal=proven and decided)
         proven = proven and decided
-    raise SpectwinInputError(
+    raise InputError(
         f"node_limit: the search found no schedule within {nodes} nodes per image count, not "
         "even one image per band exposure; allow it more nodes"
     )

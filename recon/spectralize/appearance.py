@@ -39,7 +39,7 @@ from scipy import ndimage, sparse
 from scipy.sparse import csgraph
 from scipy.spatial import cKDTree
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = [
     "APPEARANCE_SPACES",
@@ -75,7 +75,7 @@ def _patch(images: np.ndarray, *, patch_radius: int = 1, **_) -> np.ndarray:
     :math:`\\alpha_{center} = (2m+1)^2 - 1`; image borders are mirrored."""
     m = int(patch_radius)
     if m < 1:
-        raise SpectwinInputError(f"patch_radius: expected an integer >= 1, got {patch_radius}")
+        raise InputError(f"patch_radius: expected an integer >= 1, got {patch_radius}")
     centre_weight = (2 * m + 1) ** 2 - 1
     padded = np.pad(images, ((0, 0), (m, m), (m, m), (0, 0)), mode="reflect")
     count, height, width, channels = images.shape
@@ -111,12 +111,12 @@ def appearance_points(images: np.ndarray, space: str = "rgbxy", **options) -> np
         ``(n_images * height * width, dims)`` points, pixels in row-major order per image.
     """
     if space not in APPEARANCE_SPACES:
-        raise SpectwinInputError(
+        raise InputError(
             f"appearance: unknown space {space!r}; expected one of {sorted(APPEARANCE_SPACES)}"
         )
     images = np.asarray(images, dtype=np.float64)
     if images.ndim != 4:
-        raise SpectwinInputError(
+        raise InputError(
             f"images: expected (n_images, height, width, channels), got shape {images.shape}"
         )
     return APPEARANCE_SPACES[space](images, **options)
@@ -242,15 +242,13 @@ def appearance_neighbours(
     """
     points = np.asarray(points, dtype=np.float64)
     if points.ndim != 2 or points.shape[0] < 2:
-        raise SpectwinInputError(
-            f"points: expected (n_pixels >= 2, dims), got shape {points.shape}"
-        )
+        raise InputError(f"points: expected (n_pixels >= 2, dims), got shape {points.shape}")
     if not np.all(np.isfinite(points)):
-        raise SpectwinInputError("points: appearance values must be finite (found NaN or inf)")
+        raise InputError("points: appearance values must be finite (found NaN or inf)")
     n = points.shape[0]
     candidates = 2 * k if candidates is None else int(candidates)
     if not 1 <= k <= candidates < n:
-        raise SpectwinInputError(
+        raise InputError(
             f"k={k}, candidates={candidates}: expected 1 <= k <= candidates < n_pixels={n}"
         )
     # Queries in a kd-tree's own point order keep successive searches in cache (a quarter of
@@ -298,11 +296,9 @@ def connect_components(
     """
     has_data = np.asarray(has_data, dtype=bool)
     if has_data.shape != (graph.n_pixels,):
-        raise SpectwinInputError(
-            f"has_data: expected shape ({graph.n_pixels},), got {has_data.shape}"
-        )
+        raise InputError(f"has_data: expected shape ({graph.n_pixels},), got {has_data.shape}")
     if not has_data.any():
-        raise SpectwinInputError("has_data: no pixel carries spectral data; nothing to anchor to")
+        raise InputError("has_data: no pixel carries spectral data; nothing to anchor to")
     adjacency = sparse.csr_matrix(
         (np.ones(graph.n_links), (graph.first, graph.second)),
         shape=(graph.n_pixels, graph.n_pixels),

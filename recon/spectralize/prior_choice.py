@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.metrics import relative_error
 from recon.spectralize.solve import PRIORS, PointSpectra, reconstruct
 
@@ -113,29 +113,29 @@ def choose_prior(
     ('regression', 21)
     """
     if "prior" in options:
-        raise SpectwinInputError("prior: choose_prior tries every prior; do not pass one")
+        raise InputError("prior: choose_prior tries every prior; do not pass one")
     images = np.asarray(rgb, dtype=np.float64)
     pixels = np.asarray(known_pixels)
     spectra = np.asarray(known_spectra, dtype=np.float64)
     if pixels.ndim != 1 or spectra.shape[:1] != pixels.shape:
-        raise SpectwinInputError(
+        raise InputError(
             f"known_pixels, known_spectra: expected m indices and (m, K) spectra, got shapes "
             f"{pixels.shape} and {spectra.shape}"
         )
     if images.ndim not in (3, 4):
-        raise SpectwinInputError(
+        raise InputError(
             f"rgb: expected (H, W, C) or (N, H, W, C) camera values, got shape {images.shape}"
         )
     pixel_grid = images.shape[:-1] if images.ndim == 4 else (1, *images.shape[:-1])
     if pixels.size and (pixels.min() < 0 or pixels.max() >= np.prod(pixel_grid)):
-        raise SpectwinInputError(
+        raise InputError(
             f"known_pixels: expected indices in [0, {np.prod(pixel_grid)}), got "
             f"[{pixels.min()}, {pixels.max()}]"
         )
     spots = _spot_labels(pixels, pixel_grid)
     count = int(spots.max()) + 1 if spots.size else 0
     if count < FOLDS:
-        raise SpectwinInputError(
+        raise InputError(
             f"known_pixels: choose_prior needs at least {FOLDS} separate spots (or lines long "
             f"enough to cut into {2 * FOLDS} segments) to hold one in {FOLDS} out, got {count}"
         )

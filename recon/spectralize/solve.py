@@ -49,7 +49,7 @@ from scipy import sparse
 from scipy.sparse import linalg
 from threadpoolctl import threadpool_limits
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.progress import progress_steps
 from recon.spectra import SampledSpectra, WavelengthGrid
 from recon.spectralize.appearance import (
@@ -159,11 +159,9 @@ class EnergyWeights:
             if value is None:
                 continue
             if not (np.isfinite(value) and value >= 0):
-                raise SpectwinInputError(
-                    f"weights.{name}: expected a finite value >= 0, got {value}"
-                )
+                raise InputError(f"weights.{name}: expected a finite value >= 0, got {value}")
         if self.alpha == 0:
-            raise SpectwinInputError("weights.alpha: expected > 0; without data nothing is known")
+            raise InputError("weights.alpha: expected > 0; without data nothing is known")
 
 
 @dataclass
@@ -289,12 +287,12 @@ def _as_images(rgb: np.ndarray) -> np.ndarray:
     if rgb.ndim == 3:
         rgb = rgb[None]
     if rgb.ndim != 4 or min(rgb.shape) < 1:
-        raise SpectwinInputError(
+        raise InputError(
             f"rgb: expected (height, width, channels) or (n_images, height, width, channels), "
             f"got shape {rgb.shape}"
         )
     if not np.all(np.isfinite(rgb)):
-        raise SpectwinInputError("rgb: camera values must be finite (found NaN or inf)")
+        raise InputError("rgb: camera values must be finite (found NaN or inf)")
     return rgb
 
 
@@ -305,7 +303,7 @@ def _grid_and_values(
     if not isinstance(spectra, SampledSpectra):
         return np.asarray(spectra, dtype=np.float64), grid
     if grid is not None and spectra.grid != grid:
-        raise SpectwinInputError(
+        raise InputError(
             f"{what}: sampled on {spectra.grid.describe()} but the response is on "
             f"{grid.describe()}; resample one of them with recon.spectra.resample"
         )
@@ -315,12 +313,12 @@ def _grid_and_values(
 def _checked_response(response: np.ndarray, channels: int) -> np.ndarray:
     response = np.asarray(response, dtype=np.float64)
     if response.ndim != 2 or response.shape[1] != channels or response.shape[0] < 2:
-        raise SpectwinInputError(
+        raise InputError(
             f"response: expected (K bands, {channels} channels) to match the rgb channels, got "
             f"shape {response.shape}"
         )
     if not np.all(np.isfinite(response)):
-        raise SpectwinInputError("response: values must be finite (found NaN or inf)")
+        raise InputError("response: values must be finite (found NaN or inf)")
     return response
 
 
@@ -329,13 +327,13 @@ def dynamic_scale(images: np.ndarray, p_dyn: float) -> np.ndarray:
     times the mean sum (holder, shadows, noise: dark pixels whose sum noise can make negative)
     are raised to that floor."""
     if not 0 <= p_dyn <= 1:
-        raise SpectwinInputError(f"p_dyn: expected a value in [0, 1], got {p_dyn}")
+        raise InputError(f"p_dyn: expected a value in [0, 1], got {p_dyn}")
     brightness = images.sum(axis=-1).ravel()
     if p_dyn == 0:
         return np.ones_like(brightness)
     mean = float(np.mean(brightness))
     if mean <= 0:
-        raise SpectwinInputError(
+        raise InputError(
             "rgb: dynamic-range compression (p_dyn > 0) needs a positive mean pixel sum"
         )
     return np.maximum(brightness, DYNAMIC_FLOOR * mean) ** -p_dyn
@@ -347,19 +345,19 @@ def _point_term(
     pixels = np.asarray(data.pixels)
     spectra, _ = _grid_and_values(data.spectra, grid, "point_spectra.spectra")
     if pixels.ndim != 1 or not np.issubdtype(pixels.dtype, np.integer):
-        raise SpectwinInputError(f"point_spectra.pixels: expected 1-D integers, got {pixels.dtype}")
+        raise InputError(f"point_spectra.pixels: expected 1-D integers, got {pixels.dtype}")
     if spectra.shape != (pixels.size, bands):
-        raise SpectwinInputError(
+        raise InputError(
             f"point_spectra.spectra: expected shape ({pixels.size}, {bands}) = (pixels, bands of "
             f"the response), got {spectra.shape}"
         )
     if pixels.size and (pixels.min() < 0 or pixels.max() >= scale.size):
-        raise SpectwinInputError(
+        raise InputError(
             f"point_spectra.pixels: expected indices in [0, {scale.size}), got "
             f"[{pixels.min()}, {pixels.max()}]"
         )
     if not np.all(np.isfinite(spectra)):
-        raise SpectwinInputError("point_spectra.spectra: values must be finite (found NaN or inf)")
+        raise InputError("point_spectra.spectra: values must be finite (found NaN or inf)")
     return PointSpectraTerm(pixels.astype(np.intp), spectra * scale[pixels, None])
 
 
@@ -369,21 +367,19 @@ def _band_term(
     count, height, width = image_shape
     values = np.asarray(data.values, dtype=np.float64)
     if values.shape != (height, width):
-        raise SpectwinInputError(
+        raise InputError(
             f"band_images: image {data.image} band {data.band} has shape {values.shape}, "
             f"expected ({height}, {width}) like the rgb images"
         )
     if not (0 <= data.image < count and 0 <= data.band < bands):
-        raise SpectwinInputError(
+        raise InputError(
             f"band_images: image {data.image} / band {data.band} out of range ({count} images, "
             f"{bands} bands)"
         )
     if not (np.isfinite(data.sigma_px) and data.sigma_px >= 0):
-        raise SpectwinInputError(f"band_images: sigma_px must be >= 0, got {data.sigma_px}")
+        raise InputError(f"band_images: sigma_px must be >= 0, got {data.sigma_px}")
     if not np.all(np.isfinite(values)):
-        raise SpectwinInputError(
-            f"band_images: image {data.image} band {data.band} has NaN or inf values"
-        )
+        raise InputError(f"band_images: image {data.image} band {data.band} has NaN or inf values")
     size = height * width
     plane = scale[data.image * size : (data.image + 1) * size].reshape(height, width) * values
     target = gaussian_plane(plane, float(data.sigma_px))
@@ -395,13 +391,13 @@ def _device_term(data: DeviceIntegrals, scale: np.ndarray, bands: int) -> Device
     values = np.asarray(data.values, dtype=np.float64)
     columns = scale.size * bands
     if weights.shape != (values.size, columns):
-        raise SpectwinInputError(
+        raise InputError(
             f"device_integrals.weights: expected shape ({values.size}, {columns}) = (readings, "
             f"pixels x bands), got {weights.shape}"
         )
     alpha = np.ones(values.size) if data.alpha is None else np.asarray(data.alpha, np.float64)
     if alpha.shape != values.shape or np.any(alpha < 0) or not np.all(np.isfinite(values)):
-        raise SpectwinInputError(
+        raise InputError(
             "device_integrals: values must be finite and alpha non-negative, one per reading"
         )
     # Scaled unknowns X = f S: column (i, l) of the weights is divided by f_i.
@@ -416,7 +412,7 @@ def _regression_matrix(scaled_rgb: np.ndarray, data_terms: list) -> np.ndarray:
     Hardeberg (thesis Sec. 6.1)."""
     points = [t for t in data_terms if isinstance(t, PointSpectraTerm)]
     if not points:
-        raise SpectwinInputError(
+        raise InputError(
             "prior: 'regression' learns its map from point spectra; pass known_pixels and "
             "known_spectra, or use prior='spectra'"
         )
@@ -474,7 +470,7 @@ def build_problem(
     SpectralizationProblem
     """
     if prior not in PRIORS:
-        raise SpectwinInputError(f"prior: expected one of {PRIORS}, got {prior!r}")
+        raise InputError(f"prior: expected one of {PRIORS}, got {prior!r}")
     images = _as_images(rgb)
     response_values, grid = _grid_and_values(response, None, "response")
     if isinstance(response, SampledSpectra):
@@ -493,7 +489,7 @@ def build_problem(
         data_terms.append(_device_term(device_integrals, scale, bands))
     data_rows = sum(t.n_rows for t in data_terms)
     if data_rows == 0:
-        raise SpectwinInputError(
+        raise InputError(
             "spectralize: no spectral data given; pass point_spectra, band_images or "
             "device_integrals (an RGB image alone leaves the spectra undetermined)"
         )
@@ -523,7 +519,7 @@ def build_problem(
     data_mean = np.mean(np.concatenate([np.abs(np.ravel(t.target)) for t in data_terms]))
     rgb_mean = float(np.mean(np.abs(scaled_rgb)))
     if rgb_mean == 0 or data_mean == 0:
-        raise SpectwinInputError("spectralize: rgb and spectral data must not be all zero")
+        raise InputError("spectralize: rgb and spectral data must not be all zero")
     terms = [*data_terms, CameraTerm(response, scaled_rgb)]
     absolute = [weights.alpha * total / data_rows] * len(data_terms)
     absolute.append(weights.beta * (data_mean / rgb_mean) * total / (channels * n))
@@ -637,9 +633,9 @@ def reconstruct(
     (True, 'multigrid')
     """
     if solver not in SOLVERS:
-        raise SpectwinInputError(f"solver: expected one of {SOLVERS}, got {solver!r}")
+        raise InputError(f"solver: expected one of {SOLVERS}, got {solver!r}")
     if not (tol > 0 and max_iterations >= 1):
-        raise SpectwinInputError(
+        raise InputError(
             f"tol, max_iterations: expected tol > 0 and max_iterations >= 1, got {tol}, "
             f"{max_iterations}"
         )
@@ -649,7 +645,7 @@ def reconstruct(
     if initial is not None:
         initial = np.asarray(initial, dtype=np.float64)
         if initial.size != shape[0] * shape[1] or not np.all(np.isfinite(initial)):
-            raise SpectwinInputError(
+            raise InputError(
                 f"initial: expected finite spectra with {shape[0]} x {shape[1]} values, got "
                 f"shape {initial.shape}"
             )
@@ -660,7 +656,7 @@ def reconstruct(
     parts = problem.kronecker_parts() if solver in ("auto", "multigrid") else None
     assembly_s = time.perf_counter() - started
     if solver == "multigrid" and parts is None:
-        raise SpectwinInputError(
+        raise InputError(
             "solver='multigrid' needs an energy with point spectra, camera, prior and "
             "smoothness terms only; use 'lsqr' or 'lsmr' with band images or device integrals"
         )
@@ -747,7 +743,7 @@ def spectralize(
     True
     """
     if (known_pixels is None) != (known_spectra is None):
-        raise SpectwinInputError(
+        raise InputError(
             "known_pixels, known_spectra: give both (indices and their spectra) or neither"
         )
     point_spectra = None

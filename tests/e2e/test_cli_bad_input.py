@@ -123,7 +123,11 @@ PROBES: list[tuple[list[str], int, str]] = [
         2,
         "gonio-run needs --calibration (the JSON of spectwin calibrate)",
     ),
-    (["capture", "demo", "@CAPTURE"], 2, "exists: continue it with --resume"),
+    (
+        ["capture", "demo", "@CAPTURE"],
+        2,
+        "overwritten); continue it with spectwin capture resume",
+    ),
     (
         ["capture", "gonio-run", "@NEW", "--calibration", "@CAL", "--material", "nosuch"],
         2,
@@ -180,7 +184,7 @@ PROBES: list[tuple[list[str], int, str]] = [
     (
         ["process", "@CAPTURE", "--calibration", "@CAL", "--out", "@BTF"],
         2,
-        "exists: continue it with --resume",
+        "(nothing was overwritten); continue it with --resume or choose another name",
     ),
     (
         ["process", "@CAPTURE", "--calibration", "@CAL", "--out", "@NEW_BTF"]

@@ -11,7 +11,7 @@ import serial
 from hwbridge.drivers.apt_rotation_stage import K10CR1_COUNTS_PER_DEG, AptRotationStage
 from hwbridge.emulators.apt_stage_state import AptStageState
 from hwbridge.emulators.pty_link import EmulatorPty
-from hwbridge.errors import BridgeInputError, DeviceError, DeviceTimeout, DriverNotInstalled
+from hwbridge.errors import DeviceError, DeviceTimeout, DriverNotInstalled, InputError, Remedy
 
 # The driver imports its protocol library only when it stages: skip here without the extra.
 apt = pytest.importorskip("thorlabs_apt_protocol")
@@ -116,17 +116,18 @@ def test_a_move_that_never_ends_times_out_and_stops_the_motor():
 
 
 def test_requests_are_checked_before_they_reach_the_wire(fast_stage):
-    with pytest.raises(BridgeInputError, match=r"angle 361 deg is outside .* 0-360 deg"):
+    with pytest.raises(InputError, match=r"angle 361 deg is outside .* 0-360 deg"):
         fast_stage.set({"angle_deg": 361.0})
-    with pytest.raises(BridgeInputError, match="angle_deg"):
+    with pytest.raises(InputError, match="angle_deg"):
         fast_stage.set({"azimuth": 10.0})
     assert fast_stage.angle_deg() == 0.0
 
 
 def test_without_the_library_the_driver_names_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "thorlabs_apt_protocol", None)
-    with pytest.raises(DriverNotInstalled, match=r"pip install 'spectwin\[rotation-stage\]'"):
+    with pytest.raises(DriverNotInstalled, match="thorlabs-apt-protocol .*rotation-stage") as no:
         AptRotationStage("apt://").stage()
+    assert no.value.remedy is Remedy.install_rotation_stage
 
 
 def test_unknown_emulator_options_are_refused():

@@ -8,7 +8,7 @@ import serial
 from hwbridge.drivers.dmx_led_array import DmxLedArray
 from hwbridge.emulators.dmx_usb_pro_state import DmxUsbProState
 from hwbridge.emulators.pty_link import EmulatorPty
-from hwbridge.errors import BridgeInputError, DeviceTimeout
+from hwbridge.errors import DeviceTimeout, InputError
 
 FULL_SCALE_MA = 700.0
 
@@ -105,10 +105,10 @@ def test_out_of_range_requests_are_refused_before_the_wire():
         (lambda: leds.light(3, 0.0), r"expected a positive LED current"),
         (lambda: leds.set(np.ones(5, bool)), r"pattern of 198 LEDs, got shape \(5,\)"),
     ]:
-        with pytest.raises(BridgeInputError, match=message):
+        with pytest.raises(InputError, match=message):
             request()
     assert not state.output_currents_ma().any()
-    with pytest.raises(BridgeInputError, match="do not fit the 512 slots"):
+    with pytest.raises(InputError, match="do not fit the 512 slots"):
         DmxLedArray("dmxusbpro://", count=198, first_address=400)
     with pytest.raises(serial.SerialException, match="unknown"):
         DmxLedArray("dmxusbpro://?colour=red").stage()

@@ -12,7 +12,7 @@ from hwbridge.dome_plans import (
     dome_run,
     dome_start_times_s,
 )
-from hwbridge.errors import BridgeInputError
+from hwbridge.errors import InputError
 
 HDR = (0.05, 0.186, 0.666, 2.5)  # thesis 10.4
 CAMERAS = DomeCameraIds((rgb_camera_id(0), rgb_camera_id(6)), "spectral")
@@ -115,13 +115,13 @@ def test_cameras_expose_in_parallel_and_a_slot_ends_with_its_slowest_camera():
 
 
 def test_bad_plans_are_refused():
-    with pytest.raises(BridgeInputError, match="every band index"):
+    with pytest.raises(InputError, match="every band index"):
         DomeExposures(HDR, (450.0, 550.0), (1.0, 2.0), ((0,),), {})
-    with pytest.raises(BridgeInputError, match="distinct"):
+    with pytest.raises(InputError, match="distinct"):
         dome_run(CAMERAS, EXPOSURES, stage_positions=[0, 0], leds=[1])
-    with pytest.raises(BridgeInputError, match="distinct ids"):
+    with pytest.raises(InputError, match="distinct ids"):
         DomeCameraIds(("spectral",), "spectral")
-    with pytest.raises(BridgeInputError, match="no frame overhead"):
+    with pytest.raises(InputError, match="no frame overhead"):
         dome_duration_s(
             dome_run(CAMERAS, EXPOSURES, stage_positions=[0], leds=[1]),
             DomeTiming(1.0, 0.0, {"rgb00": 0.1}),

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from hwbridge.drivers import genicam_camera
-from hwbridge.errors import BridgeInputError, DeviceError
+from hwbridge.errors import DeviceError, InputError
 from hwbridge.protocols import Camera
 
 # The driver imports harvesters only when it stages a camera: skip here without the extra.
@@ -35,7 +35,7 @@ def test_wrong_serials_producers_and_exposures_are_reported(tmp_path):
         genicam_camera.GenICamCamera(
             genicam_camera.simulated_producer(), serial_number="999"
         ).stage()
-    with pytest.raises(BridgeInputError, match="does not exist"):
+    with pytest.raises(InputError, match="does not exist"):
         genicam_camera.GenICamCamera(tmp_path / "none.cti").stage()
     with pytest.raises(DeviceError, match="not staged"):
         genicam_camera.GenICamCamera(genicam_camera.simulated_producer()).snap()

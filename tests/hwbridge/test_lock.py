@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from hwbridge.errors import BridgeInputError, StoreBusy
+from hwbridge.errors import InputError, Remedy, StoreBusy
 from hwbridge.lock import LOCK_NAME, LockOwner, StoreLock, lock_owner, require_new_store
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -110,8 +110,9 @@ def test_a_new_store_is_reserved_beside_its_name_then_locked_inside(tmp_path):
     lock.release()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.capture.zarr"]
     assert list(store.iterdir()) == []
-    with pytest.raises(BridgeInputError, match="exists: continue it with --resume"):
+    with pytest.raises(InputError, match="exists: expected a new store") as refused:
         StoreLock.reserve(store)
+    assert refused.value.remedy is Remedy.resume_or_rename
 
 
 def test_a_killed_creator_leaves_a_reservation_that_the_next_creator_takes_over(tmp_path):
@@ -164,9 +165,9 @@ def test_a_held_lock_whose_recorded_process_has_ended_says_a_child_holds_it(tmp_
 def test_locking_a_file_or_a_missing_folder_is_refused(tmp_path):
     plain = tmp_path / "plain.txt"
     plain.write_text("not a store")
-    with pytest.raises(BridgeInputError, match="is a file"):
+    with pytest.raises(InputError, match="is a file"):
         StoreLock.acquire(plain)
-    with pytest.raises(BridgeInputError, match="does not exist"):
+    with pytest.raises(InputError, match="does not exist"):
         StoreLock.acquire(tmp_path / "nosuch.zarr")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["plain.txt"]
 

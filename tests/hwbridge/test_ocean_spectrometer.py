@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from hwbridge.drivers.ocean_spectrometer import OceanSpectrometer
-from hwbridge.errors import BridgeInputError, DeviceError
+from hwbridge.errors import DeviceError, InputError
 from hwbridge.protocols import Spectrometer
 
 # The driver imports seabreeze only when it stages a device: skip here without the extra.
@@ -18,7 +18,7 @@ def test_without_a_device_the_driver_says_so():
         monitor.trigger()
     with pytest.raises(DeviceError, match="no spectrum yet"):
         monitor.read()
-    with pytest.raises(BridgeInputError, match="integration_s"):
+    with pytest.raises(InputError, match="integration_s"):
         OceanSpectrometer(integration_s=0)
 
 

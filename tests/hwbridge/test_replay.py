@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import tifffile
 
-from hwbridge.errors import BridgeInputError
+from hwbridge.errors import InputError
 from hwbridge.replay import ingest, load_mapping
 from hwbridge.store import CaptureStore
 from recon.measured_data import data_path
@@ -47,13 +47,13 @@ def test_llanos2019_becomes_a_complete_capture_store(tmp_path):
 
 
 def test_bad_mappings_and_sources_are_refused(tmp_path):
-    with pytest.raises(BridgeInputError, match="llanos2019"):
+    with pytest.raises(InputError, match="llanos2019"):
         load_mapping("nope")
     bad = tmp_path / "bad.yaml"
     bad.write_text("camera: c\nfiles:\n  - pattern: 'x'\n    kind: selfie\n")
-    with pytest.raises(BridgeInputError, match="selfie"):
+    with pytest.raises(InputError, match="selfie"):
         load_mapping(bad)
     empty = tmp_path / "empty"
     empty.mkdir()
-    with pytest.raises(BridgeInputError, match="no file matches"):
+    with pytest.raises(InputError, match="no file matches"):
         ingest(empty, "llanos2019", tmp_path / "x.zarr")

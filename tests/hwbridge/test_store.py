@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import zarr
 
-from hwbridge.errors import BridgeInputError
+from hwbridge.errors import InputError
 from hwbridge.store import CaptureStore, FrameRecord
 
 PLAN = [
@@ -101,18 +101,18 @@ def test_redoing_a_step_overwrites_instead_of_duplicating(tmp_path):
 def test_bad_input_is_refused_and_nothing_is_overwritten(tmp_path):
     store = _new(tmp_path)
     store.write_frame(0, _frame((8, 6), 9), FrameRecord("dark", 0.1, 1.0))
-    with pytest.raises(BridgeInputError, match="exists"):
+    with pytest.raises(InputError, match="exists"):
         _new(tmp_path)
     assert CaptureStore.open(tmp_path / "run.capture.zarr").frames("k4")[0].max() == 9
-    with pytest.raises(BridgeInputError, match="uint16"):
+    with pytest.raises(InputError, match="uint16"):
         store.write_frame(0, np.zeros((8, 6)), FrameRecord("dark", 0.1, 1.0))
-    with pytest.raises(BridgeInputError, match="step"):
+    with pytest.raises(InputError, match="step"):
         store.mark_done(3)
-    with pytest.raises(BridgeInputError, match="kind"):
+    with pytest.raises(InputError, match="kind"):
         FrameRecord("selfie", 0.1, 1.0)
-    with pytest.raises(BridgeInputError, match="exposure_s"):
+    with pytest.raises(InputError, match="exposure_s"):
         FrameRecord("dark", -1.0, 1.0)
-    with pytest.raises(BridgeInputError, match="not among"):
+    with pytest.raises(InputError, match="not among"):
         CaptureStore.create(
             tmp_path / "other.zarr",
             rig={},
@@ -121,7 +121,7 @@ def test_bad_input_is_refused_and_nothing_is_overwritten(tmp_path):
             plan=[{"camera": "x"}],
             cameras=CAMERAS,
         )
-    with pytest.raises(BridgeInputError, match="backend"):
+    with pytest.raises(InputError, match="backend"):
         CaptureStore.create(
             tmp_path / "b.zarr", rig={}, backend="dream", seed=0, plan=PLAN, cameras=CAMERAS
         )

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import zarr
 
-from hwbridge.errors import StoreDamagedError
+from hwbridge.errors import DamagedDataError
 from hwbridge.integrity import has_checksums
 from hwbridge.session import run_session
 from hwbridge.store import CaptureStore, FrameRecord
@@ -94,7 +94,7 @@ def test_a_damaged_frame_chunk_is_named_by_camera_step_and_key(store, damage):
     assert problem.problem == ("missing" if damage.kind == "deleted" else "corrupt")
     assert report.damage().startswith("camera k4 step 3 (frame 3): frames/k4/c/3/0/0 is ")
     # Zarr alone would return zeros for the deleted chunk; reading through the store refuses.
-    with pytest.raises(StoreDamagedError, match=r"camera k4 step 3 \(frame 3\): frames/k4/c/3/0/0"):
+    with pytest.raises(DamagedDataError, match=r"camera k4 step 3 \(frame 3\): frames/k4/c/3/0/0"):
         capture.read_frames("k4", [2, 3])
     np.testing.assert_array_equal(
         capture.read_frames("k4", [2])[0], capture.frames("k4")[2]
@@ -115,7 +115,7 @@ def test_a_damaged_index_chunk_of_done_steps_is_found(store, damage):
     if damage.kind == "deleted":  # Zarr reads the fill value: only the check sees it
         assert np.isnan(CaptureStore.open(store).index("k4", ["exposure_s"])["exposure_s"]).all()
     else:
-        with pytest.raises(StoreDamagedError, match="index/k4/exposure_s cannot be read"):
+        with pytest.raises(DamagedDataError, match="index/k4/exposure_s cannot be read"):
             CaptureStore.open(store).index("k4")
 
 
@@ -159,7 +159,7 @@ def test_resuming_a_real_or_replayed_capture_with_damaged_frames_is_refused(
     damage(path / "frames/k4/c/2/0/0")
     damage(path / "frames/k4/c/3/0/0")
     camera = StepCamera()
-    with pytest.raises(StoreDamagedError) as refused:
+    with pytest.raises(DamagedDataError) as refused:
         run_session(
             path,
             PLAN,
@@ -208,7 +208,7 @@ def test_a_corrupt_progress_chunk_only_makes_its_steps_pending(tmp_path, backend
         (f"camera k4 step {lost[0]} (frame {lost[0]}) (progress flag)", "corrupt")
     ]
     with pytest.raises(
-        StoreDamagedError, match=rf"progress/c/{chunk} is corrupt \(checksum mismatch\)"
+        DamagedDataError, match=rf"progress/c/{chunk} is corrupt \(checksum mismatch\)"
     ):
         capture.pending_steps()
     assert [p.key for p in capture.prepare_resume()] == [f"progress/c/{chunk}"]  # any backend
@@ -246,7 +246,7 @@ def test_damaged_metadata_is_one_line_naming_the_file(store, node, what, damage)
         file.unlink()
     else:
         file.write_text(file.read_text()[:40])
-    with pytest.raises(StoreDamagedError) as refused:
+    with pytest.raises(DamagedDataError) as refused:
         CaptureStore.open(store)
     message = str(refused.value)
     expected = "is missing" if damage == "deleted" else "is unreadable"

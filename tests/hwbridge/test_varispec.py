@@ -7,7 +7,7 @@ import serial
 
 from hwbridge.drivers.varispec import VariSpec
 from hwbridge.emulators.varispec_state import VariSpecState
-from hwbridge.errors import BridgeInputError, DeviceError
+from hwbridge.errors import DeviceError, InputError
 from hwbridge.protocols import TunableFilter
 
 
@@ -54,7 +54,7 @@ def test_set_waits_for_the_crystals_and_query_reads_back(lctf):
 
 
 def test_out_of_range_is_refused_before_it_reaches_the_wire(lctf):
-    with pytest.raises(BridgeInputError, match="outside the filter's range 400.0-720.0"):
+    with pytest.raises(InputError, match="outside the filter's range 400.0-720.0"):
         lctf.set(750.0)
     assert lctf.status()["error"] is False
 

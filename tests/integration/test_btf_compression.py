@@ -25,7 +25,7 @@ from recon.btf.compression import (
     save_compressed,
 )
 from recon.btf.store import COMPRESSED_GROUP, BTFStore, write_btf
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import DEFAULT_GRID, WavelengthGrid
 
 K = DEFAULT_GRID.size
@@ -183,7 +183,7 @@ def test_compressed_btf_round_trips_through_the_store(tmp_path, rng):
     save_compressed(path, compress_btf(reflectance, DEFAULT_GRID, layout="joint", n_spectral=2))
     assert load_compressed(path).layout == "joint"
     store.write_pair(0, reflectance[0])
-    with pytest.raises(SpectwinInputError, match="no compressed form"):
+    with pytest.raises(InputError, match="no compressed form"):
         load_compressed(path)
 
 
@@ -198,34 +198,34 @@ def test_half_written_compressed_form_is_refused(tmp_path, rng):
 
     zarr.open_group(str(path), mode="r+")[COMPRESSED_GROUP].attrs["complete"] = False
     assert not BTFStore.open(path).has_compressed
-    with pytest.raises(SpectwinInputError, match="not completely written"):
+    with pytest.raises(InputError, match="not completely written"):
         load_compressed(path)
 
 
 def test_bad_input_is_rejected(tmp_path, rng):
     reflectance, light_dirs, view_dirs = _lobe_btf(rng, n_pairs=6, texels=4)
-    with pytest.raises(SpectwinInputError, match="last axis has 33 bands, the grid 3 samples"):
+    with pytest.raises(InputError, match="last axis has 33 bands, the grid 3 samples"):
         compress_btf(reflectance, WavelengthGrid([400.0, 500.0, 600.0]))
-    with pytest.raises(SpectwinInputError, match=r"expected \(n_pairs, H, W, K\)"):
+    with pytest.raises(InputError, match=r"expected \(n_pairs, H, W, K\)"):
         compress_btf(reflectance[0], DEFAULT_GRID)
     broken = reflectance.copy()
     broken[1, 1, 1, 1] = np.nan
-    with pytest.raises(SpectwinInputError, match="finite values"):
+    with pytest.raises(InputError, match="finite values"):
         compress_btf(broken, DEFAULT_GRID)
-    with pytest.raises(SpectwinInputError, match="n_spectral: expected a positive integer"):
+    with pytest.raises(InputError, match="n_spectral: expected a positive integer"):
         compress_btf(reflectance, DEFAULT_GRID, n_spectral=0)
-    with pytest.raises(SpectwinInputError, match="layout: expected one of"):
+    with pytest.raises(InputError, match="layout: expected one of"):
         compress_btf(reflectance, DEFAULT_GRID, layout="per_texel")
-    with pytest.raises(SpectwinInputError, match="svd: expected one of"):
+    with pytest.raises(InputError, match="svd: expected one of"):
         compress_btf(reflectance, DEFAULT_GRID, svd="qr")
     compressed = compress_btf(reflectance, DEFAULT_GRID, n_brightness=2, n_spectral=2)
-    with pytest.raises(SpectwinInputError, match=r"pair: expected an index in 0..5, got 6"):
+    with pytest.raises(InputError, match=r"pair: expected an index in 0..5, got 6"):
         compressed.decode_pair(6)
-    with pytest.raises(SpectwinInputError, match=r"x: expected an index in 0..3, got 4"):
+    with pytest.raises(InputError, match=r"x: expected an index in 0..3, got 4"):
         compressed.decode_texel(0, 4)
-    with pytest.raises(SpectwinInputError, match=r"reference: shape \(5, 4, 4, 33\) differs"):
+    with pytest.raises(InputError, match=r"reference: shape \(5, 4, 4, 33\) differs"):
         compression_report(compressed, reflectance[:5])
-    with pytest.raises(SpectwinInputError, match=r"spectral_scores: expected shape"):
+    with pytest.raises(InputError, match=r"spectral_scores: expected shape"):
         CompressedBTF(
             **{
                 **{name: getattr(compressed, name) for name in compressed.__dataclass_fields__},
@@ -240,7 +240,7 @@ def test_bad_input_is_rejected(tmp_path, rng):
         view_dirs=view_dirs[:5],
         material="m",
     )
-    with pytest.raises(SpectwinInputError, match="does not match the store's"):
+    with pytest.raises(InputError, match="does not match the store's"):
         save_compressed(other, compressed)
 
 

@@ -14,7 +14,7 @@ from recon.camera_char import (
     profile_matrix,
     reference_response,
 )
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.measured_data import read_spectra_csv
 from recon.metrics import peak_relative_rmse
 from recon.spectra import DEFAULT_GRID, WavelengthGrid, from_colour, resample
@@ -264,5 +264,5 @@ def test_prediction_error_is_zero_for_the_true_response():
     ],
 )
 def test_bad_input_is_rejected_clearly(call, message):
-    with pytest.raises(SpectwinInputError, match=message):
+    with pytest.raises(InputError, match=message):
         call()

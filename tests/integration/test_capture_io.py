@@ -6,7 +6,7 @@ import tifffile
 
 from hwbridge.replay import ingest
 from recon.calibration.capture_io import select_frames
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.measured_data import data_path
 from twin.gonio.sim_session import run_demo_session
 from twin.sensor.model import Sensor
@@ -51,5 +51,5 @@ def test_band_selection_and_clear_errors(stores):
     store, camera, _ = stores["replay"]
     at_550 = select_frames(store, camera, kind="chart", band_nm=550)
     assert len(at_550.frames) == 7 and np.all(at_550.band_nm == 550)
-    with pytest.raises(SpectwinInputError, match="no 'white' frames"):
+    with pytest.raises(InputError, match="no 'white' frames"):
         select_frames(store, camera, kind="white")

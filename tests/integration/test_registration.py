@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.registration.border import (
     MarksNotFoundError,
     detect_corners,
@@ -240,7 +240,7 @@ def test_manual_corner_file_is_used_for_frames_detection_cannot_handle(frames, t
     ],
 )
 def test_malformed_manual_corners_are_rejected_with_the_field_named(document, message):
-    with pytest.raises(SpectwinInputError, match=message):
+    with pytest.raises(InputError, match=message):
         parse_manual_corners(document)
 
 
@@ -269,11 +269,11 @@ def test_bad_input_is_rejected_with_the_argument_named(tmp_path):
         ),
     ]
     for call, message in cases:
-        with pytest.raises(SpectwinInputError, match=message):
+        with pytest.raises(InputError, match=message):
             call()
     broken = tmp_path / "broken.json"
     broken.write_text("{not json")
-    with pytest.raises(SpectwinInputError, match="not valid JSON"):
+    with pytest.raises(InputError, match="not valid JSON"):
         read_manual_corners(broken)
 
 

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hwbridge.errors import BridgeInputError, SessionInterrupted, StoreBusy
+from hwbridge.errors import InputError, SessionInterrupted, StoreBusy
 from hwbridge.lock import StoreLock, lock_owner
 from hwbridge.plans import dark_series, estimate_duration_s, gonio_sample_run
 from hwbridge.session import run_session
@@ -253,9 +253,9 @@ def test_plans_and_dry_run_duration():
     run = gonio_sample_run("k4", [0, 1], [400.0, 410.0], [1.0, 0.5])
     assert [step["band_nm"] for step in run] == [400.0, 410.0, 400.0, 410.0]
     assert estimate_duration_s(run) == pytest.approx(3.0 + 4 * 0.13 + 2 * 6.0)
-    with pytest.raises(BridgeInputError, match="exposures"):
+    with pytest.raises(InputError, match="exposures"):
         gonio_sample_run("k4", [0], [400.0, 410.0], [1.0])
-    with pytest.raises(BridgeInputError, match="exposure_s"):
+    with pytest.raises(InputError, match="exposure_s"):
         dark_series("k4", [-1.0])
 
 
@@ -263,12 +263,12 @@ def test_bad_sessions_are_refused_and_overwrite_nothing(tmp_path):
     path = tmp_path / "done.capture.zarr"
     run_demo_session(path, SEED)
     before = CaptureStore.open(path).frames("k4")[:]
-    with pytest.raises(BridgeInputError, match="exists"):
+    with pytest.raises(InputError, match="exists"):
         run_demo_session(path, SEED)
-    with pytest.raises(BridgeInputError, match="same plan and seed"):
+    with pytest.raises(InputError, match="same plan and seed"):
         run_demo_session(path, SEED + 1, resume=True)
     np.testing.assert_array_equal(CaptureStore.open(path).frames("k4")[:], before)
-    with pytest.raises(BridgeInputError, match="cameras"):
+    with pytest.raises(InputError, match="cameras"):
         run_session(tmp_path / "x.zarr", demo_plan(), cameras={}, rig={}, backend="sim", seed=0)
 
 

@@ -8,7 +8,7 @@ import pytest
 from recon.camera_char import estimate_response
 from recon.camera_jiang2013 import jiang2013_response
 from recon.camera_prior import learn_response_prior
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.measured_data import camera_names, read_camera_sensitivities, read_spectra_csv
 from recon.metrics import peak_relative_rmse
 from recon.spectra import DEFAULT_GRID, WavelengthGrid, from_colour, resample
@@ -54,7 +54,7 @@ def test_the_51_measured_cameras_read_by_name():
 
 
 def test_an_unknown_camera_is_named_with_the_closest_ones():
-    with pytest.raises(SpectwinInputError, match="Nikon D850"):
+    with pytest.raises(InputError, match="Nikon D850"):
         read_camera_sensitivities("Nikon D85")
 
 
@@ -160,5 +160,5 @@ def test_the_prior_helps_where_a_small_chart_says_little():
     ],
 )
 def test_bad_input_is_rejected_clearly(call, message):
-    with pytest.raises(SpectwinInputError, match=message):
+    with pytest.raises(InputError, match=message):
         call()

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from recon.chart_patches import dark_statistics, patch_masks, patch_statistics
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 
 def test_patch_statistics_per_channel_with_clipping():
@@ -31,7 +31,7 @@ def test_masks_are_eroded_and_empty_patches_refused():
     labels = np.zeros((12, 12), np.uint8)
     labels[2:10, 2:10] = 1
     labels[0, 0] = 2
-    with pytest.raises(SpectwinInputError, match=r"patches \[2\] have no pixels"):
+    with pytest.raises(InputError, match=r"patches \[2\] have no pixels"):
         patch_masks(labels, 2, erode_px=1)
     masks = patch_masks(labels[:, :], 1, erode_px=2)
     assert masks[0].sum() == 4 * 4
@@ -49,7 +49,7 @@ def test_dark_temporal_spread_is_the_noise_of_the_pair():
 
 def test_a_frame_of_another_shape_is_refused():
     labels = np.ones((4, 4), np.uint8)
-    with pytest.raises(SpectwinInputError, match="expected shape"):
+    with pytest.raises(InputError, match="expected shape"):
         patch_statistics(
             np.zeros((4, 5)), patch_masks(labels, 1, erode_px=0), np.zeros((4, 4), int), top_dn=255
         )

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.metrics import peak_relative_rmse, relative_error
 
 
@@ -18,5 +18,5 @@ def test_peak_relative_rmse_ignores_a_global_scale_when_asked():
     truth = np.abs(np.sin(np.linspace(0, 3, 33)))[:, None] * np.array([1.0, 0.5, 0.2])
     assert peak_relative_rmse(3.0 * truth, truth).max() < 1e-12
     assert peak_relative_rmse(3.0 * truth, truth, fit_scale=False).max() > 1
-    with pytest.raises(SpectwinInputError, match="shape"):
+    with pytest.raises(InputError, match="shape"):
         peak_relative_rmse(truth, truth[:, :2])

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy import linalg
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.metrics import THESIS_ILLUMINANTS, delta_e94, rmse, spectral_angle
 from recon.spectra import DEFAULT_GRID
 
@@ -109,20 +109,20 @@ def test_delta_e_keeps_the_leading_shape(rng):
 
 def test_delta_e_rejects_bad_input(checker_pairs):
     estimate, truth = checker_pairs
-    with pytest.raises(SpectwinInputError, match="shape"):
+    with pytest.raises(InputError, match="shape"):
         delta_e94(estimate[:, :-1], truth, DEFAULT_GRID)
-    with pytest.raises(SpectwinInputError, match="wavelengths_nm: expected 32 wavelengths"):
+    with pytest.raises(InputError, match="wavelengths_nm: expected 32 wavelengths"):
         delta_e94(estimate[:, :-1], truth[:, :-1], DEFAULT_GRID)
-    with pytest.raises(SpectwinInputError, match="regular grid"):
+    with pytest.raises(InputError, match="regular grid"):
         irregular = np.concatenate([[395.0], DEFAULT_GRID.wavelengths_nm[1:]])
         delta_e94(estimate, truth, irregular)
-    with pytest.raises(SpectwinInputError, match="illuminants"):
+    with pytest.raises(InputError, match="illuminants"):
         delta_e94(estimate, truth, DEFAULT_GRID, ("D65", "no such lamp"))
-    with pytest.raises(SpectwinInputError, match="illuminants"):
+    with pytest.raises(InputError, match="illuminants"):
         delta_e94(estimate, truth, DEFAULT_GRID, ())
     bad = estimate.copy()
     bad[0, 3] = np.nan
-    with pytest.raises(SpectwinInputError, match="estimate contains NaN"):
+    with pytest.raises(InputError, match="estimate contains NaN"):
         delta_e94(bad, truth, DEFAULT_GRID)
 
 
@@ -145,9 +145,9 @@ def test_spectral_angle_of_hand_computed_cases():
 
 def test_rmse_and_angle_reject_bad_input():
     for function in (rmse, spectral_angle):
-        with pytest.raises(SpectwinInputError, match="differ in shape"):
+        with pytest.raises(InputError, match="differ in shape"):
             function(np.ones((2, 3)), np.ones((3, 2)))
-        with pytest.raises(SpectwinInputError, match="truth contains NaN"):
+        with pytest.raises(InputError, match="truth contains NaN"):
             function(np.ones(3), np.array([1.0, np.nan, 1.0]))
-        with pytest.raises(SpectwinInputError, match=r"\(\.\.\., K\)"):
+        with pytest.raises(InputError, match=r"\(\.\.\., K\)"):
             function(np.float64(1.0), np.float64(1.0))

@@ -6,7 +6,7 @@ import colour
 import numpy as np
 import pytest
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.rgb_upsampling import read_srgb_image, srgb_response, upsample_srgb
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid, from_colour, resample
 
@@ -47,16 +47,16 @@ def test_jakob2019_spectra_reproduce_the_image_colours_and_colours_optimiser():
 def test_spectralization_needs_its_spots_inside_the_image_and_one_spectrum_each():
     linear = np.full((4, 4, 3), 0.5)
     spectra = SampledSpectra(DEFAULT_GRID, np.full((2, DEFAULT_GRID.size), 0.5))
-    with pytest.raises(SpectwinInputError, match="outside the 4 x 4 image"):
+    with pytest.raises(InputError, match="outside the 4 x 4 image"):
         upsample_srgb(
             linear, "spectralization", known_pixels=[[0, 0], [4, 1]], known_spectra=spectra
         )
-    with pytest.raises(SpectwinInputError, match="2 spectra for 1 known pixels"):
+    with pytest.raises(InputError, match="2 spectra for 1 known pixels"):
         upsample_srgb(linear, "spectralization", known_pixels=[[0, 0]], known_spectra=spectra)
     short = SampledSpectra(WavelengthGrid.regular(450.0, 720.0, 10.0), np.full((2, 28), 0.5))
-    with pytest.raises(SpectwinInputError, match="cover 450-720 nm; expected at least 400-700"):
+    with pytest.raises(InputError, match="cover 450-720 nm; expected at least 400-700"):
         upsample_srgb(linear, "spectralization", known_pixels=[[0, 0], [1, 1]], known_spectra=short)
-    with pytest.raises(SpectwinInputError, match="method: expected one of"):
+    with pytest.raises(InputError, match="method: expected one of"):
         upsample_srgb(linear, "smits")
 
 
@@ -65,8 +65,8 @@ def test_read_srgb_image_refuses_what_is_not_an_rgb_image(tmp_path):
     from skimage import io
 
     io.imsave(path, np.zeros((4, 4), np.uint8), check_contrast=False)
-    with pytest.raises(SpectwinInputError, match="expected an 8- or 16-bit RGB image"):
+    with pytest.raises(InputError, match="expected an 8- or 16-bit RGB image"):
         read_srgb_image(path)
     (tmp_path / "broken.png").write_bytes(b"not a png")
-    with pytest.raises(SpectwinInputError, match="not a readable image"):
+    with pytest.raises(InputError, match="not a readable image"):
         read_srgb_image(tmp_path / "broken.png")

@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import (
     DEFAULT_GRID,
     SampledSpectra,
@@ -56,51 +56,51 @@ def test_quadrature_weights_integrate_polynomials_of_degree_one_exactly():
     ],
 )
 def test_malformed_grids_are_rejected_with_the_reason(wavelengths, message):
-    with pytest.raises(SpectwinInputError, match=message):
+    with pytest.raises(InputError, match=message):
         WavelengthGrid(np.array(wavelengths))
 
 
 def test_regular_grid_needs_a_whole_number_of_steps():
-    with pytest.raises(SpectwinInputError, match="integer"):
+    with pytest.raises(InputError, match="integer"):
         WavelengthGrid.regular(400, 720, 7)
 
 
 def test_spectra_must_match_their_grid_and_be_finite():
-    with pytest.raises(SpectwinInputError, match="last axis"):
+    with pytest.raises(InputError, match="last axis"):
         SampledSpectra(DEFAULT_GRID, np.ones(32))
-    with pytest.raises(SpectwinInputError, match="NaN"):
+    with pytest.raises(InputError, match="NaN"):
         SampledSpectra(DEFAULT_GRID, np.full(33, np.nan))
-    with pytest.raises(SpectwinInputError, match="one name per row"):
+    with pytest.raises(InputError, match="one name per row"):
         SampledSpectra(DEFAULT_GRID, np.ones((2, 33)), ("a",))
 
 
 def test_negative_spectra_are_rejected_where_not_allowed():
     values = np.ones(33)
     values[5] = -0.1
-    with pytest.raises(SpectwinInputError, match="non-negative.*450 nm"):
+    with pytest.raises(InputError, match="non-negative.*450 nm"):
         SampledSpectra(DEFAULT_GRID, values).require_non_negative("lamp power")
 
 
 def test_mismatched_grids_are_never_combined():
     fine = SampledSpectra(FINE, np.ones(FINE.size))
     coarse = SampledSpectra(DEFAULT_GRID, np.ones((3, 33)))
-    with pytest.raises(SpectwinInputError, match="grids differ"):
+    with pytest.raises(InputError, match="grids differ"):
         band_integrals(fine, coarse)
-    with pytest.raises(SpectwinInputError, match="grids differ"):
+    with pytest.raises(InputError, match="grids differ"):
         fine * coarse
 
 
 def test_resampling_outside_the_source_range_follows_the_policy():
     source = SampledSpectra(DEFAULT_GRID, np.linspace(1.0, 2.0, 33))
     wide = WavelengthGrid.regular(380, 740, 10)
-    with pytest.raises(SpectwinInputError, match="leaves the source range"):
+    with pytest.raises(InputError, match="leaves the source range"):
         resample(source, wide)
     zero = resample(source, wide, out_of_range="zero").values
     clamp = resample(source, wide, out_of_range="clamp").values
     assert zero[0] == 0 and zero[-1] == 0
     assert clamp[0] == 1.0 and clamp[-1] == 2.0
     np.testing.assert_allclose(zero[2:-2], source.values)
-    with pytest.raises(SpectwinInputError, match="method"):
+    with pytest.raises(InputError, match="method"):
         resample(source, wide, method="nearest")
 
 

@@ -5,7 +5,7 @@ import numpy as np
 import OpenEXR
 import pytest
 
-from recon.errors import SpectwinDataError, SpectwinInputError
+from recon.errors import InputError, MissingDataError
 from recon.spectra import DEFAULT_GRID, WavelengthGrid
 from recon.spectral_exr import channel_name, read_spectral_exr, write_spectral_exr
 
@@ -53,15 +53,15 @@ def test_colour_reads_our_files_as_the_same_spectral_image(tmp_path, rng):
 
 def test_bad_cubes_are_rejected_and_nothing_is_written(tmp_path, rng):
     target = tmp_path / "bad.exr"
-    with pytest.raises(SpectwinInputError, match=r"\(H, W, 33\)"):
+    with pytest.raises(InputError, match=r"\(H, W, 33\)"):
         write_spectral_exr(target, rng.random((4, 5, 32)).astype(np.float32), DEFAULT_GRID)
-    with pytest.raises(SpectwinInputError, match="float32 or float16"):
+    with pytest.raises(InputError, match="float32 or float16"):
         write_spectral_exr(target, rng.random((4, 5, 33)), DEFAULT_GRID)
-    with pytest.raises(SpectwinInputError, match="kind"):
+    with pytest.raises(InputError, match="kind"):
         write_spectral_exr(
             target, rng.random((4, 5, 33)).astype(np.float32), DEFAULT_GRID, kind="x"
         )
-    with pytest.raises(SpectwinInputError, match="does not exist"):
+    with pytest.raises(InputError, match="does not exist"):
         write_spectral_exr(
             tmp_path / "missing" / "a.exr", np.zeros((1, 1, 33), np.float32), DEFAULT_GRID
         )
@@ -75,7 +75,7 @@ def test_reading_files_without_spectral_channels_fails_clearly(tmp_path):
         {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}, channels
     ) as exr:
         exr.write(str(rgb))
-    with pytest.raises(SpectwinInputError, match="S0.550,0nm"):
+    with pytest.raises(InputError, match="S0.550,0nm"):
         read_spectral_exr(rgb)
-    with pytest.raises(SpectwinDataError):
+    with pytest.raises(MissingDataError):
         read_spectral_exr(tmp_path / "nothing.exr")

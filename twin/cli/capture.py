@@ -23,6 +23,8 @@ from typing import Annotated, Any, NoReturn
 import typer
 from typer.core import TyperGroup
 
+from hwbridge.errors import Remedy
+
 from twin.cli.errors import (
     INTERRUPT_REPORT,
     INTERRUPTED,
@@ -41,9 +43,23 @@ the retries about once in 10^4 calls (the demo session makes about 250); at 0.2 
 stop."""
 
 
+CAPTURE_STORE = "spectwin.capture_store"
+"""Key in ``ctx.meta`` of the store a capture command writes, for the advice of its errors."""
+
+
 class CaptureGroup(SpectwinGroup):
     """``spectwin capture``: a program first; a store path in its place (the form without
-    programs) gets one line saying so."""
+    programs) gets one line saying so. Errors that a resume mends advise ``spectwin capture
+    resume STORE``."""
+
+    def advice(self, ctx: Any, remedy: Remedy | None) -> str | None:
+        store = ctx.meta.get(CAPTURE_STORE)
+        if store is not None and remedy in (Remedy.resume, Remedy.resume_or_rename):
+            again = f"spectwin capture resume {shlex.quote(str(store))}"
+            if remedy is Remedy.resume:
+                return f"continue with {again}"
+            return f"continue it with {again} or choose another name"
+        return super().advice(ctx, remedy)
 
     def resolve_command(self, ctx: Any, args: list[str]) -> Any:
         if args and args[0] not in self.commands and not args[0].startswith("-"):
@@ -194,6 +210,7 @@ def _capture(
     from twin.kinds.registry import ProgramSettings, rig_kind
 
     ctx.meta[INTERRUPT_REPORT] = lambda: _interrupted(store)  # a Ctrl-C as the command returns
+    ctx.meta[CAPTURE_STORE] = store
     program = rig_kind(rig).program(program_name)
     if dry_run:
         for name in _CAPTURE_ONLY:
@@ -504,6 +521,7 @@ def resume(
     from hwbridge.store import CaptureStore
     from twin.kinds.registry import capture_program
 
+    ctx.meta[CAPTURE_STORE] = store
     require_no_writer(store)  # a store another writer holds is refused before it is read
     if not store.exists():
         if lock_owner(store) is None:

@@ -2,17 +2,21 @@
 
 A user error (a bad option, an unknown name, a missing or wrong input file, a damaged store, a
 run that failed) never shows a Python traceback: the command prints one line
-``error: <what was wrong and what was expected>`` to stderr and exits with
+``error: <what was wrong and what was expected>; <what to do>`` to stderr and exits with
 
 - 2 for usage errors: bad options, unknown names, missing or wrong input files
-  (:class:`recon.errors.SpectwinInputError`, :class:`hwbridge.errors.BridgeInputError`, the
-  option parser's own errors);
-- 1 for failed runs: data that turned out damaged (:class:`recon.errors.SpectwinDataError`,
-  :class:`hwbridge.errors.StoreDamagedError`), devices that kept failing
-  (:class:`hwbridge.errors.DeviceError`), a store that another writer holds
-  (:class:`hwbridge.errors.StoreBusy`), a check that failed;
-- 130 for a run stopped by Ctrl-C (``KeyboardInterrupt``) or, in a capture, SIGTERM: one line
-  ``interrupted ...`` (``spectwin capture`` says how far it got and how to continue).
+  (:class:`~hwbridge.errors.InputError`, the option parser's own errors);
+- 1 for failed runs: data that turned out damaged or missing
+  (:class:`~hwbridge.errors.DataError`), devices that kept failing
+  (:class:`~hwbridge.errors.DeviceError`), a store that another writer holds
+  (:class:`~hwbridge.errors.StoreBusy`), a check that failed;
+- 130 for a run stopped by Ctrl-C (``KeyboardInterrupt``) or, in a capture, SIGTERM
+  (:class:`~hwbridge.errors.SessionInterrupted`): one line ``interrupted ...``
+  (``spectwin capture`` says how far it got and how to continue).
+
+The libraries' messages say what is wrong; what to do is the exception's
+:class:`~hwbridge.errors.Remedy`, which :data:`ADVICE` words as commands and options of
+``spectwin`` (advice to continue with ``--resume`` only where the command has that option).
 
 :class:`SpectwinGroup` applies this to every command registered on the app; anything else is a
 bug and keeps its traceback.
@@ -28,15 +32,17 @@ import typer
 from typer.core import TyperGroup
 
 from hwbridge.errors import (
-    BridgeInputError,
+    DataError,
     DeviceError,
+    InputError,
+    Remedy,
     SessionInterrupted,
+    SpectwinError,
     StoreBusy,
-    StoreDamagedError,
 )
-from recon.errors import SpectwinDataError, SpectwinInputError
 
 __all__ = [
+    "ADVICE",
     "INTERRUPTED",
     "INTERRUPT_REPORT",
     "RUN_FAILED",
@@ -57,6 +63,32 @@ INTERRUPT_REPORT = "spectwin.interrupt_report"
 """Key in a command's ``ctx.meta`` of a callable that says how far the command got and exits
 with :data:`INTERRUPTED`: a Ctrl-C that reaches the command group, e.g. one arriving as the
 command returns, ends with that line rather than a bare "interrupted"."""
+
+
+ADVICE: dict[Remedy, str] = {
+    Remedy.resume: "continue with --resume",
+    Remedy.resume_or_rename: "continue it with --resume or choose another name",
+    Remedy.finish_processing: "finish it with spectwin process --resume",
+    Remedy.reprocess_pairs: "process the capture again with spectwin process --resume",
+    Remedy.process: "spectwin process makes one",
+    Remedy.export_btf: "spectwin btf export writes one",
+    Remedy.calibrate: "write it with spectwin calibrate",
+    Remedy.calibrate_texels: "calibrate with the run's --texels",
+    Remedy.calibrate_leds: "calibrate with the run's --leds",
+    Remedy.capture_gonio_calibration: "spectwin capture gonio-calibration makes one",
+    Remedy.capture_gonio_run: "spectwin capture gonio-run makes one",
+    Remedy.capture_dome_calibration: "spectwin capture dome-calibration makes one",
+    Remedy.capture_dome_run: "spectwin capture dome-run makes one",
+    Remedy.reinstall: "reinstall spectwin",
+    Remedy.install_rotation_stage: "pip install 'spectwin[rotation-stage]'",
+}
+"""The command line's words for each :class:`~hwbridge.errors.Remedy`."""
+
+_WITHOUT_RESUME: dict[Remedy, str | None] = {
+    Remedy.resume: None,
+    Remedy.resume_or_rename: "choose another name",
+}
+"""The advice of a command without ``--resume`` (e.g. ``compress``, ``demo``)."""
 
 
 def one_line(message: object) -> str:
@@ -97,8 +129,12 @@ def require_output_file(path: Path, option: str = "--out") -> None:
     _require_folder_above(path, option)
 
 
-_USAGE_ERRORS = (SpectwinInputError, BridgeInputError)
-_RUN_ERRORS = (SpectwinDataError, StoreDamagedError, DeviceError, StoreBusy)
+_RUN_ERRORS = (DataError, DeviceError, StoreBusy)
+
+
+def _advised(message: object, advice: str | None) -> str:
+    """``message`` followed by ``advice``, if any."""
+    return f"{message}; {advice}" if advice else str(message)
 
 
 def _usage_error(error: typer.TyperException) -> NoReturn:
@@ -149,16 +185,14 @@ class SpectwinGroup(TyperGroup):
             if _shows_help(error):  # a subgroup (``spectwin store``) without arguments
                 raise
             _usage_error(error)
-        except _USAGE_ERRORS as error:
-            fail(error, USAGE)
+        except InputError as error:
+            fail(_advised(error, self.advice(ctx, error.remedy)), USAGE)
         except _RUN_ERRORS as error:
-            if isinstance(error, DeviceError):
-                fail(f"a device kept failing ({error}); continue with --resume", RUN_FAILED)
-            fail(error, RUN_FAILED)
+            shown = f"a device kept failing ({error})" if isinstance(error, DeviceError) else error
+            fail(_advised(shown, self.advice(ctx, error.remedy)), RUN_FAILED)
         except SessionInterrupted as stop:  # a capture inside another command (the demo)
-            typer.echo(
-                f"interrupted after {stop.done} of {stop.total} frames of {stop.store}", err=True
-            )
+            line = f"interrupted after {stop.done} of {stop.total} frames of {stop.store}"
+            typer.echo(_advised(line, self.advice(ctx, stop.remedy)), err=True)
             raise typer.Exit(INTERRUPTED) from None
         except KeyboardInterrupt:
             report = ctx.meta.get(INTERRUPT_REPORT)
@@ -166,3 +200,13 @@ class SpectwinGroup(TyperGroup):
                 report()
             typer.echo("interrupted", err=True)
             raise typer.Exit(INTERRUPTED) from None
+
+    def advice(self, ctx: Any, remedy: Remedy | None) -> str | None:
+        """The command line's words for ``remedy`` after the command that ran: the advice to
+        resume only where that command has ``--resume``."""
+        if remedy is None:
+            return None
+        command = self.get_command(ctx, ctx.invoked_subcommand or "")
+        if command is not None and any("--resume" in p.opts for p in command.params):
+            return ADVICE[remedy]
+        return _WITHOUT_RESUME.get(remedy, ADVICE[remedy])

@@ -68,14 +68,14 @@ def _kind(path: Path) -> str:
 
 def _source_provenance(source: str | None) -> dict[str, Any]:
     """Seed and program of the capture a BTF was processed from (when it can be read)."""
-    from hwbridge.errors import BridgeInputError, StoreDamagedError
+    from hwbridge.errors import DamagedDataError, InputError
     from hwbridge.store import CaptureStore
 
     if not source:
         return {"seed": None, "program": None}
     try:
         attrs = CaptureStore.open(source).attrs
-    except (BridgeInputError, StoreDamagedError):
+    except (InputError, DamagedDataError):
         return {"seed": None, "program": "(source capture unreadable)"}
     rig = attrs.get("rig") or {}
     return {"seed": attrs.get("seed"), "program": rig.get("program")}

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import colour
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.measured_data import read_spectra_csv
 from recon.spectra import (
     OutOfRangePolicy,
@@ -51,11 +51,9 @@ class CCDQuantumEfficiency:
 
     def __post_init__(self) -> None:
         if not 0 < self.peak_qe <= 1:
-            raise SpectwinInputError(f"peak_qe: expected a value in (0, 1], got {self.peak_qe}")
+            raise InputError(f"peak_qe: expected a value in (0, 1], got {self.peak_qe}")
         if not (self.peak_nm > 0 and self.log_width_blue > 0 and self.log_width_red > 0):
-            raise SpectwinInputError(
-                "peak_nm, log_width_blue, log_width_red: expected positive values"
-            )
+            raise InputError("peak_nm, log_width_blue, log_width_red: expected positive values")
 
     def __call__(self, grid: WavelengthGrid) -> SampledSpectra:
         log_ratio = np.log(grid.wavelengths_nm / self.peak_nm)
@@ -90,9 +88,7 @@ def rgb_camera_response(
     measurements are relative).
     """
     if name not in RGB_CAMERA_RESPONSES:
-        raise SpectwinInputError(
-            f"camera: expected one of {sorted(RGB_CAMERA_RESPONSES)}, got {name!r}"
-        )
+        raise InputError(f"camera: expected one of {sorted(RGB_CAMERA_RESPONSES)}, got {name!r}")
     measured = RGB_CAMERA_RESPONSES[name]()
     response = resample(measured, grid, method="pchip", out_of_range=out_of_range)
     return SampledSpectra(grid, response.values / measured.values.max(), ("R", "G", "B"))

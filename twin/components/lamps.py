@@ -27,7 +27,7 @@ import colour
 import numpy as np
 from scipy import constants
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import SampledSpectra, WavelengthGrid, from_colour, resample
 
 __all__ = [
@@ -61,9 +61,7 @@ def planck_spectral_radiance(wavelengths_nm: np.ndarray, temperature_k: float) -
         Absolute temperature in K, positive.
     """
     if not temperature_k > 0:
-        raise SpectwinInputError(
-            f"temperature_k: expected a positive temperature, got {temperature_k}"
-        )
+        raise InputError(f"temperature_k: expected a positive temperature, got {temperature_k}")
     wavelength_m = np.asarray(wavelengths_nm, dtype=np.float64) * 1e-9
     h, c, k = constants.h, constants.c, constants.k
     per_metre = (
@@ -74,9 +72,9 @@ def planck_spectral_radiance(wavelengths_nm: np.ndarray, temperature_k: float) -
 
 def _require_exposure(t0_s: float, exposure_s: float) -> None:
     if not np.isfinite(t0_s) or t0_s < 0:
-        raise SpectwinInputError(f"t0_s: expected a finite, non-negative start time, got {t0_s}")
+        raise InputError(f"t0_s: expected a finite, non-negative start time, got {t0_s}")
     if not np.isfinite(exposure_s) or exposure_s <= 0:
-        raise SpectwinInputError(f"exposure_s: expected a positive exposure time, got {exposure_s}")
+        raise InputError(f"exposure_s: expected a positive exposure time, got {exposure_s}")
 
 
 class Lamp(Protocol):
@@ -113,7 +111,7 @@ def _intensity_scale(
     """Factor that makes ``relative_spectrum`` integrate to ``radiant_intensity_w_sr`` over
     380-780 nm."""
     if not radiant_intensity_w_sr > 0:
-        raise SpectwinInputError(
+        raise InputError(
             f"radiant_intensity_w_sr: expected a positive intensity, got {radiant_intensity_w_sr}"
         )
     fine = FINE_GRID.wavelengths_nm
@@ -230,13 +228,11 @@ class HMILamp:
 
     def __post_init__(self) -> None:
         if not 0 <= self.flicker_depth <= 1:
-            raise SpectwinInputError(
+            raise InputError(
                 f"flicker_depth: expected a modulation depth in [0, 1], got {self.flicker_depth}"
             )
         if not self.flicker_hz > 0 or not self.drift_time_constant_s > 0:
-            raise SpectwinInputError(
-                "flicker_hz and drift_time_constant_s: expected positive values"
-            )
+            raise InputError("flicker_hz and drift_time_constant_s: expected positive values")
 
     def _relative_parts(self, wavelengths_nm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         continuum = planck_spectral_radiance(wavelengths_nm, self.continuum_temperature_k)
@@ -336,7 +332,7 @@ class PhosphorWhiteLED(_SteadyLamp):
 def cie_illuminant(name: str, grid: WavelengthGrid) -> SampledSpectra:
     """Relative spectral power of a CIE illuminant from ``colour.SDS_ILLUMINANTS`` (e.g. "D65")."""
     if name not in colour.SDS_ILLUMINANTS:
-        raise SpectwinInputError(
+        raise InputError(
             f"illuminant: expected a name of colour.SDS_ILLUMINANTS "
             f"({', '.join(sorted(colour.SDS_ILLUMINANTS))}), got {name!r}"
         )
@@ -348,12 +344,12 @@ def lamp_model(spectrum: str) -> Lamp:
     lines) or ``"qth"`` (the 1000 W tungsten-halogen lamp), thesis 3.2.2."""
     models = {"hmi": HMILamp, "qth": QTHLamp}
     if spectrum not in models:
-        raise SpectwinInputError(f"lamp spectrum: expected 'hmi' or 'qth', got {spectrum!r}")
+        raise InputError(f"lamp spectrum: expected 'hmi' or 'qth', got {spectrum!r}")
     return models[spectrum]()
 
 
 def irradiance_at(intensity: SampledSpectra, distance_m: float) -> SampledSpectra:
     """Irradiance on a surface facing a point-like lamp: :math:`E = I / d^2` (W m^-2 nm^-1)."""
     if not distance_m > 0:
-        raise SpectwinInputError(f"distance_m: expected a positive distance, got {distance_m}")
+        raise InputError(f"distance_m: expected a positive distance, got {distance_m}")
     return intensity.require_non_negative("lamp intensity") * (1.0 / distance_m**2)

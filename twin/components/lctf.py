@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid
 
 __all__ = ["VARISPEC_FWHM_NM", "LiquidCrystalTunableFilter"]
@@ -60,27 +60,23 @@ class LiquidCrystalTunableFilter:
 
     def __post_init__(self) -> None:
         if not self.fwhm_nm > 0:
-            raise SpectwinInputError(f"fwhm_nm: expected a positive bandwidth, got {self.fwhm_nm}")
+            raise InputError(f"fwhm_nm: expected a positive bandwidth, got {self.fwhm_nm}")
         centres = np.asarray(self.band_centres_nm, dtype=np.float64)
         if centres.ndim != 1 or centres.size == 0 or np.any(np.diff(centres) <= 0):
-            raise SpectwinInputError(
+            raise InputError(
                 "band_centres_nm: expected a non-empty, strictly increasing list of wavelengths"
             )
         for name in ("peak_transmission_max", "polarizer_transmission"):
             if not 0 < getattr(self, name) <= 1:
-                raise SpectwinInputError(f"{name}: expected a transmission in (0, 1]")
+                raise InputError(f"{name}: expected a transmission in (0, 1]")
         if not 0 <= self.leakage < 1:
-            raise SpectwinInputError(
-                f"leakage: expected a transmission in [0, 1), got {self.leakage}"
-            )
+            raise InputError(f"leakage: expected a transmission in [0, 1), got {self.leakage}")
 
     @classmethod
     def varispec(cls, model: str = "VS-10", **overrides: object) -> LiquidCrystalTunableFilter:
         """The VariSpec ``model`` ("VS-07", "VS-10" or "VS-20") with optional overrides."""
         if model not in VARISPEC_FWHM_NM:
-            raise SpectwinInputError(
-                f"model: expected one of {sorted(VARISPEC_FWHM_NM)}, got {model!r}"
-            )
+            raise InputError(f"model: expected one of {sorted(VARISPEC_FWHM_NM)}, got {model!r}")
         return cls(fwhm_nm=VARISPEC_FWHM_NM[model], **overrides)
 
     @property

@@ -16,7 +16,7 @@ from __future__ import annotations
 import colour
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.measured_data import read_spectra_csv
 from recon.spectra import OutOfRangePolicy, SampledSpectra, WavelengthGrid, from_colour, resample
 
@@ -44,7 +44,7 @@ def zenith_white_reflectance(
     the ultraviolet, :math:`W(\\lambda) = p - d\\, e^{-(\\lambda - 350)/s}`.
     """
     if not 0 < plateau <= 1 or not 0 <= blue_drop < plateau or not drop_scale_nm > 0:
-        raise SpectwinInputError(
+        raise InputError(
             "zenith white: expected 0 < plateau <= 1, 0 <= blue_drop < plateau, drop_scale_nm > 0"
         )
     values = plateau - blue_drop * np.exp(-(grid.wavelengths_nm - 350.0) / drop_scale_nm)
@@ -64,7 +64,7 @@ def colorchecker_reflectances(
     to a wider grid (see ``recon.spectra.resample``).
     """
     if source not in COLORCHECKER_SOURCES:
-        raise SpectwinInputError(f"source: expected one of {COLORCHECKER_SOURCES}, got {source!r}")
+        raise InputError(f"source: expected one of {COLORCHECKER_SOURCES}, got {source!r}")
     names = tuple(colour.SDS_COLOURCHECKERS["ColorChecker N Ohta"])
     if source == "isetbio":
         measured = read_spectra_csv("spectra/reflectances/macbeth_colorchecker.csv")
@@ -117,9 +117,7 @@ def camera_chart_reflectances(grid: WavelengthGrid) -> SampledSpectra:
     within 380-780 nm), so every grid gets the same fields.
     """
     if grid.start_nm < 380.0 or grid.stop_nm > 780.0:
-        raise SpectwinInputError(
-            f"grid: expected wavelengths within 380-780 nm, got {grid.describe()}"
-        )
+        raise InputError(f"grid: expected wavelengths within 380-780 nm, got {grid.describe()}")
     training = read_spectra_csv("spectra/reflectances/rawtoaces_training_190.csv")
     diffuse = training.values.max(axis=1) <= 1.0
     macbeth = read_spectra_csv("spectra/reflectances/macbeth_colorchecker.csv")

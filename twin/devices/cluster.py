@@ -79,7 +79,7 @@ from recon.btf.processing import (
 )
 from recon.btf.store import BTFStore
 from recon.calibration.gonio import GonioCalibration
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.progress import progress_steps
 
 __all__ = [
@@ -123,9 +123,9 @@ def dask_client(
         Connected to the cluster, which a ``LocalCluster`` outlives no longer than the block.
     """
     if workers < 0:
-        raise SpectwinInputError(f"workers: expected 0 or more worker processes, got {workers}")
+        raise InputError(f"workers: expected 0 or more worker processes, got {workers}")
     if scheduler and workers > 1:
-        raise SpectwinInputError(
+        raise InputError(
             f"workers: {workers} local workers and the scheduler {scheduler!r} were both given; "
             "a scheduler's cluster brings its own workers"
         )
@@ -133,7 +133,7 @@ def dask_client(
         try:
             client = Client(scheduler, timeout=connect_timeout_s)
         except (OSError, TimeoutError, ValueError) as error:
-            raise SpectwinInputError(
+            raise InputError(
                 f"scheduler {scheduler!r}: no Dask scheduler answered within "
                 f"{connect_timeout_s:g} s ({error}); start one (dask scheduler), or unset "
                 "--scheduler and DASK_SCHEDULER_ADDRESS to run without it"
@@ -209,7 +209,7 @@ def view_tasks(
     [[0, 1], [2, 3], [4], [5]]
     """
     if max_steps < 1:
-        raise SpectwinInputError(f"max_steps: expected at least 1, got {max_steps}")
+        raise InputError(f"max_steps: expected at least 1, got {max_steps}")
     tasks: list[list[int]] = []
     for step in steps:
         view = plan[step].get("view_id", -1)

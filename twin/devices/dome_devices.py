@@ -18,7 +18,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from hwbridge.errors import BridgeInputError
+from hwbridge.errors import InputError
 from hwbridge.session import SessionDevices
 from twin.devices.sim_devices import (
     SimLedArray,
@@ -64,7 +64,7 @@ class DomeDevices:
 
     def __post_init__(self) -> None:
         if self.backend not in BACKENDS:
-            raise BridgeInputError(f"backend: expected one of {BACKENDS}, got {self.backend!r}")
+            raise InputError(f"backend: expected one of {BACKENDS}, got {self.backend!r}")
         ports = {
             "stage_port": self.stage_port,
             "led_port": self.led_port,
@@ -72,7 +72,7 @@ class DomeDevices:
         }
         missing = [key for key, port in ports.items() if not port]
         if self.backend == "real" and missing:
-            raise BridgeInputError(f"the real dome needs the serial ports {missing}")
+            raise InputError(f"the real dome needs the serial ports {missing}")
 
     @classmethod
     def for_rig(cls, config: DomeConfig, **settings: Any) -> DomeDevices:

@@ -13,7 +13,7 @@ import numpy as np
 
 from hwbridge.session import SessionDevices
 from hwbridge.store import CaptureStore
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from twin.devices.cluster import run_capture
 from twin.sensor.model import Sensor
 
@@ -31,13 +31,13 @@ def is_whole(value: object) -> bool:
 def check_seed(seed: object) -> None:
     """Refuse a seed that is not a whole number >= 0."""
     if not is_whole(seed) or seed < 0:
-        raise SpectwinInputError(f"seed: expected a whole number >= 0, got {seed}")
+        raise InputError(f"seed: expected a whole number >= 0, got {seed}")
 
 
 def check_fault_rate(fault_rate: object) -> None:
     """Refuse an injected fault rate that is not a probability (NaN included)."""
     if not isinstance(fault_rate, int | float | np.floating) or not 0.0 <= fault_rate <= 1.0:
-        raise SpectwinInputError(f"fault_rate: expected a probability in [0, 1], got {fault_rate}")
+        raise InputError(f"fault_rate: expected a probability in [0, 1], got {fault_rate}")
 
 
 def check_exposures(plan: list[dict], sensors: Mapping[str, Sensor]) -> None:
@@ -48,7 +48,7 @@ def check_exposures(plan: list[dict], sensors: Mapping[str, Sensor]) -> None:
         outside = sorted(time for time in times if not low <= time <= high)
         if outside:
             shown = ", ".join(f"{value:g}" for value in outside[:5])
-            raise SpectwinInputError(
+            raise InputError(
                 f"exposures: the plan has exposures ({shown} s) outside the "
                 f"{sensor.config.name}'s range {low:g}..{high:g} s"
             )

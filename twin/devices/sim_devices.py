@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from hwbridge.dome_targets import check_current_ma, led_pattern, single_led, stage_angle_deg
-from hwbridge.errors import BridgeInputError, DeviceDisconnected, DeviceTimeout
+from hwbridge.errors import DeviceDisconnected, DeviceTimeout, InputError
 from hwbridge.protocols import description, reading
 from hwbridge.session import SessionDevices
 from recon.spectra import DEFAULT_GRID
@@ -100,7 +100,7 @@ class SimTunableFilter:
     def set(self, wavelength_nm: float) -> None:
         low, high = self._range
         if not low <= wavelength_nm <= high:
-            raise BridgeInputError(f"{self.name}: {wavelength_nm} nm is outside {low}-{high} nm")
+            raise InputError(f"{self.name}: {wavelength_nm} nm is outside {low}-{high} nm")
         self._rig.maybe_fail(f"{self.name}.set")
         self._rig.band_nm = float(wavelength_nm)
 
@@ -267,7 +267,7 @@ class SimSpectrometer:
 
     def read(self) -> dict[str, dict[str, Any]]:
         if self._last is None:
-            raise BridgeInputError(f"{self.name}: no spectrum yet; call trigger() first")
+            raise InputError(f"{self.name}: no spectrum yet; call trigger() first")
         return reading(f"{self.name}_counts", self._last)
 
     def describe(self) -> dict[str, dict[str, Any]]:
@@ -290,7 +290,7 @@ class SimPositioner:
     def set(self, target: dict[str, float]) -> None:
         view = int(target["view_id"])
         if not 0 <= view < self._views:
-            raise BridgeInputError(f"{self.name}: view_id {view} is not in 0..{self._views - 1}")
+            raise InputError(f"{self.name}: view_id {view} is not in 0..{self._views - 1}")
         self._rig.maybe_fail(f"{self.name}.set")
         self._rig.view_id = view
 

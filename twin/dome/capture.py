@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.radiometric.dark_frames import average_dark_frames
 from recon.spectra import SampledSpectra
 from twin.components.lamps import FINE_GRID, PhosphorWhiteLED
@@ -163,7 +163,7 @@ def dome_cameras(
     """
     config = config if config is not None else load_rig("dome")
     if texel_px is not None and (texel_px < 2 or texel_px % 2):
-        raise SpectwinInputError(
+        raise InputError(
             f"texel_px: expected an even number of pixels per texel, at least 2 (whole Bayer "
             f"quads), got {texel_px}"
         )

@@ -21,7 +21,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from hwbridge.dome_layout import SPECTRAL_CAMERA
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from twin.dome.holder import holder_geometry, target_geometry
 from twin.dome.render import dome_camera, stage_matrix
 from twin.materials.sample_holder import PRINT_OUTER_HALF_M, registration_corners
@@ -43,7 +43,7 @@ class FrameSize:
 
     def __init__(self, config: DomeConfig, texels: int):
         if not isinstance(texels, int | np.integer) or not 4 <= texels <= 1024:
-            raise SpectwinInputError(f"texels: expected 4..1024 texels across, got {texels}")
+            raise InputError(f"texels: expected 4..1024 texels across, got {texels}")
         field = config.spectral_camera.field_of_view_m
         self.texels = int(texels)
         self.pitch_m = NOMINAL_SAMPLE_M / (2 * self.texels)

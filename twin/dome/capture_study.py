@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.metrics import delta_e94, relative_error
 from recon.scheduling.dome_schedule import THESIS_RGB_EXPOSURES_S
 from recon.spectralize.solve import BandImage, spectralize
@@ -113,7 +113,7 @@ def dome_light_directions(setup: DomeSetup, leds: Sequence[int]) -> np.ndarray:
     directions = dome_geometry(setup.cameras.config).led_directions
     leds = np.asarray(leds, int)
     if leds.min() < 0 or leds.max() >= len(directions):
-        raise SpectwinInputError(f"leds: expected indices in [0, {len(directions) - 1}]")
+        raise InputError(f"leds: expected indices in [0, {len(directions) - 1}]")
     return directions[leds]
 
 
@@ -146,7 +146,7 @@ def simulate_capture(
     """
     n = truth.weights.shape[0]
     if len(bands_per_image) != n or np.shape(light_dirs) != (n, 3):
-        raise SpectwinInputError(
+        raise InputError(
             f"light_dirs, bands_per_image: expected (n, 3) and n lists for {n} images, got "
             f"{np.shape(light_dirs)} and {len(bands_per_image)}"
         )

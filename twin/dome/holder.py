@@ -18,7 +18,7 @@ import math
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from twin.materials import Material
 from twin.materials.calibration_targets import (
     checkerboard_corners,
@@ -65,7 +65,7 @@ def holder_content(kind: str, tilt_deg: float | None = None) -> str | None:
     if kind == "dark":
         return None
     if kind not in _CONTENT_OF_KIND:
-        raise SpectwinInputError(f"kind: expected one of {sorted(_CONTENT_OF_KIND)}, got {kind!r}")
+        raise InputError(f"kind: expected one of {sorted(_CONTENT_OF_KIND)}, got {kind!r}")
     content = _CONTENT_OF_KIND[kind]
     return f"{content}@{float(tilt_deg or 0.0):g}" if content == "checkerboard" else content
 
@@ -75,7 +75,7 @@ def wedge_pose(tilt_deg: float) -> np.ndarray:
     frame: tilted about the sample's x axis by ``tilt_deg`` on a wedge, centred over the sample,
     raised so that its lowest edge clears the holder."""
     if not -45.0 <= tilt_deg <= 45.0:
-        raise SpectwinInputError(f"tilt_deg: expected a wedge of -45..45 degrees, got {tilt_deg}")
+        raise InputError(f"tilt_deg: expected a wedge of -45..45 degrees, got {tilt_deg}")
     half_height = CHECKERBOARD["rows"] * CHECKERBOARD["square_m"] / 2 + CHECKERBOARD["margin_m"]
     pose = np.eye(4)
     pose[:3, :3] = Rotation.from_euler("x", tilt_deg, degrees=True).as_matrix()
@@ -93,7 +93,7 @@ def holder_scene_parts(content: str, material: Material | None) -> list[SurfaceP
     """The holder with ``content`` (:func:`holder_content`) on it."""
     if content == "material":
         if material is None:
-            raise SpectwinInputError("material: a frame of the sample needs a material")
+            raise InputError("material: a frame of the sample needs a material")
         extra = list(material.parts)
     elif content == "white":
         extra = _raised(zenith_white_target(2 * PAPER_INNER_HALF_M), _ON_PLATE_M)
@@ -105,7 +105,7 @@ def holder_scene_parts(content: str, material: Material | None) -> list[SurfaceP
             transformed(part, wedge_pose(tilt)) for part in checkerboard_target(**CHECKERBOARD)
         ]
     else:
-        raise SpectwinInputError(f"content: unknown holder content {content!r}")
+        raise InputError(f"content: unknown holder content {content!r}")
     return holder_parts() + extra
 
 

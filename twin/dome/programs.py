@@ -41,7 +41,7 @@ from hwbridge.dome_plans import (
     dome_start_times_s,
 )
 from hwbridge.store import CaptureStore
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from twin.components.lamps import FINE_GRID, PhosphorWhiteLED
 from twin.components.targets import zenith_white_reflectance
 from twin.devices.programs import (
@@ -149,11 +149,11 @@ class DomeCaptureSize:
         for name, top in limits.items():
             value = getattr(self, name)
             if not is_whole(value) or not 1 <= value <= top:
-                raise SpectwinInputError(f"{name}: expected 1..{top} (the rig's), got {value}")
+                raise InputError(f"{name}: expected 1..{top} (the rig's), got {value}")
         if not is_whole(self.spp) or self.spp < 1:
-            raise SpectwinInputError(f"spp: expected at least 1 sample per pixel, got {self.spp}")
+            raise InputError(f"spp: expected at least 1 sample per pixel, got {self.spp}")
         if self.led_renders not in LED_RENDERS:
-            raise SpectwinInputError(
+            raise InputError(
                 f"led_renders: expected one of {', '.join(LED_RENDERS)}, got {self.led_renders!r}"
             )
         FrameSize(config, self.texels)
@@ -206,13 +206,9 @@ def dome_plan_parts(
     and the bands packed into ``schedule_images`` RGB images (:func:`twin.dome.exposure_plan
     .dome_exposures`)."""
     if not longest_band_s > 0:
-        raise SpectwinInputError(
-            f"longest_band_s: expected a positive exposure in s, got {longest_band_s}"
-        )
+        raise InputError(f"longest_band_s: expected a positive exposure in s, got {longest_band_s}")
     if schedule_images is not None and (not is_whole(schedule_images) or schedule_images < 1):
-        raise SpectwinInputError(
-            f"schedule_images: expected at least 1 RGB image, got {schedule_images}"
-        )
+        raise InputError(f"schedule_images: expected at least 1 RGB image, got {schedule_images}")
     size.check(config)
     cameras = size.camera_ids(config)
     led = calibration_led(config)
@@ -439,9 +435,7 @@ def dome_run_program(
     check_seed(seed)
     check_fault_rate(fault_rate)
     if material not in available_materials():
-        raise SpectwinInputError(
-            f"material: expected one of {available_materials()}, got {material!r}"
-        )
+        raise InputError(f"material: expected one of {available_materials()}, got {material!r}")
     config = config or load_rig("dome")
     parts = dome_plan_parts(
         config, size, longest_band_s=longest_band_s, schedule_images=schedule_images
@@ -483,7 +477,7 @@ def dome_calibration_program(
     check_seed(seed)
     check_fault_rate(fault_rate)
     if not is_whole(dark_frames) or dark_frames < 1:
-        raise SpectwinInputError(f"dark_frames: expected at least 1, got {dark_frames}")
+        raise InputError(f"dark_frames: expected at least 1, got {dark_frames}")
     config = config or load_rig("dome")
     parts = dome_plan_parts(
         config, size, longest_band_s=longest_band_s, schedule_images=schedule_images

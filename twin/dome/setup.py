@@ -39,7 +39,7 @@ from recon.calibration.dome import (
     calibrate_rgb_camera,
     calibrate_spectral_camera,
 )
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.scheduling.dome_schedule import (
     FILTER_SIZE_PER_SIGMA,
     THESIS_RGB_EXPOSURES_S,
@@ -162,7 +162,7 @@ def dome_setup(
     ``texels``, ``sample_size_m`` and ``texel_px`` size the cameras
     (:func:`twin.dome.capture.dome_cameras`)."""
     if not longest_band_s > 0:
-        raise SpectwinInputError(f"longest_band_s: expected a positive time, got {longest_band_s}")
+        raise InputError(f"longest_band_s: expected a positive time, got {longest_band_s}")
     rng = np.random.default_rng(seed)
     cameras = dome_cameras(texels, sample_size_m=sample_size_m, texel_px=texel_px)
     led = np.interp(THESIS_BANDS_NM, FINE_GRID.wavelengths_nm, cameras.led.values)

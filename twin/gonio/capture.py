@@ -45,7 +45,7 @@ from hwbridge.plans import (
 )
 from hwbridge.store import CaptureStore
 from recon.calibration.spectral import HMI_FLICKER_PERIOD_S
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.registration.corners import CORNER_PIECE_SIZE
 from recon.spectra import DEFAULT_GRID
 from twin.components.lctf import LiquidCrystalTunableFilter
@@ -116,7 +116,7 @@ class GonioPairs:
         solution = solve_pairs(config, light_dirs, view_dirs)
         keep = np.flatnonzero(solution.exact)
         if keep.size == 0:
-            raise SpectwinInputError("directions: the rig reaches none of the direction pairs")
+            raise InputError("directions: the rig reaches none of the direction pairs")
         self.light_dirs = np.asarray(light_dirs, np.float64)[keep]
         self.view_dirs = np.asarray(view_dirs, np.float64)[keep]
         self.poses: list[GonioPose] = [solution.poses[i] for i in keep]
@@ -230,23 +230,23 @@ def check_capture_settings(
 
     Raises
     ------
-    SpectwinInputError
+    InputError
         Naming the setting, its range and the value given.
     """
     camera = Sensor(config.camera.definition).config
     side = min(camera.width, camera.height)
     if not is_whole(pixels) or not 1 <= pixels <= side:
-        raise SpectwinInputError(
+        raise InputError(
             f"pixels: expected 1..{side} pixels across the field of the {camera.name} (its "
             f"sensor has {camera.width}x{camera.height}), got {pixels}"
         )
     if window is not None and (not is_whole(window) or not 1 <= window <= pixels):
-        raise SpectwinInputError(
+        raise InputError(
             f"window: expected a read-out window of 1..{pixels} pixels (at most pixels, "
             f"{pixels}), got {window}"
         )
     if not is_whole(spp) or spp < 1:
-        raise SpectwinInputError(f"spp: expected at least 1 sample per pixel, got {spp}")
+        raise InputError(f"spp: expected at least 1 sample per pixel, got {spp}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -339,7 +339,7 @@ def stored_settings(store: CaptureStore) -> dict[str, Any]:
     attrs = store.attrs
     rig = attrs.get("rig") or {}
     if attrs.get("backend") != "sim":
-        raise SpectwinInputError(
+        raise InputError(
             f"{store.path}: a {attrs.get('backend')!r} store, not made by spectwin capture; only "
             "simulated captures continue where they stopped"
         )
@@ -397,7 +397,7 @@ def gonio_calibration_program(
     check_capture_settings(config, pixels=pixels, spp=spp)
     check_seed(seed)
     if not 0.0 < white_fill < 1.0:
-        raise SpectwinInputError(
+        raise InputError(
             f"white_fill: expected a fraction of saturation in (0, 1), got {white_fill}"
         )
     sensor = Sensor(config.camera.definition, roi=(pixels, pixels))
@@ -483,13 +483,13 @@ def gonio_measurement_program(
     bands = np.asarray(lctf.band_centres_nm, np.float64)
     exposures = np.asarray(exposures_s, np.float64)
     if exposures.shape != bands.shape or not np.all(np.isfinite(exposures) & (exposures > 0)):
-        raise SpectwinInputError(
+        raise InputError(
             f"exposures_s: expected {bands.size} positive band exposure times, got "
             f"shape {exposures.shape}"
         )
     periods = exposures / HMI_FLICKER_PERIOD_S
     if is_flickering(config) and not np.allclose(periods, np.round(periods), rtol=0, atol=1e-6):
-        raise SpectwinInputError(
+        raise InputError(
             "exposures_s: with the HMI lamp every band exposure must be a multiple of 1/15 s "
             "(thesis 3.2.2); plan them with spectwin calibrate"
         )

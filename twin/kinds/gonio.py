@@ -12,7 +12,7 @@ import numpy as np
 from pydantic import Field
 
 from hwbridge.store import CaptureStore
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from twin.kinds.registry import Outcome, ProgramKind, ProgramSettings, RigKind
 from twin.rigs.rig_config import GonioConfig
 from twin.studies.sweep_file import SweepKind
@@ -64,19 +64,19 @@ def _run(settings: GonioRunSettings, fault_rate: float, dry_run: bool):
     from twin.gonio.render import GONIO_SPP
 
     if settings.window is not None and settings.window > settings.pixels:
-        raise SpectwinInputError(
+        raise InputError(
             f"window: {settings.window} is larger than pixels {settings.pixels}; expected at "
             f"most {settings.pixels}"
         )
     if settings.sampling is None:
-        raise SpectwinInputError(
+        raise InputError(
             "sampling: captured at its own direction pairs, which a resumed capture cannot rebuild"
         )
     notes: dict[str, object] = {}
     exposures_s = settings.exposures_s
     if exposures_s is None:
         if not dry_run:
-            raise SpectwinInputError(
+            raise InputError(
                 "calibration: a gonio-run needs the band exposure plan of a gonio calibration"
             )
         from twin.gonio.capture_time import band_exposures_s

@@ -20,7 +20,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from hwbridge.store import CaptureStore
 from recon.btf.store import BTFStore
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from twin.studies.sweep_file import SweepKind
 
 __all__ = [
@@ -143,7 +143,7 @@ class RigKind:
             if program.name == name:
                 return program
         known = [program.name for program in self.programs]
-        raise SpectwinInputError(
+        raise InputError(
             f"program: the {self.name} has no capture program {name!r}; expected one of {known}"
         )
 
@@ -172,7 +172,7 @@ def rig_kind(name: object) -> RigKind:
     """The kind of rig named ``name``."""
     _load_builtin()
     if not isinstance(name, str) or name not in _KINDS:
-        raise SpectwinInputError(f"rig: expected one of {sorted(_KINDS)}, got {name!r}")
+        raise InputError(f"rig: expected one of {sorted(_KINDS)}, got {name!r}")
     return _KINDS[name]
 
 
@@ -186,7 +186,7 @@ def capture_rig_kind(capture: CaptureStore) -> RigKind:
     rig = capture.attrs.get("rig")
     name = rig.get("rig") if isinstance(rig, Mapping) else None
     if name is None:
-        raise SpectwinInputError(
+        raise InputError(
             f"{capture.path}: the store records no rig; expected a capture store of one of "
             f"{sorted(_names())}"
         )
@@ -204,7 +204,7 @@ def btf_rig_kind(btf: BTFStore | Path) -> RigKind:
     store = btf if isinstance(btf, BTFStore) else BTFStore.open(btf)
     name = store.attrs.get("rig")
     if name is None:
-        raise SpectwinInputError(
+        raise InputError(
             f"{store.path}: a BTF store that no rig of spectwin processed (imported); expected "
             "one processed from a capture store"
         )

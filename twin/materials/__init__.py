@@ -11,7 +11,7 @@ from pathlib import Path
 
 from pydantic import TypeAdapter
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import SampledSpectra
 from twin.materials.builders import (
     MATERIAL_GRID,
@@ -77,8 +77,8 @@ def load_material(name_or_path: str | Path) -> Material:
 
         try:
             parts, spectra, pairs = build_user(config, path.parent)
-        except SpectwinInputError as error:
-            raise SpectwinInputError(f"{path}: {error}") from None
+        except InputError as error:
+            raise InputError(f"{path}: {error}") from None
     else:
         parts, spectra, pairs = _BUILDERS[config.material](config)
     return Material(config.name, config.size_m, tuple(parts), spectra, tuple(pairs))

@@ -13,7 +13,7 @@ import math
 import numpy as np
 import trimesh
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import SampledSpectra
 from twin.components.lamps import FINE_GRID
 from twin.components.targets import (
@@ -93,7 +93,7 @@ def checkerboard_target(
     symmetry that maps black onto black, so its orientation in an image is unambiguous.
     """
     if columns < 3 or rows < 3 or not square_m > 0 or margin_m < 0:
-        raise SpectwinInputError(
+        raise InputError(
             f"checkerboard: expected at least 3 x 3 squares of positive size, got {columns} x "
             f"{rows} of {square_m} m"
         )

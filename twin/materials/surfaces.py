@@ -15,7 +15,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import trimesh
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import SampledSpectra, WavelengthGrid
 
 __all__ = ["MATERIAL_GRID", "SurfacePart", "texture_coordinates", "transformed"]
@@ -62,42 +62,40 @@ class SurfacePart:
 
     def __post_init__(self) -> None:
         if self.reflectance.values.ndim != 1:
-            raise SpectwinInputError(f"{self.name}: expected one reflectance spectrum")
+            raise InputError(f"{self.name}: expected one reflectance spectrum")
         values = self.reflectance.values
         if np.any(values < 0) or np.any(values > 1):
-            raise SpectwinInputError(f"{self.name}: expected reflectance values in [0, 1]")
+            raise InputError(f"{self.name}: expected reflectance values in [0, 1]")
         if self.roughness is not None and not 0 < self.roughness <= 1:
-            raise SpectwinInputError(
-                f"{self.name}: expected roughness in (0, 1], got {self.roughness}"
-            )
+            raise InputError(f"{self.name}: expected roughness in (0, 1], got {self.roughness}")
         if self.dielectric_ior is not None and (
             self.roughness is None or self.conductor is not None or not self.dielectric_ior > 1
         ):
-            raise SpectwinInputError(
+            raise InputError(
                 f"{self.name}: a clear dielectric needs an index above 1 and a roughness, and "
                 "is no conductor"
             )
         if len(self.mesh.faces) == 0:
-            raise SpectwinInputError(f"{self.name}: the mesh has no faces")
+            raise InputError(f"{self.name}: the mesh has no faces")
         if self.texture is not None:
             self._check_texture()
 
     def _check_texture(self) -> None:
         values = self.texture.values
         if values.ndim != 3 or min(values.shape[:2]) < 1:
-            raise SpectwinInputError(
+            raise InputError(
                 f"{self.name}: expected a texture of shape (height, width, wavelengths), got "
                 f"{values.shape}"
             )
         if np.any(values < 0) or np.any(values > 1):
-            raise SpectwinInputError(f"{self.name}: expected texture reflectances in [0, 1]")
+            raise InputError(f"{self.name}: expected texture reflectances in [0, 1]")
         if self.conductor is not None or self.dielectric_ior is not None:
-            raise SpectwinInputError(
+            raise InputError(
                 f"{self.name}: a conductor or clear dielectric takes no diffuse texture"
             )
         uv = texture_coordinates(self.mesh)
         if uv is None or len(uv) != len(self.mesh.vertices):
-            raise SpectwinInputError(
+            raise InputError(
                 f"{self.name}: a textured part needs texture coordinates on every mesh vertex"
             )
 

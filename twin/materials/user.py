@@ -21,7 +21,7 @@ import numpy as np
 import trimesh
 
 from recon.btf.specular_lobe import COATING_IOR
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.measured_data import read_spectra_csv
 from recon.rgb_upsampling import read_srgb_image, reduce_image, upsample_srgb
 from recon.spectra import SampledSpectra, from_colour, resample
@@ -63,7 +63,7 @@ def flat_patch(size_m: float) -> trimesh.Trimesh:
 def _file(folder: Path, name: str, field: str) -> Path:
     path = Path(name) if Path(name).is_absolute() else folder / name
     if not path.is_file():
-        raise SpectwinInputError(f"{field}: no file {path}")
+        raise InputError(f"{field}: no file {path}")
     return path
 
 
@@ -75,14 +75,14 @@ def _mesh(config: UserPartConfig, folder: Path, size_m: float) -> trimesh.Trimes
     try:
         mesh = trimesh.load(path, force="mesh", process=False)
     except Exception as error:  # trimesh raises many kinds for unreadable files
-        raise SpectwinInputError(f"{field}: {path} is not a mesh trimesh reads ({error})") from None
+        raise InputError(f"{field}: {path} is not a mesh trimesh reads ({error})") from None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-        raise SpectwinInputError(f"{field}: {path} holds no triangles")
+        raise InputError(f"{field}: {path} holds no triangles")
     mesh.apply_scale(config.mesh_scale)
     low, high = mesh.bounds
     reach = np.abs(np.concatenate([low[:2], high[:2]])).max()
     if reach > size_m / 2 * 1.001 or low[2] < -_BELOW_M:
-        raise SpectwinInputError(
+        raise InputError(
             f"{field}: {path.name} spans x, y to {1e3 * reach:.1f} mm and z from "
             f"{1e3 * low[2]:.1f} mm; "
             f"expected metres (mesh_scale) within the {1e3 * size_m:.0f} mm square around the "
@@ -94,7 +94,7 @@ def _mesh(config: UserPartConfig, folder: Path, size_m: float) -> trimesh.Trimes
 def _covering(spectra: SampledSpectra, field: str) -> SampledSpectra:
     wavelengths = spectra.wavelengths_nm
     if wavelengths[0] > _BANDS_NM[0] or wavelengths[-1] < _BANDS_NM[1]:
-        raise SpectwinInputError(
+        raise InputError(
             f"{field}: covers {wavelengths[0]:g}-{wavelengths[-1]:g} nm; expected at least "
             f"{_BANDS_NM[0]:g}-{_BANDS_NM[1]:g} nm"
         )
@@ -108,7 +108,7 @@ def _colour_spectrum(entry: str, field: str) -> SampledSpectra:
     dataset, _, name = entry.rpartition("/")
     if dataset not in datasets or name not in datasets[dataset]:
         known = ", ".join(sorted(datasets))
-        raise SpectwinInputError(
+        raise InputError(
             f"{field}: no spectrum {entry!r}; expected '<dataset>/<name>' with a dataset of {known}"
         )
     return from_colour(datasets[dataset][name])
@@ -117,11 +117,11 @@ def _colour_spectrum(entry: str, field: str) -> SampledSpectra:
 def _csv_column(path: Path, column: str | None, field: str) -> SampledSpectra:
     table = read_spectra_csv(path.resolve())
     if column is None and len(table.names) > 1:
-        raise SpectwinInputError(
+        raise InputError(
             f"{field}: {path} has the columns {list(table.names)}; name one with column"
         )
     if column is not None and column not in table.names:
-        raise SpectwinInputError(f"{field}: {path} has no column {column!r}: {list(table.names)}")
+        raise InputError(f"{field}: {path} has no column {column!r}: {list(table.names)}")
     return SampledSpectra(table.grid, table.values[table.names.index(column or table.names[0])])
 
 
@@ -155,7 +155,7 @@ def _texture(config: UserPartConfig, folder: Path) -> SampledSpectra | None:
         return None
     image = read_spectral_exr(_file(folder, config.texture, f"{field}.texture"))
     if image.kind != "reflective":
-        raise SpectwinInputError(
+        raise InputError(
             f"{field}.texture: holds {image.kind} values; expected a reflective spectral EXR"
         )
     return _covering(SampledSpectra(image.grid, image.cube), f"{field}.texture")
@@ -167,9 +167,7 @@ def _part(config: UserPartConfig, folder: Path, size_m: float) -> SurfacePart:
     texture = _texture(config, folder)
     if texture is not None:
         if texture_coordinates(mesh) is None:
-            raise SpectwinInputError(
-                f"{field}.mesh: a textured part needs a mesh with texture coordinates"
-            )
+            raise InputError(f"{field}.mesh: a textured part needs a mesh with texture coordinates")
         reflectance = SampledSpectra(texture.grid, texture.values.mean(axis=(0, 1)))
     elif config.spectrum is not None:
         reflectance = _spectrum(config.spectrum, folder, f"{field}.spectrum")
@@ -190,8 +188,8 @@ def _part(config: UserPartConfig, folder: Path, size_m: float) -> SurfacePart:
             texture=texture,
             dielectric_ior=(bsdf.ior or COATING_IOR) if bsdf.type == "rough_dielectric" else None,
         )
-    except SpectwinInputError as error:
-        raise SpectwinInputError(f"{field}: {error}") from None
+    except InputError as error:
+        raise InputError(f"{field}: {error}") from None
 
 
 def build_user(config: UserMaterialConfig, folder: Path):

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import SampledSpectra
 from twin.materials.calibration_targets import chart_parts
 from twin.render.scene import PinholeCamera, render_view
@@ -61,10 +61,10 @@ def render_chart_bench(
     height, width = image_px
     pose = np.asarray(chart_to_camera, np.float64)
     if pose.shape != (4, 4) or not np.all(np.isfinite(pose)):
-        raise SpectwinInputError(f"chart_to_camera: expected a finite 4x4 pose, got {pose.shape}")
+        raise InputError(f"chart_to_camera: expected a finite 4x4 pose, got {pose.shape}")
     depth = float(pose[2, 3])
     if depth <= 0 or height > width:
-        raise SpectwinInputError(
+        raise InputError(
             f"chart_to_camera, image_px: expected the chart in front of the camera and an image "
             f"at least as wide as high, got depth {depth} m and {height}x{width} px"
         )

@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import SampledSpectra, band_integrals
 from twin.render.render import render_scene
 from twin.render.spectra import irregular_spectrum, ldsampler, specfilm
@@ -28,19 +28,19 @@ def _check_inputs(
     reflectances: SampledSpectra, irradiance: SampledSpectra, bands: SampledSpectra
 ) -> np.ndarray:
     if irradiance.values.ndim != 1:
-        raise SpectwinInputError(
+        raise InputError(
             f"irradiance: expected one spectrum, got values of shape {irradiance.values.shape}"
         )
     irradiance.require_non_negative("irradiance")
     reflectances.require_non_negative("reflectances")
     rows = np.atleast_2d(reflectances.values)
     if rows.ndim != 2 or np.any(rows > 1):
-        raise SpectwinInputError(
+        raise InputError(
             "reflectances: expected one or more reflectance spectra with values in [0, 1]"
         )
     for name, spectra in (("irradiance", irradiance), ("bands", bands)):
         if spectra.grid != reflectances.grid:
-            raise SpectwinInputError(
+            raise InputError(
                 f"{name}: expected the reflectances' grid ({reflectances.grid.describe()}), got "
                 f"{spectra.grid.describe()}"
             )
@@ -99,11 +99,11 @@ def flat_target_scene(
     """
     rows_of_reflectance = _check_inputs(reflectances, irradiance, bands)
     if not 0 < patch_fill <= 1:
-        raise SpectwinInputError(f"patch_fill: expected a fraction in (0, 1], got {patch_fill}")
+        raise InputError(f"patch_fill: expected a fraction in (0, 1], got {patch_fill}")
     if not 0 <= incidence_deg < 90:
-        raise SpectwinInputError(f"incidence_deg: expected [0, 90), got {incidence_deg}")
+        raise InputError(f"incidence_deg: expected [0, 90), got {incidence_deg}")
     if columns < 1 or pixels_per_patch < 1 or spp < 1:
-        raise SpectwinInputError("columns, pixels_per_patch, spp: expected positive integers")
+        raise InputError("columns, pixels_per_patch, spp: expected positive integers")
     activate()
     import mitsuba as mi
 
@@ -170,7 +170,7 @@ def patch_means(
     chart_rows = math.ceil(count / columns)
     cell = image.shape[1] // columns
     if image.shape[0] != chart_rows * cell or image.shape[1] != columns * cell:
-        raise SpectwinInputError(
+        raise InputError(
             f"image: expected {chart_rows * cell}x{columns * cell} pixels for {count} patches in "
             f"{columns} columns, got {image.shape[0]}x{image.shape[1]}"
         )

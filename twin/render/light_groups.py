@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import SampledSpectra
 from twin.render.render import render_scene
 
@@ -50,7 +50,7 @@ def lamp_weighted_channels(
     """Channel responses times ``spectrum``, each normalized to unit area, and the areas
     ``(n_channels,)`` to multiply a render with (module docstring)."""
     if spectrum.grid != channels.grid:
-        raise SpectwinInputError(
+        raise InputError(
             f"spectrum: expected the channels' grid ({channels.grid.describe()}), got "
             f"{spectrum.grid.describe()}"
         )

@@ -57,7 +57,7 @@ import mitsuba as mi
 import numpy as np
 from scipy import sparse
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import SampledSpectra, resample
 from twin.materials.builders import MATERIAL_GRID
 from twin.materials.surfaces import SurfacePart
@@ -307,7 +307,7 @@ class NodeScene:
 
     def __init__(self, parts: Sequence[SurfacePart]):
         if not parts:
-            raise SpectwinInputError("parts: expected at least one surface part")
+            raise InputError("parts: expected at least one surface part")
         activate()
         unit_bsdfs: dict[str, object] = {}  # parts with the same lobes share one BSDF
         entries: dict[str, object] = {"type": "scene"}
@@ -376,7 +376,7 @@ class NodeScene:
             ``path`` integrator at ``max_depth`` 3).
         """
         if bounces < 0:
-            raise SpectwinInputError(f"bounces: expected 0 or more, got {bounces}")
+            raise InputError(f"bounces: expected 0 or more, got {bounces}")
         samples = rendered_spp(spp)
         height, width = camera.shape
         per_launch = max(1, _MAX_LANES // samples)
@@ -426,7 +426,7 @@ class NodeScene:
             order (the rest zero; ``n_channels`` is the longest list's length). Default: all.
         """
         if bounces < 0:
-            raise SpectwinInputError(f"bounces: expected 0 or more, got {bounces}")
+            raise InputError(f"bounces: expected 0 or more, got {bounces}")
         positions = np.asarray(positions_m, np.float64).reshape(-1, 3)
         weights = np.asarray(weights, np.float32).reshape(NODES_NM.size, -1)
         wanted = (
@@ -435,7 +435,7 @@ class NodeScene:
             else [tuple(int(c) for c in chosen) for chosen in channels]
         )
         if len(wanted) != len(positions):
-            raise SpectwinInputError(
+            raise InputError(
                 f"channels: expected one list per lamp ({len(positions)}), got {len(wanted)}"
             )
         height, width = camera.shape

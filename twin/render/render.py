@@ -5,7 +5,7 @@ from __future__ import annotations
 import mitsuba as mi
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from twin.render.variant import activate
 
 __all__ = ["render_scene"]
@@ -30,11 +30,11 @@ def render_scene(scene: dict | mi.Scene, seed: int = 0, spp: int | None = None) 
 
     Raises
     ------
-    SpectwinInputError
+    InputError
         If ``spp`` is given and below 1.
     """
     if spp is not None and int(spp) < 1:
-        raise SpectwinInputError(f"spp: expected at least 1 sample per pixel, got {spp}")
+        raise InputError(f"spp: expected at least 1 sample per pixel, got {spp}")
     activate()
     if isinstance(scene, dict):
         scene = mi.load_dict(scene)

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import SampledSpectra
 from twin.materials.surfaces import SurfacePart, transformed
 from twin.render.light_groups import lamp_weighted_channels
@@ -87,9 +87,7 @@ class PinholeCamera:
         film = specfilm(channels, self.pixels, self.pixels)
         if self.window is not None:
             if not 0 < self.window <= self.pixels:
-                raise SpectwinInputError(
-                    f"window: expected 1 to {self.pixels} pixels, got {self.window}"
-                )
+                raise InputError(f"window: expected 1 to {self.pixels} pixels, got {self.window}")
             film |= {
                 "crop_offset_x": self.window_offset,
                 "crop_offset_y": self.window_offset,

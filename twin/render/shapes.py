@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from recon.btf.specular_lobe import COATING_IOR
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from twin.materials.surfaces import SurfacePart, texture_coordinates
 from twin.render.spectra import irregular_spectrum
 from twin.render.variant import activate
@@ -27,7 +27,7 @@ def part_bsdf(part: SurfacePart, *, unit: bool = False) -> dict[str, object]:
     with a spectral texture has only the unit form: Mitsuba's textures are RGB.
     """
     if part.texture is not None and not unit:
-        raise SpectwinInputError(
+        raise InputError(
             f"{part.name}: a spectrally textured part renders through the node transport "
             "(virtual captures and the truth), not in a Mitsuba scene of its own"
         )

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import re
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import SampledSpectra
 
 __all__ = ["channel_name", "irregular_spectrum", "ldsampler", "rendered_spp", "specfilm"]
@@ -20,7 +20,7 @@ __all__ = ["channel_name", "irregular_spectrum", "ldsampler", "rendered_spp", "s
 def irregular_spectrum(spectrum: SampledSpectra) -> dict[str, str]:
     """A Mitsuba ``irregular`` spectrum dict for one spectrum (1-D values)."""
     if spectrum.values.ndim != 1:
-        raise SpectwinInputError(
+        raise InputError(
             f"irregular_spectrum: expected one spectrum (1-D values), got shape "
             f"{spectrum.values.shape}"
         )
@@ -40,7 +40,7 @@ def rendered_spp(spp: int) -> int:
     """The sample count Mitsuba's ``ldsampler`` renders for a request of ``spp``: the next power
     of 4 (its low-discrepancy sequence needs a square power of two; 32 becomes 64)."""
     if int(spp) < 1:
-        raise SpectwinInputError(f"spp: expected at least 1 sample per pixel, got {spp}")
+        raise InputError(f"spp: expected at least 1 sample per pixel, got {spp}")
     count = 1
     while count < int(spp):
         count *= 4
@@ -59,11 +59,11 @@ def specfilm(responses: SampledSpectra, width: int, height: int) -> dict[str, ob
     Channels keep the order of the rows; they are named after ``responses.names`` when given.
     """
     if responses.values.ndim != 2:
-        raise SpectwinInputError(
+        raise InputError(
             f"specfilm: expected responses of shape (n_channels, K), got {responses.values.shape}"
         )
     if width < 1 or height < 1:
-        raise SpectwinInputError(f"specfilm: expected a positive size, got {width}x{height}")
+        raise InputError(f"specfilm: expected a positive size, got {width}x{height}")
     responses.require_non_negative("specfilm responses")
     names = responses.names or tuple(f"band_{i:03d}" for i in range(responses.values.shape[0]))
     film: dict[str, object] = {

@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import optimize
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid, resample
 from twin.components.lamps import FINE_GRID
 from twin.materials import Material, load_material
@@ -88,15 +88,13 @@ def _check_directions(
 ) -> tuple[np.ndarray, np.ndarray]:
     light_dirs, view_dirs = np.atleast_2d(light_dirs), np.atleast_2d(view_dirs)
     if light_dirs.shape != view_dirs.shape or light_dirs.shape[1] != 3:
-        raise SpectwinInputError("light_dirs, view_dirs: expected matching (n, 3) unit vectors")
+        raise InputError("light_dirs, view_dirs: expected matching (n, 3) unit vectors")
     if not np.allclose(np.linalg.norm(light_dirs, axis=1), 1) or not np.allclose(
         np.linalg.norm(view_dirs, axis=1), 1
     ):
-        raise SpectwinInputError("light_dirs, view_dirs: expected unit vectors")
+        raise InputError("light_dirs, view_dirs: expected unit vectors")
     if np.any(light_dirs[:, 2] <= 0) or np.any(view_dirs[:, 2] <= 0):
-        raise SpectwinInputError(
-            "light_dirs, view_dirs: expected directions above the sample (z > 0)"
-        )
+        raise InputError("light_dirs, view_dirs: expected directions above the sample (z > 0)")
     return light_dirs, view_dirs
 
 
@@ -122,7 +120,7 @@ def truth_btf(
     if passbands is None:
         passbands = band_passbands(bands)
     elif passbands.grid != FINE_GRID or passbands.values.ndim != 2:
-        raise SpectwinInputError(
+        raise InputError(
             f"passbands: expected (n_bands, K) rows on {FINE_GRID.describe()}, got "
             f"{passbands.values.shape} on {passbands.grid.describe()}"
         )
@@ -206,7 +204,7 @@ def texture_truth(
     """
     model = load_material(material) if isinstance(material, str) else material
     if texels < 2:
-        raise SpectwinInputError(f"texels: expected at least 2, got {texels}")
+        raise InputError(f"texels: expected at least 2, got {texels}")
     btf = np.pi * truth_btf(model, light_dirs, view_dirs, texels=texels, spp=spp)
     fine, bands, names = _basis(model, surface)
     pixels = btf.reshape(-1, btf.shape[-1]).astype(np.float64)

@@ -18,7 +18,7 @@ from dataclasses import asdict, dataclass
 import drjit as dr
 import mitsuba as mi
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = [
     "DEFAULT_VARIANT",
@@ -65,11 +65,11 @@ def choose_variant(
     ``cuda`` (Dr.Jit found CUDA), else by the LLVM version ``found`` (module docstring)."""
     if requested:
         if requested not in mi.variants():
-            raise SpectwinInputError(
+            raise InputError(
                 f"SPECTWIN_VARIANT: expected one of {mi.variants()}, got {requested!r}"
             )
         if not requested.endswith(("spectral", "spectral_polarized")):
-            raise SpectwinInputError(
+            raise InputError(
                 f"SPECTWIN_VARIANT: spectwin renders spectrally, expected a *_spectral variant, "
                 f"got {requested!r}"
             )
@@ -101,9 +101,7 @@ def activate() -> VariantReport:
     threads_text = os.environ.get("SPECTWIN_THREADS", "")
     if threads_text:
         if not threads_text.isdigit() or int(threads_text) < 1:
-            raise SpectwinInputError(
-                f"SPECTWIN_THREADS: expected a positive integer, got {threads_text!r}"
-            )
+            raise InputError(f"SPECTWIN_THREADS: expected a positive integer, got {threads_text!r}")
         dr.set_thread_count(int(threads_text))
     mi.set_variant(variant)
     _active = VariantReport(

@@ -17,7 +17,7 @@ from typing import Annotated
 
 from pydantic import Field, model_validator
 
-from recon.errors import SpectwinDataError, SpectwinInputError
+from recon.errors import InputError, MissingDataError
 from recon.measured_data import data_path
 from twin.rigs.yaml_config import (
     Positive,
@@ -128,8 +128,8 @@ class BenchConfig(StrictModel):
             return path
         try:
             return data_path(path)
-        except SpectwinDataError as error:
-            raise SpectwinInputError(
+        except MissingDataError as error:
+            raise InputError(
                 f"bench {self.name}: data folder {self.data} is neither beside the bench file nor "
                 "in spectwin's measured data"
             ) from error
@@ -142,16 +142,14 @@ class BenchConfig(StrictModel):
         """Raise one line naming the first file of the bench that is missing."""
         folder = self.data_folder()
         if not folder.is_dir():
-            raise SpectwinInputError(f"bench {self.name}: data folder {folder} does not exist")
+            raise InputError(f"bench {self.name}: data folder {folder} does not exist")
         for what, relative in (
             ("chart.labels", self.chart.labels),
             ("chart.spectra", self.chart.spectra),
             ("filters.spectra", self.filters.spectra),
         ):
             if not self.file(relative).is_file():
-                raise SpectwinInputError(
-                    f"bench {self.name}: {what} {self.file(relative)} does not exist"
-                )
+                raise InputError(f"bench {self.name}: {what} {self.file(relative)} does not exist")
 
 
 def available_benches() -> list[str]:

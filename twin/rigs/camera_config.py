@@ -20,7 +20,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from recon.errors import SpectwinDataError
+from recon.errors import DamagedDataError
 from recon.measured_data import data_path, read_spectra_csv
 from recon.spectra import SampledSpectra, WavelengthGrid, resample
 from twin.components.detectors import CCDQuantumEfficiency, rgb_camera_response
@@ -92,7 +92,7 @@ class RGBCSVQuantumEfficiencyConfig(StrictModel):
         range, the largest value ``peak_qe``."""
         measured = read_spectra_csv(self.file)
         if measured.names != ("R", "G", "B"):
-            raise SpectwinDataError(
+            raise DamagedDataError(
                 f"{self.file}: expected the columns R, G, B, got {measured.names}"
             )
         measured.require_non_negative(self.file)

@@ -24,7 +24,7 @@ import numpy as np
 import yaml
 
 from recon.emva.fit import FittedSensor
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.measured_data import data_path
 from recon.spectra import WavelengthGrid
 from twin.components.detectors import CCDQuantumEfficiency
@@ -61,7 +61,7 @@ def _peak_qe(fit: FittedSensor) -> float:
     shape_at = float(_QE_SHAPE(grid).values[0])
     peak = fit.quantum_efficiency / shape_at
     if not 0 < peak <= 1:
-        raise SpectwinInputError(
+        raise InputError(
             f"wavelength_nm: a quantum efficiency of {100 * fit.quantum_efficiency:.1f} % at "
             f"{fit.wavelength_nm:g} nm needs a peak of {100 * peak:.0f} % on the CCD curve shape "
             f"(peak at {_QE_SHAPE.peak_nm:g} nm); expected a wavelength where the shape allows it"

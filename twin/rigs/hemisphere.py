@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from recon.directions import direction
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = ["SATTLER_RINGS", "angle_between_deg", "direction", "sattler_directions", "spherical_deg"]
 
@@ -39,7 +39,7 @@ def angle_between_deg(first: np.ndarray, second: np.ndarray) -> np.ndarray:
 def sattler_directions(rings: tuple[tuple[float, int], ...] = SATTLER_RINGS) -> np.ndarray:
     """The 81 directions of Sattler et al. (2003), ``(81, 3)``, ring by ring, azimuth ascending."""
     if not rings or any(count < 1 or not 0 <= theta < 90 for theta, count in rings):
-        raise SpectwinInputError(
+        raise InputError(
             "rings: expected (polar angle in [0, 90) degrees, azimuth count >= 1) pairs"
         )
     return np.concatenate(

@@ -12,7 +12,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from twin.rigs.camera_config import available_cameras
 from twin.rigs.yaml_config import (
     NonNegative,
@@ -169,5 +169,5 @@ def load_rig(name_or_path: str | Path) -> GonioConfig | DomeConfig:
     document = read_yaml_mapping(path)
     kinds = {"gonioreflectometer": GonioConfig, "dome": DomeConfig}
     if document.get("rig") not in kinds:
-        raise SpectwinInputError(f"{path}: rig: expected 'gonioreflectometer' or 'dome'")
+        raise InputError(f"{path}: rig: expected 'gonioreflectometer' or 'dome'")
     return validate_document(kinds[document["rig"]], document, path)

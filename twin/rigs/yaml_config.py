@@ -9,7 +9,7 @@ from typing import Annotated, TypeVar
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 __all__ = [
     "NonNegative",
@@ -50,9 +50,7 @@ def resolve_scene_file(name_or_path: str | Path, folder: Path, what: str) -> Pat
     if not path.suffix:
         path = folder / f"{name_or_path}.yaml"
     if not path.is_file():
-        raise SpectwinInputError(
-            f"{what}: no file {path}; expected a path or one of {scene_names(folder)}"
-        )
+        raise InputError(f"{what}: no file {path}; expected a path or one of {scene_names(folder)}")
     return path
 
 
@@ -61,11 +59,11 @@ def read_yaml_mapping(path: Path) -> dict:
     try:
         document = yaml.safe_load(path.read_text(encoding="utf-8"))
     except yaml.YAMLError as error:
-        raise SpectwinInputError(f"{path}: malformed YAML: {error}") from error
+        raise InputError(f"{path}: malformed YAML: {error}") from error
     except (OSError, UnicodeDecodeError) as error:
-        raise SpectwinInputError(f"{path}: not a readable YAML text file ({error})") from error
+        raise InputError(f"{path}: not a readable YAML text file ({error})") from error
     if not isinstance(document, dict):
-        raise SpectwinInputError(f"{path}: expected a mapping of settings")
+        raise InputError(f"{path}: expected a mapping of settings")
     return document
 
 
@@ -79,4 +77,4 @@ def validate_document(model: type[Model], document: dict, path: Path) -> Model:
             f"{item['msg'].removeprefix('Value error, ')}"
             for item in error.errors()
         )
-        raise SpectwinInputError(f"{path}: {problems}") from error
+        raise InputError(f"{path}: {problems}") from error

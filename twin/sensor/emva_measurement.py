@@ -27,7 +27,7 @@ from recon.emva.descriptor import (
     write_descriptor,
     write_frame,
 )
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import WavelengthGrid
 from twin.rigs.camera_config import CameraConfig
 from twin.sensor.model import Sensor
@@ -37,19 +37,19 @@ __all__ = ["simulate_measurement"]
 
 def _sensor_for(config: CameraConfig, plan: EMVADescriptor) -> Sensor:
     if config.mosaic != "none":
-        raise SpectwinInputError(
+        raise InputError(
             f"{config.name}: a colour camera ({config.mosaic} mosaic); the EMVA 1288 simulation "
             "expects a monochrome camera"
         )
     if plan.height > config.height or plan.width > config.width:
-        raise SpectwinInputError(
+        raise InputError(
             f"{plan.path}: {plan.width}x{plan.height} px frames; {config.name} has "
             f"{config.width}x{config.height} px: expected a measurement no larger than the sensor"
         )
     low, high = config.exposure_range_s
     shortest, longest = plan.exposure_range_s
     if shortest < low or longest > high:
-        raise SpectwinInputError(
+        raise InputError(
             f"{plan.path}: exposure times {shortest:g} to {longest:g} s; {config.name} takes "
             f"{low:g} to {high:g} s: expected a measurement within the camera's range"
         )

@@ -45,7 +45,7 @@ import numpy as np
 from scipy import constants
 
 from recon.emva.linear_model import knee_oecf, predicted_saturation_e
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import SampledSpectra, WavelengthGrid, band_integrals
 from twin.rigs.camera_config import CameraConfig, load_camera_config
 
@@ -76,7 +76,7 @@ def bayer_channel_index(height: int, width: int, pattern: str = "RGGB") -> np.nd
     [[1, 2, 1, 2], [0, 1, 0, 1]]
     """
     if sorted(pattern) != ["B", "G", "G", "R"]:
-        raise SpectwinInputError(f"pattern: expected a Bayer tile such as RGGB, got {pattern!r}")
+        raise InputError(f"pattern: expected a Bayer tile such as RGGB, got {pattern!r}")
     tile = np.array(["RGB".index(letter) for letter in pattern]).reshape(2, 2)
     return np.tile(tile, (height // 2 + 1, width // 2 + 1))[:height, :width]
 
@@ -104,7 +104,7 @@ class Sensor:
         self.config = load_camera_config(config) if isinstance(config, str) else config
         height, width = roi or (self.config.height, self.config.width)
         if not (0 < height <= self.config.height and 0 < width <= self.config.width):
-            raise SpectwinInputError(
+            raise InputError(
                 f"roi: expected 1..{self.config.height} rows and 1..{self.config.width} columns, "
                 f"got {height}x{width}"
             )
@@ -158,9 +158,7 @@ class Sensor:
         (EMVA 1288 Linear).
         """
         if self.config.oecf.model != "linear":
-            raise SpectwinInputError(
-                "emva_saturation_capacity_e: EMVA 1288 Linear needs a linear OECF"
-            )
+            raise InputError("emva_saturation_capacity_e: EMVA 1288 Linear needs a linear OECF")
         config = self.config
         return predicted_saturation_e(
             config.full_well_e,
@@ -193,13 +191,13 @@ class Sensor:
             return SampledSpectra(grid, per_channel, qe.names)
         filter_transmission.require_non_negative("filter_transmission")
         if filter_transmission.grid != grid:
-            raise SpectwinInputError(
+            raise InputError(
                 f"filter_transmission: expected the grid {grid.describe()}, got "
                 f"{filter_transmission.grid.describe()}"
             )
         rows = np.atleast_2d(filter_transmission.values)
         if self.is_colour and rows.shape[0] != 1:
-            raise SpectwinInputError(
+            raise InputError(
                 f"filter_transmission: a colour camera takes one filter, got {rows.shape[0]} bands"
             )
         names = filter_transmission.names if not self.is_colour else qe.names
@@ -312,7 +310,7 @@ class Sensor:
             Source of the temporal noise.
         """
         if not isinstance(rng, np.random.Generator):
-            raise SpectwinInputError(f"rng: expected a numpy.random.Generator, got {type(rng)}")
+            raise InputError(f"rng: expected a numpy.random.Generator, got {type(rng)}")
         electrons = self._check_image(
             photo_electrons, "photo_electrons", channels=3 if self.is_colour else None
         )
@@ -366,11 +364,9 @@ class Sensor:
     def _check_exposure(self, exposure_s: float) -> None:
         low, high = self.config.exposure_range_s
         if not np.isfinite(exposure_s) or exposure_s <= 0:
-            raise SpectwinInputError(
-                f"exposure_s: expected a positive exposure time, got {exposure_s}"
-            )
+            raise InputError(f"exposure_s: expected a positive exposure time, got {exposure_s}")
         if not low <= exposure_s <= high:
-            raise SpectwinInputError(
+            raise InputError(
                 f"exposure_s: {exposure_s} s is outside the {self.config.name}'s range "
                 f"[{low}, {high}] s"
             )
@@ -379,11 +375,11 @@ class Sensor:
         image = np.asarray(image)
         expected = (self.height, self.width) + ((channels,) if channels else ())
         if image.shape[:2] != expected[:2] or (channels and image.shape != expected):
-            raise SpectwinInputError(
+            raise InputError(
                 f"{what}: expected shape {expected} for this sensor's readout, got {image.shape}"
             )
         if not np.all(np.isfinite(image)):
-            raise SpectwinInputError(f"{what}: expected finite values, found NaN or infinity")
+            raise InputError(f"{what}: expected finite values, found NaN or infinity")
         if np.any(image < 0):
-            raise SpectwinInputError(f"{what}: expected non-negative values")
+            raise InputError(f"{what}: expected non-negative values")
         return image

@@ -14,7 +14,7 @@ import cv2
 import numpy as np
 from skimage.transform import resize
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from twin.sensor.model import bayer_channel_index, mosaic_channels
 
 __all__ = ["bilinear_demosaic", "reduce_linear", "reduce_raw_frame"]
@@ -45,9 +45,7 @@ def reduce_linear(raw: np.ndarray, pattern: str, shape: tuple[int, int]) -> np.n
     ``shape`` and re-mosaicing, linear in ``raw`` (float ``shape``)."""
     raw = np.asarray(raw)
     if raw.ndim != 2 or shape[0] > raw.shape[0] or shape[1] > raw.shape[1]:
-        raise SpectwinInputError(
-            f"raw: expected a 2-D frame at least {shape}, got shape {raw.shape}"
-        )
+        raise InputError(f"raw: expected a 2-D frame at least {shape}, got shape {raw.shape}")
     rgb = bilinear_demosaic(raw, pattern)
     small = resize(rgb, (*shape, 3), order=1, anti_aliasing=True, preserve_range=True)
     return mosaic_channels(small, bayer_channel_index(*shape, pattern))

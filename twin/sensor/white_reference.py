@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import SampledSpectra
 from twin.components.lamps import FINE_GRID, Lamp
 from twin.components.targets import zenith_white_reflectance
@@ -35,7 +35,7 @@ def white_reference_rates(
     or ``None`` for a colour camera's own R, G, B channels.
     """
     if not distance_m > 0:
-        raise SpectwinInputError(f"distance_m: expected a positive distance, got {distance_m}")
+        raise InputError(f"distance_m: expected a positive distance, got {distance_m}")
     reflectance = zenith_white_reflectance(FINE_GRID).values
     parts = lamp.spectral_parts(FINE_GRID)
     radiance = SampledSpectra(FINE_GRID, parts.values * reflectance / math.pi / distance_m**2)
@@ -56,10 +56,10 @@ def equalized_exposures_s(
     its multiples; all times are clipped to the camera's exposure range.
     """
     if not 0 < white_fill <= 1:
-        raise SpectwinInputError(f"white_fill: expected a fraction in (0, 1], got {white_fill}")
+        raise InputError(f"white_fill: expected a fraction in (0, 1], got {white_fill}")
     rates = np.asarray(rates_e_per_s, dtype=np.float64)
     if np.any(rates <= 0):
-        raise SpectwinInputError("rates_e_per_s: expected positive signal rates in every band")
+        raise InputError("rates_e_per_s: expected positive signal rates in every band")
     exposures = white_fill * sensor.saturation_capacity_e / rates
     if round_to_s:
         exposures = np.ceil(exposures / round_to_s - 1e-9) * round_to_s

@@ -28,7 +28,7 @@ from scipy import ndimage
 from scipy.optimize import least_squares
 
 from recon.chart_patches import patch_statistics
-from recon.errors import SpectwinDataError
+from recon.errors import DamagedDataError, MissingDataError
 from twin.rigs.bench_config import BenchConfig
 from twin.rigs.camera_config import CameraConfig
 from twin.sensor.model import Sensor, mosaic_channels
@@ -93,7 +93,7 @@ def chart_pose(
     )
     found, rotation_vector, translation = cv2.solvePnP(layout, centroids, intrinsics, None)
     if not found:
-        raise SpectwinDataError("chart labels: the patch centres fit no pose of the chart")
+        raise DamagedDataError("chart labels: the patch centres fit no pose of the chart")
     projected, _ = cv2.projectPoints(layout, rotation_vector, translation, intrinsics, None)
     rms_px = float(np.sqrt(np.mean(np.sum((projected[:, 0] - centroids) ** 2, axis=1))))
     pitch_m = distance_m / float(np.linalg.norm(translation))
@@ -142,7 +142,7 @@ def fit_exposure_index(bench: BenchConfig, means: np.ndarray, exposures: np.ndar
     counts = inside.reshape(len(exposures), -1).sum(axis=1)
     best = max(range(len(exposures)), key=lambda index: (counts[index], exposures[index]))
     if counts[best] == 0:
-        raise SpectwinDataError(
+        raise MissingDataError(
             f"{bench.name}: no exposure puts a fit patch between {bench.fit.min_dn} and "
             f"{bench.fit.max_dn} DN"
         )
@@ -304,7 +304,7 @@ def fit_dark(
     wanted = np.array(bench.fit.dark_exposures_ms) / 1000
     chosen = np.isclose(dark_exposure_s[:, None], wanted[None, :]).any(axis=1)
     if not chosen.any():
-        raise SpectwinDataError(
+        raise MissingDataError(
             f"{bench.name}: no dark frame at the fit exposures "
             f"{list(bench.fit.dark_exposures_ms)} ms"
         )

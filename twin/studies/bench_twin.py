@@ -23,7 +23,7 @@ from skimage import io as skimage_io
 from hwbridge.replay import ingest
 from recon.calibration.capture_io import select_frames
 from recon.chart_patches import patch_masks
-from recon.errors import SpectwinDataError, SpectwinInputError
+from recon.errors import DamagedDataError, InputError
 from recon.measured_data import read_spectra_columns
 from recon.spectra import SampledSpectra
 from twin.render.bench_scene import render_chart_bench
@@ -72,13 +72,13 @@ def read_real_capture(bench: BenchConfig) -> RealCapture:
         dark = select_frames(store, camera, kind="dark")
     shape = (bench.reduction.height, bench.reduction.width)
     if chart.frames.shape[1:] != shape or dark.frames.shape[1:] != shape:
-        raise SpectwinDataError(
+        raise DamagedDataError(
             f"{bench.data_folder()}: expected frames of {shape[0]}x{shape[1]} px as the bench's "
             f"reduction says, got {chart.frames.shape[1:]}"
         )
     unknown = sorted({int(round(band)) for band in chart.band_nm} - set(bench.filters.columns))
     if unknown:
-        raise SpectwinDataError(f"{bench.name}: frames at bands {unknown} nm have no filter")
+        raise DamagedDataError(f"{bench.name}: frames at bands {unknown} nm have no filter")
     return RealCapture(chart.frames, chart.band_nm, chart.exposure_s, dark.frames, dark.exposure_s)
 
 
@@ -147,7 +147,7 @@ class BenchTwin:
         """Index of a frame's filter in :attr:`bands_nm`."""
         band = int(round(band_nm))
         if band not in self.bands_nm:
-            raise SpectwinInputError(f"band_nm: expected one of {list(self.bands_nm)}, got {band}")
+            raise InputError(f"band_nm: expected one of {list(self.bands_nm)}, got {band}")
         return self.bands_nm.index(band)
 
     def expected_frame(self, band_nm: float, exposure_s: float) -> np.ndarray:
@@ -197,7 +197,7 @@ def _read_labels(bench: BenchConfig) -> np.ndarray:
     shape = (bench.reduction.height, bench.reduction.width)
     count = len(bench.chart.patches)
     if labels.shape != shape or int(labels.max()) != count:
-        raise SpectwinDataError(
+        raise DamagedDataError(
             f"{bench.chart.labels}: expected a {shape[0]}x{shape[1]} image labelling patches "
             f"1-{count}, got {labels.shape} with labels up to {int(labels.max())}"
         )
@@ -206,7 +206,7 @@ def _read_labels(bench: BenchConfig) -> np.ndarray:
 
 def _colour_camera(camera: CameraConfig) -> CameraConfig:
     if camera.mosaic == "none":
-        raise SpectwinInputError(f"camera {camera.name}: the bench twin needs a colour camera")
+        raise InputError(f"camera {camera.name}: the bench twin needs a colour camera")
     return camera
 
 

@@ -38,7 +38,7 @@ from scipy import stats
 from recon.camera_char import estimate_response
 from recon.camera_jiang2013 import jiang2013_response
 from recon.camera_prior import PRIOR_COMPONENTS, PRIOR_WEIGHT, learn_response_prior
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.measured_data import camera_name, camera_names, read_camera_sensitivities
 from recon.metrics import peak_relative_rmse
 from recon.progress import progress_steps
@@ -175,11 +175,11 @@ def characterize_cameras(
     everyone = camera_names()
     cameras = list(everyone) if cameras is None else [camera_name(name) for name in cameras]
     if not cameras:
-        raise SpectwinInputError("cameras: expected at least one measured camera")
+        raise InputError("cameras: expected at least one measured camera")
     if not methods or set(methods) - set(METHODS):
-        raise SpectwinInputError(f"methods: expected some of {METHODS}, got {tuple(methods)}")
+        raise InputError(f"methods: expected some of {METHODS}, got {tuple(methods)}")
     if light not in colour.SDS_ILLUMINANTS:
-        raise SpectwinInputError(f"light: expected a CIE illuminant such as 'D65', got {light!r}")
+        raise InputError(f"light: expected a CIE illuminant such as 'D65', got {light!r}")
     measured = {name: read_camera_sensitivities(name) for name in everyone}
     fine = {name: resample(s, PHOTO_GRID).values.T for name, s in measured.items()}
     responses = {

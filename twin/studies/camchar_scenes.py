@@ -15,7 +15,7 @@ import colour
 import numpy as np
 import trimesh
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import DEFAULT_GRID, SampledSpectra, from_colour, resample
 from twin.components.detectors import rgb_camera_response
 from twin.components.lamps import FINE_GRID, HMILamp
@@ -51,11 +51,11 @@ class ChartScenario:
 
     def __post_init__(self) -> None:
         if self.chart not in CHARTS:
-            raise SpectwinInputError(f"chart: expected one of {sorted(CHARTS)}, got {self.chart!r}")
+            raise InputError(f"chart: expected one of {sorted(CHARTS)}, got {self.chart!r}")
         if self.light not in LIGHTS:
-            raise SpectwinInputError(f"light: expected one of {sorted(LIGHTS)}, got {self.light!r}")
+            raise InputError(f"light: expected one of {sorted(LIGHTS)}, got {self.light!r}")
         if not 0 <= self.bend <= 0.2:
-            raise SpectwinInputError(f"bend: expected 0 to 0.2 chart widths, got {self.bend}")
+            raise InputError(f"bend: expected 0 to 0.2 chart widths, got {self.bend}")
 
 
 @dataclass(frozen=True)

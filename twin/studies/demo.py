@@ -28,7 +28,7 @@ import numpy as np
 from recon.btf.compression import compress_btf, compression_report, save_compressed
 from recon.btf.processing import process_gonio
 from recon.calibration.gonio import calibrate_gonio
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from twin.gonio.capture import CAMERA_ID, run_gonio_calibration, run_gonio_measurement
 from twin.gonio.render import GONIO_SPP
 from twin.output_format import dumps
@@ -73,7 +73,7 @@ class DemoSettings:
 def _prepare(out: Path) -> None:
     if out.exists() and any(out.iterdir()):
         if not (out / _MARKER).exists():
-            raise SpectwinInputError(
+            raise InputError(
                 f"--out: {out} is not empty and was not written by spectwin demo; choose another"
             )
         shutil.rmtree(out)
@@ -118,7 +118,7 @@ def run_demo(
     with stage("processing and compression"):
         btf = process_gonio(capture, calibration, out / "cc.btf.zarr", texels=settings.texels)
         if not btf.complete:
-            raise SpectwinInputError(
+            raise InputError(
                 f"processing left pairs unregistered: {btf.attrs['unregistered_pairs']}"
             )
         reflectance = np.asarray(btf.reflectance())

@@ -37,7 +37,7 @@ import numpy as np
 from scipy import ndimage
 
 from recon.baselines import dong_2016, spectral_a_plus
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.metrics import relative_error
 from recon.spectralize.appearance import appearance_neighbours, appearance_points
 from recon.spectralize.solve import dynamic_scale
@@ -362,7 +362,7 @@ def _field_medians(image: np.ndarray, grid: int = 4) -> np.ndarray:
     """Median of the inner half of each of the ``grid x grid`` fields, ``(grid * grid, C)``."""
     side = image.shape[0]
     if side % grid:
-        raise SpectwinInputError(f"image: {side} texels do not split into {grid} fields")
+        raise InputError(f"image: {side} texels do not split into {grid} fields")
     step = side // grid
     inner = slice(step // 4, step - step // 4)
     return np.array(
@@ -414,13 +414,13 @@ def run_dome_study(
     """
     unknown = sorted(set(materials) - set(DOME_MATERIALS))
     if unknown or not materials:
-        raise SpectwinInputError(
+        raise InputError(
             f"materials: expected some of {list(DOME_MATERIALS)}, got {list(materials)}"
         )
     if texels < 8 or texels % 4:
-        raise SpectwinInputError(f"texels: expected a multiple of 4, at least 8, got {texels}")
+        raise InputError(f"texels: expected a multiple of 4, at least 8, got {texels}")
     if not analytic and store_metrics is None:
-        raise SpectwinInputError("analytic, capture: expected the analytic path, stores or both")
+        raise InputError("analytic, capture: expected the analytic path, stores or both")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     metrics = _analytic_study(out, texels, materials, seed, step) if analytic else {}

@@ -41,7 +41,7 @@ from recon.calibration.dome import DARK_VALUE_OFFSET
 from recon.calibration.dome_capture import DomeCalibration, calibrate_dome
 from recon.dome.processing import P_DYN, dome_directions, process_dome
 from recon.dome.run import open_dome_run
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.metrics import relative_error
 from recon.radiometric.hdr import interpolate_curve
 from twin.dome.capture_study import ReconstructionErrors, reconstruct_capture, simulate_capture
@@ -122,7 +122,7 @@ def _check_capture_size(path: Path, size: DomeCaptureSize) -> None:
     wanted = asdict(size)
     differing = [name for name, value in wanted.items() if name in rig and rig[name] != value]
     if differing:
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: captured with "
             + ", ".join(f"{name}={rig[name]}" for name in differing)
             + "; expected "

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 from hwbridge.dome_layout import SPECTRAL_CAMERA
 from recon.calibration.dome_capture import calibrate_dome
 from recon.dome.processing import process_dome
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from twin.dome.programs import (
     DEFAULT_SPP,
     DomeCaptureSize,
@@ -62,7 +62,7 @@ def check_dome_point(point: DesignPoint) -> None:
     images past the last LED would never be exposed), exposures no schedule fits."""
     plan = point.plan
     if plan.schedule_images is not None and plan.schedule_images > plan.leds:
-        raise SpectwinInputError(
+        raise InputError(
             f"schedule_images: expected at most plan.leds ({plan.leds}) images, got "
             f"{plan.schedule_images}: the bands of the images past the last LED would never "
             "be exposed"

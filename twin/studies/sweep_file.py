@@ -38,7 +38,7 @@ from typing import Annotated, Any
 import numpy as np
 from pydantic import Field, field_validator
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from twin.materials import available_materials
 from twin.output_format import format_value
 from twin.rigs.rig_config import load_rig
@@ -196,7 +196,7 @@ def _set_path(document: Any, parts: list[str], value: Any, path: str) -> None:
         elif head.isdigit() and int(head) < len(document):
             targets = [int(head)]
         else:
-            raise SpectwinInputError(
+            raise InputError(
                 f"parameters: {path}: {head!r} is not an item of a list of {len(document)}; "
                 "expected an item number or '*'"
             )
@@ -208,9 +208,7 @@ def _set_path(document: Any, parts: list[str], value: Any, path: str) -> None:
         return
     if not isinstance(document, dict) or head not in document:
         known = sorted(document) if isinstance(document, dict) else []
-        raise SpectwinInputError(
-            f"parameters: {path}: unknown key {head!r}; expected one of {known}"
-        )
+        raise InputError(f"parameters: {path}: unknown key {head!r}; expected one of {known}")
     if rest:
         _set_path(document[head], rest, value, path)
     else:
@@ -223,7 +221,7 @@ def _values(path: str, values: list[Any] | SweepRange) -> list[Any]:
     try:
         return values.values()
     except ValueError as error:
-        raise SpectwinInputError(f"parameters: {path}: {error}") from None
+        raise InputError(f"parameters: {path}: {error}") from None
 
 
 def _check_path(path: str, rig: dict, plan_fields: set[str]) -> None:
@@ -236,11 +234,11 @@ def _check_path(path: str, rig: dict, plan_fields: set[str]) -> None:
     if stage == "plan" and rest in plan_fields:
         return
     if stage == "plan":
-        raise SpectwinInputError(
+        raise InputError(
             f"parameters: {path}: unknown plan field; expected one of "
             f"{sorted('plan.' + name for name in plan_fields)}"
         )
-    raise SpectwinInputError(
+    raise InputError(
         f"parameters: {path}: expected a path starting with 'rig.' or 'plan.', or 'material'"
     )
 
@@ -259,7 +257,7 @@ def _point(
             plan[rest] = value
     where = f"{path}: point {index} ({', '.join(f'{k}={v!r}' for k, v in values.items())})"
     if material not in available_materials():
-        raise SpectwinInputError(
+        raise InputError(
             f"{where}: material: expected one of {available_materials()}, got {material!r}"
         )
     config = validate_document(kind.config, document, Path(f"{where}: rig"))
@@ -269,20 +267,20 @@ def _point(
 
 def check_points(sweep: Sweep, check: Callable[[DesignPoint], None]) -> None:
     """Run ``check`` (the kind's, e.g. :func:`twin.studies.sweep_gonio.check_gonio_point`) on
-    every point: the plan against what the rig can take. Raises :class:`SpectwinInputError`
+    every point: the plan against what the rig can take. Raises :class:`InputError`
     naming the file, the point and its values."""
     for point in sweep.points:
         try:
             check(point)
-        except SpectwinInputError as error:
-            raise SpectwinInputError(f"{point.where}: plan: {error}") from None
+        except InputError as error:
+            raise InputError(f"{point.where}: plan: {error}") from None
 
 
 def load_sweep(name_or_path: str | Path, kind_of: Callable[[str], SweepKind]) -> Sweep:
     """Read and validate a sweep file (a name in ``scenes/sweeps`` or a path), every design
     point's rig and plan included (what the rig can take of a plan: :func:`check_points`);
     ``kind_of(rig)`` gives the :class:`SweepKind` of the rig named in the rig file. Raises
-    :class:`SpectwinInputError` naming the first problem."""
+    :class:`InputError` naming the first problem."""
     path = resolve_scene_file(name_or_path, SWEEP_DIR, "sweep file")
     sweep = validate_document(SweepFile, read_yaml_mapping(path), path)
     rig_path = resolve_scene_file(sweep.rig, scene_folder("rigs"), "rig")
@@ -292,14 +290,14 @@ def load_sweep(name_or_path: str | Path, kind_of: Callable[[str], SweepKind]) ->
     rig = read_yaml_mapping(rig_path)
     unknown = [name for name in sweep.objectives if name not in measures]
     if unknown or sweep.objectives[0] == sweep.objectives[1]:
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: objectives: expected two different measures of {list(measures)}, "
             f"got {list(sweep.objectives)}"
         )
     plan_fields = set(plan_model.model_fields)
     unknown_plan = sorted(set(sweep.plan) - plan_fields)
     if unknown_plan:
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: plan: unknown field {unknown_plan[0]!r}; expected some of "
             f"{sorted(plan_fields)}"
         )
@@ -309,7 +307,7 @@ def load_sweep(name_or_path: str | Path, kind_of: Callable[[str], SweepKind]) ->
         parameters[name] = _values(name, values)
     count = int(np.prod([len(values) for values in parameters.values()]))
     if count > _MAX_POINTS:
-        raise SpectwinInputError(
+        raise InputError(
             f"{path}: parameters: {count} design points; expected at most {_MAX_POINTS}"
         )
     points = [

@@ -27,7 +27,7 @@ import numpy as np
 
 from recon.btf.processing import process_gonio
 from recon.calibration.gonio import calibrate_gonio, lamp_rounding_s
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from twin.gonio.capture import (
     check_capture_settings,
     gonio_calibration_program,
@@ -52,11 +52,11 @@ def check_gonio_point(point: DesignPoint) -> None:
     config, plan = point.rig, point.plan
     check_capture_settings(config, pixels=plan.pixels, spp=plan.spp or GONIO_SPP)
     if plan.texels > plan.pixels:
-        raise SpectwinInputError(
+        raise InputError(
             f"plan.texels: expected at most plan.pixels ({plan.pixels}), got {plan.texels}"
         )
     if not gonio_pairs(config, tuple(plan.rings)).poses:
-        raise SpectwinInputError(f"plan.rings: the robot reaches no pair of {plan.rings}")
+        raise InputError(f"plan.rings: the robot reaches no pair of {plan.rings}")
 
 
 def measure_gonio_point(point: DesignPoint, folder: Path) -> dict:

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.progress import progress_steps
 from twin.output_format import dumps
 from twin.studies.sweep_file import DesignPoint, Sweep
@@ -58,14 +58,14 @@ def _prepare(sweep: Sweep, out: Path) -> None:
     if marker.is_file():
         recorded = json.loads(marker.read_text(encoding="utf-8"))
         if {key: recorded.get(key) for key in ("sweep", "point_keys")} != _identity(sweep):
-            raise SpectwinInputError(
+            raise InputError(
                 f"--out: {out} holds another sweep ({recorded.get('sweep')!r} with "
                 f"{len(recorded.get('point_keys', []))} points) or other settings; choose "
                 "another folder"
             )
         return
     if out.exists() and any(out.iterdir()):
-        raise SpectwinInputError(f"--out: {out} is not empty and holds no sweep; choose another")
+        raise InputError(f"--out: {out} is not empty and holds no sweep; choose another")
     (out / "points").mkdir(parents=True, exist_ok=True)
     marker.write_text(dumps(sweep.describe() | _identity(sweep)), encoding="utf-8")
 

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from recon.chart_patches import PatchStatistics, dark_statistics, patch_statistics
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.progress import progress_steps
 from twin.output_format import dumps
 from twin.rigs.bench_config import BenchConfig, load_bench
@@ -345,7 +345,7 @@ def run_twin_vs_real(
     if bands_nm:
         keep = np.isin(np.round(real.band_nm).astype(int), bands_nm)
         if not keep.any():
-            raise SpectwinInputError(
+            raise InputError(
                 f"bands: expected some of {sorted({int(round(b)) for b in real.band_nm})} nm, "
                 f"got {list(bands_nm)}"
             )

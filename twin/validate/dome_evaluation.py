@@ -34,11 +34,10 @@ import numpy as np
 from matplotlib.figure import Figure
 from skimage.registration import phase_cross_correlation
 
-from hwbridge.errors import BridgeInputError
 from hwbridge.store import CaptureStore
 from recon.btf.store import BTFStore
 from recon.calibration.dome_geometric import CameraGeometry, stage_rotation
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.metrics import delta_e94, relative_error
 from recon.preview import spectral_to_srgb
 from recon.spectra import SampledSpectra, WavelengthGrid
@@ -165,13 +164,13 @@ def _nominal_corners(capture: CaptureStore, btf: BTFStore, pairs: np.ndarray) ->
 def _capture(btf_path: Path, btf: BTFStore) -> CaptureStore:
     source = btf.attrs.get("source_capture")
     if not source or "dome_pairs" not in btf.attrs:
-        raise SpectwinInputError(
+        raise InputError(
             f"{btf_path}: not processed from a dome run (no source capture or dome pairs)"
         )
     try:
         return CaptureStore.open(source)
-    except BridgeInputError as error:
-        raise SpectwinInputError(
+    except InputError as error:
+        raise InputError(
             f"{btf_path}: the capture store it was processed from is needed: {error}"
         ) from None
 
@@ -219,13 +218,13 @@ def evaluate_dome(
         Fraction of a chart field's width compared (its edges blur with the registration).
     """
     if isinstance(spp, bool) or not isinstance(spp, int | np.integer) or spp < 1:
-        raise SpectwinInputError(f"spp: expected a positive number of samples, got {spp!r}")
+        raise InputError(f"spp: expected a positive number of samples, got {spp!r}")
     btf_path = Path(btf_path)
     btf = BTFStore.open(btf_path)
     capture = _capture(btf_path, btf)
     chosen = np.arange(btf.n_pairs) if pairs is None else np.asarray(pairs, int)
     if chosen.size == 0 or chosen.min() < 0 or chosen.max() >= btf.n_pairs:
-        raise SpectwinInputError(f"pairs: expected indices in 0..{btf.n_pairs - 1}")
+        raise InputError(f"pairs: expected indices in 0..{btf.n_pairs - 1}")
     material = load_material(btf.material)
     chart = any(part.name.startswith("field_") for part in material.parts)
     if not chart:

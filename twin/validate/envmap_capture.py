@@ -21,7 +21,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import WavelengthGrid
 from twin.render.light_groups import LightGroup, render_lit
 from twin.render.plugins.spectral_envmap import SpectralMap
@@ -90,7 +90,7 @@ def unwrap_mirror_sphere(
         counts.reshape(height, width) == 0
     )
     if hidden.all():
-        raise SpectwinInputError("blind_spot_deg: hides every direction of the map")
+        raise InputError("blind_spot_deg: hides every direction of the map")
     seen = np.argwhere(~hidden)
     for row_index, column_index in np.argwhere(hidden):
         distance = np.abs(seen[:, 0] - row_index) + 0.01 * np.abs(seen[:, 1] - column_index)

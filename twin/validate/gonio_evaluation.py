@@ -22,10 +22,9 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from hwbridge.errors import BridgeInputError
 from hwbridge.store import CaptureStore
 from recon.btf.store import BTFStore
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.metrics import relative_error
 from recon.preview import spectral_to_srgb
 from recon.spectra import SampledSpectra
@@ -121,24 +120,24 @@ def evaluate_gonio(
     filter's bandwidth part of the error.
     """
     if isinstance(spp, bool) or not isinstance(spp, int | np.integer) or spp < 1:
-        raise SpectwinInputError(f"spp: expected a positive number of samples, got {spp!r}")
+        raise InputError(f"spp: expected a positive number of samples, got {spp!r}")
     btf = BTFStore.open(btf_path)
     written = np.flatnonzero(btf.written())
     if not written.size:
-        raise SpectwinInputError(
+        raise InputError(
             f"{btf_path}: no direction pair is written yet; finish the BTF with spectwin "
             "process --resume"
         )
     source = btf.attrs.get("source_capture")
     if not source:
-        raise SpectwinInputError(
+        raise InputError(
             f"{btf_path}: records no source capture; evaluate compares BTFs made by spectwin "
             "process from a twin capture"
         )
     try:
         capture = CaptureStore.open(source)
-    except BridgeInputError as error:
-        raise SpectwinInputError(
+    except InputError as error:
+        raise InputError(
             f"{btf_path}: the capture store it was processed from is needed: {error}"
         ) from None
     material = load_material(btf.material)
@@ -147,7 +146,7 @@ def evaluate_gonio(
     for pair in written if chart else ():
         fields = field_masks(material, btf.view_dirs[pair], texels, interior=interior)
         if not fields.masks.any(axis=(1, 2)).all():
-            raise SpectwinInputError(
+            raise InputError(
                 f"{btf_path}: at {texels} texels some chart fields have no interior texel to "
                 "compare; process the capture again with --texels 16 or more"
             )

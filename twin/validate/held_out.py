@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from recon.btf.store import BTFStore
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.metrics import delta_e94, relative_error
 from recon.spectra import SampledSpectra
 from twin.materials import load_material
@@ -94,7 +94,7 @@ def held_out_errors(
     """
     btf = BTFStore.open(btf_path)
     if not btf.written().any():
-        raise SpectwinInputError(f"{btf_path}: no direction pair is written; nothing to compare")
+        raise InputError(f"{btf_path}: no direction pair is written; nothing to compare")
     material = load_material(btf.material)
     lights = np.array([direction(*light) for light, _ in pairs_deg])
     views = np.array([direction(*view) for _, view in pairs_deg])

@@ -25,7 +25,7 @@ from typing import Any
 
 from recon.btf.rgb_import import rgb_source
 from recon.btf.store import BTFStore
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from twin.materials import load_material
 from twin.output_format import dumps
 from twin.render.plugins.btf_bsdf import store_table
@@ -94,30 +94,28 @@ def validate_btf(
     """
     for name, value in (("pixels", pixels), ("spp", spp), ("map_height", map_height)):
         if isinstance(value, bool) or not isinstance(value, int) or value < 4:
-            raise SpectwinInputError(f"{name}: expected an integer of at least 4, got {value!r}")
+            raise InputError(f"{name}: expected an integer of at least 4, got {value!r}")
     btf = BTFStore.open(btf_path)
     material = load_material(btf.material)
     if not any(part.name.startswith("field_") for part in material.parts):
-        raise SpectwinInputError(
+        raise InputError(
             f"{btf_path}: material {btf.material!r} has no chart fields (field_*) to compare"
         )
     if compressed and not btf.has_compressed:
-        raise SpectwinInputError(
-            f"{btf_path}: no compressed form stored; run spectwin compress first"
-        )
+        raise InputError(f"{btf_path}: no compressed form stored; run spectwin compress first")
     if not compressed and not btf.written().any():
-        raise SpectwinInputError(
+        raise InputError(
             f"{btf_path}: no direction pair is written yet; finish the BTF with spectwin "
             "process --resume"
         )
     if not field_spots(material, btf.texels[0]).any(axis=(1, 2)).all():
-        raise SpectwinInputError(
+        raise InputError(
             f"{btf_path}: its {btf.texels[0]} texels leave chart fields without a texel in the "
             "45/0 measuring spot; process the capture with --texels 16 or more"
         )
     field_pixels = field_interiors(material, pixels).reshape(-1, pixels * pixels).sum(axis=1)
     if not field_pixels.all():
-        raise SpectwinInputError(
+        raise InputError(
             f"pixels: {pixels} px leave chart fields of {btf.material!r} without an interior "
             f"pixel to compare; expected at least {MIN_PIXELS}"
         )

@@ -10,7 +10,7 @@ import pytest
 
 from recon.btf.bonn_formats import read_image_archive, read_ubo2014
 from recon.btf.rgb_import import import_rgb_images, rgb_source
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 _HEIGHT, _WIDTH = 6, 8  # not square: a transposed or unflipped reader shows
 
@@ -137,7 +137,7 @@ def test_a_broken_ubo2014_file_fails_in_one_line(tmp_path, rng, bonn_files, dama
     bonn_files.write_ubo2014(good, _directions_rad(), _directions_rad(), _images(rng))
     bad = tmp_path / "bad.btf"
     damage(bad, good.read_bytes())
-    with pytest.raises(SpectwinInputError, match=message) as error:
+    with pytest.raises(InputError, match=message) as error:
         read_ubo2014(bad)
     assert "\n" not in str(error.value)
 
@@ -146,7 +146,7 @@ def test_bad_archives_fail_in_one_line(tmp_path, rng, bonn_files):
     empty = tmp_path / "empty.zip"
     with zipfile.ZipFile(empty, "w") as archive:
         archive.writestr("readme.txt", "no images")
-    with pytest.raises(SpectwinInputError, match="no images named like"):
+    with pytest.raises(InputError, match="no images named like"):
         read_image_archive(empty)
     encoded = np.zeros((2, 4, 4, 3), np.uint8)
     twice = tmp_path / "twice.zip"
@@ -154,12 +154,12 @@ def test_bad_archives_fail_in_one_line(tmp_path, rng, bonn_files):
     bonn_files.write_ubo2003(twice, angles[:1], encoded[:1], folder="a/")
     with zipfile.ZipFile(twice, "a") as archive:
         archive.writestr("b/tl000 pl000 tv000 pv000.jpg", archive.read(archive.namelist()[0]))
-    with pytest.raises(SpectwinInputError, match="have the same angles"):
+    with pytest.raises(InputError, match="have the same angles"):
         read_image_archive(twice)
     below = tmp_path / "below.zip"
     bonn_files.write_ubo2003(below, np.array([[90, 0, 0, 0]]), encoded[:1])
-    with pytest.raises(SpectwinInputError, match="expected 0 to below 90"):
+    with pytest.raises(InputError, match="expected 0 to below 90"):
         read_image_archive(below)
     (tmp_path / "junk.zip").write_bytes(b"not a zip")
-    with pytest.raises(SpectwinInputError, match="not a readable zip archive"):
+    with pytest.raises(InputError, match="not a readable zip archive"):
         read_image_archive(tmp_path / "junk.zip")

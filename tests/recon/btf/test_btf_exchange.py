@@ -9,7 +9,7 @@ import pytest
 
 from recon.btf.exchange import INDEX_NAME, export_btf, import_exr_slices
 from recon.btf.store import BTFStore, write_btf
-from recon.errors import SpectwinDataError, SpectwinInputError
+from recon.errors import DamagedDataError, InputError
 from recon.spectra import WavelengthGrid
 
 
@@ -65,7 +65,7 @@ def test_refusals_name_what_is_wrong(store, tmp_path):
     source, values = store
     (tmp_path / "busy").mkdir()
     (tmp_path / "busy" / "note.txt").write_text("mine")
-    with pytest.raises(SpectwinInputError, match="new or empty folder"):
+    with pytest.raises(InputError, match="new or empty folder"):
         export_btf(source, tmp_path / "busy")
     partial = BTFStore.create(
         tmp_path / "partial.btf.zarr",
@@ -76,22 +76,20 @@ def test_refusals_name_what_is_wrong(store, tmp_path):
         material="wallpaper",
     )
     partial.write_pair(0, values[0])
-    with pytest.raises(SpectwinInputError, match="incomplete BTF store"):
+    with pytest.raises(InputError, match="incomplete BTF store"):
         export_btf(BTFStore.open(partial.path), tmp_path / "out")
-    with pytest.raises(SpectwinInputError, match=f"no {INDEX_NAME}"):
+    with pytest.raises(InputError, match=f"no {INDEX_NAME}"):
         import_exr_slices(tmp_path / "busy", tmp_path / "x.btf.zarr")
     export_btf(source, tmp_path / "slices")
     index_path = tmp_path / "slices" / INDEX_NAME
     index = json.loads(index_path.read_text())
     index["texels"] = [5, 8]
     index_path.write_text(json.dumps(index))
-    with pytest.raises(
-        SpectwinDataError, match=r"pair_00000.exr: \(5, 7\) px .* expected \(5, 8\)"
-    ):
+    with pytest.raises(DamagedDataError, match=r"pair_00000.exr: \(5, 7\) px .* expected \(5, 8\)"):
         import_exr_slices(tmp_path / "slices", tmp_path / "y.btf.zarr")
     index_path.write_text(json.dumps({**index, "texels": [5, 7], "units": "W/m2/sr"}))
-    with pytest.raises(SpectwinInputError, match="units 'W/m2/sr', expected '1/sr'"):
+    with pytest.raises(InputError, match="units 'W/m2/sr', expected '1/sr'"):
         import_exr_slices(tmp_path / "slices", tmp_path / "w.btf.zarr")
     index_path.write_text(json.dumps({**index, "format": "ubo2014"}))
-    with pytest.raises(SpectwinInputError, match="format 'ubo2014', expected"):
+    with pytest.raises(InputError, match="format 'ubo2014', expected"):
         import_exr_slices(tmp_path / "slices", tmp_path / "z.btf.zarr")

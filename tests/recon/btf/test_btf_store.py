@@ -5,7 +5,7 @@ import pytest
 import zarr
 
 from recon.btf.store import BTFStore, write_btf
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import DEFAULT_GRID, WavelengthGrid
 
 N_PAIRS, HEIGHT, WIDTH = 6, 5, 4
@@ -129,7 +129,7 @@ def test_interrupted_rewrite_leaves_the_pair_pending_not_complete(tmp_path, btf,
         store.write_pair(1, reflectance[1] * 2)
     reopened = BTFStore.open(path)
     assert not reopened.complete and reopened.pending_pairs() == [1]
-    with pytest.raises(SpectwinInputError, match="incomplete"):
+    with pytest.raises(InputError, match="incomplete"):
         reopened.read()
 
 
@@ -138,17 +138,17 @@ def test_incomplete_store_refuses_reads_unless_allowed(tmp_path, btf):
     store = _create(tmp_path / "partial.btf.zarr", light_dirs, view_dirs)
     store.write_pair(0, reflectance[0])
     for read in (store.read, lambda: store.read_pair(0), store.reflectance):
-        with pytest.raises(SpectwinInputError, match=r"incomplete BTF store \(5 of 6 pairs"):
+        with pytest.raises(InputError, match=r"incomplete BTF store \(5 of 6 pairs"):
             read()
-    with pytest.raises(SpectwinInputError, match="incomplete"):
+    with pytest.raises(InputError, match="incomplete"):
         list(store.iter_pairs())
     np.testing.assert_array_equal(store.read_pair(0, allow_incomplete=True), reflectance[0])
-    with pytest.raises(SpectwinInputError, match="pair 1 is not written"):
+    with pytest.raises(InputError, match="pair 1 is not written"):
         store.read_pair(1, allow_incomplete=True)
     assert [pair for pair, _ in store.iter_pairs(allow_incomplete=True)] == [0]
-    with pytest.raises(SpectwinInputError, match="5 pairs pending"):
+    with pytest.raises(InputError, match="5 pairs pending"):
         store.mark_complete()
-    with pytest.raises(SpectwinInputError, match="incomplete"):
+    with pytest.raises(InputError, match="incomplete"):
         store.write_compressed({"x": np.zeros(2)}, {})
     assert "5 pairs pending" in repr(store)
 
@@ -171,7 +171,7 @@ def test_incomplete_store_refuses_reads_unless_allowed(tmp_path, btf):
 def test_create_rejects_bad_input(tmp_path, btf, field, value, message):
     _, light_dirs, view_dirs = btf
     options = {"light_dirs": light_dirs, "view_dirs": view_dirs, field: value}
-    with pytest.raises(SpectwinInputError, match=message):
+    with pytest.raises(InputError, match=message):
         _create_with(tmp_path / "bad.btf.zarr", **options)
     assert not (tmp_path / "bad.btf.zarr").exists()
 
@@ -180,7 +180,7 @@ def test_create_never_overwrites(tmp_path, btf):
     _, light_dirs, view_dirs = btf
     path = tmp_path / "once.btf.zarr"
     _create(path, light_dirs, view_dirs)
-    with pytest.raises(SpectwinInputError, match="exists"):
+    with pytest.raises(InputError, match="exists"):
         _create(path, light_dirs, view_dirs)
 
 
@@ -189,33 +189,33 @@ def test_write_pair_rejects_bad_input(tmp_path, btf):
     path = tmp_path / "strict.btf.zarr"
     store = _create(path, light_dirs, view_dirs)
     texture = reflectance[0]
-    with pytest.raises(SpectwinInputError, match=r"pair: expected an index in 0..5, got 6"):
+    with pytest.raises(InputError, match=r"pair: expected an index in 0..5, got 6"):
         store.write_pair(N_PAIRS, texture)
-    with pytest.raises(SpectwinInputError, match=r"pair: expected an index in 0..5, got -1"):
+    with pytest.raises(InputError, match=r"pair: expected an index in 0..5, got -1"):
         store.write_pair(-1, texture)
-    with pytest.raises(SpectwinInputError, match="pair: expected an integer"):
+    with pytest.raises(InputError, match="pair: expected an integer"):
         store.write_pair(1.0, texture)
-    with pytest.raises(SpectwinInputError, match=r"expected a texture of shape \(H, W, K\)"):
+    with pytest.raises(InputError, match=r"expected a texture of shape \(H, W, K\)"):
         store.write_pair(0, texture[..., :31])
     nan_texture = texture.copy()
     nan_texture[1, 2, 7] = np.nan
-    with pytest.raises(SpectwinInputError, match=r"NaN .* \(y, x, band\) = \(1, 2, 7\)"):
+    with pytest.raises(InputError, match=r"NaN .* \(y, x, band\) = \(1, 2, 7\)"):
         store.write_pair(0, nan_texture)
-    with pytest.raises(SpectwinInputError, match="beyond float32"):
+    with pytest.raises(InputError, match="beyond float32"):
         store.write_pair(0, np.full(texture.shape, 1e300))
     other_grid = WavelengthGrid.regular(405, 725, 10)
-    with pytest.raises(SpectwinInputError, match="grid: the texture is on 33 samples, 405-725"):
+    with pytest.raises(InputError, match="grid: the texture is on 33 samples, 405-725"):
         store.write_pair(0, texture, grid=other_grid)
-    with pytest.raises(SpectwinInputError, match="light_dir: pair 0 of the store"):
+    with pytest.raises(InputError, match="light_dir: pair 0 of the store"):
         store.write_pair(0, texture, light_dir=light_dirs[1])
     assert store.pending_pairs() == list(range(N_PAIRS))  # nothing was written
-    with pytest.raises(SpectwinInputError, match="opened read-only"):
+    with pytest.raises(InputError, match="opened read-only"):
         BTFStore.open(path).write_pair(0, texture)
 
 
 def test_write_btf_and_open_reject_bad_input(tmp_path, btf):
     reflectance, light_dirs, view_dirs = btf
-    with pytest.raises(SpectwinInputError, match="does not match the grid"):
+    with pytest.raises(InputError, match="does not match the grid"):
         write_btf(
             tmp_path / "a.btf.zarr",
             reflectance[..., :10],
@@ -224,7 +224,7 @@ def test_write_btf_and_open_reject_bad_input(tmp_path, btf):
             view_dirs=view_dirs,
             material="m",
         )
-    with pytest.raises(SpectwinInputError, match="5 light directions"):
+    with pytest.raises(InputError, match="5 light directions"):
         write_btf(
             tmp_path / "a.btf.zarr",
             reflectance,
@@ -233,14 +233,14 @@ def test_write_btf_and_open_reject_bad_input(tmp_path, btf):
             view_dirs=view_dirs[:5],
             material="m",
         )
-    with pytest.raises(SpectwinInputError, match="does not exist"):
+    with pytest.raises(InputError, match="does not exist"):
         BTFStore.open(tmp_path / "missing.btf.zarr")
     zarr.open_group(str(tmp_path / "other.zarr"), mode="w", zarr_format=3)
-    with pytest.raises(SpectwinInputError, match="not a BTF store"):
+    with pytest.raises(InputError, match="not a BTF store"):
         BTFStore.open(tmp_path / "other.zarr")
     # A store whose creation stopped before its last array does not open.
     _create(tmp_path / "cut.btf.zarr", light_dirs, view_dirs)
     group = zarr.open_group(str(tmp_path / "cut.btf.zarr"), mode="r+")
     del group["written"]
-    with pytest.raises(SpectwinInputError, match=r"lacks arrays \['written'\]"):
+    with pytest.raises(InputError, match=r"lacks arrays \['written'\]"):
         BTFStore.open(tmp_path / "cut.btf.zarr")

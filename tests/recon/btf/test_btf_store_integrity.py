@@ -8,7 +8,7 @@ import pytest
 
 from recon.btf.compression import compress_btf, save_compressed
 from recon.btf.store import BTFStore, write_btf
-from recon.errors import SpectwinDataError, SpectwinInputError
+from recon.errors import DamagedDataError, InputError
 from recon.spectra import DEFAULT_GRID
 
 N_PAIRS, TEXELS = 4, 3
@@ -54,11 +54,11 @@ def test_a_damaged_pair_is_named_and_never_read_as_numbers(store, damage):
     ]
     assert report.problems[0].problem == ("missing" if damage.kind == "deleted" else "corrupt")
     # A deleted chunk would read as NaN, a flipped byte as other numbers: both raise instead.
-    with pytest.raises(SpectwinDataError, match="pair 2"):
+    with pytest.raises(DamagedDataError, match="pair 2"):
         btf.read_pair(2)
-    with pytest.raises(SpectwinDataError, match="damaged store"):
+    with pytest.raises(DamagedDataError, match="damaged store"):
         btf.read()
-    with pytest.raises(SpectwinDataError, match="damaged store"):
+    with pytest.raises(DamagedDataError, match="damaged store"):
         list(btf.iter_pairs())
     np.testing.assert_array_equal(btf.read_pair(1), BTFStore.open(store).read_pair(1))
 
@@ -85,9 +85,7 @@ def test_a_corrupt_written_flag_is_named_and_the_pair_pending(store, chunk_damag
     btf = BTFStore.open(store)  # opening still works: check() can report
     report = btf.check()
     assert report.pending == [0] and report.problems[0].key == "written/c/0"
-    with pytest.raises(
-        SpectwinDataError, match=r"pair 0 \(progress flag\): written/c/0 is corrupt"
-    ):
+    with pytest.raises(DamagedDataError, match=r"pair 0 \(progress flag\): written/c/0 is corrupt"):
         btf.pending_pairs()
 
 
@@ -99,7 +97,7 @@ def test_a_damaged_compressed_form_is_reported_without_a_pair(store, chunk_damag
     report = BTFStore.open(store).check()
     assert [p.item for p in report.problems] == ["compressed form (pca/)"]
     assert report.problems[0].units == () and report.damaged_units == []
-    with pytest.raises(SpectwinDataError, match="compress again"):
+    with pytest.raises(DamagedDataError, match="compress again"):
         BTFStore.open(store).read_compressed()
     BTFStore.open(store, writable=True).prepare_resume()
     assert not BTFStore.open(store).has_compressed
@@ -108,11 +106,11 @@ def test_a_damaged_compressed_form_is_reported_without_a_pair(store, chunk_damag
 @pytest.mark.parametrize(
     ("node", "error", "phrase"),
     [
-        ("zarr.json", SpectwinDataError, "the root metadata"),
-        ("reflectance/zarr.json", SpectwinDataError, "the metadata of reflectance"),
-        ("light_dirs/zarr.json", SpectwinDataError, "the metadata of light_dirs"),
-        ("light_dirs/c/0/0", SpectwinDataError, "light_dirs/c/0/0 is missing"),
-        ("written/zarr.json", SpectwinDataError, "the metadata of written"),
+        ("zarr.json", DamagedDataError, "the root metadata"),
+        ("reflectance/zarr.json", DamagedDataError, "the metadata of reflectance"),
+        ("light_dirs/zarr.json", DamagedDataError, "the metadata of light_dirs"),
+        ("light_dirs/c/0/0", DamagedDataError, "light_dirs/c/0/0 is missing"),
+        ("written/zarr.json", DamagedDataError, "the metadata of written"),
     ],
 )
 def test_damaged_metadata_is_one_line_naming_the_file(store, node, error, phrase):
@@ -125,5 +123,5 @@ def test_damaged_metadata_is_one_line_naming_the_file(store, node, error, phrase
 
 def test_an_interrupted_creation_is_still_told_from_damage(tmp_path, store):
     shutil.rmtree(store / "written")  # created last: the creation stopped before it
-    with pytest.raises(SpectwinInputError, match="creation was interrupted"):
+    with pytest.raises(InputError, match="creation was interrupted"):
         BTFStore.open(store)

@@ -8,7 +8,7 @@ import pytest
 import tifffile
 
 from recon.btf.rgb_import import RGB_COLUMNS, import_rgb_images, rgb_source
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.metrics import delta_e94
 from recon.rgb_upsampling import srgb_response
 from recon.spectra import DEFAULT_GRID, from_colour, resample
@@ -87,7 +87,7 @@ def test_brightness_above_one_is_kept(tmp_path):
 def test_a_bad_direction_table_fails_in_one_line(tmp_path, table, message):
     _write_folder(tmp_path / "rgb")
     (tmp_path / "rgb" / "directions.csv").write_text(table)
-    with pytest.raises(SpectwinInputError, match=message) as error:
+    with pytest.raises(InputError, match=message) as error:
         import_rgb_images(tmp_path / "rgb", tmp_path / "x.btf.zarr")
     assert "\n" not in str(error.value)
 
@@ -95,5 +95,5 @@ def test_a_bad_direction_table_fails_in_one_line(tmp_path, table, message):
 def test_images_of_different_sizes_are_refused(tmp_path):
     _write_folder(tmp_path / "rgb")
     tifffile.imwrite(tmp_path / "rgb" / "img2.tif", np.zeros((4, 4, 3), np.uint8))
-    with pytest.raises(SpectwinInputError, match="4 x 4 px, expected 8 x 8"):
+    with pytest.raises(InputError, match="4 x 4 px, expected 8 x 8"):
         import_rgb_images(tmp_path / "rgb", tmp_path / "x.btf.zarr")

@@ -7,7 +7,7 @@ import pytest
 from colour_demosaicing import masks_CFA_Bayer
 
 from recon.calibration.dome import curve_linearity, texel_mean
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.radiometric.demosaic import bin_quads
 
 
@@ -24,7 +24,7 @@ def test_bin_quads_matches_colour_demosaicings_masks(pattern, rng):
 
 
 def test_bin_quads_needs_even_sides():
-    with pytest.raises(SpectwinInputError, match="even sides"):
+    with pytest.raises(InputError, match="even sides"):
         bin_quads(np.zeros((5, 4)))
 
 
@@ -33,7 +33,7 @@ def test_texel_mean_averages_blocks_and_keeps_channels():
     means = texel_mean(image, 2)
     assert means.shape == (2, 3, 2)
     assert means[0, 0, 1] == pytest.approx(np.mean(image[:2, :2, 1]))
-    with pytest.raises(SpectwinInputError, match="divisor"):
+    with pytest.raises(InputError, match="divisor"):
         texel_mean(image, 4)
 
 

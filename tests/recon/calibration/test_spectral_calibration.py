@@ -13,7 +13,7 @@ from recon.calibration.spectral import (
     run_white_factors,
     white_factors,
 )
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 
 BANDS = 33
 RNG = np.random.default_rng(0)
@@ -101,5 +101,5 @@ def test_lamp_drift_is_undone_by_the_monitor_factors():
     ],
 )
 def test_bad_calibration_input_is_refused(call, message):
-    with pytest.raises(SpectwinInputError, match=message):
+    with pytest.raises(InputError, match=message):
         call()

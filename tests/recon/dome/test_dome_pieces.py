@@ -11,7 +11,7 @@ from recon.calibration.dome_geometric import CameraGeometry
 from recon.calibration.dome_lighting import field_scale, led_irradiance
 from recon.dome.processing import TARGET_RELATIVE_NOISE, band_sigma_px, parallax_shift
 from recon.dome.run import joint_groups
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.registration.sample_plane import sample_square_corners
 from recon.spectra import SampledSpectra, WavelengthGrid
 
@@ -46,7 +46,7 @@ def test_sample_square_is_the_plates_square_seen_through_the_raised_marks():
 def test_sample_square_refuses_a_camera_below_the_marks():
     marks = np.array([[-1.0, 1, 0.1], [1, 1, 0.1], [1, -1, 0.1], [-1, -1, 0.1]])
     image = np.array([[0.0, 0], [10, 0], [10, 10], [0, 10]])
-    with pytest.raises(SpectwinInputError, match="below a camera"):
+    with pytest.raises(InputError, match="below a camera"):
         sample_square_corners(image, marks, np.array([0.0, 0, 0.05]), 1.0)
 
 
@@ -83,7 +83,7 @@ def test_joint_groups_follow_the_schedule_cycles():
     bands = [[0, 1], [2], [3], [0], [1, 2], [3], [0]]
     assert joint_groups(bands, 3, 4) == [[0, 1, 2], [3, 4, 5, 6]]
     assert joint_groups(bands[:6], 3, 4) == [[0, 1, 2], [3, 4, 5]]
-    with pytest.raises(SpectwinInputError):
+    with pytest.raises(InputError):
         joint_groups([], 3, 4)
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.experiments.real_images import (
     REFLECTANCE_SETS,
     real_test_image,
@@ -29,7 +29,7 @@ def test_every_reflectance_set_gives_a_mosaic_and_a_blend_under_its_own_camera()
         assert (np.ones(33) @ case.response).max() == pytest.approx(1.0)
         cameras.add(case.camera)
     assert len(cameras) == 2 * len(REFLECTANCE_SETS)
-    with pytest.raises(SpectwinInputError, match="expected one of llanos2019"):
+    with pytest.raises(InputError, match="expected one of llanos2019"):
         real_test_image("lego mosaic")
 
 
@@ -41,7 +41,7 @@ def test_a_smooth_blend_stays_within_its_spectra_times_the_shading():
     assert image.max() <= 1.2 * spectra.max() + 1e-12
     # Smooth: neighbouring pixels differ by a small part of the range, unlike a mosaic's edges.
     assert np.abs(np.diff(image, axis=1)).max() < 0.1 * image.max()
-    with pytest.raises(SpectwinInputError, match="shading"):
+    with pytest.raises(InputError, match="shading"):
         smooth_blend(spectra, (8, 8), shading=(1.0, 0.5))
 
 

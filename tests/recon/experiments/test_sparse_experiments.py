@@ -6,7 +6,7 @@ import colour
 import numpy as np
 import pytest
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.experiments.sampling import exclude_region, push_broom_mask, whisk_broom_mask
 from recon.experiments.sparse import noise_sweep, run_protocol, spot_count_sweep
 from recon.experiments.synthetic_images import material_mosaic
@@ -89,7 +89,7 @@ def test_incomplete_information_raises_the_error_where_spectra_are_missing(six_s
 def test_protocol_refuses_unknown_methods_and_mismatched_response(six_spectra_case):
     _, image, _, response = six_spectra_case
     mask = whisk_broom_mask(image.shape[:2])
-    with pytest.raises(SpectwinInputError, match="unknown"):
+    with pytest.raises(InputError, match="unknown"):
         run_protocol(image, response, mask, methods=("wiener",))
-    with pytest.raises(SpectwinInputError, match="response"):
+    with pytest.raises(InputError, match="response"):
         run_protocol(image, response[:-1], mask)

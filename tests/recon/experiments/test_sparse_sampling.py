@@ -9,7 +9,7 @@ import pytest
 from scipy import io
 from skimage import measure
 
-from recon.errors import SpectwinDataError, SpectwinInputError
+from recon.errors import InputError, MissingDataError, Remedy
 from recon.experiments.sampling import (
     add_rgb_noise,
     exclude_region,
@@ -93,11 +93,11 @@ def test_exclude_region_removes_the_known_pixels_in_the_region():
     kept = exclude_region(mask, stripes)
     assert kept.sum() == mask[:, 60:].sum() > 0
     assert not kept[:, :60].any() and np.array_equal(kept[:, 60:], mask[:, 60:])
-    with pytest.raises(SpectwinInputError, match="region: covers all"):
+    with pytest.raises(InputError, match="region: covers all"):
         exclude_region(mask, np.ones_like(mask))
-    with pytest.raises(SpectwinInputError, match="region: expected the mask's shape"):
+    with pytest.raises(InputError, match="region: expected the mask's shape"):
         exclude_region(mask, stripes[:-1])
-    with pytest.raises(SpectwinInputError, match="region: expected a non-empty 2-D boolean"):
+    with pytest.raises(InputError, match="region: expected a non-empty 2-D boolean"):
         exclude_region(mask, stripes.astype(int))
 
 
@@ -120,35 +120,35 @@ def test_spot_means_average_each_spot(rng):
 
 
 def test_sampling_functions_reject_bad_input(rng):
-    with pytest.raises(SpectwinInputError, match="shape"):
+    with pytest.raises(InputError, match="shape"):
         whisk_broom_mask((0, 10))
-    with pytest.raises(SpectwinInputError, match="shape"):
+    with pytest.raises(InputError, match="shape"):
         whisk_broom_mask((10,))
-    with pytest.raises(SpectwinInputError, match="n_spots"):
+    with pytest.raises(InputError, match="n_spots"):
         whisk_broom_mask((10, 10), 0)
-    with pytest.raises(SpectwinInputError, match="n_spots"):
+    with pytest.raises(InputError, match="n_spots"):
         whisk_broom_mask((10, 10), 101)
-    with pytest.raises(SpectwinInputError, match="n_spots: 100 spots of side 2"):
+    with pytest.raises(InputError, match="n_spots: 100 spots of side 2"):
         whisk_broom_mask((10, 10), 100, spot_fraction=0.2)
     for fraction in (0.0, 1.0, -0.1):
-        with pytest.raises(SpectwinInputError, match="spot_fraction"):
+        with pytest.raises(InputError, match="spot_fraction"):
             whisk_broom_mask((10, 10), 4, fraction)
     for heights in ((0.33, 1.0), (-0.1,), (), (0.5, 0.501)):
-        with pytest.raises(SpectwinInputError, match="line_heights"):
+        with pytest.raises(InputError, match="line_heights"):
             push_broom_mask((100, 10), heights)
     rgb = rng.uniform(size=(4, 4, 3))
-    with pytest.raises(SpectwinInputError, match="sigma_fraction"):
+    with pytest.raises(InputError, match="sigma_fraction"):
         add_rgb_noise(rgb, -0.01, rng)
-    with pytest.raises(SpectwinInputError, match="rgb: expected a positive mean"):
+    with pytest.raises(InputError, match="rgb: expected a positive mean"):
         add_rgb_noise(np.zeros((4, 4, 3)), 0.01, rng)
-    with pytest.raises(SpectwinInputError, match="rgb: expected a non-empty array of finite"):
+    with pytest.raises(InputError, match="rgb: expected a non-empty array of finite"):
         add_rgb_noise(np.full((4, 4, 3), np.nan), 0.01, rng)
     image = rng.uniform(size=(6, 5, 4))
-    with pytest.raises(SpectwinInputError, match="mask: expected at least one"):
+    with pytest.raises(InputError, match="mask: expected at least one"):
         known_spectra_from_mask(image, np.zeros((6, 5), dtype=bool))
-    with pytest.raises(SpectwinInputError, match="mask: expected the image's"):
+    with pytest.raises(InputError, match="mask: expected the image's"):
         known_spectra_from_mask(image, np.ones((5, 6), dtype=bool))
-    with pytest.raises(SpectwinInputError, match="spectral_image"):
+    with pytest.raises(InputError, match="spectral_image"):
         spot_mean_spectra(image[..., 0], np.ones((6, 5), dtype=bool))
 
 
@@ -183,5 +183,6 @@ def test_llanos2019_multispectral_image_and_camera():
 
 
 def test_missing_shipped_data_raises_with_the_path():
-    with pytest.raises(SpectwinDataError, match="real/nosuch.mat is missing .* reinstall"):
+    with pytest.raises(MissingDataError, match="real/nosuch.mat is missing .* package") as missing:
         data_path("real/nosuch.mat")
+    assert missing.value.remedy is Remedy.reinstall

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.radiometric.dark_frames import average_dark_frames, dark_frames_at, subtract_dark
 
 SHAPE = (128, 128)
@@ -85,7 +85,7 @@ def test_extrapolation_is_refused_by_default_and_linear_on_request(rng):
         np.stack([offset + rate * t for t in dark_times]), dark_times
     )
     for outside in (0.25, 4.0):
-        with pytest.raises(SpectwinInputError, match="outside the dark frames' exposure range"):
+        with pytest.raises(InputError, match="outside the dark frames' exposure range"):
             dark_frames_at(outside, times, means)
     extrapolated = dark_frames_at(np.array([0.25, 4.0]), times, means, extrapolate="linear")
     np.testing.assert_allclose(extrapolated[0], offset + rate * 0.25, atol=1e-9)
@@ -110,7 +110,7 @@ def test_subtraction_leaves_the_signal_and_keeps_negative_values(rng):
 def test_a_single_dark_exposure_time_serves_only_that_time():
     times, means = np.array([1.0]), np.full((1, 2, 2), 7.0)
     np.testing.assert_allclose(dark_frames_at(1.0, times, means), 7.0)
-    with pytest.raises(SpectwinInputError, match="single dark exposure time"):
+    with pytest.raises(InputError, match="single dark exposure time"):
         dark_frames_at(2.0, times, means, extrapolate="linear")
 
 
@@ -127,23 +127,23 @@ def test_a_single_dark_exposure_time_serves_only_that_time():
     ],
 )
 def test_average_rejects_bad_input(frames, times, match):
-    with pytest.raises(SpectwinInputError, match=match):
+    with pytest.raises(InputError, match=match):
         average_dark_frames(frames, times)
 
 
 def test_dark_model_and_subtraction_reject_bad_input():
     times, means = np.array([1.0, 2.0]), np.zeros((2, 3, 3))
-    with pytest.raises(SpectwinInputError, match="strictly increasing"):
+    with pytest.raises(InputError, match="strictly increasing"):
         dark_frames_at(1.5, np.array([2.0, 1.0]), means)
-    with pytest.raises(SpectwinInputError, match="one frame per dark exposure time"):
+    with pytest.raises(InputError, match="one frame per dark exposure time"):
         dark_frames_at(1.5, times, np.zeros((3, 3, 3)))
-    with pytest.raises(SpectwinInputError, match="extrapolate: expected one of"):
+    with pytest.raises(InputError, match="extrapolate: expected one of"):
         dark_frames_at(1.5, times, means, extrapolate="cubic")
-    with pytest.raises(SpectwinInputError, match="exposure_s: expected finite, positive"):
+    with pytest.raises(InputError, match="exposure_s: expected finite, positive"):
         dark_frames_at(0.0, times, means)
-    with pytest.raises(SpectwinInputError, match=r"frames: expected shape \(2, 3, 3\)"):
+    with pytest.raises(InputError, match=r"frames: expected shape \(2, 3, 3\)"):
         subtract_dark(np.zeros((2, 4, 4)), [1.0, 2.0], times, means)
-    with pytest.raises(SpectwinInputError, match=r"frames: expected shape \(3, 3\)"):
+    with pytest.raises(InputError, match=r"frames: expected shape \(3, 3\)"):
         subtract_dark(np.zeros((1, 3, 3)), 1.0, times, means)
-    with pytest.raises(SpectwinInputError, match="frames: expected finite values"):
+    with pytest.raises(InputError, match="frames: expected finite values"):
         subtract_dark(np.full((3, 3), np.inf), 1.0, times, means)

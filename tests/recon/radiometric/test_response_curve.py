@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.radiometric.dark_frames import average_dark_frames, dark_frames_at
 from recon.radiometric.hdr import (
     interpolate_curve,
@@ -454,5 +454,5 @@ def test_clipped_raw_values_censor_their_filter_support():
     ],
 )
 def test_bad_input_raises_a_named_error(call, match):
-    with pytest.raises(SpectwinInputError, match=match):
+    with pytest.raises(InputError, match=match):
         call()

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.scheduling.dome_schedule import (
     FILTER_SIZE_PER_SIGMA,
     THESIS_RGB_EXPOSURES_S,
@@ -57,7 +57,7 @@ def test_exposures_scale_as_one_over_the_square_root_of_sensitivity_times_light(
     ],
 )
 def test_exposure_input_errors_name_the_argument(arguments, keywords, message):
-    with pytest.raises(SpectwinInputError, match=message):
+    with pytest.raises(InputError, match=message):
         spectral_exposures(*arguments, **keywords)
 
 
@@ -102,7 +102,7 @@ def test_filter_sizes_bring_noisy_bands_to_the_target_and_leave_clean_ones():
     ],
 )
 def test_filter_size_input_errors_name_the_argument(arguments, message):
-    with pytest.raises(SpectwinInputError, match=message):
+    with pytest.raises(InputError, match=message):
         filter_sizes(*arguments)
 
 
@@ -188,7 +188,7 @@ def test_repeated_bands_go_to_different_images():
     # Everything fits under the 3 s RGB set, e.g. 2 + 0.5 | 2 + 0.5 | 0.4 + 0.4.
     assert plan.increase == pytest.approx(0.0)
     # One image cannot take a band twice.
-    with pytest.raises(SpectwinInputError, match="n_images: a band taken twice needs two"):
+    with pytest.raises(InputError, match="n_images: a band taken twice needs two"):
         schedule_bands(exposures, 1, repeat_bands=[0])
 
 
@@ -252,5 +252,5 @@ def test_thesis_sized_instance_solves_to_proven_optimum():
     ],
 )
 def test_schedule_input_errors_name_the_argument(arguments, keywords, message):
-    with pytest.raises(SpectwinInputError, match=message):
+    with pytest.raises(InputError, match=message):
         schedule_bands(*arguments, **keywords)

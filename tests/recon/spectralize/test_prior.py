@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.experiments.real_images import holder_bar_case, real_test_image
 from recon.experiments.sampling import known_spectra_from_mask, push_broom_mask, whisk_broom_mask
 from recon.metrics import relative_error
@@ -80,14 +80,14 @@ def test_choose_prior_keeps_the_spectra_prior_on_a_noisy_mosaic():
 def test_prior_errors_name_the_problem(span_of_three):
     truth, response, pixels, spectra = span_of_three
     rgb = truth @ response
-    with pytest.raises(SpectwinInputError, match="prior: expected one of"):
+    with pytest.raises(InputError, match="prior: expected one of"):
         spectralize(rgb, response, known_pixels=pixels, known_spectra=spectra, prior="smooth")
     band = BandImage(0, 3, truth[..., 3], 0.0)
-    with pytest.raises(SpectwinInputError, match="learns its map from point spectra"):
+    with pytest.raises(InputError, match="learns its map from point spectra"):
         spectralize(rgb, response, band_images=[band], prior="regression")
-    with pytest.raises(SpectwinInputError, match="at least 5 separate spots"):
+    with pytest.raises(InputError, match="at least 5 separate spots"):
         choose_prior(rgb, response, pixels[:4:2], spectra[:4:2])
-    with pytest.raises(SpectwinInputError, match="do not pass one"):
+    with pytest.raises(InputError, match="do not pass one"):
         choose_prior(rgb, response, pixels, spectra, prior="spectra")
 
 

@@ -10,7 +10,7 @@ from scipy import sparse
 from scipy.sparse import linalg
 from scipy.spatial import cKDTree
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.experiments.synthetic_images import material_mosaic
 from recon.metrics import relative_error
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid
@@ -338,7 +338,7 @@ def test_bad_input_is_refused_with_a_clear_message(change, message):
     }
     arguments.update(change)
     rgb, response = arguments.pop("rgb"), arguments.pop("response")
-    with pytest.raises(SpectwinInputError, match=message):
+    with pytest.raises(InputError, match=message):
         reconstruct(rgb, response, **arguments)
 
 
@@ -346,7 +346,7 @@ def test_spectra_on_another_grid_are_refused():
     response = SampledSpectra(DEFAULT_GRID, _response().T)
     other = WavelengthGrid.regular(400, 720, 20)
     known = PointSpectra(np.array([0]), SampledSpectra(other, np.ones((1, other.size))))
-    with pytest.raises(SpectwinInputError, match="resample"):
+    with pytest.raises(InputError, match="resample"):
         reconstruct(np.ones((3, 3, 3)), response, point_spectra=known)
 
 
@@ -379,5 +379,5 @@ def test_stable_entry_point_returns_the_cube_of_the_detailed_call(mosaic):
         tol=1e-9,
     )
     assert isinstance(cube, np.ndarray) and np.array_equal(cube, detailed.spectra)
-    with pytest.raises(SpectwinInputError, match="give both"):
+    with pytest.raises(InputError, match="give both"):
         spectralize(image @ response, response, known_pixels=pixels)

@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 
 from hwbridge.session import capture_steps, locked_session_store
 from hwbridge.store import CaptureStore
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from twin.cli.app import app
 from twin.dome.programs import (
     DomeCaptureSize,
@@ -89,11 +89,11 @@ def test_options_a_dome_program_does_not_use_are_refused(tmp_path, arguments, me
 
 
 def test_sizes_the_rig_cannot_take_are_refused():
-    with pytest.raises(SpectwinInputError, match="leds: expected 1..198"):
+    with pytest.raises(InputError, match="leds: expected 1..198"):
         dome_run_program(size=DomeCaptureSize(leds=199))
-    with pytest.raises(SpectwinInputError, match="texels: expected 4..1024"):
+    with pytest.raises(InputError, match="texels: expected 4..1024"):
         dome_run_program(size=DomeCaptureSize(texels=2))
-    with pytest.raises(SpectwinInputError, match="fault_rate"):
+    with pytest.raises(InputError, match="fault_rate"):
         dome_run_program(fault_rate=2.0)
 
 

@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 from hwbridge.session import capture_steps, locked_session_store
 from hwbridge.store import CaptureStore
 from recon.calibration.gonio import GonioCalibration
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import DEFAULT_GRID
 from twin.cli.app import app
 from twin.gonio.capture import (
@@ -122,17 +122,17 @@ def test_the_dry_run_duration_is_the_rig_timing_of_the_plan():
     ],
 )
 def test_settings_that_cannot_work_are_refused_before_anything_is_made(build, message):
-    with pytest.raises(SpectwinInputError, match=message):
+    with pytest.raises(InputError, match=message):
         build()
 
 
 def test_a_refused_capture_leaves_no_store_behind(tmp_path):
     store = tmp_path / "run.capture.zarr"
-    with pytest.raises(SpectwinInputError, match="spp"):
+    with pytest.raises(InputError, match="spp"):
         run_gonio_measurement(store, EXPOSURES_S, spp=-3)
-    with pytest.raises(SpectwinInputError, match="window"):
+    with pytest.raises(InputError, match="window"):
         run_gonio_measurement(store, EXPOSURES_S, pixels=32, window=64)
-    with pytest.raises(SpectwinInputError, match="fault_rate"):
+    with pytest.raises(InputError, match="fault_rate"):
         run_demo_session(store, 0, fault_rate=2.0)
     assert list(tmp_path.iterdir()) == []
     result = runner.invoke(app, ["capture", "gonio-run", str(store), "--spp", "0"])

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy import integrate, special
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import (
     DEFAULT_GRID,
     SampledSpectra,
@@ -196,7 +196,7 @@ def test_cie_illuminants_come_from_colour():
     assert d65.values[np.searchsorted(DEFAULT_GRID.wavelengths_nm, 560)] == pytest.approx(
         100, rel=0.01
     )
-    with pytest.raises(SpectwinInputError, match="SDS_ILLUMINANTS"):
+    with pytest.raises(InputError, match="SDS_ILLUMINANTS"):
         cie_illuminant("D99", DEFAULT_GRID)
 
 
@@ -272,7 +272,7 @@ def test_irradiance_follows_the_inverse_square_law():
     ],
 )
 def test_bad_component_parameters_raise_clear_errors(make, message):
-    with pytest.raises(SpectwinInputError, match=message):
+    with pytest.raises(InputError, match=message):
         make()
 
 

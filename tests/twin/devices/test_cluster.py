@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from hwbridge.errors import BridgeInputError, SessionInterrupted, StoreBusy
+from hwbridge.errors import InputError, SessionInterrupted, StoreBusy
 from hwbridge.lock import StoreLock, lock_owner
 from hwbridge.plans import plan_start_times_s
 from hwbridge.session import capture_steps, open_session_store
@@ -24,7 +24,6 @@ from recon.btf.processing import process_gonio
 from recon.btf.store import BTFStore
 from recon.calibration.gonio import GonioCalibration
 from recon.calibration.spectral import HMI_FLICKER_PERIOD_S
-from recon.errors import SpectwinInputError
 from twin.cli.app import app
 from twin.components.lamps import HMILamp
 from twin.components.lctf import LiquidCrystalTunableFilter
@@ -172,7 +171,7 @@ def test_a_capture_cut_short_resumes_on_the_cluster_with_the_same_frames(client,
 def _done(path) -> int:
     try:
         store = CaptureStore.open(path)
-    except BridgeInputError:  # not created yet
+    except InputError:  # not created yet
         return 0
     return len(store.attrs["plan"]) - len(store.pending_steps())
 
@@ -309,13 +308,13 @@ def test_view_tasks_split_runs_of_one_view_and_respect_gaps_and_the_size_limit()
     plan = [{"view_id": view} for view in (-1, -1, 0, 0, 0, 0, 1, 1)]
     assert view_tasks(plan, list(range(8)), max_steps=3) == [[0, 1], [2, 3, 4], [5], [6, 7]]
     assert view_tasks(plan, [0, 2, 3, 5, 7]) == [[0], [2, 3], [5], [7]]
-    with pytest.raises(SpectwinInputError, match="max_steps"):
+    with pytest.raises(InputError, match="max_steps"):
         view_tasks(plan, [0], max_steps=0)
 
 
 def test_cluster_errors_name_the_scheduler_and_the_conflict(tmp_path):
     address = "tcp://127.0.0.1:9"  # the discard port: nothing listens there
-    with pytest.raises(SpectwinInputError, match="tcp://127.0.0.1:9.*no Dask scheduler"):
+    with pytest.raises(InputError, match="tcp://127.0.0.1:9.*no Dask scheduler"):
         with dask_client(scheduler=address, connect_timeout_s=0.5):
             pass
     store = tmp_path / "x.capture.zarr"

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from hwbridge.dome_plans import DomeCameraIds, DomeExposures, dome_run
-from hwbridge.errors import BridgeInputError
+from hwbridge.errors import InputError
 from hwbridge.plans import chart_photographs, plan_start_times_s
 from hwbridge.session import run_session
 from twin.components.lamps import HMILamp
@@ -98,7 +98,7 @@ def test_a_dome_plan_runs_on_the_simulated_and_the_real_devices(tmp_path, backen
 def test_a_light_the_dome_does_not_have_stops_the_session(tmp_path):
     plan = chart_photographs("k4", [0.05], [198])
     devices = DomeDevices(cameras=_cameras(plan, ["k4"]))()
-    with pytest.raises(BridgeInputError, match=r"LED 198 is not in 0..197"):
+    with pytest.raises(InputError, match=r"LED 198 is not in 0..197"):
         run_session(
             tmp_path / "s.capture.zarr",
             plan,
@@ -114,7 +114,7 @@ def test_the_recipe_refuses_an_unknown_backend_and_missing_ports():
     config = load_rig("dome")
     recipe = DomeDevices.for_rig(config)
     assert (recipe.led_count, recipe.step_deg) == (198, 15.0)
-    with pytest.raises(BridgeInputError, match=r"backend: expected one of \('sim', 'real'\)"):
+    with pytest.raises(InputError, match=r"backend: expected one of \('sim', 'real'\)"):
         DomeDevices(backend="replay")
-    with pytest.raises(BridgeInputError, match=r"serial ports \['led_port', 'lctf_port'\]"):
+    with pytest.raises(InputError, match=r"serial ports \['led_port', 'lctf_port'\]"):
         DomeDevices(backend="real", stage_port="apt://")

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from hwbridge.errors import BridgeInputError
+from hwbridge.errors import InputError
 from hwbridge.protocols import Camera, Positioner, TunableFilter
 from twin.components.lamps import HMILamp, QTHLamp
 from twin.devices.sim_devices import SimCamera, SimPositioner, SimTunableFilter, VirtualRig
@@ -45,7 +45,7 @@ def test_simulated_devices_follow_the_protocols_and_share_state():
     camera.set_step(1, 0)
     dark, _ = camera.snap()
     assert bright.mean() > dark.mean() + 100
-    with pytest.raises(BridgeInputError, match="view_id"):
+    with pytest.raises(InputError, match="view_id"):
         positioner.set({"view_id": 5})
 
 
@@ -91,7 +91,7 @@ def test_lamp_leds_and_monitor_follow_the_protocols(tmp_path):
     )
     leds.set(np.arange(198) == 7)
     assert rig.led_pattern.sum() == 1
-    with pytest.raises(BridgeInputError, match="198"):
+    with pytest.raises(InputError, match="198"):
         leds.set(np.ones(5))
     rig.clock_s = 0.0
     monitor.trigger()

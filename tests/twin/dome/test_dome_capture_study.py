@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from recon.calibration.dome import DARK_VALUE_OFFSET, curve_linearity
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.scheduling.dome_schedule import THESIS_RGB_EXPOSURES_S
 from twin.dome.capture_study import (
     ReconstructionErrors,
@@ -118,7 +118,7 @@ def test_red_fabric_is_the_worst(single_images):
 def test_capture_needs_a_band_list_per_image(setup):
     light = dome_light_directions(setup, [LED])
     truth = texture_truth("wallpaper", light, SPECTRAL_VIEW[None], texels=4)
-    with pytest.raises(SpectwinInputError, match="bands_per_image"):
+    with pytest.raises(InputError, match="bands_per_image"):
         simulate_capture(setup, truth, light, [[0], [1]], np.random.default_rng(0))
 
 
@@ -205,7 +205,7 @@ def test_hybrid_capture_is_one_and_a_half_orders_faster_than_the_reference(per_p
 
 
 def test_pixels_per_texel_must_be_whole_bayer_quads():
-    with pytest.raises(SpectwinInputError, match="texel_px: expected an even number"):
+    with pytest.raises(InputError, match="texel_px: expected an even number"):
         dome_setup(TEXELS, texel_px=3)
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.metrics import delta_e94, relative_error
 from recon.rgb_upsampling import read_srgb_image, srgb_response
 from twin.materials import load_material
@@ -66,7 +66,7 @@ def _write(folder: Path, parts: str) -> Path:
 
 
 def _refused(path: Path) -> str:
-    with pytest.raises(SpectwinInputError) as error:
+    with pytest.raises(InputError) as error:
         load_material(path)
     message = str(error.value)
     assert "\n" not in message and str(path) in message

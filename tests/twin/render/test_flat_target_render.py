@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import DEFAULT_GRID, SampledSpectra
 from twin.components.lamps import FINE_GRID, QTHLamp, irradiance_at
 from twin.components.lctf import LiquidCrystalTunableFilter
@@ -68,11 +68,11 @@ def test_tilted_colorchecker_patches_match_analytic_radiance(qth_irradiance, lct
 
 def test_render_inputs_are_validated(qth_irradiance, lctf_bands):
     white = zenith_white_reflectance(FINE_GRID)
-    with pytest.raises(SpectwinInputError, match="grid"):
+    with pytest.raises(InputError, match="grid"):
         render_flat_target(zenith_white_reflectance(DEFAULT_GRID), qth_irradiance, lctf_bands)
-    with pytest.raises(SpectwinInputError, match=r"\[0, 1\]"):
+    with pytest.raises(InputError, match=r"\[0, 1\]"):
         render_flat_target(white * 2.0, qth_irradiance, lctf_bands)
-    with pytest.raises(SpectwinInputError, match="incidence_deg"):
+    with pytest.raises(InputError, match="incidence_deg"):
         render_flat_target(white, qth_irradiance, lctf_bands, incidence_deg=95.0)
 
 

@@ -5,7 +5,7 @@ image as emitters with their own spectra, with far less band noise under fluores
 import numpy as np
 import pytest
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid
 from twin.render.light_groups import lamp_weighted_channels, render_lit
 from twin.render.scene import PinholeCamera
@@ -76,5 +76,5 @@ def test_lamp_weighted_channels_have_unit_area_and_refuse_another_grid():
     np.testing.assert_allclose(
         areas, np.trapezoid(film.values * spectrum.values, wavelengths, axis=1), rtol=1e-12
     )
-    with pytest.raises(SpectwinInputError, match="channels' grid"):
+    with pytest.raises(InputError, match="channels' grid"):
         lamp_weighted_channels(film, SampledSpectra(DEFAULT_GRID, np.ones(DEFAULT_GRID.size)))

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from recon.btf.specular_lobe import microfacet_specular
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import SampledSpectra
 from twin.components.lamps import FINE_GRID
 from twin.components.lctf import LiquidCrystalTunableFilter
@@ -274,5 +274,5 @@ def test_each_lamp_renders_only_the_channels_it_is_asked_for():
             chosen[lamp, ..., : len(channels)], every[lamp][..., channels], rtol=1e-5
         )
     assert not chosen[1, ..., 1].any()
-    with pytest.raises(SpectwinInputError, match="channels: expected one list per lamp"):
+    with pytest.raises(InputError, match="channels: expected one list per lamp"):
         scene.transport_each(camera, lamps, weights, channels=[(1,)])

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import SampledSpectra, WavelengthGrid
 from twin.components.lamps import FINE_GRID
 from twin.render.render import render_scene
@@ -70,5 +70,5 @@ def test_render_scene_matches_mitsubas_render_and_takes_the_sample_count():
     np.testing.assert_array_equal(
         render_scene(scene, seed=5, spp=16), render_scene(_scene(spp=16), seed=5)
     )
-    with pytest.raises(SpectwinInputError, match="spp"):
+    with pytest.raises(InputError, match="spp"):
         render_scene(scene, spp=0)

@@ -5,7 +5,7 @@ and the texture lies the way the BTF's texels do (row 0 at +y, column 0 at -x)."
 import numpy as np
 import pytest
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import SampledSpectra, WavelengthGrid
 from twin.materials import Material
 from twin.materials.surfaces import SurfacePart
@@ -49,5 +49,5 @@ def test_texture_rows_run_down_from_plus_y_and_columns_right_from_minus_x():
 def test_a_textured_part_has_no_mitsuba_bsdf_of_its_own():
     material = _patch(np.full((2, 2, _GRID.size), 0.5))
     assert part_bsdf(material.parts[0], unit=True)["type"] == "diffuse"
-    with pytest.raises(SpectwinInputError, match="node transport"):
+    with pytest.raises(InputError, match="node transport"):
         part_bsdf(material.parts[0])

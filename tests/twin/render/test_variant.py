@@ -8,7 +8,7 @@ import drjit as dr
 import numpy as np
 import pytest
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from twin.render.variant import (
     DEFAULT_VARIANT,
     FALLBACK_VARIANT,
@@ -35,9 +35,9 @@ def test_llvm_older_than_16_falls_back_to_scalar_spectral(found, expected):
 
 def test_requested_variant_wins_and_must_be_spectral():
     assert choose_variant("scalar_spectral", (19, 1, 7))[0] == "scalar_spectral"
-    with pytest.raises(SpectwinInputError, match="spectral"):
+    with pytest.raises(InputError, match="spectral"):
         choose_variant("llvm_ad_rgb", (19, 1, 7))
-    with pytest.raises(SpectwinInputError, match="expected one of"):
+    with pytest.raises(InputError, match="expected one of"):
         choose_variant("vulkan_spectral", (19, 1, 7))
 
 

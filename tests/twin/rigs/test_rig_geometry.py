@@ -7,7 +7,7 @@ import pytest
 import yaml
 from scipy import constants
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from twin.components.lamps import FINE_GRID, HMILamp
 from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.components.targets import zenith_white_reflectance
@@ -237,18 +237,18 @@ def test_bad_rig_files_name_the_field(tmp_path):
     document = yaml.safe_load((RIG_DIR / "dome.yaml").read_text())
     path = tmp_path / "dome.yaml"
     path.write_text(yaml.safe_dump({**document, "lamp_typo": 1}))
-    with pytest.raises(SpectwinInputError, match="lamp_typo"):
+    with pytest.raises(InputError, match="lamp_typo"):
         load_rig(path)
     path.write_text(yaml.safe_dump({**document, "led_rings": document["led_rings"][:-1]}))
-    with pytest.raises(SpectwinInputError, match="led_count"):
+    with pytest.raises(InputError, match="led_count"):
         load_rig(path)
     gonio = yaml.safe_load((RIG_DIR / "gonio.yaml").read_text())
     gonio["camera"]["definition"] = "hubble"
     path.write_text(yaml.safe_dump(gonio))
-    with pytest.raises(SpectwinInputError, match="camera: .*definition: expected one of"):
+    with pytest.raises(InputError, match="camera: .*definition: expected one of"):
         load_rig(path)
     path.write_text("rig: spaceship\n")
-    with pytest.raises(SpectwinInputError, match="gonioreflectometer"):
+    with pytest.raises(InputError, match="gonioreflectometer"):
         load_rig(path)
-    with pytest.raises(SpectwinInputError, match="gonio"):
+    with pytest.raises(InputError, match="gonio"):
         load_rig("nonexistent")

@@ -25,7 +25,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.scheduling.dome_schedule import (
     FILTER_SIZE_PER_SIGMA,
     THESIS_RGB_EXPOSURES_S,
@@ -107,7 +107,7 @@ def test_thirty_bands_in_eight_images(dome):
     assert plan.increase == pytest.approx(band_sum / (8 * RGB_S) - 1, rel=1e-6)
     assert plan.image_s.max() < 1.05 * band_sum / 8  # balanced, about 6 s each
     # With images no longer than the longest band, 8 do not suffice: 47.97 / 5.48 > 8.
-    with pytest.raises(SpectwinInputError, match="no schedule of 30 band exposures in 8"):
+    with pytest.raises(InputError, match="no schedule of 30 band exposures in 8"):
         schedule_bands(exposures, 8, image_limit_s=exposures.max())
     fewest = fewest_images(exposures)
     assert fewest.n_images == math.ceil(band_sum / exposures.max()) == 9

@@ -10,7 +10,7 @@ from emva1288.process.routines import get_int_imgs
 from scipy import constants
 
 from recon.emva.analysis import run_results1288
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.radiometric.demosaic import demosaic
 from recon.spectra import SampledSpectra, WavelengthGrid
 from twin.components.lamps import FINE_GRID, HMILamp
@@ -277,7 +277,7 @@ def test_colour_camera_oecf_is_nonlinear_and_the_k4_is_linear():
     ],
 )
 def test_bad_sensor_input_raises_clear_errors(call, message):
-    with pytest.raises(SpectwinInputError, match=message):
+    with pytest.raises(InputError, match=message):
         call(Sensor("coolsnap_k4", roi=(32, 32)))
 
 
@@ -293,14 +293,14 @@ def test_bad_camera_files_name_the_field(tmp_path):
     import yaml
 
     path.write_text(yaml.safe_dump(document))
-    with pytest.raises(SpectwinInputError) as error:
+    with pytest.raises(InputError) as error:
         load_camera_config(path)
     for field in ("gain_typo", "read_noise_dn", "bit_depth"):
         assert field in str(error.value)
     (tmp_path / "bad.yaml").write_text("name: [unclosed\n")
-    with pytest.raises(SpectwinInputError, match="malformed YAML"):
+    with pytest.raises(InputError, match="malformed YAML"):
         load_camera_config(tmp_path / "bad.yaml")
-    with pytest.raises(SpectwinInputError, match="coolsnap_k4"):
+    with pytest.raises(InputError, match="coolsnap_k4"):
         load_camera_config("no_such_camera")
-    with pytest.raises(SpectwinInputError, match="roi"):
+    with pytest.raises(InputError, match="roi"):
         Sensor("coolsnap_k4", roi=(4096, 10))

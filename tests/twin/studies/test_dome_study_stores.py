@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from recon.dome.processing import process_dome
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from twin.dome.programs import DomeCaptureSize
 from twin.dome.setup import dome_setup
 from twin.studies.dome import reference_exposures
@@ -146,7 +146,7 @@ def test_band_data_moved_to_the_top_camera_separates_spectral_data_from_view(
             errors = shift[source]["all"][camera]["mean_relative_error_pct"]
             assert errors["with"] == with_bands[source][camera]["mean_relative_error_pct"]
             assert errors["without"] == without[source][camera]["mean_relative_error_pct"]
-    with pytest.raises(SpectwinInputError, match="band_partner: expected one of"):
+    with pytest.raises(InputError, match="band_partner: expected one of"):
         process_dome(run, calibration, folder / "bad.btf.zarr", band_partner="rgb99")
 
 
@@ -154,7 +154,7 @@ def test_stores_of_another_size_are_not_reused(stores):
     """A stores folder captured at 24 texels is refused for a 32-texel study, naming the
     setting, instead of being reused or resumed as if it were the new size."""
     folder, _, _ = stores
-    with pytest.raises(SpectwinInputError, match="captured with texels=24; expected texels=32"):
+    with pytest.raises(InputError, match="captured with texels=24; expected texels=32"):
         capture_study_stores(
             folder, "colorchecker16", replace(SIZE, texels=32), seed=SEED, dark_frames=4
         )

@@ -10,7 +10,7 @@ import pytest
 import yaml
 from typer.testing import CliRunner
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from twin.cli.app import app
 from twin.kinds.registry import sweep_kind
 from twin.studies.sweep_file import SweepRange, check_points, load_sweep
@@ -116,7 +116,7 @@ BAD_FILES = [
 
 @pytest.mark.parametrize(("changes", "phrase"), BAD_FILES, ids=[p for _, p in BAD_FILES])
 def test_bad_sweep_files_are_refused_naming_the_problem(tmp_path, changes, phrase):
-    with pytest.raises(SpectwinInputError) as error:
+    with pytest.raises(InputError) as error:
         sweep = load_sweep(_write(tmp_path, **changes), sweep_kind)
         check_points(sweep, sweep_kind(sweep.kind).check)
     assert phrase in str(error.value)

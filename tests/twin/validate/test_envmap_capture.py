@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import DEFAULT_GRID
 from twin.render.plugins.spectral_envmap import SpectralMap, spectral_envmap
 from twin.render.scene import PinholeCamera
@@ -40,7 +40,7 @@ def test_mirror_sphere_capture_recovers_a_known_spectral_map():
 
 def test_unwrap_refuses_a_blind_spot_hiding_everything():
     camera = PinholeCamera(np.array([0.0, -30.0, 0.0]), 0.11, 16)
-    with pytest.raises(SpectwinInputError, match="blind_spot_deg"):
+    with pytest.raises(InputError, match="blind_spot_deg"):
         unwrap_mirror_sphere(
             np.ones((16, 16, DEFAULT_GRID.size)), camera, 0.05, DEFAULT_GRID, blind_spot_deg=181
         )

@@ -41,7 +41,7 @@ from scipy.spatial import Delaunay
 from recon.btf.compression import CompressedBTF, load_compressed
 from recon.btf.specular_lobe import COATING_IOR, SpecularLobes, fit_specular_lobes
 from recon.btf.store import BTFStore
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import WavelengthGrid
 from twin.render.plugins.registry import PluginData, register_once
 from twin.render.variant import activate
@@ -85,12 +85,12 @@ class BTFTable:
             or shape[:2] != (len(self.light_dirs), len(self.view_dirs))
             or shape[4] != self.grid.size
         ):
-            raise SpectwinInputError(
+            raise InputError(
                 f"values: expected (n_lights, n_views, H, W, K) = ({len(self.light_dirs)}, "
                 f"{len(self.view_dirs)}, H, W, {self.grid.size}), got {shape}"
             )
         if not np.all(np.isfinite(self.values)):
-            raise SpectwinInputError("values: expected finite reflectance")
+            raise InputError("values: expected finite reflectance")
         _check_regular(self.grid)
 
     @property
@@ -118,12 +118,10 @@ class CompressedTable:
     def __post_init__(self) -> None:
         want = (len(self.light_dirs), len(self.view_dirs))
         if self.pairs.shape != want:
-            raise SpectwinInputError(f"pairs: expected shape {want}, got {self.pairs.shape}")
+            raise InputError(f"pairs: expected shape {want}, got {self.pairs.shape}")
         n_pairs = self.compressed.shape[0]
         if self.pairs.min() < 0 or self.pairs.max() >= n_pairs:
-            raise SpectwinInputError(
-                f"pairs: expected indices of the compressed BTF's {n_pairs} pairs"
-            )
+            raise InputError(f"pairs: expected indices of the compressed BTF's {n_pairs} pairs")
         _check_regular(self.compressed.grid)
 
     @property
@@ -151,7 +149,7 @@ class CompressedTable:
 def _check_regular(grid: WavelengthGrid) -> None:
     steps = np.diff(grid.wavelengths_nm)
     if steps.size and not np.allclose(steps, steps[0]):
-        raise SpectwinInputError("grid: expected a regular wavelength grid (resample first)")
+        raise InputError("grid: expected a regular wavelength grid (resample first)")
 
 
 def _unique_directions(directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -172,7 +170,7 @@ def _product_set(
     for light in range(len(lights)):
         have = np.flatnonzero(pairs[light] >= 0)
         if have.size == 0:
-            raise SpectwinInputError(f"light direction {lights[light].tolist()} has no views")
+            raise InputError(f"light direction {lights[light].tolist()} has no views")
         for view in np.flatnonzero(pairs[light] < 0):
             pairs[light, view] = pairs[light, have[np.argmax(views[have] @ views[view])]]
     return lights, views, pairs
@@ -205,7 +203,7 @@ def compressed_product_table(
     """The compressed BTF's pairs (directions in its pair order) on their product set, filled
     like :func:`product_table`."""
     if len(light_dirs) != compressed.shape[0] or len(view_dirs) != compressed.shape[0]:
-        raise SpectwinInputError(
+        raise InputError(
             f"light_dirs, view_dirs: expected one per compressed pair ({compressed.shape[0]}), "
             f"got {len(light_dirs)} and {len(view_dirs)}"
         )

@@ -28,7 +28,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import WavelengthGrid
 from twin.render.plugins.registry import PluginData, register_once
 from twin.render.variant import activate
@@ -51,14 +51,14 @@ class SpectralMap:
     def __post_init__(self) -> None:
         values = np.asarray(self.radiance, np.float64)
         if values.ndim != 3 or values.shape[2] != self.grid.size or min(values.shape[:2]) < 1:
-            raise SpectwinInputError(
+            raise InputError(
                 f"radiance: expected a lat-long map (H, W, {self.grid.size}), got {values.shape}"
             )
         if not np.all(np.isfinite(values)) or np.any(values < 0):
-            raise SpectwinInputError("radiance: expected finite, non-negative radiance")
+            raise InputError("radiance: expected finite, non-negative radiance")
         steps = np.diff(self.grid.wavelengths_nm)
         if steps.size and not np.allclose(steps, steps[0]):
-            raise SpectwinInputError("grid: expected a regular wavelength grid (resample first)")
+            raise InputError("grid: expected a regular wavelength grid (resample first)")
 
     def solid_angles(self) -> np.ndarray:
         """``(H, W)`` solid angle of every pixel, sr (they sum to 4 pi)."""
@@ -112,7 +112,7 @@ class SpectralEnvmapEmitter(mi.Emitter):
         self._radiance = mi.Float(spectral_map.radiance.astype(np.float32).ravel())
         weights = spectral_map.radiance.mean(axis=2) * spectral_map.solid_angles()
         if not weights.sum() > 0:
-            raise SpectwinInputError("radiance: the map emits nothing")
+            raise InputError("radiance: the map emits nothing")
         self._distribution = mi.DiscreteDistribution(mi.Float(weights.ravel()))
         self._importance = bool(props.get("importance", True))
         self._radius = 1e4

@@ -9,7 +9,7 @@ import pytest
 
 from recon.btf.compression import compress_btf
 from recon.btf.specular_lobe import fit_specular_lobes, microfacet_specular
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid
 from twin.components.lamps import FINE_GRID
 from twin.render.plugins.btf_bsdf import (
@@ -58,7 +58,7 @@ def test_product_table_fills_an_unmeasured_pair_from_the_nearest_view_of_its_lig
     assert table.values.shape == (2, 2, 1, 1, 33)
     light = int(np.argmax(table.light_dirs[:, 0]))  # the oblique light has one view measured
     assert np.all(table.values[light] == 2.0)
-    with pytest.raises(SpectwinInputError, match="n_lights, n_views"):
+    with pytest.raises(InputError, match="n_lights, n_views"):
         BTFTable(table.light_dirs, table.view_dirs, table.values[:, :1], DEFAULT_GRID)
 
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from recon.errors import SpectwinInputError
+from recon.errors import InputError
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid
 from twin.components.lamps import FINE_GRID
 from twin.render.plugins.registry import register_once
@@ -86,12 +86,12 @@ def test_importance_sampling_lowers_the_variance_for_a_sun_like_map():
 def test_solid_angles_cover_the_sphere_and_bad_maps_are_refused():
     spectral_map = SpectralMap(np.ones((7, 9, DEFAULT_GRID.size)), DEFAULT_GRID)
     assert spectral_map.solid_angles().sum() == pytest.approx(4 * np.pi)
-    with pytest.raises(SpectwinInputError, match="lat-long map"):
+    with pytest.raises(InputError, match="lat-long map"):
         SpectralMap(np.ones((4, 8, 5)), DEFAULT_GRID)
-    with pytest.raises(SpectwinInputError, match="non-negative"):
+    with pytest.raises(InputError, match="non-negative"):
         SpectralMap(-np.ones((4, 8, DEFAULT_GRID.size)), DEFAULT_GRID)
     irregular = WavelengthGrid(np.array([400.0, 410.0, 430.0]))
-    with pytest.raises(SpectwinInputError, match="regular wavelength grid"):
+    with pytest.raises(InputError, match="regular wavelength grid"):
         SpectralMap(np.ones((4, 8, 3)), irregular)
 
 
