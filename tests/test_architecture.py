@@ -78,8 +78,8 @@ HWBRIDGE_LAYERS = (
         (
             "recon/calibration/gonio.py",
             "import hwbridge.session",
-            "recon reads capture stores: of hwbridge it imports the store, its integrity checks "
-            "and the dome's store layout, nothing else",
+            "recon reads capture stores: of hwbridge it imports the store, its integrity checks, "
+            "the dome's store layout and (recon.errors) the errors, nothing else",
         ),
         ("hwbridge/store.py", "import hwbridge.drivers", HWBRIDGE_LAYERS),
         ("recon/emva/fit.py", "import recon.dome", RECON_LAYERS),

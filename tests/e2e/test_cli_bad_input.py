@@ -415,7 +415,7 @@ def test_a_device_that_keeps_failing_stops_the_capture_with_exit_1(inputs, monke
     monkeypatch.setattr("twin.gonio.capture.CaptureProgram.run", failing_session)
     result = runner.invoke(app, ["capture", "demo", str(inputs["NEW"]), "--workers", "0"])
     assert result.exit_code == 1, result.output
-    assert result.stderr.count("\n") == 1 and "--resume" in result.stderr
+    assert result.stderr.count("\n") == 1 and "spectwin capture resume" in result.stderr
     assert "Traceback" not in result.output
 
 

@@ -24,7 +24,6 @@ import typer
 from typer.core import TyperGroup
 
 from hwbridge.errors import Remedy
-
 from twin.cli.errors import (
     INTERRUPT_REPORT,
     INTERRUPTED,

@@ -37,7 +37,6 @@ from hwbridge.errors import (
     InputError,
     Remedy,
     SessionInterrupted,
-    SpectwinError,
     StoreBusy,
 )
 
