@@ -114,14 +114,16 @@ def test_a_module_outside_the_layers_breaks_the_exhaustive_contract(tmp_path, pa
     assert f"- {package}.unplaced" in result.stdout
 
 
-def test_the_longest_import_chain_in_twin_has_at_most_10_modules():
+def test_the_longest_import_chain_in_twin_has_at_most_12_modules():
+    """The command line reaches a rig's pipeline through the rig registry (``twin.kinds``):
+    command, registry, kind, then the rig's own stages."""
     spec = importlib.util.spec_from_file_location(
         "import_chains", ROOT / "scripts" / "import_chains.py"
     )
     chains = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(chains)
     chain = chains.longest_chain("twin")
-    assert 2 <= len(chain) <= 10, " -> ".join(chain)
+    assert 2 <= len(chain) <= 12, " -> ".join(chain)
 
 
 def _private_names_imported(path: Path) -> list[str]:

@@ -22,7 +22,8 @@ import json, os, sys, traceback
 from twin.cli.app import app
 import twin.gonio.sim_session  # noqa: F401 (the demo program's imports)
 import twin.dome.programs  # noqa: F401 (the dome programs' imports)
-import twin.kinds.builtin  # noqa: F401 (the rig registry of the capture programs)
+import twin.kinds.dome  # noqa: F401 (the rig registry of the capture programs)
+import twin.kinds.gonio  # noqa: F401
 
 for line in sys.stdin:
     request = json.loads(line)

@@ -13,7 +13,7 @@ import numpy as np
 from pydantic import Field
 
 from hwbridge.store import CaptureStore
-from twin.kinds.registry import Outcome, ProgramKind, ProgramSettings, RigKind
+from twin.kinds.kind import Outcome, ProgramKind, ProgramSettings, RigKind
 from twin.rigs.rig_config import DomeConfig
 from twin.studies.sweep_dome import check_dome_point, measure_dome_point
 from twin.studies.sweep_file import SweepKind

@@ -13,7 +13,7 @@ from pydantic import Field
 
 from hwbridge.store import CaptureStore
 from recon.errors import InputError
-from twin.kinds.registry import Outcome, ProgramKind, ProgramSettings, RigKind
+from twin.kinds.kind import Outcome, ProgramKind, ProgramSettings, RigKind
 from twin.rigs.rig_config import GonioConfig
 from twin.studies.sweep_file import SweepKind
 from twin.studies.sweep_gonio import check_gonio_point, measure_gonio_point
