@@ -1,6 +1,6 @@
 """Spectral recovery methods that compete with spectralization: array in, array out.
 
-Every function recovers spectra from RGB (or any ``C``-channel broadband) data. Conventions:
+Every method recovers spectra from RGB (or any ``C``-channel broadband) data. Conventions:
 
 - Spectral images are float arrays of shape ``(..., K)``, band axis last; RGB images are
   ``(..., C)`` with ``C = 3`` for an RGB camera.
@@ -15,35 +15,32 @@ Every function recovers spectra from RGB (or any ``C``-channel broadband) data. 
 - Bad input raises :class:`recon.errors.InputError` naming the argument.
 
 Methods (the thesis compares them with spectralization in chapter 7, Sec. 7.1-7.6, and in
-Sec. 10.4.3-10.4.4), one module per method, each registered by its short name in
-:data:`RECOVERY_METHODS` and callable by name through :func:`recover` (as colour-science's
-``colour.XYZ_to_sd(XYZ, method=...)`` dispatches through ``XYZ_TO_SD_METHODS``):
+Sec. 10.4.3-10.4.4), one module per method, each with one public function of the method's name,
+registered under that name in :data:`RECOVERY_METHODS` and callable by name through
+:func:`recover` (as colour-science's ``colour.XYZ_to_sd(XYZ, method=...)`` dispatches through
+``XYZ_TO_SD_METHODS``):
 
-- ``"imai"``, :func:`imai` (:mod:`~recon.baselines.imai_berns1999`): pseudo-inverse
-  :math:`S = V R^+`, the minimal-norm inverse matrix (Sec. 6.1).
-- ``"hardeberg"``, :func:`hardeberg` (:mod:`~recon.baselines.hardeberg1999`): the inverse
-  matrix trained on known spectra, :math:`W = \\arg\\min \\|V_{known} W - S_{known}\\|^2`
-  (Sec. 6.1).
-- ``"murakami"``, :func:`murakami_2007` (:mod:`~recon.baselines.murakami2007`): Gaussian-prior
-  (Wiener) estimate from the known spectra's statistics plus a spatially interpolated
-  correction at the known points (Sec. 5, 7.1).
-- ``"dong"``, :func:`dong_2016` (:mod:`~recon.baselines.dong2016`): a non-negative basis of the
-  known spectra by NMF, coefficients per pixel from the RGB (Sec. 5, 10.4.3).
-- ``"aplus"``, :func:`aplus` and :func:`spectral_a_plus`
-  (:mod:`~recon.baselines.aeschbacher2017`): anchored neighbourhood regression on a sparse
-  spectral dictionary (Sec. 5, 7.1, 10.4.4; defaults sparsity 8 and :math:`\\lambda = 0.1` as
-  quoted in Sec. 7.1). :func:`aplus` takes the project's ``(rgb, response, ...)`` order,
-  :func:`spectral_a_plus` the paper's.
-- ``"smits"``, :func:`smits_1999` (:mod:`~recon.baselines.smits1999`) and ``"jakob2019"``,
-  :func:`jakob_2019` (:mod:`~recon.baselines.jakob_hanika2019`): heuristic RGB-to-reflectance
-  upsampling that uses no known spectra (Sec. 7.1); input is linear RGB with sRGB primaries,
-  see each function.
+- :func:`imai` (:mod:`~recon.baselines.imai_berns1999`): pseudo-inverse :math:`S = V R^+`, the
+  minimal-norm inverse matrix (Sec. 6.1).
+- :func:`hardeberg` (:mod:`~recon.baselines.hardeberg1999`): the inverse matrix trained on known
+  spectra, :math:`W = \\arg\\min \\|V_{known} W - S_{known}\\|^2` (Sec. 6.1).
+- :func:`murakami` (:mod:`~recon.baselines.murakami2007`): Gaussian-prior (Wiener) estimate from
+  the known spectra's statistics plus a spatially interpolated correction at the known points
+  (Sec. 5, 7.1).
+- :func:`dong` (:mod:`~recon.baselines.dong2016`): a non-negative basis of the known spectra by
+  NMF, coefficients per pixel from the RGB (Sec. 5, 10.4.3).
+- :func:`a_plus` (:mod:`~recon.baselines.aeschbacher2017`): Spectral A+, anchored neighbourhood
+  regression on a sparse spectral dictionary (Sec. 5, 7.1, 10.4.4; defaults sparsity 8 and
+  :math:`\\lambda = 0.1` as quoted in Sec. 7.1).
+- :func:`smits` (:mod:`~recon.baselines.smits1999`) and :func:`jakob`
+  (:mod:`~recon.baselines.jakob_hanika2019`): heuristic RGB-to-reflectance upsampling that uses
+  no known spectra (Sec. 7.1); input is linear RGB with sRGB primaries, see each function.
 
-The short names ``murakami``, ``dong``, ``smits`` and ``jakob2019`` are the same functions as
-``murakami_2007``, ``dong_2016``, ``smits_1999`` and ``jakob_2019``. The modules are named after
-the papers as cited (first author, or both of two, and the year), not after the functions, so
-that no module hides a function of the same name (``recon.baselines.jakob2019`` is a function).
-Shared input checks are in :mod:`recon.baselines.common`.
+Every function takes ``rgb`` first, then ``response`` if the method uses one, and everything
+else by keyword, with the same names as :func:`recover` (``known_spectra``, ``known_pixels``,
+``known_rgb``, then the method's options). The modules are named after the papers as cited
+(first author, or both of two, and the year). Shared input checks are in
+:mod:`recon.baselines.common`.
 
 References
 ----------
@@ -53,96 +50,123 @@ References
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
-from recon.baselines.aeschbacher2017 import aplus, spectral_a_plus
-from recon.baselines.dong2016 import dong_2016
+from recon.baselines.aeschbacher2017 import a_plus
+from recon.baselines.dong2016 import dong
 from recon.baselines.hardeberg1999 import hardeberg
 from recon.baselines.imai_berns1999 import imai
-from recon.baselines.jakob_hanika2019 import jakob_2019
-from recon.baselines.murakami2007 import murakami_2007
-from recon.baselines.smits1999 import smits_1999
+from recon.baselines.jakob_hanika2019 import jakob
+from recon.baselines.murakami2007 import murakami
+from recon.baselines.smits1999 import smits
 from recon.errors import InputError
 
 __all__ = [
     "RECOVERY_METHODS",
-    "aplus",
+    "a_plus",
     "dong",
-    "dong_2016",
     "hardeberg",
     "imai",
-    "jakob2019",
-    "jakob_2019",
+    "jakob",
     "murakami",
-    "murakami_2007",
     "recover",
     "smits",
-    "smits_1999",
-    "spectral_a_plus",
 ]
-
-# The short names of the project's stable entry points (ARCHITECTURE.md). Smits and Jakob take
-# linear sRGB reflectance and wavelengths, not a camera response.
-murakami = murakami_2007
-dong = dong_2016
-smits = smits_1999
-jakob2019 = jakob_2019
 
 RECOVERY_METHODS: dict[str, Callable[..., np.ndarray]] = {
     "imai": imai,
     "hardeberg": hardeberg,
     "murakami": murakami,
     "dong": dong,
-    "aplus": aplus,
+    "a_plus": a_plus,
     "smits": smits,
-    "jakob2019": jakob2019,
+    "jakob": jakob,
 }
-"""The spectral recovery methods by their short (lower-case) names, for :func:`recover`.
+"""The spectral recovery methods by their names, for :func:`recover`.
 
-Each value is the module attribute of the same name (``RECOVERY_METHODS["dong"]`` is
-:func:`dong`, that is :func:`dong_2016`)."""
+Each key is the name of its function (``RECOVERY_METHODS["dong"]`` is :func:`dong`). A function's
+signature says what the method takes: ``response`` as its second parameter if it uses one (with
+a default of ``None`` if it can do without), ``known_spectra`` and ``known_pixels`` among its
+keyword-only parameters if it uses them, and its options as the other keyword-only parameters;
+a keyword-only parameter without a default is required."""
 
 
-def recover(rgb: np.ndarray, *args: Any, method: str, **kwargs: Any) -> np.ndarray:
+def recover(
+    rgb: np.ndarray,
+    response: np.ndarray | None,
+    *,
+    method: str,
+    known_pixels: np.ndarray | None = None,
+    known_spectra: np.ndarray | None = None,
+    **options: Any,
+) -> np.ndarray:
     """Spectra from RGB by the spectral recovery method named ``method``.
 
-    Looks the method up in :data:`RECOVERY_METHODS` (case-insensitively) and calls it with
-    ``rgb`` and the remaining arguments unchanged, so ``recover(rgb, response, method="imai")``
-    is ``imai(rgb, response)``; like ``colour.XYZ_to_sd(XYZ, method=...)`` in colour-science.
-    The methods take different arguments after ``rgb``:
+    Looks the method up in :data:`RECOVERY_METHODS` (case-insensitively), checks that the call
+    gives it exactly what it uses, and calls its function: ``recover(rgb, response,
+    method="dong", known_spectra=s)`` is ``dong(rgb, response, known_spectra=s)``. What each
+    method uses (``response`` ``None`` where it uses none):
 
-    - ``"imai"``: ``response`` (:func:`imai`).
-    - ``"hardeberg"``: ``known_spectra, known_pixels`` or ``known_spectra, known_rgb=...``
-      (:func:`hardeberg`).
-    - ``"murakami"``: ``response, known_spectra, known_pixels`` (:func:`murakami_2007`).
-    - ``"dong"``: ``response, known_spectra[, n_components]`` (:func:`dong_2016`).
-    - ``"aplus"``: ``response, training_spectra[, training_rgb]`` and the options of
-      :func:`spectral_a_plus` (:func:`aplus`).
-    - ``"smits"``: ``wavelengths_nm`` (:func:`smits_1999`).
-    - ``"jakob2019"``: ``wavelengths_nm[, lut_size=...]`` (:func:`jakob_2019`).
+    - ``"imai"``: ``response`` (:func:`imai`; thesis Sec. 6.1, Eq. 6.1-6.2). No known spectra.
+    - ``"hardeberg"``: ``known_spectra`` with ``known_pixels`` or the option ``known_rgb``; no
+      response (:func:`hardeberg`; Sec. 6.1).
+    - ``"murakami"``: ``response``, ``known_spectra`` and ``known_pixels`` of an ``(H, W, C)``
+      image; options ``correlation_length``, ``rgb_noise_std``, ``nugget``
+      (:func:`murakami`; Sec. 7.1).
+    - ``"dong"``: ``response`` and ``known_spectra``; options ``n_components``,
+      ``random_state``, ``max_iter``, ``tol`` (:func:`dong`; Sec. 10.4.3).
+    - ``"a_plus"``: ``known_spectra`` with ``known_pixels``, the option ``known_rgb`` or only
+      a ``response``; ``response`` may be ``None`` (estimated from the known pairs); options
+      ``known_rgb``, ``n_atoms``, ``sparsity``, ``ridge_lambda``, ``neighbourhood_size``,
+      ``n_iter``, ``random_state`` (:func:`a_plus`; Sec. 7.1, 10.4.4).
+    - ``"smits"``: linear sRGB ``rgb`` in [0, 1] and the required option ``wavelengths_nm``;
+      no response, no known spectra (:func:`smits`; Sec. 7.1).
+    - ``"jakob"``: as ``"smits"``, and the option ``lut_size`` (:func:`jakob`; Sec. 7.1).
+
+    The thesis compares these methods with spectralization in chapter 7.
 
     Parameters
     ----------
     rgb
-        ``(..., C)`` device values (linear sRGB in [0, 1] for ``"smits"`` and ``"jakob2019"``).
-    *args, **kwargs
-        The method's other arguments, as listed above.
+        ``(..., C)`` device values (linear sRGB in [0, 1] for ``"smits"`` and ``"jakob"``).
+    response
+        ``(K, C)`` projection with ``rgb = spectra @ response`` (Eq. 6.2), or ``None`` for a
+        method that uses none (or, for ``"a_plus"``, to estimate it).
     method
         A key of :data:`RECOVERY_METHODS`, in any letter case.
+    known_pixels
+        Flat row-major indices into ``rgb.shape[:-1]`` of the known spectra, for the methods
+        that use them.
+    known_spectra
+        ``(m, K)`` known (training) spectra, for the methods that use them.
+    **options
+        The method's keyword-only options, as listed above.
 
     Returns
     -------
     numpy.ndarray
-        ``(..., K)`` spectra, exactly what the method returns.
+        ``(..., K)`` spectra, exactly what the method's function returns.
 
     Raises
     ------
     recon.errors.InputError
-        If ``method`` names no registered method (the message lists the valid names), or for
-        bad input to the method itself.
+        If ``method`` names no registered method (the message lists the valid names), an
+        option is not one of the method's (the message lists its options), the method needs
+        ``response``, ``known_spectra``, ``known_pixels`` or a required option that is missing,
+        or is given one it does not use; or for bad input to the method itself.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rgb, response = np.array([[0.2, 0.4, 0.6]]), np.eye(3)  # K = C = 3
+    >>> recover(rgb, response, method="imai").round(12).tolist()
+    [[0.2, 0.4, 0.6]]
+    >>> recover(rgb, response, method="dong", known_spectra=np.eye(3), max_iter=500).shape
+    (1, 3)
     """
     function = RECOVERY_METHODS.get(method.lower()) if isinstance(method, str) else None
     if function is None:
@@ -150,4 +174,34 @@ def recover(rgb: np.ndarray, *args: Any, method: str, **kwargs: Any) -> np.ndarr
             f"method: unknown spectral recovery method {method!r}; expected one of "
             f"{', '.join(RECOVERY_METHODS)}"
         )
-    return function(rgb, *args, **kwargs)
+    name = method.lower()
+    parameters = inspect.signature(function).parameters
+    keywords = [p for p in parameters.values() if p.kind is inspect.Parameter.KEYWORD_ONLY]
+    valid_options = [p.name for p in keywords if p.name not in ("known_pixels", "known_spectra")]
+    unknown = sorted(set(options) - set(valid_options))
+    if unknown:
+        raise InputError(
+            f"options: method {name!r} has no option {', '.join(unknown)}; its options are "
+            f"{', '.join(valid_options) if valid_options else 'none'}"
+        )
+    data = {"known_pixels": known_pixels, "known_spectra": known_spectra}
+    given = {key: value for key, value in data.items() if value is not None}
+    for key in given:
+        if key not in parameters:
+            raise InputError(f"{key}: method {name!r} does not use {key}; pass None")
+    uses_response = "response" in parameters
+    if response is not None and not uses_response:
+        raise InputError(f"response: method {name!r} uses no response; pass None")
+    if response is None and uses_response and parameters["response"].default is not None:
+        raise InputError(
+            f"response: method {name!r} needs the (K, C) response with rgb = spectra @ response"
+        )
+    missing = [
+        p.name
+        for p in keywords
+        if p.default is inspect.Parameter.empty and p.name not in given and p.name not in options
+    ]
+    if missing:
+        raise InputError(f"{missing[0]}: method {name!r} needs {' and '.join(missing)}")
+    leading = (rgb, response) if uses_response else (rgb,)
+    return function(*leading, **given, **options)

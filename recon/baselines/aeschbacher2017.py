@@ -1,9 +1,6 @@
 """Spectral A+ (Aeschbacher, Wu & Timofte 2017): anchored neighbourhood regression on a sparse
 spectral dictionary (thesis Sec. 5, 7.1, 10.4.4).
 
-:func:`spectral_a_plus` takes the paper's arguments, :func:`aplus` the same in the project's
-``(rgb, response, ...)`` order.
-
 References
 ----------
 - Aeschbacher, J., Wu, J., & Timofte, R. (2017). In defense of shallow learned spectral
@@ -36,7 +33,7 @@ from recon.baselines.common import (
 )
 from recon.errors import InputError
 
-__all__ = ["aplus", "spectral_a_plus"]
+__all__ = ["a_plus"]
 
 
 def _ksvd(
@@ -72,13 +69,13 @@ def _ksvd(
     return dictionary
 
 
-def spectral_a_plus(
+def a_plus(
     rgb: np.ndarray,
-    training_spectra: np.ndarray,
-    training_rgb: np.ndarray | None = None,
-    *,
-    known_pixels: np.ndarray | None = None,
     response: np.ndarray | None = None,
+    *,
+    known_spectra: np.ndarray,
+    known_pixels: np.ndarray | None = None,
+    known_rgb: np.ndarray | None = None,
     n_atoms: int = 64,
     sparsity: int = 8,
     ridge_lambda: float = 0.1,
@@ -112,16 +109,18 @@ def spectral_a_plus(
     ----------
     rgb
         ``(..., C)`` image to reconstruct.
-    training_spectra
-        ``(m, K)`` training spectra (e.g. the known spectra of the image), m >= ``n_atoms``.
-    training_rgb
-        ``(m, C)`` RGB of the training spectra. Alternatively give ``known_pixels`` (the RGB is
-        read from ``rgb``) or only ``response`` (the RGB is ``training_spectra @ response``).
-    known_pixels
-        Flat row-major indices into ``rgb.shape[:-1]`` of the training spectra.
     response
-        ``(K, C)`` projection used for the anchors. If omitted it is estimated from the training
-        pairs by least squares (``training_rgb ~ training_spectra @ response``).
+        ``(K, C)`` projection used for the anchors. If ``None`` it is estimated from the
+        training pairs by least squares (``known_rgb ~ known_spectra @ response``).
+    known_spectra
+        ``(m, K)`` training spectra (e.g. the known spectra of the image), m >= ``n_atoms``.
+    known_pixels
+        Flat row-major indices into ``rgb.shape[:-1]`` of the training spectra (their RGB is
+        read from ``rgb``).
+    known_rgb
+        ``(m, C)`` RGB of the training spectra, for training data that is not in the image.
+        Give this or ``known_pixels``, or neither and a ``response`` (the RGB is then
+        ``known_spectra @ response``).
     n_atoms
         Dictionary size (anchors).
     sparsity
@@ -142,26 +141,19 @@ def spectral_a_plus(
     """
     pixels = check_image("rgb", rgb)
     channels = pixels.shape[-1]
-    spectra = check_spectra("training_spectra", training_spectra)
+    spectra = check_spectra("known_spectra", known_spectra)
     samples, bands = spectra.shape
     matrix = None if response is None else check_response(response, bands, channels)
     flat = pixels.reshape(-1, channels)
-    if known_pixels is None and training_rgb is None:
+    if known_pixels is None and known_rgb is None:
         if matrix is None:
             raise InputError(
-                "training_rgb: expected training_rgb, known_pixels or response to know the RGB "
-                "of the training spectra, got none of them"
+                "known_rgb: expected known_rgb, known_pixels or response to know the RGB of the "
+                "known spectra, got none of them"
             )
         train_rgb = spectra @ matrix
     else:
-        train_rgb = check_known_rgb(
-            flat,
-            spectra,
-            known_pixels,
-            training_rgb,
-            pixels.shape[:-1],
-            ("known_pixels", "training_rgb"),
-        )
+        train_rgb = check_known_rgb(flat, spectra, known_pixels, known_rgb, pixels.shape[:-1])
     n_atoms = check_count("n_atoms", n_atoms, 1, samples)
     sparsity = check_count("sparsity", sparsity, 1, min(bands, n_atoms))
     ridge = check_positive("ridge_lambda", ridge_lambda)
@@ -172,7 +164,7 @@ def spectral_a_plus(
     usable = rgb_norm > 0
     if not np.any(usable) or not np.any(spectra):
         raise InputError(
-            "training_spectra / training_rgb: all training samples are black (zero RGB or zero "
+            "known_spectra / known_rgb: all training samples are black (zero RGB or zero "
             "spectrum); nothing to learn from"
         )
     if matrix is None:
@@ -212,33 +204,3 @@ def spectral_a_plus(
         best = np.argmax(np.abs(unit @ anchors.T), axis=1)
         result[start : start + len(chunk)] = np.einsum("pc,pck->pk", chunk, projections[best])
     return result.reshape(*pixels.shape[:-1], bands)
-
-
-def aplus(
-    rgb: np.ndarray,
-    response: np.ndarray | None,
-    training_spectra: np.ndarray,
-    training_rgb: np.ndarray | None = None,
-    **options,
-) -> np.ndarray:
-    """:func:`spectral_a_plus` in the project's ``(rgb, response, ...)`` calling order.
-
-    Parameters
-    ----------
-    rgb
-        ``(..., C)`` image to reconstruct.
-    response
-        ``(K, C)`` projection used for the anchors, or ``None`` to estimate it from the
-        training pairs (see :func:`spectral_a_plus`).
-    training_spectra, training_rgb
-        As in :func:`spectral_a_plus`.
-    **options
-        The keyword arguments of :func:`spectral_a_plus` (``known_pixels``, ``n_atoms``,
-        ``sparsity``, ``ridge_lambda``, ...).
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(..., K)`` spectra, those of :func:`spectral_a_plus`.
-    """
-    return spectral_a_plus(rgb, training_spectra, training_rgb, response=response, **options)

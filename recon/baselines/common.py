@@ -128,22 +128,21 @@ def check_known_rgb(
     known_pixels: object,
     known_rgb: object,
     image_shape: tuple,
-    names: tuple[str, str] = ("known_pixels", "known_rgb"),
 ) -> np.ndarray:
     """RGB of the known spectra: from the image at ``known_pixels`` or given as ``known_rgb``."""
     if (known_pixels is None) == (known_rgb is None):
         raise InputError(
-            f"{names[0]} / {names[1]}: expected exactly one of them (the pixels of the known "
+            f"known_pixels / known_rgb: expected exactly one of them (the pixels of the known "
             f"spectra in rgb, or their RGB values), got "
             f"{'both' if known_pixels is not None else 'neither'}"
         )
     if known_pixels is not None:
         index = check_known_pixels(known_pixels, len(pixels), len(known_spectra), image_shape)
         return pixels[index]
-    values = check_image(names[1], known_rgb, pixels.shape[-1])
+    values = check_image("known_rgb", known_rgb, pixels.shape[-1])
     if values.shape != (len(known_spectra), pixels.shape[-1]):
         raise InputError(
-            f"{names[1]}: expected shape ({len(known_spectra)}, {pixels.shape[-1]}), one RGB "
+            f"known_rgb: expected shape ({len(known_spectra)}, {pixels.shape[-1]}), one RGB "
             f"per known spectrum, got {values.shape}"
         )
     return values

@@ -25,15 +25,15 @@ from recon.baselines.common import (
 )
 from recon.errors import InputError
 
-__all__ = ["dong_2016"]
+__all__ = ["dong"]
 
 
-def dong_2016(
+def dong(
     rgb: np.ndarray,
     response: np.ndarray,
+    *,
     known_spectra: np.ndarray,
     n_components: int = 3,
-    *,
     random_state: int | None = 0,
     max_iter: int = 10000,
     tol: float = 1e-6,

@@ -18,9 +18,9 @@ __all__ = ["hardeberg"]
 
 def hardeberg(
     rgb: np.ndarray,
+    *,
     known_spectra: np.ndarray,
     known_pixels: np.ndarray | None = None,
-    *,
     known_rgb: np.ndarray | None = None,
 ) -> np.ndarray:
     """Trained inverse matrix (Hardeberg et al. 1999; thesis Sec. 6.1).

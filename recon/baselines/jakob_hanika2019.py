@@ -22,7 +22,7 @@ from recon.baselines.common import CHUNK_ELEMENTS, check_count, check_reflectanc
 from recon.errors import InputError
 from recon.spectra import WavelengthGrid
 
-__all__ = ["jakob_2019"]
+__all__ = ["jakob"]
 
 _CMFS_NAME = "CIE 1931 2 Degree Standard Observer"
 
@@ -99,8 +99,8 @@ def _jakob_lut(size: int, start: float, end: float, interval: float) -> LUT3D_Ja
     return lut
 
 
-def jakob_2019(
-    rgb: np.ndarray, wavelengths_nm: np.ndarray, *, lut_size: int | None = None
+def jakob(
+    rgb: np.ndarray, *, wavelengths_nm: np.ndarray, lut_size: int | None = None
 ) -> np.ndarray:
     """Smooth reflectance spectra from RGB by Jakob & Hanika's (2019) sigmoid model.
 

@@ -23,15 +23,15 @@ from recon.baselines.common import (
 )
 from recon.errors import InputError
 
-__all__ = ["murakami_2007"]
+__all__ = ["murakami"]
 
 
-def murakami_2007(
+def murakami(
     rgb: np.ndarray,
     response: np.ndarray,
+    *,
     known_spectra: np.ndarray,
     known_pixels: np.ndarray,
-    *,
     correlation_length: float | None = None,
     rgb_noise_std: float = 0.0,
     nugget: float = 0.0,
@@ -98,7 +98,7 @@ def murakami_2007(
     image = check_image("rgb", rgb)
     if image.ndim != 3:
         raise InputError(
-            f"rgb: murakami_2007 needs a 2-D image of shape (H, W, C) for the pixel positions, "
+            f"rgb: murakami needs a 2-D image of shape (H, W, C) for the pixel positions, "
             f"got shape {image.shape}"
         )
     height, width, channels = image.shape

@@ -17,7 +17,7 @@ from colour.recovery import RGB_to_sd_Smits1999
 from recon.baselines.common import check_reflectance_rgb
 from recon.spectra import WavelengthGrid
 
-__all__ = ["smits_1999"]
+__all__ = ["smits"]
 
 
 @functools.lru_cache(maxsize=16)
@@ -40,7 +40,7 @@ def _smits_matrices(wavelengths: tuple[float, ...]) -> dict[tuple[int, int, int]
     return matrices
 
 
-def smits_1999(rgb: np.ndarray, wavelengths_nm: np.ndarray) -> np.ndarray:
+def smits(rgb: np.ndarray, *, wavelengths_nm: np.ndarray) -> np.ndarray:
     """Smooth reflectance spectra from RGB by Smits' (1999) method, via colour-science.
 
     Smits' spectrum is white times the smallest channel plus cyan/magenta/yellow times the

@@ -11,7 +11,7 @@ Eq. 6.8 per pixel:
 - :func:`spot_count_sweep`: whisk-broom with a varying number of spots (Fig. 7.9);
 - :func:`noise_sweep`: RGB noise from 0.5 % to 5 % of the mean (Fig. 7.10).
 
-Methods are registered by name in :data:`METHODS`; each takes a :class:`SparseInput`.
+The contenders are named in :data:`METHODS`; each takes a :class:`SparseInput`.
 
 References
 ----------
@@ -84,11 +84,11 @@ def _a_plus(data: SparseInput, ridge_lambda: float) -> np.ndarray:
     return baselines.recover(
         data.rgb,
         None,
-        data.spectra,
+        method="a_plus",
         known_pixels=data.pixels,
+        known_spectra=data.spectra,
         sparsity=min(8, data.spectra.shape[1]),
         ridge_lambda=ridge_lambda,
-        method="aplus",
     )
 
 
@@ -98,19 +98,22 @@ METHODS: dict[str, Callable[[SparseInput], np.ndarray]] = {
     "spectralization regression prior": lambda d: _spectralization(d, prior="regression"),
     "spectralization chosen prior": lambda d: _spectralization(d, prior="chosen"),
     "imai": lambda d: baselines.recover(d.rgb, d.response, method="imai"),
-    "hardeberg": lambda d: baselines.recover(d.rgb, d.spectra, d.pixels, method="hardeberg"),
-    "murakami": lambda d: baselines.recover(
-        d.rgb, d.response, d.spectra, d.pixels, method="murakami"
+    "hardeberg": lambda d: baselines.recover(
+        d.rgb, None, method="hardeberg", known_pixels=d.pixels, known_spectra=d.spectra
     ),
-    "dong": lambda d: baselines.recover(d.rgb, d.response, d.spectra, method="dong"),
+    "murakami": lambda d: baselines.recover(
+        d.rgb, d.response, method="murakami", known_pixels=d.pixels, known_spectra=d.spectra
+    ),
+    "dong": lambda d: baselines.recover(d.rgb, d.response, method="dong", known_spectra=d.spectra),
     "a_plus": lambda d: _a_plus(d, 0.1),
     "a_plus lambda=1e-5": lambda d: _a_plus(d, 1e-5),
 }
-"""Reconstruction methods by name; the baselines are called through
-:func:`recon.baselines.recover` by their names in :data:`recon.baselines.RECOVERY_METHODS`.
-Imai cannot use the known spectra (section 7); all others receive them. Smits 1999 and Jakob
-2019 (``recon.baselines``) expect sRGB reflectance input, not camera values, and are left out of
-these camera-based protocols."""
+"""The protocols' contenders by name: spectralization in four settings, and the baselines of
+:data:`recon.baselines.RECOVERY_METHODS` under their names there, called through
+:func:`recon.baselines.recover` with what each uses (``"a_plus lambda=1e-5"`` is ``"a_plus"``
+with ``ridge_lambda=1e-5``, thesis Sec. 10.4.4). Imai cannot use the known spectra (section 7),
+Hardeberg uses no response and Dong no pixel positions. Smits 1999 and Jakob 2019 expect sRGB
+reflectance input, not camera values, and are left out of these camera-based protocols."""
 
 
 @dataclass(frozen=True)

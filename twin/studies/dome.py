@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 from scipy import ndimage
 
-from recon.baselines import dong_2016, spectral_a_plus
+from recon.baselines import recover
 from recon.errors import InputError
 from recon.metrics import relative_error
 from recon.spectralize.appearance import appearance_neighbours, appearance_points
@@ -149,12 +149,12 @@ def comparison(
     )
     known = np.clip(sphere.reshape(-1, sphere.shape[-1]), 0, None)
     training = known[rng.choice(known.shape[0], min(1000, known.shape[0]), replace=False)]
-    results: dict[str, list] = {"dong_2016": [], "spectral_a_plus": []}
+    results: dict[str, list] = {"dong": [], "a_plus": []}
     for capture in single.captures:
         rgb = capture.rgb
-        results["dong_2016"].append(dong_2016(rgb, setup.response, known))
-        results["spectral_a_plus"].append(
-            spectral_a_plus(rgb, training, response=setup.response, ridge_lambda=1e-5)
+        results["dong"].append(recover(rgb, setup.response, method="dong", known_spectra=known))
+        results["a_plus"].append(
+            recover(rgb, setup.response, method="a_plus", known_spectra=training, ridge_lambda=1e-5)
         )
     out = {"spectralization": single.summary()}
     for name, cubes in results.items():

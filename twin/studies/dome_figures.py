@@ -167,7 +167,7 @@ def write_exposure_vs_error(exposure: dict, path: Path) -> None:
 def write_comparison(metrics: dict, path: Path) -> None:
     """Mean relative error and Delta E94 per method and material (Fig. 10.23's means)."""
     materials = list(metrics["materials"])
-    methods = ("spectralization", "dong_2016", "spectral_a_plus")
+    methods = ("spectralization", "dong", "a_plus")
     fig = Figure(figsize=(11, 3.6))
     axes = fig.subplots(1, 2)
     for axis, key, label in (
