@@ -14,6 +14,7 @@ import pytest
 import tifffile
 from typer.testing import CliRunner
 
+from hwbridge.store import CaptureStore
 from recon.btf.compression import load_compressed
 from recon.btf.rgb_import import RGB_COLUMNS
 from recon.btf.store import BTFStore
@@ -35,6 +36,16 @@ pytestmark = pytest.mark.render
 runner = CliRunner()
 
 
+def _counted(open_store, opened: list):
+    """``CaptureStore.open`` that also notes each call in ``opened``."""
+
+    def counting(path):
+        opened.append(path)
+        return open_store(path)
+
+    return classmethod(lambda cls, path: counting(path))
+
+
 @pytest.fixture(scope="module")
 def pipeline(tmp_path_factory, invoke_json):
     root = tmp_path_factory.mktemp("gonio")
@@ -51,19 +62,28 @@ def pipeline(tmp_path_factory, invoke_json):
     run_gonio_measurement(
         root / "run.capture.zarr", calibration.planned_exposure_s, pairs=pairs, seed=3
     )
-    processed = invoke_json(
-        "process",
-        root / "run.capture.zarr",
-        "--calibration",
-        root / "cal.json",
-        "--out",
-        root / "cc.btf.zarr",
-        "--texels",
-        64,
-        "--json",
-    )
+    opened = []
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(CaptureStore, "open", _counted(CaptureStore.open, opened))
+        processed = invoke_json(
+            "process",
+            root / "run.capture.zarr",
+            "--calibration",
+            root / "cal.json",
+            "--out",
+            root / "cc.btf.zarr",
+            "--texels",
+            64,
+            "--json",
+        )
+    processed["capture_store_opens"] = len(opened)
     evaluated = invoke_json("evaluate", root / "cc.btf.zarr", "--figure", root / "cc.png", "--json")
     return root, calibrated, calibration, processed, evaluated
+
+
+def test_process_opens_the_capture_store_once(pipeline):
+    _, _, _, processed, _ = pipeline
+    assert processed["capture_store_opens"] == 1
 
 
 def test_every_planned_hmi_exposure_is_a_whole_number_of_flicker_periods(pipeline):
