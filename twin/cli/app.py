@@ -238,7 +238,8 @@ def demo(
 ) -> None:
     """The whole pipeline at small size on built-in defaults, with an HTML report: gonio
     calibration and measurement of the colour checker, BTF, evaluation against the truth,
-    spectralization, Figure 4.6 validation (about 10 minutes on 2 cores).
+    spectralization, Figure 4.6 validation (about 90 s on 2 cores; BENCHMARKS.md, "make demo on
+    a cold machine").
 
     Example: spectwin demo --out out/demo
     """
