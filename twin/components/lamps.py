@@ -35,7 +35,7 @@ __all__ = [
     "HMI_F575_LINES",
     "EmissionLine",
     "HMILamp",
-    "Lamp",
+    "LightSource",
     "PhosphorWhiteLED",
     "QTHLamp",
     "cie_illuminant",
@@ -79,7 +79,7 @@ def _require_exposure(t0_s: float, exposure_s: float) -> None:
         raise SpectwinInputError(f"exposure_s: expected a positive exposure time, got {exposure_s}")
 
 
-class Lamp(Protocol):
+class LightSource(Protocol):
     """What the rigs need of a light source.
 
     A lamp's output is a sum of fixed spectral parts whose weights change in time
@@ -343,7 +343,7 @@ def cie_illuminant(name: str, grid: WavelengthGrid) -> SampledSpectra:
     return resample(from_colour(colour.SDS_ILLUMINANTS[name]), grid, method="pchip")
 
 
-def lamp_model(spectrum: str) -> Lamp:
+def lamp_model(spectrum: str) -> LightSource:
     """The gonioreflectometer lamp a rig file names: ``"hmi"`` (Broncolor F575, flickering
     lines) or ``"qth"`` (the 1000 W tungsten-halogen lamp), thesis 3.2.2."""
     models = {"hmi": HMILamp, "qth": QTHLamp}
