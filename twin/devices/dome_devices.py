@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from hwbridge.errors import BridgeInputError
+from hwbridge.protocols import Camera, LedArray, RotationStage, TunableFilter
 from hwbridge.session import SessionDevices
 from twin.devices.sim_devices import (
     SimLedArray,
@@ -60,7 +61,7 @@ class DomeDevices:
     stage_port: str | None = None
     led_port: str | None = None
     lctf_port: str | None = None
-    cameras: Mapping[str, Any] = field(default_factory=dict)
+    cameras: Mapping[str, Camera] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.backend not in BACKENDS:
@@ -81,11 +82,14 @@ class DomeDevices:
 
     def __call__(self) -> SessionDevices:
         """Build the devices and stage them (a device that fails to stage unstages the others)."""
+        stage: RotationStage
+        leds: LedArray
+        lctf: TunableFilter
         if self.backend == "sim":
             rig = VirtualRig()
-            stage: Any = SimRotationStage(rig, step_deg=self.step_deg)
-            leds: Any = SimLedArray(rig, self.led_count, drive_current_ma=self.drive_current_ma)
-            lctf: Any = SimTunableFilter(rig)
+            stage = SimRotationStage(rig, step_deg=self.step_deg)
+            leds = SimLedArray(rig, self.led_count, drive_current_ma=self.drive_current_ma)
+            lctf = SimTunableFilter(rig)
         else:
             from hwbridge.drivers.apt_rotation_stage import AptRotationStage
             from hwbridge.drivers.dmx_led_array import DmxLedArray
@@ -110,5 +114,4 @@ class DomeDevices:
             positioner=stage,
             tunable_filter=lctf,
             leds=leds,
-            led_count=self.led_count,
         )

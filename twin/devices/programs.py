@@ -5,16 +5,16 @@ their plan in this process or over a Dask cluster (:func:`twin.devices.cluster.r
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from hwbridge.session import SessionDevices
 from hwbridge.store import CaptureStore
 from recon.errors import SpectwinInputError
 from twin.devices.cluster import run_capture
+from twin.devices.sim_devices import DeviceRecipe
 from twin.sensor.model import Sensor
 
 if TYPE_CHECKING:
@@ -59,8 +59,8 @@ class ProgramCapture:
     them, and pickles for the workers of a cluster), the store's ``rig`` attribute and the
     session ``seed``."""
 
-    plan: list[dict]
-    devices: Callable[[], SessionDevices]
+    plan: list[dict[str, Any]]
+    devices: DeviceRecipe
     rig: dict[str, Any]
     seed: int
 

@@ -291,12 +291,12 @@ class CaptureProgram(ProgramCapture):
         :func:`twin.gonio.capture_time.estimate_plan_s`) and the storage the frames and their
         index take uncompressed (the store compresses them)."""
         devices = self.devices()
-        monitor = devices.get("monitor")
+        monitor = devices.monitor
         samples = monitor.samples if monitor is not None else 0
         frames = Counter(step["camera"] for step in self.plan)
         storage = 0
         for camera, count in frames.items():
-            height, width = devices["cameras"][camera].frame_shape
+            height, width = devices.cameras[camera].frame_shape
             storage += count * (2 * height * width + _INDEX_BYTES + 4 * samples)
         duration_s = estimate_plan_s(self.config or load_rig("gonio"), self.plan, self.poses)
         height, width = self.devices.sensor.height, self.devices.sensor.width

@@ -9,7 +9,7 @@ import json
 import pytest
 from typer.testing import CliRunner
 
-from hwbridge.session import capture_steps, locked_session_store
+from hwbridge.session import SessionSettings, capture_steps, locked_session_store
 from hwbridge.store import CaptureStore
 from recon.errors import SpectwinInputError
 from twin.cli.app import app
@@ -95,11 +95,9 @@ def test_sizes_the_rig_cannot_take_are_refused():
 def test_resume_of_a_dome_run_reads_its_settings_and_refuses_other_ones(tmp_path):
     path = tmp_path / "run.capture.zarr"
     program = dome_run_program("lego", size=DomeCaptureSize(1, 3, 1, 8, 4), seed=5)
-    devices = program.devices()
-    with locked_session_store(
-        path, program.plan, devices, rig=program.rig, backend="sim", seed=5
-    ) as store:
-        capture_steps(store, range(2), devices, seed=5)  # the alignment frames
+    settings = SessionSettings(rig=program.rig, backend="sim", seed=5)
+    with locked_session_store(path, program.plan, program.devices(), settings) as store:
+        capture_steps(store, range(2), program.devices(5, range(2)))  # the alignment frames
     probes = [
         (["--leds", "5"], "was captured with --leds 3, not 5"),
         (["--texels", "16"], "was captured with --texels 8, not 16"),
@@ -126,7 +124,7 @@ def test_a_store_that_does_not_record_its_led_renders_resumes_one_render_per_led
     program = dome_run_program("lego", size=DomeCaptureSize(1, 3, 1, 8, 4, "single"), seed=5)
     rig = {name: value for name, value in program.rig.items() if name != "led_renders"}
     with locked_session_store(
-        path, program.plan, program.devices(), rig=rig, backend="sim", seed=5
+        path, program.plan, program.devices(), SessionSettings(rig=rig, backend="sim", seed=5)
     ):
         pass
     assert stored_dome_settings(CaptureStore.open(path))["led_renders"] == "single"
