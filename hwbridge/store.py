@@ -402,7 +402,7 @@ class CaptureStore:
         names = list(group.array_keys()) if fields is None else list(fields)
         return {name: self._read(array_at(group, name)) for name in names}
 
-    def read_frames(self, camera: str, slots: Sequence[int]) -> np.ndarray:
+    def read_frames(self, camera: str, slots: Sequence[int] | np.ndarray) -> np.ndarray:
         """The frames ``(n, H, W)`` of ``camera`` at ``slots``; a frame whose chunk is missing
         (it would read as zeros) or corrupt raises :class:`~hwbridge.errors.StoreDamagedError`
         naming camera, step and chunk key."""

@@ -21,6 +21,7 @@ References
 from __future__ import annotations
 
 import warnings
+from typing import Any
 
 import numpy as np
 from sklearn.decomposition import sparse_encode
@@ -219,7 +220,7 @@ def aplus(
     response: np.ndarray | None,
     training_spectra: np.ndarray,
     training_rgb: np.ndarray | None = None,
-    **options,
+    **options: Any,
 ) -> np.ndarray:
     """:func:`spectral_a_plus` in the project's ``(rgb, response, ...)`` calling order.
 
