@@ -39,6 +39,7 @@ References
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal, overload
 
 import colour
 import numpy as np
@@ -388,6 +389,46 @@ def _solve_specularity(
     return specularity
 
 
+@overload
+def estimate_response(
+    chart_rgb: np.ndarray,
+    reflectances: np.ndarray,
+    illuminant: np.ndarray,
+    wavelengths: np.ndarray,
+    *,
+    method: str = "extended",
+    field_positions: np.ndarray | None = None,
+    alpha: float | None = None,
+    beta: float = 100.0,
+    gamma: float = 1.0,
+    delta: float = 10.0,
+    data_weight: float = 300.0,
+    max_iterations: int = 50,
+    tolerance: float = 3e-4,
+    prior: ResponsePrior | None = None,
+    prior_weight: float = PRIOR_WEIGHT,
+    return_details: Literal[False] = False,
+) -> np.ndarray: ...
+@overload
+def estimate_response(
+    chart_rgb: np.ndarray,
+    reflectances: np.ndarray,
+    illuminant: np.ndarray,
+    wavelengths: np.ndarray,
+    *,
+    method: str = "extended",
+    field_positions: np.ndarray | None = None,
+    alpha: float | None = None,
+    beta: float = 100.0,
+    gamma: float = 1.0,
+    delta: float = 10.0,
+    data_weight: float = 300.0,
+    max_iterations: int = 50,
+    tolerance: float = 3e-4,
+    prior: ResponsePrior | None = None,
+    prior_weight: float = PRIOR_WEIGHT,
+    return_details: Literal[True],
+) -> CharacterizationResult: ...
 def estimate_response(
     chart_rgb: np.ndarray,
     reflectances: np.ndarray,

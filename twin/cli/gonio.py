@@ -21,7 +21,7 @@ import shlex
 from collections import Counter
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated, NoReturn
+from typing import Annotated, Any, NoReturn
 
 import numpy as np
 import typer
@@ -188,7 +188,7 @@ def _program_of(
     seed: int,
     fault_rate: float,
     dry_run: bool,
-    dome: dict[str, object],
+    dome: dict[str, Any],
 ):
     """The capture program, every setting checked (nothing is written)."""
     if program in _DOME:
@@ -768,7 +768,7 @@ def evaluate(
     Example: spectwin evaluate out/cc.btf.zarr --figure out/cc_vs_truth.png --json
     """
     from recon.btf.store import BTFStore
-    from twin.validate.dome_evaluation import evaluate_dome, write_dome_figure
+    from twin.validate.dome_evaluation import DomeEvaluation, evaluate_dome, write_dome_figure
     from twin.validate.gonio_evaluation import evaluate_gonio, pair_label, write_gonio_figure
     from twin.validate.gonio_texel_evaluation import GonioTexelEvaluation, write_texel_figure
 
@@ -781,7 +781,7 @@ def evaluate(
     summary = result.summary()
     if figure is not None:
         figure.parent.mkdir(parents=True, exist_ok=True)
-        if dome:
+        if isinstance(result, DomeEvaluation):
             written = write_dome_figure(result, figure)
         elif isinstance(result, GonioTexelEvaluation):
             store = BTFStore.open(btf)

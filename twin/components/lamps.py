@@ -240,14 +240,16 @@ class HMILamp:
 
     def _relative_parts(self, wavelengths_nm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         continuum = planck_spectral_radiance(wavelengths_nm, self.continuum_temperature_k)
-        continuum = continuum / planck_spectral_radiance(560.0, self.continuum_temperature_k)
+        continuum = continuum / planck_spectral_radiance(
+            np.array(560.0), self.continuum_temperature_k
+        )
         lines = sum(line.profile(wavelengths_nm) for line in self.lines)
         return continuum, lines + np.zeros_like(continuum)
 
     def continuum_and_lines(self, wavelengths_nm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Time-averaged continuum and line parts in W sr^-1 nm^-1 at drift 1."""
         scale = _intensity_scale(
-            lambda wavelengths: sum(self._relative_parts(wavelengths)),
+            lambda wavelengths: np.add(*self._relative_parts(wavelengths)),
             self.radiant_intensity_w_sr,
         )
         continuum, lines = self._relative_parts(np.asarray(wavelengths_nm, dtype=np.float64))

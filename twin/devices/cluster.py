@@ -432,7 +432,7 @@ def _btf_lock(out: Path, resume: bool) -> StoreLock:
 
 
 def run_process(
-    capture: str | Path,
+    capture: str | Path | CaptureStore,
     calibration: GonioCalibration,
     out: str | Path,
     *,

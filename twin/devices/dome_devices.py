@@ -66,14 +66,17 @@ class DomeDevices:
     def __post_init__(self) -> None:
         if self.backend not in BACKENDS:
             raise BridgeInputError(f"backend: expected one of {BACKENDS}, got {self.backend!r}")
-        ports = {
-            "stage_port": self.stage_port,
-            "led_port": self.led_port,
-            "lctf_port": self.lctf_port,
-        }
-        missing = [key for key, port in ports.items() if not port]
-        if self.backend == "real" and missing:
+        if self.backend == "real":
+            self._real_ports()
+
+    def _real_ports(self) -> tuple[str, str, str]:
+        """The serial ports of the real stage, LEDs and LCTF."""
+        stage, leds, lctf = self.stage_port, self.led_port, self.lctf_port
+        if not (stage and leds and lctf):
+            ports = {"stage_port": stage, "led_port": leds, "lctf_port": lctf}
+            missing = [key for key, port in ports.items() if not port]
             raise BridgeInputError(f"the real dome needs the serial ports {missing}")
+        return stage, leds, lctf
 
     @classmethod
     def for_rig(cls, config: DomeConfig, **settings: Any) -> DomeDevices:
@@ -95,11 +98,12 @@ class DomeDevices:
             from hwbridge.drivers.dmx_led_array import DmxLedArray
             from hwbridge.drivers.varispec import VariSpec
 
-            stage = AptRotationStage(self.stage_port, step_deg=self.step_deg)
+            stage_port, led_port, lctf_port = self._real_ports()
+            stage = AptRotationStage(stage_port, step_deg=self.step_deg)
             leds = DmxLedArray(
-                self.led_port, count=self.led_count, drive_current_ma=self.drive_current_ma
+                led_port, count=self.led_count, drive_current_ma=self.drive_current_ma
             )
-            lctf = VariSpec(self.lctf_port)
+            lctf = VariSpec(lctf_port)
         staged = []
         try:
             for device in (stage, leds, lctf):

@@ -19,11 +19,12 @@ from twin.sensor.model import Sensor
 
 if TYPE_CHECKING:
     from distributed import Client
+    from typing_extensions import TypeIs
 
 __all__ = ["ProgramCapture", "check_exposures", "check_fault_rate", "check_seed", "is_whole"]
 
 
-def is_whole(value: object) -> bool:
+def is_whole(value: object) -> TypeIs[int | np.integer]:
     """Whether ``value`` is a whole number (not a bool)."""
     return isinstance(value, int | np.integer) and not isinstance(value, bool)
 

@@ -108,7 +108,7 @@ class GonioScene:
             self._weights[placement.id] = np.concatenate(
                 [
                     node_weights(channels * spectral_parts.row(name))
-                    for name in spectral_parts.names
+                    for name in spectral_parts.names or ()
                 ],
                 axis=1,
             ).astype(np.float32)  # (n_nodes, n_parts * n_bands)

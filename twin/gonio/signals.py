@@ -14,6 +14,8 @@ a multiple of 1/15 s then vary with the flicker phase, as on the real rig (thesi
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+
 import numpy as np
 
 from twin.components.lamps import FINE_GRID, LightSource
@@ -72,7 +74,7 @@ class RenderedGonioSignal:
         self,
         config: GonioConfig,
         material: Material | None,
-        poses: list[GonioPose],
+        poses: Sequence[GonioPose] | Mapping[int, GonioPose],
         *,
         pixels: int,
         spp: int = GONIO_SPP,

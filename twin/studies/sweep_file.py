@@ -63,7 +63,10 @@ __all__ = [
 
 SWEEP_DIR = scene_folder("sweeps")
 _MAX_POINTS = 10_000
-_KINDS = {
+_KINDS: dict[
+    str,
+    tuple[type[GonioConfig] | type[DomeConfig], type[GonioPlan] | type[DomePlan], dict[str, str]],
+] = {
     "gonioreflectometer": (GonioConfig, GonioPlan, GONIO_MEASURES),
     "dome": (DomeConfig, DomePlan, DOME_MEASURES),
 }
@@ -83,9 +86,10 @@ class SweepRange(StrictModel):
             raise ValueError("expected exactly one of num and step")
         if self.stop < self.start:
             raise ValueError(f"empty range: stop {self.stop} is below start {self.start}")
+        values: np.ndarray
         if self.num is not None:
             values = np.linspace(self.start, self.stop, self.num)
-        else:
+        elif self.step is not None:
             count = int(np.floor((self.stop - self.start) / self.step + 1e-9)) + 1
             values = self.start + self.step * np.arange(count)
         whole = all(float(v).is_integer() for v in (self.start, self.stop, self.step or 1))
@@ -141,6 +145,18 @@ class DesignPoint:
         digest = hashlib.sha256(json.dumps(design, sort_keys=True).encode()).hexdigest()[:10]
         return f"{self.index:04d}-{digest}"
 
+    def gonio(self) -> tuple[GonioConfig, GonioPlan]:
+        """The rig and plan of a gonioreflectometer point."""
+        if isinstance(self.rig, GonioConfig) and isinstance(self.plan, GonioPlan):
+            return self.rig, self.plan
+        raise SpectwinInputError(f"{self.where}: expected a gonioreflectometer design point")
+
+    def dome(self) -> tuple[DomeConfig, DomePlan]:
+        """The rig and plan of a dome point."""
+        if isinstance(self.rig, DomeConfig) and isinstance(self.plan, DomePlan):
+            return self.rig, self.plan
+        raise SpectwinInputError(f"{self.where}: expected a dome design point")
+
 
 @dataclass(frozen=True)
 class Sweep:
@@ -155,7 +171,7 @@ class Sweep:
     objectives: tuple[str, str]
     measures: dict[str, str]
 
-    def describe(self) -> dict[str, object]:
+    def describe(self) -> dict[str, Any]:
         return {
             "sweep": self.name,
             "file": str(self.path),
@@ -182,7 +198,7 @@ def _set_path(document: Any, parts: list[str], value: Any, path: str) -> None:
     head, rest = parts[0], parts[1:]
     if isinstance(document, list):
         if head == "*":
-            targets = range(len(document))
+            targets: range | list[int] = range(len(document))
         elif head.isdigit() and int(head) < len(document):
             targets = [int(head)]
         else:
@@ -252,10 +268,16 @@ def _point(
         raise SpectwinInputError(
             f"{where}: material: expected one of {available_materials()}, got {material!r}"
         )
-    config_model, plan_model, _ = _KINDS[kind]
-    config = validate_document(config_model, document, Path(f"{where}: rig"))
-    plan_model = validate_document(plan_model, plan, Path(f"{where}: plan"))
-    return DesignPoint(index, values, material, config, plan_model, sweep.seed, where)
+    rig_where, plan_where = Path(f"{where}: rig"), Path(f"{where}: plan")
+    config: GonioConfig | DomeConfig
+    plan_config: GonioPlan | DomePlan
+    if kind == "dome":
+        config = validate_document(DomeConfig, document, rig_where)
+        plan_config = validate_document(DomePlan, plan, plan_where)
+    else:
+        config = validate_document(GonioConfig, document, rig_where)
+        plan_config = validate_document(GonioPlan, plan, plan_where)
+    return DesignPoint(index, values, material, config, plan_config, sweep.seed, where)
 
 
 def check_points(sweep: Sweep, check: Callable[[DesignPoint], None]) -> None:

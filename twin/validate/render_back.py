@@ -21,6 +21,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from recon.btf.rgb_import import rgb_source
 from recon.btf.store import BTFStore
@@ -58,7 +59,7 @@ def validate_btf(
     spp: int = 256,
     map_height: int = 64,
     step: Callable[[str], None] = lambda name: None,
-) -> dict[str, object]:
+) -> dict[str, Any]:
     """Render Figure 4.6 and the 45/0 comparison for the BTF at ``btf_path`` into ``out``.
 
     Parameters
