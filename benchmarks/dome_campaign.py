@@ -33,7 +33,7 @@ from pathlib import Path
 
 from benchmarks.common import machine_description, peak_rss_mib, per_unit, timed_stages
 from hwbridge import store as store_module
-from hwbridge.session import capture_steps, locked_session_store
+from hwbridge.session import SessionSettings, capture_steps, locked_session_store
 from twin.dome import render as render_module
 from twin.dome import signals as signals_module
 from twin.dome.programs import DomeCaptureSize, dome_calibration_program, dome_run_program
@@ -57,7 +57,13 @@ def _rounded(stages: dict[str, dict[str, float]]) -> dict[str, dict[str, float]]
     return per_unit(stages, 1)
 
 
-def _run(program, store, devices, leds: int) -> dict[str, object]:
+def _timed(program, store, steps) -> dict[str, dict[str, float]]:
+    """Capture ``steps`` with ``program``'s devices; wall and CPU seconds per stage."""
+    devices = program.devices(0, steps)
+    return timed_stages(_STAGES, lambda: capture_steps(store, steps, devices))
+
+
+def _run(program, store, leds: int) -> dict[str, object]:
     """The first stage position of a full run: its alignment, then ``leds`` LEDs."""
     plan = program.plan
     first = [i for i, step in enumerate(plan) if step.get("view_id") == plan[0]["view_id"]]
@@ -65,8 +71,8 @@ def _run(program, store, devices, leds: int) -> dict[str, object]:
     all_leds = list(dict.fromkeys(plan[i]["light_id"] for i in first if i not in alignment))
     chosen = set(all_leds[:leds])
     lit = [i for i in first if plan[i].get("light_id") in chosen]
-    aligned = timed_stages(_STAGES, lambda: capture_steps(store, alignment, devices, seed=0))
-    each = timed_stages(_STAGES, lambda: capture_steps(store, lit, devices, seed=0))
+    aligned = _timed(program, store, alignment)
+    each = _timed(program, store, lit)
     positions = program.rig["stage_positions"]
     scale = len(all_leds) / len(chosen)
     projected_s = positions * (aligned["total"]["wall_s"] + scale * each["total"]["wall_s"])
@@ -83,14 +89,14 @@ def _run(program, store, devices, leds: int) -> dict[str, object]:
     }
 
 
-def _calibration(program, store, devices, dark_share: float) -> dict[str, object]:
+def _calibration(program, store, dark_share: float) -> dict[str, object]:
     """Every rendered frame of a full calibration and ``dark_share`` of its darks."""
     plan = program.plan
     darks = [i for i, step in enumerate(plan) if step["kind"] == "dark"]
     rendered = [i for i, step in enumerate(plan) if step["kind"] != "dark"]
     chosen = darks[:: max(1, round(1 / dark_share))]
-    dark = timed_stages(_STAGES, lambda: capture_steps(store, chosen, devices, seed=0))
-    lit = timed_stages(_STAGES, lambda: capture_steps(store, rendered, devices, seed=0))
+    dark = _timed(program, store, chosen)
+    lit = _timed(program, store, rendered)
     scale = len(darks) / len(chosen)
     projected_s = scale * dark["total"]["wall_s"] + lit["total"]["wall_s"]
     projected_cpu_s = scale * dark["total"]["cpu_s"] + lit["total"]["cpu_s"]
@@ -124,20 +130,17 @@ def main() -> None:
         program = dome_calibration_program(size=size)
     root = arguments.out or Path(tempfile.mkdtemp(prefix="spectwin-dome-campaign-"))
     started = time.perf_counter()
-    devices = program.devices()
     with locked_session_store(
         root / f"{arguments.program}.capture.zarr",
         program.plan,
-        devices,
-        rig=program.rig,
-        backend="sim",
-        seed=0,
+        program.devices(),
+        SessionSettings(rig=program.rig, backend="sim", seed=0),
     ) as store:
         create_s = time.perf_counter() - started
         if arguments.program == "run":
-            timing = _run(program, store, devices, arguments.leds)
+            timing = _run(program, store, arguments.leds)
         else:
-            timing = _calibration(program, store, devices, arguments.dark_share)
+            timing = _calibration(program, store, arguments.dark_share)
     dry_run = program.dry_run()
     results = {
         "machine": machine_description(),

@@ -32,7 +32,7 @@ import numpy as np
 
 from benchmarks.common import machine_description, peak_rss_mib, per_unit, timed_stages
 from hwbridge import store as store_module
-from hwbridge.session import capture_steps, locked_session_store
+from hwbridge.session import SessionSettings, capture_steps, locked_session_store
 from recon.calibration.spectral import HMI_FLICKER_PERIOD_S
 from twin.gonio import render as render_module
 from twin.gonio import signals as signals_module
@@ -55,9 +55,11 @@ _STAGES = {
 }
 
 
-def _phase(store, steps, devices, seed) -> dict[str, dict[str, float]]:
-    """Capture ``steps``; wall and CPU seconds in total and per stage."""
-    return timed_stages(_STAGES, lambda: capture_steps(store, steps, devices, seed=seed))
+def _phase(store, steps, program, seed) -> dict[str, dict[str, float]]:
+    """Capture ``steps`` with ``program``'s devices; wall and CPU seconds in total and per
+    stage."""
+    devices = program.devices(seed, steps)
+    return timed_stages(_STAGES, lambda: capture_steps(store, steps, devices))
 
 
 def main() -> None:
@@ -80,9 +82,9 @@ def main() -> None:
     plan = program.plan
     root = arguments.out or Path(tempfile.mkdtemp(prefix="spectwin-campaign-"))
     started = time.perf_counter()
-    devices = program.devices()
+    settings = SessionSettings(rig=program.rig, backend="sim", seed=0)
     with locked_session_store(
-        root / "campaign.capture.zarr", plan, devices, rig=program.rig, backend="sim", seed=0
+        root / "campaign.capture.zarr", plan, program.devices(), settings
     ) as store:
         create_s = time.perf_counter() - started
         by_view: dict[int, list[int]] = defaultdict(list)
@@ -90,9 +92,9 @@ def main() -> None:
             by_view[settings.get("view_id", -1)].append(step)
         white = program.rig["white_view_id"]
         chosen = np.linspace(0, len(pairs.poses) - 1, arguments.pairs + 1).round().astype(int)
-        before = _phase(store, by_view[-1] + by_view[white], devices, 0)
-        first = _phase(store, by_view[int(chosen[0])], devices, 0)
-        steady = _phase(store, [s for view in chosen[1:] for s in by_view[int(view)]], devices, 0)
+        before = _phase(store, by_view[-1] + by_view[white], program, 0)
+        first = _phase(store, by_view[int(chosen[0])], program, 0)
+        steady = _phase(store, [s for view in chosen[1:] for s in by_view[int(view)]], program, 0)
     mean = steady["total"]["wall_s"] / arguments.pairs
     projection_s = before["total"]["wall_s"] + arguments.campaign * mean
     results = {

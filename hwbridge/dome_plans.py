@@ -38,6 +38,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -137,12 +138,21 @@ class DomeTiming:
     frame_overhead_s: Mapping[str, float]
 
 
-def _spectral_step(cameras, exposures, kind, exposure_s, band_nm=None, **settings) -> dict:
+def _spectral_step(
+    cameras: DomeCameraIds,
+    exposures: DomeExposures,
+    kind: str,
+    exposure_s: float,
+    band_nm: float | None = None,
+    **settings: float | int,
+) -> dict[str, Any]:
     band = exposures.reference_band_nm if band_nm is None else band_nm
     return plan_step(cameras.spectral, kind, exposure_s, band_nm=float(band), **settings)
 
 
-def _hdr_sets(cameras, exposures, kind, **settings) -> list[dict]:
+def _hdr_sets(
+    cameras: DomeCameraIds, exposures: DomeExposures, kind: str, **settings: float | int
+) -> list[dict[str, Any]]:
     """Every RGB camera's HDR set, camera after camera."""
     return [
         plan_step(camera, kind, t, **settings)
@@ -151,7 +161,9 @@ def _hdr_sets(cameras, exposures, kind, **settings) -> list[dict]:
     ]
 
 
-def _all_leds_frames(cameras, exposures, kind, **settings) -> list[dict]:
+def _all_leds_frames(
+    cameras: DomeCameraIds, exposures: DomeExposures, kind: str, **settings: float | int
+) -> list[dict[str, Any]]:
     """One frame of every camera with every LED on (the spectral camera in the reference band)."""
     rgb = [
         plan_step(camera, kind, exposures.all_leds_s[camera], light_id=ALL_LEDS, **settings)
@@ -176,7 +188,7 @@ def dome_run(
     *,
     stage_positions: Sequence[int],
     leds: Sequence[int],
-) -> list[dict]:
+) -> list[dict[str, Any]]:
     """The measurement of one material (thesis 10.2.2, 10.4; module docstring).
 
     Parameters
@@ -198,7 +210,7 @@ def dome_run(
     """
     positions = _check_ids("stage_positions", stage_positions)
     lights = _check_ids("leds", leds)
-    plan: list[dict] = []
+    plan: list[dict[str, Any]] = []
     image = 0
     for view in positions:
         plan += _all_leds_frames(cameras, exposures, "alignment", view_id=view)
@@ -233,7 +245,7 @@ def dome_calibration(
     geometric_views: Sequence[tuple[int, float]],
     dark_frames: int = 200,
     rgb_dark_frames: int = 16,
-) -> list[dict]:
+) -> list[dict[str, Any]]:
     """The calibration of the dome's cameras (thesis 10.3; module docstring).
 
     Parameters
@@ -296,7 +308,7 @@ def dome_calibration(
     return plan
 
 
-def _slot_key(step: dict) -> tuple:
+def _slot_key(step: dict[str, Any]) -> tuple[Any, ...]:
     return (
         step.get("view_id", -1),
         step.get("light_id", NO_LIGHT),
@@ -305,7 +317,7 @@ def _slot_key(step: dict) -> tuple:
     )
 
 
-def _timeline(plan: list[dict], timing: DomeTiming) -> tuple[np.ndarray, float]:
+def _timeline(plan: list[dict[str, Any]], timing: DomeTiming) -> tuple[np.ndarray, float]:
     """Exposure starts of every step and the end of the plan (module docstring)."""
     unknown = sorted({step["camera"] for step in plan} - set(timing.frame_overhead_s))
     if unknown:
@@ -332,7 +344,7 @@ def _timeline(plan: list[dict], timing: DomeTiming) -> tuple[np.ndarray, float]:
     return starts, max(cameras.values(), default=clock)
 
 
-def dome_start_times_s(plan: list[dict], timing: DomeTiming) -> np.ndarray:
+def dome_start_times_s(plan: list[dict[str, Any]], timing: DomeTiming) -> np.ndarray:
     """When each step's exposure starts, in seconds from the start, cameras in parallel
     (module docstring). Fixed by the plan, so a resumed capture gets the same times.
 
@@ -352,7 +364,7 @@ def dome_start_times_s(plan: list[dict], timing: DomeTiming) -> np.ndarray:
     return _timeline(plan, timing)[0]
 
 
-def dome_duration_s(plan: list[dict], timing: DomeTiming) -> float:
+def dome_duration_s(plan: list[dict[str, Any]], timing: DomeTiming) -> float:
     """How long ``plan`` takes, cameras in parallel (module docstring)."""
     if not plan:
         raise InputError("plan: expected at least one step")

@@ -80,7 +80,9 @@ def single_led(led: int, count: int, name: str) -> np.ndarray:
     """The pattern with LED ``led`` alone on, or a :class:`InputError`."""
     if not 0 <= led < count:
         raise InputError(f"{name}: LED {led} is not in 0..{count - 1}")
-    return np.arange(count) == led
+    pattern = np.zeros(count, bool)
+    pattern[led] = True
+    return pattern
 
 
 def check_current_ma(current_ma: float, current_range_ma: tuple[float, float], name: str) -> float:

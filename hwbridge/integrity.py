@@ -35,13 +35,17 @@ import numpy as np
 import zarr
 from zarr.codecs import Crc32cCodec, ZstdCodec
 
+from hwbridge.errors import DamagedDataError
+
 __all__ = [
     "ChunkChecker",
     "ChunkProblem",
     "IntegrityReport",
+    "array_at",
     "checksum_state",
     "checksummed_compressors",
     "chunk_key",
+    "group_at",
     "has_checksums",
     "metadata_problem",
     "read_flags",
@@ -56,20 +60,36 @@ def checksummed_compressors(level: int = 0) -> tuple[ZstdCodec, Crc32cCodec]:
     return ZstdCodec(level=level, checksum=False), Crc32cCodec()
 
 
-def has_checksums(array: zarr.Array) -> bool:
+def array_at(group: zarr.Group, key: str) -> zarr.Array[Any]:
+    """The array at ``key`` in ``group``; a group there is a damaged store."""
+    node = group[key]
+    if not isinstance(node, zarr.Array):
+        raise DamagedDataError(f"damaged store: {key} is a group where an array belongs")
+    return node
+
+
+def group_at(group: zarr.Group, key: str) -> zarr.Group:
+    """The group at ``key`` in ``group``; an array there is a damaged store."""
+    node = group[key]
+    if not isinstance(node, zarr.Group):
+        raise DamagedDataError(f"damaged store: {key} is an array where a group belongs")
+    return node
+
+
+def has_checksums(array: zarr.Array[Any]) -> bool:
     """Whether the chunks of ``array`` end with a CRC-32C of their bytes (crc32c is the last
     codec of its chain)."""
-    codecs = getattr(array.metadata, "codecs", ())
+    codecs: tuple[object, ...] = getattr(array.metadata, "codecs", ())  # v2 metadata has none
     return bool(codecs) and isinstance(codecs[-1], Crc32cCodec)
 
 
-def with_empty_chunks(array: zarr.Array) -> zarr.Array:
+def with_empty_chunks(array: zarr.Array[Any]) -> zarr.Array[Any]:
     """``array`` writing every chunk, also one that holds only the fill value (Zarr skips those
     by default, which would make a frame of zeros look like a missing chunk)."""
     return array.with_config({"write_empty_chunks": True})
 
 
-def chunk_key(array: zarr.Array, coords: tuple[int, ...]) -> str:
+def chunk_key(array: zarr.Array[Any], coords: tuple[int, ...]) -> str:
     """Path of the chunk at grid position ``coords`` inside the store, e.g.
     ``frames/k4/c/80/0/0``."""
     return f"{array.path}/{array.metadata.encode_chunk_key(coords)}"
@@ -143,19 +163,19 @@ class ChunkChecker:
     def __init__(self, root: Path, *, verify: bool = True):
         self.root = Path(root)
         self.verify = verify
-        self._arrays: dict[str, tuple[str, zarr.Array, bool]] = {}
+        self._arrays: dict[str, tuple[str, zarr.Array[Any], bool]] = {}
 
-    def _array(self, array: zarr.Array) -> tuple[str, zarr.Array, bool]:
+    def _array(self, array: zarr.Array[Any]) -> tuple[str, zarr.Array[Any], bool]:
         """The array's folder, the array and whether it has checksums (looked up once)."""
         path = array.path
         if path not in self._arrays:
             self._arrays[path] = (os.path.join(self.root, path), array, has_checksums(array))
         return self._arrays[path]
 
-    def checksums(self, array: zarr.Array) -> bool:
+    def checksums(self, array: zarr.Array[Any]) -> bool:
         return self._array(array)[2]
 
-    def check(self, array: zarr.Array, coords: tuple[int, ...]) -> tuple[str, str] | None:
+    def check(self, array: zarr.Array[Any], coords: tuple[int, ...]) -> tuple[str, str] | None:
         """``None`` for a sound chunk, else ``(problem, detail)``: ``("missing", "")`` or
         ``("corrupt", why)``."""
         folder, array, checksums = self._array(array)
@@ -176,7 +196,7 @@ class ChunkChecker:
         return None
 
     @staticmethod
-    def _decode(array: zarr.Array, coords: tuple[int, ...]) -> tuple[str, str] | None:
+    def _decode(array: zarr.Array[Any], coords: tuple[int, ...]) -> tuple[str, str] | None:
         """Decode a chunk of an array without checksums (an older store)."""
         selection = tuple(
             slice(c * size, (c + 1) * size) for c, size in zip(coords, array.chunks, strict=True)
@@ -193,7 +213,7 @@ def _decoding_error(error: Exception) -> str:
 
 
 def read_flags(
-    checker: ChunkChecker, array: zarr.Array, name: Callable[[int], str]
+    checker: ChunkChecker, array: zarr.Array[Any], name: Callable[[int], str]
 ) -> tuple[np.ndarray, list[ChunkProblem]]:
     """The flags of a 1-D bool progress array, and the problems of its unreadable chunks (their
     flags read as not set: the units are pending again). ``name(unit)`` describes a unit."""

@@ -15,6 +15,7 @@ References
 from __future__ import annotations
 
 from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
 
@@ -32,9 +33,7 @@ __all__ = [
 ]
 
 
-def plan_step(
-    camera: str, kind: str, exposure_s: float, **settings: float | int
-) -> dict[str, object]:
+def plan_step(camera: str, kind: str, exposure_s: float, **settings: float | int) -> dict[str, Any]:
     """One step: ``camera`` takes a frame of ``kind`` at ``exposure_s`` after ``settings`` (view,
     light, band, ...) are set; a non-positive or non-finite exposure is refused."""
     if not np.isfinite(exposure_s) or exposure_s <= 0:
@@ -44,7 +43,7 @@ def plan_step(
 
 def dark_series(
     camera: str, exposures_s: Iterable[float], frames_per_exposure: int = 50
-) -> list[dict]:
+) -> list[dict[str, Any]]:
     """Dark frames: ``frames_per_exposure`` per exposure time, shutter closed (thesis 3.3)."""
     if frames_per_exposure < 1:
         raise InputError("frames_per_exposure: expected at least one frame")
@@ -57,7 +56,7 @@ def dark_series(
 
 def response_curve_series(
     camera: str, exposures_s: Iterable[float], *, light_id: int = 0
-) -> list[dict]:
+) -> list[dict[str, Any]]:
     """One frame of a static scene per exposure time, for the response curve (Robertson)."""
     return [plan_step(camera, "oecf", t, light_id=light_id) for t in exposures_s]
 
@@ -67,7 +66,7 @@ def gonio_sample_run(
     view_ids: Iterable[int],
     band_centres_nm: Iterable[float],
     band_exposures_s: Iterable[float],
-) -> list[dict]:
+) -> list[dict[str, Any]]:
     """Per direction pair (``view_id``), per band: tune the filter, expose (thesis 4.1.1)."""
     bands = list(band_centres_nm)
     exposures = list(band_exposures_s)
@@ -82,7 +81,7 @@ def gonio_sample_run(
 
 def white_reference_run(
     camera: str, band_centres_nm: Iterable[float], band_exposures_s: Iterable[float]
-) -> list[dict]:
+) -> list[dict[str, Any]]:
     """The white standard through every band before a run, for the factors F'_lambda (3.3)."""
     return [
         plan_step(camera, "white", t, band_nm=float(band), light_id=0)
@@ -92,7 +91,7 @@ def white_reference_run(
 
 def chart_photographs(
     camera: str, exposures_s: Iterable[float], light_ids: Iterable[int]
-) -> list[dict]:
+) -> list[dict[str, Any]]:
     """Colour-chart photographs, one per light and exposure (thesis 9.3)."""
     return [
         plan_step(camera, "chart", t, light_id=int(light))
@@ -102,7 +101,7 @@ def chart_photographs(
 
 
 def plan_start_times_s(
-    plan: list[dict], *, per_frame_overhead_s: float = 0.13, per_view_move_s: float = 6.0
+    plan: list[dict[str, Any]], *, per_frame_overhead_s: float = 0.13, per_view_move_s: float = 6.0
 ) -> np.ndarray:
     """When each step's exposure starts, in seconds from the session start: moves to a new view,
     then exposure plus switching/download per frame (thesis 4.1.1). Fixed by the plan alone, so a
@@ -119,7 +118,7 @@ def plan_start_times_s(
 
 
 def estimate_duration_s(
-    plan: list[dict], *, per_frame_overhead_s: float = 0.13, per_view_move_s: float = 6.0
+    plan: list[dict[str, Any]], *, per_frame_overhead_s: float = 0.13, per_view_move_s: float = 6.0
 ) -> float:
     """Dry-run duration: exposures, per-frame switching/download, and a move per new view."""
     starts = plan_start_times_s(

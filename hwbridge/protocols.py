@@ -19,10 +19,13 @@ __all__ = [
     "reading",
     "Describable",
     "Lamp",
+    "LampMonitor",
     "LedArray",
     "Positioner",
+    "Reading",
     "Readable",
     "RotationStage",
+    "Shutter",
     "Spectrometer",
     "Stageable",
     "TunableFilter",
@@ -80,6 +83,10 @@ class TunableFilter(Readable, Stageable, Protocol):
 class Camera(Readable, Stageable, Protocol):
     """A camera: set the exposure, take a raw frame."""
 
+    @property
+    def frame_shape(self) -> tuple[int, int]:
+        """Height and width of a frame in pixels."""
+
     def set_exposure(self, exposure_s: float) -> None: ...
 
     def snap(self) -> tuple[np.ndarray, dict[str, Any]]:
@@ -87,7 +94,16 @@ class Camera(Readable, Stageable, Protocol):
 
 
 @runtime_checkable
+class Shutter(Protocol):
+    """A camera's shutter (the CoolSNAP K4's): closed for dark frames."""
+
+    def set_shutter(self, open_: bool) -> None: ...
+
+
+@runtime_checkable
 class Lamp(Readable, Protocol):
+    """A lamp that is switched on or off."""
+
     def set(self, on: bool) -> None: ...
 
 
@@ -145,3 +161,13 @@ class Spectrometer(Readable, Protocol):
     """The lamp monitor (X-Rite i1, thesis 3.3): one spectrum per reading."""
 
     def trigger(self) -> None: ...
+
+
+@runtime_checkable
+class LampMonitor(Spectrometer, Protocol):
+    """The lamp monitor of a session: ``read`` gives one field, a spectrum of ``samples``
+    values, which the capture store keeps with every lit frame."""
+
+    @property
+    def samples(self) -> int:
+        """Values of one spectrum."""

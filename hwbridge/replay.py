@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import tifffile
@@ -25,7 +26,7 @@ __all__ = ["MAPPING_DIR", "ingest", "load_mapping"]
 MAPPING_DIR = Path(__file__).resolve().parent / "mappings"
 
 
-def load_mapping(name_or_path: str | Path) -> dict:
+def load_mapping(name_or_path: str | Path) -> dict[str, Any]:
     """A shipped mapping by name (``"llanos2019"``) or a mapping file by path, validated."""
     path = Path(name_or_path)
     if not path.suffix:

@@ -7,21 +7,25 @@ their index, and flag them done. A session interrupted
 at any moment (crash, SIGKILL, power loss) is continued with ``resume=True``: steps already
 flagged are skipped, a step that was cut short is taken again into the same slot.
 
-Devices that simulate noise can implement ``set_step(seed, step)`` to derive it from the step
-index, so that a resumed session reproduces the frames of an uninterrupted one bit for bit;
-cameras with ``set_shutter(open)`` get it closed for dark frames. With ``leds`` (an LedArray of
-``led_count`` LEDs) each step's ``light_id`` is switched on alone at the array's drive current
-(``-2``: all LEDs, the dome's alignment frames; a ``light_id`` the array does not have stops the
-session with its one-line error). With a ``monitor`` (Spectrometer) the lamp spectrum is recorded
-with every lit frame (thesis 3.3: the i1 tracks the lamp at every measurement point). Device
-timeouts are retried with exponential backoff, disconnected devices are staged again, and both are
-recorded in the frame's ``status``.
+The devices (:class:`SessionDevices`) are typed by the protocols of :mod:`hwbridge.protocols`;
+the session's settings (:class:`SessionSettings`) are one frozen object. Cameras with a
+:class:`~hwbridge.protocols.Shutter` get it closed for dark frames. With ``leds`` (an LedArray)
+each step's ``light_id`` is switched on alone at the array's drive current (``-2``: all LEDs, the
+dome's alignment frames; a ``light_id`` the array does not have stops the session with its
+one-line error). With a ``monitor`` (:class:`~hwbridge.protocols.LampMonitor`) the lamp spectrum
+is recorded with every lit frame (thesis 3.3: the i1 tracks the lamp at every measurement point).
+Device timeouts are retried with exponential backoff, disconnected devices are staged again, and
+both are recorded in the frame's ``status``. The session tells the devices nothing but the
+step's settings: simulated devices that reproduce a step's frame bit for bit, whatever session
+takes it, know the steps they take from where they were built (``twin.devices.sim_devices``).
 
-:func:`run_session` does it all in one process. Its two halves serve a distributed capture
-(``twin.devices.cluster``): :func:`open_session_store` creates (or reopens to resume) the store
-once, in the coordinator, and :func:`capture_steps` runs a subset of the steps into it, in a
-worker that writes those steps' frames (one chunk each) and returns their records, which the
-coordinator, the one writer of the index and the flags, records.
+:func:`run_session` does it all in one process: it opens the store
+(:func:`locked_session_store`) and captures its pending steps (:func:`capture_pending`). The
+halves serve a distributed capture (``twin.devices.cluster``): :func:`open_session_store`
+creates (or reopens to resume) the store once, in the coordinator, and :func:`capture_steps`
+runs a subset of the steps into it, in a worker that writes those steps' frames (one chunk each)
+and returns their records, which the coordinator, the one writer of the index and the flags,
+records.
 
 One writer per store: :func:`locked_session_store` holds the store's writer lock
 (:mod:`hwbridge.lock`) from before the store is created (or reopened) until the session ends; a
@@ -40,10 +44,13 @@ from __future__ import annotations
 import signal
 import threading
 import time
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from contextlib import contextmanager
+from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
-from typing import Any, Required, TypedDict
+from types import FrameType
+from typing import Any, TypeVar
 
 import numpy as np
 from rich.console import Console
@@ -56,12 +63,23 @@ from hwbridge.errors import (
     SessionInterrupted,
 )
 from hwbridge.lock import StoreLock
+from hwbridge.protocols import (
+    Camera,
+    LampMonitor,
+    LedArray,
+    Positioner,
+    Shutter,
+    Stageable,
+    TunableFilter,
+)
 from hwbridge.store import CaptureStore, FrameRecord
 
 __all__ = [
     "SessionDevices",
+    "SessionSettings",
     "SignalStop",
     "StopRequest",
+    "capture_pending",
     "capture_steps",
     "locked_session_store",
     "open_session_store",
@@ -102,7 +120,7 @@ class SignalStop(StopRequest):
     def __call__(self) -> bool:
         return bool(self.received)
 
-    def _handle(self, signum: int, frame: object) -> None:
+    def _handle(self, signum: int, frame: FrameType | None) -> None:
         self.received.append(signum)
         if len(self.received) > 1 and not self._writing:
             raise KeyboardInterrupt
@@ -130,7 +148,13 @@ class SignalStop(StopRequest):
         self._previous.clear()
 
 
-def _with_retries(action, device: Any, retries: int, backoff_s: float) -> tuple[Any, list[str]]:
+_Result = TypeVar("_Result")
+_Device = TypeVar("_Device")
+
+
+def _with_retries(
+    action: Callable[[], _Result], device: object, retries: int, backoff_s: float
+) -> tuple[_Result, list[str]]:
     """Call ``action``; on a timeout wait and retry, on a disconnect stage ``device`` again and
     retry, with exponential backoff. Returns the result and the names of the faults seen."""
     faults: list[str] = []
@@ -142,46 +166,85 @@ def _with_retries(action, device: Any, retries: int, backoff_s: float) -> tuple[
             if attempt == retries:
                 raise
             time.sleep(backoff_s * 2**attempt)
-            if hasattr(device, "stage"):
+            if isinstance(device, Stageable):
                 device.stage()
     raise AssertionError("unreachable")  # pragma: no cover
 
 
-class SessionDevices(TypedDict, total=False):
-    """The devices of a session, named as :func:`run_session`'s keywords.
+@dataclass(frozen=True)
+class SessionDevices:
+    """The devices of a session.
 
-    ``cameras`` maps camera ids to cameras; ``tunable_filter``, ``positioner``, ``monitor``
-    (a Spectrometer) and ``leds`` (an LedArray of ``led_count`` LEDs) are needed when the plan
-    names bands, views, lit frames to record or lights.
+    Attributes
+    ----------
+    cameras
+        Camera id (as the plan names it) to camera.
+    tunable_filter, positioner
+        Needed when the plan names bands or views.
+    monitor
+        Records the lamp spectrum with every lit frame.
+    leds
+        Switches on the LEDs the steps name (their ``light_id``); without it, lights are not
+        switched.
     """
 
-    cameras: Required[dict[str, Any]]
-    tunable_filter: Any
-    positioner: Any
-    monitor: Any
-    leds: Any
-    led_count: int
+    cameras: Mapping[str, Camera]
+    tunable_filter: TunableFilter | None = None
+    positioner: Positioner | None = None
+    monitor: LampMonitor | None = None
+    leds: LedArray | None = None
 
 
-def _check_devices(plan: list[dict], devices: SessionDevices) -> None:
-    unknown = sorted({step["camera"] for step in plan} - set(devices["cameras"]))
+@dataclass(frozen=True)
+class SessionSettings:
+    """How a session runs, and what its store records besides the plan.
+
+    Attributes
+    ----------
+    rig, backend, seed
+        Stored with the plan as the store's attributes (``backend``: ``"sim"``, ``"real"`` or
+        ``"replay"``).
+    resume
+        Continue the store instead of creating it; it must hold the same plan and seed. Steps
+        flagged done whose chunks are missing or corrupt are taken again on the simulated
+        backend and refused on the others (:meth:`~hwbridge.store.CaptureStore.prepare_resume`).
+    retries, backoff_s
+        Retries of a device call that times out or disconnects, and the first wait (doubling).
+    show_progress
+        A progress bar over the steps, on standard error.
+    """
+
+    rig: dict[str, Any]
+    backend: str
+    seed: int
+    resume: bool = False
+    retries: int = 3
+    backoff_s: float = 0.01
+    show_progress: bool = True
+
+
+def _check_devices(plan: list[dict[str, Any]], devices: SessionDevices) -> None:
+    unknown = sorted({step["camera"] for step in plan} - set(devices.cameras))
     if unknown:
         raise InputError(f"plan: names cameras {unknown} that the session was not given")
-    if any("band_nm" in step for step in plan) and devices.get("tunable_filter") is None:
+    if any("band_nm" in step for step in plan) and devices.tunable_filter is None:
         raise InputError("plan: steps name filter bands but no tunable_filter was given")
-    if any(step.get("view_id", -1) != -1 for step in plan) and devices.get("positioner") is None:
+    if any(step.get("view_id", -1) != -1 for step in plan) and devices.positioner is None:
         raise InputError("plan: steps name views but no positioner was given")
+
+
+def _given(device: _Device | None, role: str, step: int) -> _Device:
+    """``device``, which step ``step`` needs as its ``role``."""
+    if device is None:
+        raise InputError(f"plan: step {step} needs a {role} but none was given")
+    return device
 
 
 def open_session_store(
     store_path: str | Path,
-    plan: list[dict],
+    plan: list[dict[str, Any]],
     devices: SessionDevices,
-    *,
-    rig: dict[str, Any],
-    backend: str,
-    seed: int,
-    resume: bool = False,
+    settings: SessionSettings,
 ) -> CaptureStore:
     """Create the capture store of a session, or reopen it to resume.
 
@@ -193,12 +256,9 @@ def open_session_store(
         One dict per step (:mod:`hwbridge.plans`).
     devices
         The session's devices; their frame shapes and monitor samples size the store.
-    rig, backend, seed
-        Stored with the plan as the store's attributes.
-    resume
-        Reopen an existing store instead; it must hold the same plan and seed. Steps flagged
-        done whose chunks are missing or corrupt are taken again on the simulated backend and
-        refused on the others (:meth:`~hwbridge.store.CaptureStore.prepare_resume`).
+    settings
+        Its ``rig``, ``backend`` and ``seed`` are stored with the plan; with ``resume`` the
+        store is reopened instead.
 
     Returns
     -------
@@ -207,7 +267,8 @@ def open_session_store(
     """
     _check_devices(plan, devices)
     path = Path(store_path)
-    if resume:
+    seed = settings.seed
+    if settings.resume:
         store = CaptureStore.open(path)
         stored = store.attrs
         if stored["plan"] != plan or stored["seed"] != seed:
@@ -219,14 +280,14 @@ def open_session_store(
             )
         store.prepare_resume()  # damaged steps: taken again (simulated) or refused (real)
         return store
-    monitor = devices.get("monitor")
+    monitor = devices.monitor
     return CaptureStore.create(
         path,
-        rig=rig,
-        backend=backend,
+        rig=settings.rig,
+        backend=settings.backend,
         seed=seed,
         plan=plan,
-        cameras={name: camera.frame_shape for name, camera in devices["cameras"].items()},
+        cameras={name: camera.frame_shape for name, camera in devices.cameras.items()},
         monitor_samples=monitor.samples if monitor is not None else 0,
     )
 
@@ -234,13 +295,9 @@ def open_session_store(
 @contextmanager
 def locked_session_store(
     store_path: str | Path,
-    plan: list[dict],
+    plan: list[dict[str, Any]],
     devices: SessionDevices,
-    *,
-    rig: dict[str, Any],
-    backend: str,
-    seed: int,
-    resume: bool = False,
+    settings: SessionSettings,
 ) -> Iterator[CaptureStore]:
     """:func:`open_session_store` under the store's writer lock, held until the block ends.
 
@@ -254,16 +311,14 @@ def locked_session_store(
         Another writer holds the store (or is creating it).
     """
     path = Path(store_path)
-    if resume:
+    if settings.resume:
         if path.exists():
             CaptureStore.open(path)  # a capture store, before its folder gets a lock file
         lock = StoreLock.acquire(path)
     else:
         lock = StoreLock.reserve(path)
     with lock:
-        store = open_session_store(
-            path, plan, devices, rig=rig, backend=backend, seed=seed, resume=resume
-        )
+        store = open_session_store(path, plan, devices, settings)
         lock.move_into()
         yield store
 
@@ -277,7 +332,7 @@ class _PendingWrites:
     consecutive steps in one call (their chunks concurrently), the index and the flags after
     them, in the order that keeps every step flagged done complete."""
 
-    def __init__(self, store: CaptureStore, *, record: bool, check_complete: bool):
+    def __init__(self, store: CaptureStore, *, record: bool, check_complete: bool) -> None:
         self._store, self._record, self._check_complete = store, record, check_complete
         self._steps: list[int] = []
         self._frames: list[np.ndarray] = []
@@ -320,7 +375,6 @@ def capture_steps(
     steps: Iterable[int],
     devices: SessionDevices,
     *,
-    seed: int,
     retries: int = 3,
     backoff_s: float = 0.01,
     check_complete: bool = True,
@@ -340,12 +394,9 @@ def capture_steps(
     store
         A store made by :func:`open_session_store`.
     steps
-        Plan steps to take, in this order (steps done already are taken again, identically
-        when the devices derive their noise from the step).
+        Plan steps to take, in this order (steps done already are taken again).
     devices
         The session's devices.
-    seed
-        The session seed (``set_step(seed, step)`` of cameras that have it).
     retries, backoff_s
         Retries of a device call that times out or disconnects, and the first wait (doubling).
     check_complete
@@ -367,12 +418,6 @@ def capture_steps(
         The steps taken and their records (fewer than ``steps`` when ``stop`` said so).
     """
     plan = store.attrs["plan"]
-    cameras = devices["cameras"]
-    tunable_filter = devices.get("tunable_filter")
-    positioner = devices.get("positioner")
-    monitor = devices.get("monitor")
-    leds = devices.get("leds")
-    led_count = devices.get("led_count", 0)
     stop = stop or StopRequest()
     pending = _PendingWrites(store, record=record, check_complete=check_complete)
     taken: list[tuple[int, FrameRecord]] = []
@@ -380,57 +425,57 @@ def capture_steps(
         for step in steps:
             if stop():
                 break
-            settings = plan[step]
-            if pending.due(int(settings.get("view_id", -1))):
+            planned = plan[step]
+            view = int(planned.get("view_id", -1))
+            light = int(planned.get("light_id", -1))
+            if pending.due(view):
                 with stop.writing():
                     pending.flush()
-            camera = cameras[settings["camera"]]
+            camera = devices.cameras[planned["camera"]]
             faults: list[str] = []
-            if settings.get("view_id", -1) != -1:
+            if view != -1:
+                positioner = _given(devices.positioner, "positioner", step)
                 _, seen = _with_retries(
-                    lambda s=settings: positioner.set({"view_id": s["view_id"]}),
-                    positioner,
-                    retries,
-                    backoff_s,
+                    partial(positioner.set, {"view_id": view}), positioner, retries, backoff_s
                 )
                 faults += seen
-            if leds is not None and settings.get("light_id", -1) != -1:
-                light = int(settings["light_id"])
+            leds = devices.leds
+            if leds is not None and light != -1:
                 switch = (
-                    (lambda: leds.set(np.ones(led_count, bool)))
+                    partial(leds.set, np.ones(leds.count, bool))
                     if light == -2
-                    else (lambda led=light: leds.light(led))
+                    else partial(leds.light, light)
                 )
                 _, seen = _with_retries(switch, leds, retries, backoff_s)
                 faults += seen
-            if "band_nm" in settings:
+            if "band_nm" in planned:
+                tunable_filter = _given(devices.tunable_filter, "tunable_filter", step)
                 _, seen = _with_retries(
-                    lambda s=settings: tunable_filter.set(s["band_nm"]),
+                    partial(tunable_filter.set, planned["band_nm"]),
                     tunable_filter,
                     retries,
                     backoff_s,
                 )
                 faults += seen
-            camera.set_exposure(settings["exposure_s"])
-            if hasattr(camera, "set_shutter"):
-                camera.set_shutter(settings["kind"] != "dark")
-            if hasattr(camera, "set_step"):
-                camera.set_step(seed, step)
+            camera.set_exposure(planned["exposure_s"])
+            if isinstance(camera, Shutter):
+                camera.set_shutter(planned["kind"] != "dark")
             (frame, metadata), seen = _with_retries(camera.snap, camera, retries, backoff_s)
             faults += seen
             spectrum = None
-            if monitor is not None and settings["kind"] != "dark":
+            monitor = devices.monitor
+            if monitor is not None and planned["kind"] != "dark":
                 _, seen = _with_retries(monitor.trigger, monitor, retries, backoff_s)
                 faults += seen
                 (reading,) = monitor.read().values()
                 spectrum = reading["value"]
             frame_record = FrameRecord(
-                kind=settings["kind"],
-                exposure_s=settings["exposure_s"],
+                kind=planned["kind"],
+                exposure_s=planned["exposure_s"],
                 timestamp=float(metadata.get("timestamp", time.time())),
-                light_id=int(settings.get("light_id", -1)),
-                view_id=int(settings.get("view_id", -1)),
-                band_nm=float(settings.get("band_nm", float("nan"))),
+                light_id=light,
+                view_id=view,
+                band_nm=float(planned.get("band_nm", float("nan"))),
                 lamp_monitor=spectrum,
                 status="ok" if not faults else "ok after " + ", ".join(faults),
             )
@@ -445,26 +490,30 @@ def capture_steps(
 
 def run_session(
     store_path: str | Path,
-    plan: list[dict],
-    *,
-    cameras: dict[str, Any],
-    tunable_filter: Any | None = None,
-    positioner: Any | None = None,
-    monitor: Any | None = None,
-    leds: Any | None = None,
-    led_count: int = 0,
-    rig: dict[str, Any],
-    backend: str,
-    seed: int,
-    resume: bool = False,
-    retries: int = 3,
-    backoff_s: float = 0.01,
-    show_progress: bool = True,
+    plan: list[dict[str, Any]],
+    devices: SessionDevices,
+    settings: SessionSettings,
 ) -> CaptureStore:
     """Capture every pending step of ``plan``; returns the (complete) store.
 
     The store's writer lock is held throughout (:func:`locked_session_store`), and SIGINT or
     SIGTERM stop the session between frames (:class:`SignalStop`).
+
+    Parameters
+    ----------
+    store_path
+        The store, ``<name>.capture.zarr``; never overwritten.
+    plan
+        One dict per step (:mod:`hwbridge.plans`).
+    devices
+        The session's devices.
+    settings
+        The store's attributes, resuming, retries and the progress bar.
+
+    Returns
+    -------
+    CaptureStore
+        The complete store.
 
     Raises
     ------
@@ -473,49 +522,53 @@ def run_session(
     SessionInterrupted
         A signal stopped the session before its last step; ``resume=True`` continues it.
     """
-    devices = SessionDevices(
-        cameras=cameras,
-        tunable_filter=tunable_filter,
-        positioner=positioner,
-        monitor=monitor,
-        leds=leds,
-        led_count=led_count,
-    )
+    with (
+        SignalStop() as stop,
+        locked_session_store(store_path, plan, devices, settings) as store,
+    ):
+        capture_pending(store, devices, settings, stop)
+    return store
+
+
+def capture_pending(
+    store: CaptureStore, devices: SessionDevices, settings: SessionSettings, stop: StopRequest
+) -> None:
+    """Capture the pending steps of an open session store (:func:`locked_session_store`) in
+    this process, with ``settings``' retries and progress bar, until ``stop`` asks to stop.
+
+    Raises
+    ------
+    SessionInterrupted
+        ``stop`` asked to stop before the last step.
+    """
     columns = (
         TextColumn("capture"),
         BarColumn(),
         TextColumn("{task.completed}/{task.total}"),
         TimeRemainingColumn(),
     )
-    with (
-        SignalStop() as stop,
-        locked_session_store(
-            store_path, plan, devices, rig=rig, backend=backend, seed=seed, resume=resume
-        ) as store,
-    ):
-        pending = store.pending_steps()
-        with Progress(
-            *columns, console=Console(stderr=True), disable=not show_progress
-        ) as progress:
-            task = progress.add_task("capture", total=len(plan), completed=len(plan) - len(pending))
-            try:
-                capture_steps(
-                    store,
-                    pending,
-                    devices,
-                    seed=seed,
-                    retries=retries,
-                    backoff_s=backoff_s,
-                    advance=lambda: progress.advance(task),
-                    stop=stop,
-                )
-            except KeyboardInterrupt:
-                if not stop():
-                    raise  # not a signal of this session's
-        if not store.complete:  # a writer killed after its last flag, before marking complete
-            store.refresh_complete()
-        raise_if_interrupted(store, stop)
-    return store
+    total = len(store.attrs["plan"])
+    pending = store.pending_steps()
+    with Progress(
+        *columns, console=Console(stderr=True), disable=not settings.show_progress
+    ) as progress:
+        task = progress.add_task("capture", total=total, completed=total - len(pending))
+        try:
+            capture_steps(
+                store,
+                pending,
+                devices,
+                retries=settings.retries,
+                backoff_s=settings.backoff_s,
+                advance=lambda: progress.advance(task),
+                stop=stop,
+            )
+        except KeyboardInterrupt:
+            if not stop():
+                raise  # not a signal of this session's
+    if not store.complete:  # a writer killed after its last flag, before marking complete
+        store.refresh_complete()
+    raise_if_interrupted(store, stop)
 
 
 def raise_if_interrupted(store: CaptureStore, stop: StopRequest) -> None:

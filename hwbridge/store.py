@@ -62,9 +62,11 @@ from hwbridge.integrity import (
     ChunkChecker,
     ChunkProblem,
     IntegrityReport,
+    array_at,
     checksum_state,
     checksummed_compressors,
     chunk_key,
+    group_at,
     metadata_problem,
     read_flags,
     with_empty_chunks,
@@ -120,10 +122,9 @@ class CaptureStore:
     def __init__(self, group: zarr.Group, path: Path):
         self._group = group
         self.path = path
-        plan = group.attrs["plan"]
-        self._cameras = [step["camera"] for step in plan]
+        self._cameras: list[str] = [step["camera"] for step in self.attrs["plan"]]
         counts: dict[str, int] = {}
-        self._slots = []
+        self._slots: list[int] = []
         self._steps: dict[str, list[int]] = {}
         for step, camera in enumerate(self._cameras):
             self._slots.append(counts.get(camera, 0))
@@ -260,7 +261,8 @@ class CaptureStore:
             raise InputError(f"{path} is not a capture store (not a Zarr group: {error})") from None
         if "plan" not in group.attrs:
             raise InputError(f"{path} is not a capture store (no plan or progress)")
-        cameras = sorted({str(step.get("camera")) for step in group.attrs["plan"]})
+        stored: dict[str, Any] = dict(group.attrs)
+        cameras = sorted({str(step.get("camera")) for step in stored["plan"]})
         for node in _layout(cameras):
             problem = metadata_problem(path, node)
             # lamp_monitor exists only where the rig has a monitor: missing is fine, unless its
@@ -284,7 +286,7 @@ class CaptureStore:
         consecutive slots of one camera is one Zarr call, which writes its chunks concurrently.
         Frames have one chunk each, so writers of disjoint steps never share a chunk."""
         for camera, positions, slots in self._runs(steps):
-            array = self._group[f"frames/{camera}"]
+            array = array_at(self._group, f"frames/{camera}")
             stack = np.stack([np.asarray(frames[position]) for position in positions])
             if stack.shape[1:] != array.shape[1:] or stack.dtype != np.uint16:
                 raise InputError(
@@ -297,21 +299,24 @@ class CaptureStore:
         """Write the index of ``steps`` (one Zarr call per field and run of consecutive slots).
         One writer only: a chunk holds the index of :data:`INDEX_CHUNK_FRAMES` frames."""
         for camera, positions, slots in self._runs(steps):
-            index = self._group[f"index/{camera}"]
+            index = group_at(self._group, f"index/{camera}")
             chosen = [records[position] for position in positions]
             for name in (*_STRING_FIELDS, *_NUMERIC_FIELDS):
-                index[name][slots] = np.array([getattr(record, name) for record in chosen])
-            index["pose"][slots] = np.array([record.pose for record in chosen], np.float64)
+                values = np.array([getattr(record, name) for record in chosen])
+                array_at(index, name)[slots] = values
+            poses = np.array([record.pose for record in chosen], np.float64)
+            array_at(index, "pose")[slots] = poses
             monitored = [i for i, record in enumerate(chosen) if record.lamp_monitor is not None]
             if not monitored:
                 continue
             if "lamp_monitor" not in index:
                 raise InputError("lamp_monitor: this store was created without monitor samples")
             spectra = np.array([chosen[i].lamp_monitor for i in monitored], np.float32)
+            lamp_monitor = array_at(index, "lamp_monitor")
             if len(monitored) == slots.stop - slots.start:
-                index["lamp_monitor"][slots] = spectra
+                lamp_monitor[slots] = spectra
             else:
-                index["lamp_monitor"].oindex[[slots.start + i for i in monitored]] = spectra
+                lamp_monitor.oindex[np.array([slots.start + i for i in monitored])] = spectra
 
     def _runs(self, steps: Sequence[int]) -> Iterator[tuple[str, list[int], slice]]:
         """``(camera, positions in steps, slots)`` per camera and run of consecutive slots."""
@@ -340,15 +345,16 @@ class CaptureStore:
         check_complete
             ``False`` leaves the store's attributes to the caller (:meth:`refresh_complete`).
         """
-        steps = [int(steps)] if np.isscalar(steps) else [int(step) for step in steps]
+        steps = [int(steps)] if isinstance(steps, int | np.integer) else [int(s) for s in steps]
         for step in steps:
             self._camera_and_slot(step)
         flags = np.ones(len(steps), bool)
         ordered = sorted(steps)
+        progress = array_at(self._group, "progress")
         if ordered and ordered == list(range(ordered[0], ordered[-1] + 1)):
-            self._group["progress"][ordered[0] : ordered[-1] + 1] = flags
+            progress[ordered[0] : ordered[-1] + 1] = flags
         elif steps:
-            self._group["progress"].oindex[steps] = flags
+            progress.oindex[np.array(steps)] = flags
         if not check_complete:
             return
         if self._unseen is None:
@@ -369,7 +375,8 @@ class CaptureStore:
     # -- reading -------------------------------------------------------------------------------
 
     def pending_steps(self) -> list[int]:
-        return np.flatnonzero(~self._flags()).tolist()
+        pending: list[int] = np.flatnonzero(~self._flags()).tolist()
+        return pending
 
     @property
     def complete(self) -> bool:
@@ -379,17 +386,17 @@ class CaptureStore:
     def attrs(self) -> dict[str, Any]:
         return dict(self._group.attrs)
 
-    def frames(self, camera: str) -> zarr.Array:
-        return self._group[f"frames/{camera}"]
+    def frames(self, camera: str) -> zarr.Array[Any]:
+        return array_at(self._group, f"frames/{camera}")
 
     def index(self, camera: str, fields: Sequence[str] | None = None) -> dict[str, np.ndarray]:
         """The index of ``camera``'s frames: every field, or only ``fields`` (each field is one
         chunk per frame, so reading fewer is proportionally faster)."""
-        group = self._group[f"index/{camera}"]
+        group = group_at(self._group, f"index/{camera}")
         names = list(group.array_keys()) if fields is None else list(fields)
-        return {name: self._read(group[name]) for name in names}
+        return {name: self._read(array_at(group, name)) for name in names}
 
-    def read_frames(self, camera: str, slots: Sequence[int]) -> np.ndarray:
+    def read_frames(self, camera: str, slots: Sequence[int] | np.ndarray) -> np.ndarray:
         """The frames ``(n, H, W)`` of ``camera`` at ``slots``; a frame whose chunk is missing
         (it would read as zeros) or corrupt raises :class:`~hwbridge.errors.DamagedDataError`
         naming camera, step and chunk key."""
@@ -430,11 +437,11 @@ class CaptureStore:
             the store has checksums, and its seed, program and backend.
         """
         checker = ChunkChecker(self.path, verify=verify)
-        progress = self._group["progress"]
+        progress = array_at(self._group, "progress")
         flags, problems = read_flags(checker, progress, self._step_name)
         arrays = {camera: self._unit_arrays(camera) for camera in self._steps}
         outcomes: dict[str, tuple[str, str] | None] = {}
-        units: dict[str, list[int]] = {}
+        units: dict[str, tuple[tuple[str, str], list[int]]] = {}
         for step in np.flatnonzero(flags).tolist():
             camera, slot = self._camera_and_slot(step)
             for array, required in arrays[camera]:
@@ -445,10 +452,10 @@ class CaptureStore:
                     if outcome is not None and outcome[0] == "missing" and not required:
                         outcome = None
                     outcomes[key] = outcome
-                if outcomes[key] is not None:
-                    units.setdefault(key, []).append(step)
-        for key, steps in units.items():
-            problem, detail = outcomes[key]
+                found = outcomes[key]
+                if found is not None:
+                    units.setdefault(key, (found, []))[1].append(step)
+        for key, ((problem, detail), steps) in units.items():
             problems.append(
                 ChunkProblem(self._step_name(steps[0]), key, problem, detail, tuple(steps))
             )
@@ -502,7 +509,7 @@ class CaptureStore:
                 "take its frames again, so resuming would leave them wrong: restore the store "
                 "from a copy, or capture again into a new store"
             )
-        progress = self._group["progress"]
+        progress = array_at(self._group, "progress")
         for problem in report.problems:
             if problem.problem == "corrupt":
                 (self.path / problem.key).unlink(missing_ok=True)
@@ -512,12 +519,12 @@ class CaptureStore:
         self.recaptured = list(report.problems)
         return self.recaptured
 
-    def _unit_arrays(self, camera: str) -> list[tuple[zarr.Array, bool]]:
+    def _unit_arrays(self, camera: str) -> list[tuple[zarr.Array[Any], bool]]:
         """The per-frame arrays of ``camera`` and whether a done step must have its chunk."""
-        index = self._group[f"index/{camera}"]
+        index = group_at(self._group, f"index/{camera}")
         fields = [name for name in (*_INDEX_FIELDS, "lamp_monitor") if name in index]
-        return [(self._group[f"frames/{camera}"], True)] + [
-            (index[name], name in _REQUIRED_FIELDS) for name in fields
+        return [(self.frames(camera), True)] + [
+            (array_at(index, name), name in _REQUIRED_FIELDS) for name in fields
         ]
 
     def _step_name(self, step: int) -> str:
@@ -526,7 +533,7 @@ class CaptureStore:
 
     def _flags(self) -> np.ndarray:
         """The progress flags; a corrupt flag chunk raises, naming it."""
-        progress = self._group["progress"]
+        progress = array_at(self._group, "progress")
         try:
             return np.asarray(progress[:], dtype=bool)
         except (ValueError, RuntimeError) as error:
@@ -534,9 +541,9 @@ class CaptureStore:
             first = problems[0] if problems else f"progress cannot be read ({error})"
             raise DamagedDataError(f"{self.path}: damaged capture store: {first}") from None
 
-    def _read(self, array: zarr.Array) -> np.ndarray:
+    def _read(self, array: zarr.Array[Any]) -> np.ndarray:
         try:
-            return array[:]
+            return np.asarray(array[:])
         except (ValueError, RuntimeError) as error:
             raise DamagedDataError(
                 f"{self.path}: damaged capture store: {array.path} cannot be read "

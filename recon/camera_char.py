@@ -39,6 +39,7 @@ References
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal, overload
 
 import colour
 import numpy as np
@@ -71,7 +72,9 @@ class CharacterizationResult:
     iterations: int
 
 
-def _as_photos(chart_rgb, reflectances, illuminant, wavelengths):
+def _as_photos(
+    chart_rgb: np.ndarray, reflectances: np.ndarray, illuminant: np.ndarray, wavelengths: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     wavelengths = np.asarray(wavelengths, np.float64)
     if wavelengths.ndim != 1 or wavelengths.size < 4 or np.any(np.diff(wavelengths) <= 0):
         raise InputError("wavelengths: expected at least 4 strictly increasing values in nm")
@@ -130,7 +133,9 @@ def _smoothness_rows(count: int, previous: np.ndarray | None) -> np.ndarray:
     return rows
 
 
-def _basic(rgb, reflectances, light, alpha: float) -> np.ndarray:
+def _basic(
+    rgb: np.ndarray, reflectances: np.ndarray, light: np.ndarray, alpha: float
+) -> np.ndarray:
     """Eq. 9.3-9.5: stacked photos, one regularized linear least-squares fit per channel."""
     design = np.concatenate([reflectances * photo_light for photo_light in light])
     smooth = np.sqrt(alpha) * _smoothness_rows(design.shape[1], None)
@@ -190,13 +195,17 @@ def _neighbour_laplacian(positions: np.ndarray) -> np.ndarray:
     return np.diag(adjacency.sum(axis=1)) - adjacency
 
 
-def _prior_rows(prior_roots, interpolate, response_peaks, weight):
+def _prior_rows(
+    prior_roots: np.ndarray, interpolate: np.ndarray, response_peaks: np.ndarray, weight: float
+) -> np.ndarray:
     """Rows :math:`\\sqrt{\\lambda} L_c R_c / \\max R'_c` of the prior term per channel, on the
     coarse unknowns (``(3, K, count)``)."""
     return np.sqrt(weight) * (prior_roots @ interpolate) / response_peaks[:, None, None]
 
 
-def _initial_peaks(rgb, reflectances, light, prior):
+def _initial_peaks(
+    rgb: np.ndarray, reflectances: np.ndarray, light: np.ndarray, prior: ResponsePrior
+) -> np.ndarray:
     """Peaks of the multiple of the prior's mean that explains the mean device RGB (the scale
     of the prior term before there is a previous estimate)."""
     mean_reflected = (reflectances * light.mean(axis=0)).mean(axis=0)  # (K,)
@@ -205,8 +214,16 @@ def _initial_peaks(rgb, reflectances, light, prior):
 
 
 def _extended(
-    rgb, reflectances, light, wavelengths, positions, params, max_iterations, tolerance, prior
-):
+    rgb: np.ndarray,
+    reflectances: np.ndarray,
+    light: np.ndarray,
+    wavelengths: np.ndarray,
+    positions: np.ndarray,
+    params: dict[str, float],
+    max_iterations: int,
+    tolerance: float,
+    prior: ResponsePrior | None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     photos, fields, _ = rgb.shape
     bands = wavelengths.size
     fixed = _FixedTerms(rgb, reflectances, light, _neighbour_laplacian(positions), params)
@@ -232,7 +249,7 @@ def _extended(
                 else field_weights(reflectances, light.mean(axis=0), response_full, distribution)
             )
             prior_rows = None
-            if prior is not None:
+            if prior is not None and prior_roots is not None:
                 peaks = (
                     _initial_peaks(rgb, reflectances, light, prior)
                     if response_full is None
@@ -252,6 +269,8 @@ def _extended(
             response_full, previous = new_full, coarse
             if change < tolerance:
                 break
+    if response_full is None:
+        raise InputError(f"max_iterations: expected at least 1, got {max_iterations}")
     return response_full, shading, specularity, iterations
 
 
@@ -268,7 +287,14 @@ class _FixedTerms:
     params: dict[str, float]
 
 
-def _solve_response_and_shading(fixed, specularity, weights, interpolate, previous, prior_rows):
+def _solve_response_and_shading(
+    fixed: _FixedTerms,
+    specularity: np.ndarray,
+    weights: np.ndarray,
+    interpolate: np.ndarray,
+    previous: np.ndarray | None,
+    prior_rows: np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray]:
     """One linear least-squares step for (R coarse, F) with sigma fixed (Eq. 9.6 without sigma),
     with the prior's rows ``(3, K, count)`` when there are any.
 
@@ -339,7 +365,14 @@ def _solve_normal_equations(normal: np.ndarray, right: np.ndarray) -> np.ndarray
         return np.linalg.lstsq(normal, right, rcond=None)[0]
 
 
-def _solve_specularity(rgb, reflectances, light, shading, weights, response):
+def _solve_specularity(
+    rgb: np.ndarray,
+    reflectances: np.ndarray,
+    light: np.ndarray,
+    shading: np.ndarray,
+    weights: np.ndarray,
+    response: np.ndarray,
+) -> np.ndarray:
     """Closed-form sigma_j >= 0 per photo and field with R and F fixed (Eq. 9.7)."""
     specularity = np.empty(shading.shape)
     for photo in range(rgb.shape[0]):
@@ -352,6 +385,46 @@ def _solve_specularity(rgb, reflectances, light, shading, weights, response):
     return specularity
 
 
+@overload
+def estimate_response(
+    chart_rgb: np.ndarray,
+    reflectances: np.ndarray,
+    illuminant: np.ndarray,
+    wavelengths: np.ndarray,
+    *,
+    method: str = "extended",
+    field_positions: np.ndarray | None = None,
+    alpha: float | None = None,
+    beta: float = 100.0,
+    gamma: float = 1.0,
+    delta: float = 10.0,
+    data_weight: float = 300.0,
+    max_iterations: int = 50,
+    tolerance: float = 3e-4,
+    prior: ResponsePrior | None = None,
+    prior_weight: float = PRIOR_WEIGHT,
+    return_details: Literal[False] = False,
+) -> np.ndarray: ...
+@overload
+def estimate_response(
+    chart_rgb: np.ndarray,
+    reflectances: np.ndarray,
+    illuminant: np.ndarray,
+    wavelengths: np.ndarray,
+    *,
+    method: str = "extended",
+    field_positions: np.ndarray | None = None,
+    alpha: float | None = None,
+    beta: float = 100.0,
+    gamma: float = 1.0,
+    delta: float = 10.0,
+    data_weight: float = 300.0,
+    max_iterations: int = 50,
+    tolerance: float = 3e-4,
+    prior: ResponsePrior | None = None,
+    prior_weight: float = PRIOR_WEIGHT,
+    return_details: Literal[True],
+) -> CharacterizationResult: ...
 def estimate_response(
     chart_rgb: np.ndarray,
     reflectances: np.ndarray,

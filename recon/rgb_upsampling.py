@@ -159,7 +159,9 @@ def upsample_srgb(
     )
 
 
-def _spectralized(linear, known_pixels, known_spectra) -> np.ndarray:
+def _spectralized(
+    linear: np.ndarray, known_pixels: np.ndarray | None, known_spectra: SampledSpectra | None
+) -> np.ndarray:
     from recon.spectralize import spectralize
 
     if known_pixels is None or known_spectra is None:

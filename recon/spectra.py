@@ -203,6 +203,7 @@ class SampledSpectra:
 
     def __mul__(self, other: SampledSpectra | float) -> SampledSpectra:
         """Product with a scalar or with spectra on the same grid (values broadcast)."""
+        other_values: np.ndarray | float
         if isinstance(other, SampledSpectra):
             _require_same_grid(self.grid, other.grid, "product of spectra")
             other_values = other.values

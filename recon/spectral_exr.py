@@ -152,4 +152,4 @@ def read_spectral_exr(path: str | Path) -> SpectralImage:
     wavelengths = sorted(found[component])
     cube = np.stack([found[component][wavelength] for wavelength in wavelengths], axis=-1)
     kind: ImageKind = "emissive" if component == "S0" else "reflective"
-    return SpectralImage(cube, WavelengthGrid(wavelengths), kind, attributes)
+    return SpectralImage(cube, WavelengthGrid(np.asarray(wavelengths)), kind, attributes)

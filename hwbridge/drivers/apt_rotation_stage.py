@@ -194,7 +194,7 @@ class AptRotationStage:
         """The angle of the controller's position counter (``MGMSG_MOT_REQ_POSCOUNTER``)."""
         self._send("mot_req_poscounter", _CHANNEL)
         counter = self._await("mot_get_poscounter", "MGMSG_MOT_GET_POSCOUNTER", self._timeout_s)
-        return counter.position / self._counts_per_deg
+        return float(counter.position) / self._counts_per_deg
 
     def status(self) -> dict[str, Any]:
         """The decoded status bits of ``MGMSG_MOT_GET_STATUSUPDATE`` and the angle."""

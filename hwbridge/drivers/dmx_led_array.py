@@ -86,7 +86,7 @@ class DmxLedArray:
             self.current_range_ma,
             name,
         )
-        self._port: serial.SerialBase | None = None
+        self._port: serial.Serial | None = None
         self._levels = np.zeros(count, np.uint8)
         self._widget: dict[str, Any] = {}
 
@@ -192,7 +192,7 @@ class DmxLedArray:
             "packets_per_s": rate,
         }
 
-    def _require_port(self) -> serial.SerialBase:
+    def _require_port(self) -> serial.Serial:
         if self._port is None:
             raise DeviceError(f"{self.name}: not staged; call stage() first")
         return self._port
@@ -226,7 +226,7 @@ class DmxLedArray:
 
     def _read(self, size: int, what: str) -> bytes:
         try:
-            data = self._port.read(size)
+            data = self._require_port().read(size)
         except serial.SerialException as error:
             raise DeviceDisconnected(f"{self.name}: {error}") from error
         if len(data) < size:

@@ -10,12 +10,15 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from hwbridge.errors import DeviceError, DeviceTimeout, InputError
 from hwbridge.protocols import description, reading
+
+if TYPE_CHECKING:
+    from harvesters.core import Harvester, ImageAcquirer
 
 __all__ = ["GenICamCamera", "simulated_producer"]
 
@@ -40,8 +43,8 @@ class GenICamCamera:
     ):
         self.name = name
         self._cti, self._serial, self._timeout_s = Path(cti), serial_number, timeout_s
-        self._harvester = None
-        self._acquirer = None
+        self._harvester: Harvester | None = None
+        self._acquirer: ImageAcquirer | None = None
         self._exposure_s: float | None = None
 
     def stage(self) -> None:
@@ -52,7 +55,7 @@ class GenICamCamera:
         self.unstage()
         self._harvester = Harvester()
         try:
-            self._acquirer = self._create_acquirer()
+            self._acquirer = self._create_acquirer(self._harvester)
         except BaseException:
             # A failed stage releases the producer: a harvester left behind would hide its
             # cameras from the next one in this process.
@@ -61,10 +64,10 @@ class GenICamCamera:
         if self._exposure_s is not None:
             self.set_exposure(self._exposure_s)
 
-    def _create_acquirer(self):
-        self._harvester.add_file(str(self._cti))
-        self._harvester.update()
-        devices = self._harvester.device_info_list
+    def _create_acquirer(self, harvester: Harvester) -> ImageAcquirer:
+        harvester.add_file(str(self._cti))
+        harvester.update()
+        devices = harvester.device_info_list
         if not devices:
             raise DeviceError(f"{self.name}: the producer {self._cti.name} offers no camera")
         serials = [info.serial_number for info in devices]
@@ -76,7 +79,7 @@ class GenICamCamera:
             raise DeviceError(
                 f"{self.name}: no camera with serial {self._serial!r}; found {serials}"
             )
-        return self._harvester.create(selector)
+        return harvester.create(selector)
 
     def unstage(self) -> None:
         if self._acquirer is not None:
@@ -145,10 +148,10 @@ class GenICamCamera:
             units="DN",
         )
 
-    def _require(self):
+    def _require(self) -> ImageAcquirer:
         if self._acquirer is None:
             raise DeviceError(f"{self.name}: not staged; call stage() first")
         return self._acquirer
 
-    def _node_map(self):
+    def _node_map(self) -> Any:
         return self._require().remote_device.node_map

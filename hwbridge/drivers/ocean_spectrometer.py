@@ -7,12 +7,15 @@ Implements ``hwbridge.protocols.Spectrometer`` as the lamp monitor. Install the 
 from __future__ import annotations
 
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from hwbridge.errors import DeviceError, InputError
 from hwbridge.protocols import description, reading
+
+if TYPE_CHECKING:
+    from seabreeze.spectrometers import Spectrometer
 
 __all__ = ["OceanSpectrometer"]
 
@@ -30,7 +33,7 @@ class OceanSpectrometer:
         if not integration_s > 0:
             raise InputError(f"integration_s: expected a positive time, got {integration_s}")
         self.name, self._serial, self._integration_s = name, serial_number, integration_s
-        self._device = None
+        self._device: Spectrometer | None = None
         self._last: tuple[np.ndarray, np.ndarray, float] | None = None
 
     def stage(self) -> None:

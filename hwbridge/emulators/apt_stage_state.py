@@ -200,8 +200,9 @@ class AptStageState(MessageDeviceState):
     def _start(self, target: int, now: float, *, homing: bool) -> None:
         start = self._counts(now)
         limit = self._limit_counts()
-        limited = limit is not None and target > start and target > limit
-        end = min(target, max(limit, start)) if limited else target
+        end, limited = target, False
+        if limit is not None and target > start and target > limit:
+            end, limited = min(target, max(limit, start)), True
         counts_per_s = self.speed_deg_s * self.counts_per_deg
         self.position = start
         self._motion = _Motion(

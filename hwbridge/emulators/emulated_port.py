@@ -13,9 +13,12 @@ import time
 import urllib.parse
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
-from typing import Any, ClassVar, Protocol
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 from serial.serialutil import PortNotOpenError, SerialBase, SerialException, Timeout
+
+if TYPE_CHECKING:
+    from typing_extensions import Buffer
 
 __all__ = ["DeviceState", "EmulatedPort", "MessageDeviceState"]
 
@@ -80,11 +83,11 @@ class EmulatedPort(SerialBase):
         """The device's state, built from the URL's ``options``."""
 
     def open(self) -> None:
-        if self._port is None:
+        if self.port is None:
             raise SerialException("port must be configured before it can be used")
         if self.is_open:
             raise SerialException("port already open")
-        self.state = self.make_state(self._url_options(self._port))
+        self.state = self.make_state(self._url_options(self.port))
         self._buffer = bytearray()
         self.is_open = True
 
@@ -118,7 +121,8 @@ class EmulatedPort(SerialBase):
     def read(self, size: int = 1) -> bytes:
         if not self.is_open:
             raise PortNotOpenError()
-        timeout = Timeout(self._timeout)
+        # pyserial's Timeout takes None (wait for ever), which its stub leaves out
+        timeout = Timeout(self.timeout)  # type: ignore[arg-type]
         while True:
             self._buffer += self.state.due(time.monotonic())
             if len(self._buffer) >= size or timeout.expired():
@@ -128,11 +132,12 @@ class EmulatedPort(SerialBase):
         del self._buffer[:size]
         return data
 
-    def write(self, data: bytes) -> int:
+    def write(self, data: Buffer) -> int:
         if not self.is_open:
             raise PortNotOpenError()
-        self._buffer += self.state.respond(bytes(data))
-        return len(data)
+        received = bytes(data)
+        self._buffer += self.state.respond(received)
+        return len(received)
 
     def reset_input_buffer(self) -> None:
         self._buffer.clear()

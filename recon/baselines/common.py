@@ -94,7 +94,9 @@ def check_spectra(name: str, value: object, bands: int | None = None) -> np.ndar
     return spectra
 
 
-def check_known_pixels(value: object, n_pixels: int, count: int, image_shape: tuple) -> np.ndarray:
+def check_known_pixels(
+    value: object, n_pixels: int, count: int, image_shape: tuple[int, ...]
+) -> np.ndarray:
     """Distinct flat row-major indices into the image's leading dimensions."""
     indices = np.asarray(value)
     if indices.dtype == bool:
@@ -127,7 +129,7 @@ def check_known_rgb(
     known_spectra: np.ndarray,
     known_pixels: object,
     known_rgb: object,
-    image_shape: tuple,
+    image_shape: tuple[int, ...],
 ) -> np.ndarray:
     """RGB of the known spectra: from the image at ``known_pixels`` or given as ``known_rgb``."""
     if (known_pixels is None) == (known_rgb is None):

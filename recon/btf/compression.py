@@ -337,7 +337,8 @@ def _check_shape(shape: tuple[int, ...]) -> tuple[int, int, int, int]:
         isinstance(n, int | np.integer) and not isinstance(n, bool) and n > 0 for n in shape
     ):
         raise InputError(f"shape: expected (n_pairs, H, W, K) of positive ints, got {shape!r}")
-    return tuple(int(n) for n in shape)
+    n_pairs, height, width, bands = (int(n) for n in shape)
+    return n_pairs, height, width, bands
 
 
 def _check_options(n_brightness: int, n_spectral: int, layout: str, svd: str) -> None:
@@ -546,17 +547,18 @@ def compression_report(
                 f"reference: store grid {reference.grid.describe()} differs from the compressed "
                 f"BTF's {compressed.grid.describe()}"
             )
-        store_shape = reference.shape
-        reference.reflectance()  # raises when the store is incomplete
+        store = reference
+        store_shape = store.shape
+        store.reflectance()  # raises when the store is incomplete
 
         def pair_values(pair: int) -> np.ndarray:
-            return reference.read_pair(pair)
+            return store.read_pair(pair)
     else:
-        reference = np.asarray(reference)
-        store_shape = reference.shape
+        values = np.asarray(reference)
+        store_shape = values.shape
 
         def pair_values(pair: int) -> np.ndarray:
-            return reference[pair]
+            return np.asarray(values[pair])
 
     if tuple(store_shape) != compressed.shape:
         raise InputError(

@@ -43,7 +43,7 @@ def _slice_name(pair: int) -> str:
     return f"pair_{pair:05d}.exr"
 
 
-def _corners_entry(corners: np.ndarray) -> list | None:
+def _corners_entry(corners: np.ndarray) -> list[Any] | None:
     """Registered corners as a JSON list, ``None`` where none were given (NaN)."""
     return None if np.isnan(corners).any() else corners.tolist()
 

@@ -35,6 +35,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -90,7 +91,7 @@ def inset_corners(corners_xy: np.ndarray, fraction: float) -> np.ndarray:
     return texture_transform(corners_xy).inverse(square)
 
 
-def _rig(store: CaptureStore) -> dict:
+def _rig(store: CaptureStore) -> dict[str, Any]:
     rig = store.attrs["rig"]
     missing = [key for key in _RIG_KEYS if key not in rig]
     if missing:
@@ -104,7 +105,7 @@ def _rig(store: CaptureStore) -> dict:
 
 def check_gonio_run(
     store: CaptureStore, calibration: GonioCalibration
-) -> tuple[dict, str, dict[str, np.ndarray]]:
+) -> tuple[dict[str, Any], str, dict[str, np.ndarray]]:
     """Refuse a capture that is not a measurement run of the gonioreflectometer, or whose white
     photographs are at other bands than the calibration's: from the attributes and the index,
     before any frame is read. Returns the rig attribute, the camera id and the index."""
@@ -154,7 +155,7 @@ class GonioRun:
     factors: np.ndarray
     reference: np.ndarray
     index: dict[str, np.ndarray]
-    rig: dict
+    rig: dict[str, Any]
 
 
 @dataclass

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import csv
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -54,7 +55,7 @@ RGB_COLUMNS = ("file", "light_theta_deg", "light_phi_deg", "view_theta_deg", "vi
 _READERS = {".zip": read_image_archive, ".btf": read_ubo2014}
 
 
-def rgb_source(store: BTFStore) -> dict | None:
+def rgb_source(store: BTFStore) -> dict[str, Any] | None:
     """The store's ``rgb_source`` attribute (module docstring), ``None`` for a spectral BTF."""
     return store.attrs.get("rgb_source")
 

@@ -123,14 +123,16 @@ def dielectric_fresnel(cos_theta: np.ndarray, ior: float = COATING_IOR) -> np.nd
     return 0.5 * (parallel**2 + perpendicular**2)
 
 
-def _distribution_and_shadowing(cos_h, cos_l, cos_v, alpha, beckmann):
+def _distribution_and_shadowing(
+    cos_h: np.ndarray, cos_l: np.ndarray, cos_v: np.ndarray, alpha: np.ndarray, beckmann: np.ndarray
+) -> tuple[np.ndarray, np.ndarray | float]:
     """Microfacet density at the half vector and Smith's shadowing of both directions, for GGX
     or (where ``beckmann``) Beckmann microfacets with the rational shadowing of Walter et al."""
     alpha_squared = alpha**2
     tan_h_squared = (1 - cos_h**2) / cos_h**2
     ggx = alpha_squared / (np.pi * cos_h**4 * (alpha_squared + tan_h_squared) ** 2)
     gauss = np.exp(-tan_h_squared / alpha_squared) / (np.pi * alpha_squared * cos_h**4)
-    shadowing = 1.0
+    shadowing: np.ndarray | float = 1.0
     for cos_w in (cos_l, cos_v):
         tan_w = np.sqrt(np.maximum(1 - cos_w**2, 0.0)) / np.maximum(cos_w, 1e-9)
         smith_ggx = 2 / (1 + np.sqrt(1 + alpha_squared * tan_w**2))
@@ -252,18 +254,20 @@ def fit_specular_lobes(
         raise InputError(
             "light_dirs, view_dirs: no pair near a mirror configuration; no lobe can be fitted"
         )
-    errors, weights = np.array(errors), np.array(weights)  # (n_candidates, T)
-    tied = errors <= (1 + TIED_ERROR) * errors.min(axis=0) + 1e-30
-    choice = np.argmin(np.where(tied, np.abs(np.log(np.maximum(weights, 1e-30))), np.inf), axis=0)
+    candidate_errors, candidate_weights = np.array(errors), np.array(weights)  # (n, T)
+    tied = candidate_errors <= (1 + TIED_ERROR) * candidate_errors.min(axis=0) + 1e-30
+    choice = np.argmin(
+        np.where(tied, np.abs(np.log(np.maximum(candidate_weights, 1e-30))), np.inf), axis=0
+    )
     texel = np.arange(means.shape[1])
-    best_weight = weights[choice, texel]
+    best_weight = candidate_weights[choice, texel]
     best_alpha = np.array([used[c][0] for c in choice])
     best_beckmann = np.array([used[c][1] for c in choice])
     level = np.abs(means.mean(axis=0))
     varies = without / n_pairs > MIN_VARIATION * level
     confirmed = np.array(agreeing)[choice, texel] >= MIN_AGREEING
     strong = np.array(peak_values)[choice, texel] >= MIN_PEAK * np.maximum(base, 0.0)
-    best_error = errors[choice, texel]
+    best_error = candidate_errors[choice, texel]
     explains = best_error <= (1 - MIN_GAIN) * _asymmetric_error(excess)
     keep = varies & confirmed & strong & explains & (best_weight > 0)
     own = SpecularLobes(

@@ -116,8 +116,8 @@ def _check_directions(name: str, directions: np.ndarray, n_pairs: int | None) ->
     return directions
 
 
-def _texel_shape(texels: int | tuple[int, int]) -> tuple[int, int]:
-    shape = (texels, texels) if np.ndim(texels) == 0 else tuple(texels)
+def _texel_shape(texels: int | tuple[int, ...]) -> tuple[int, int]:
+    shape = (texels, texels) if np.ndim(texels) == 0 else tuple(np.asarray(texels, dtype=object))
     if len(shape) != 2 or not all(
         isinstance(n, int | np.integer) and not isinstance(n, bool) and n > 0 for n in shape
     ):
@@ -184,33 +184,34 @@ class BTFStore:
                 )
         checker = ChunkChecker(path, verify=False)
         for name in ("wavelengths", "light_dirs", "view_dirs"):
-            array = group[name]
+            array = self._array(name)
             if checker.check(array, (0,) * array.ndim):
                 raise DamagedDataError(
                     f"{path}: damaged store: {chunk_key(array, (0,) * array.ndim)} is missing "
                     f"(the {name}); process the capture again"
                 )
-        self.grid = WavelengthGrid(self._read_small(group["wavelengths"]))
-        self.light_dirs = self._read_small(group["light_dirs"])
-        self.view_dirs = self._read_small(group["view_dirs"])
-        for array in (self.light_dirs, self.view_dirs):
-            array.setflags(write=False)
+        self.grid = WavelengthGrid(self._read_small(self._array("wavelengths")))
+        self.light_dirs = self._read_small(self._array("light_dirs"))
+        self.view_dirs = self._read_small(self._array("view_dirs"))
+        for directions in (self.light_dirs, self.view_dirs):
+            directions.setflags(write=False)
         # Flags known to be set (a cache, refreshed lazily: other processes may write pairs); an
         # unreadable flag counts as unset here, and check() reports it.
-        self._known_written, _ = read_flags(checker, group["written"], self._pair_name)
-        shape = group["reflectance"].shape
+        written = self._array("written")
+        self._known_written, _ = read_flags(checker, written, self._pair_name)
+        shape = self._array("reflectance").shape
         n_pairs = self.light_dirs.shape[0]
         if (
             len(shape) != 4
             or shape[0] != n_pairs
             or shape[3] != self.grid.size
             or self.view_dirs.shape != (n_pairs, 3)
-            or group["written"].shape != (n_pairs,)
+            or written.shape != (n_pairs,)
         ):
             raise InputError(
                 f"{path}: inconsistent BTF store: reflectance {shape}, light_dirs "
                 f"{self.light_dirs.shape}, view_dirs {self.view_dirs.shape}, "
-                f"{self.grid.size} wavelengths, written {group['written'].shape}"
+                f"{self.grid.size} wavelengths, written {written.shape}"
             )
 
     # -- creating and opening ----------------------------------------------------------------
@@ -222,7 +223,7 @@ class BTFStore:
         *,
         light_dirs: np.ndarray,
         view_dirs: np.ndarray,
-        texels: int | tuple[int, int],
+        texels: int | tuple[int, ...],
         grid: WavelengthGrid,
         material: str,
         source_capture: str | Path | None = None,
@@ -363,7 +364,8 @@ class BTFStore:
     @property
     def shape(self) -> tuple[int, int, int, int]:
         """``(n_pairs, H, W, K)``."""
-        return tuple(self._group["reflectance"].shape)
+        n_pairs, height, width, bands = self._array("reflectance").shape
+        return n_pairs, height, width, bands
 
     @property
     def n_pairs(self) -> int:
@@ -390,7 +392,7 @@ class BTFStore:
 
     def written(self) -> np.ndarray:
         """One bool per pair: its texture is written (a corrupt flag raises, naming it)."""
-        written = self._group["written"]
+        written = self._array("written")
         try:
             self._known_written = np.asarray(written[:], dtype=bool)
         except (ValueError, RuntimeError) as error:
@@ -486,20 +488,20 @@ class BTFStore:
                 f"reflectance: expected finite values in 1/sr, found NaN or infinity (or a value "
                 f"beyond float32) at (y, x, band) = {tuple(bad)} of pair {pair}"
             )
-        written = self._group["written"]
+        written = self._array("written")
         if written[pair]:
             self._set_complete(False)
             written[pair] = False
             self._known_written[pair] = False
         self._drop_compressed()
-        self._group["reflectance"][pair] = values
+        self._array("reflectance")[pair] = values
         if corners_xy is not None:
             corners = np.asarray(corners_xy, dtype=np.float64)
             if corners.shape != (4, 2) or not np.all(np.isfinite(corners)):
                 raise InputError(
                     f"corners_xy: expected finite (4, 2) image corners, got shape {corners.shape}"
                 )
-            self._group["corners_xy"][pair] = corners
+            self._array("corners_xy")[pair] = corners
         written[pair] = True
         self._known_written[pair] = True
         if check_complete and self._all_written():
@@ -522,7 +524,7 @@ class BTFStore:
         """``(n_pairs, 4, 2)`` registered image corners per pair (NaN where none were given)."""
         if "corners_xy" not in self._group:
             return np.full((self.n_pairs, 4, 2), np.nan)
-        return self._group["corners_xy"][:]
+        return np.asarray(self._array("corners_xy")[:])
 
     def mark_complete(self) -> None:
         """Recompute the complete flag from the pair flags (after writers in other processes);
@@ -556,7 +558,7 @@ class BTFStore:
         """
         pair = self._check_pair(pair)
         self._require_complete(allow_incomplete, f"read pair {pair} of")
-        if not self._group["written"][pair]:
+        if not self._array("written")[pair]:
             raise InputError(f"{self.path}: pair {pair} is not written yet")
         self._require_chunks([pair])
         return self._decoded(pair)
@@ -564,15 +566,15 @@ class BTFStore:
     def iter_pairs(self, *, allow_incomplete: bool = False) -> Iterator[tuple[int, np.ndarray]]:
         """``(pair, texture)`` for every written pair, one chunk in memory at a time."""
         self._require_complete(allow_incomplete, "iterate over")
-        for pair in np.flatnonzero(self.written()):
+        for pair in np.flatnonzero(self.written()).tolist():
             self._require_chunks([pair])
-            yield int(pair), self._decoded(int(pair))
+            yield pair, self._decoded(pair)
 
-    def reflectance(self, *, allow_incomplete: bool = False) -> zarr.Array:
+    def reflectance(self, *, allow_incomplete: bool = False) -> zarr.Array[Any]:
         """The lazy Zarr array ``(n_pairs, H, W, K)``: slicing it reads only the chunks needed
         (e.g. ``store.reflectance()[:, y, x]`` is the BRDF of texel ``(y, x)``)."""
         self._require_complete(allow_incomplete, "read")
-        return self._group["reflectance"]
+        return self._array("reflectance")
 
     # -- the compressed form (recon.btf.compression) -------------------------------------------
 
@@ -581,7 +583,7 @@ class BTFStore:
         """True when a complete compressed form is stored."""
         return (
             COMPRESSED_GROUP in self._group
-            and self._group[COMPRESSED_GROUP].attrs.get("complete") is True
+            and self._compressed_group().attrs.get("complete") is True
         )
 
     def write_compressed(self, arrays: Mapping[str, np.ndarray], attrs: Mapping[str, Any]) -> None:
@@ -611,8 +613,8 @@ class BTFStore:
         """The arrays and attributes of the ``pca/`` group; raise if absent or incomplete."""
         if COMPRESSED_GROUP not in self._group:
             raise InputError(f"{self.path}: no compressed form ({COMPRESSED_GROUP}/)")
-        group = self._group[COMPRESSED_GROUP]
-        attrs = dict(group.attrs)
+        group = self._compressed_group()
+        attrs: dict[str, Any] = dict(group.attrs)
         if attrs.get("complete") is not True:
             raise InputError(
                 f"{self.path}: the compressed form ({COMPRESSED_GROUP}/) was not completely "
@@ -621,7 +623,7 @@ class BTFStore:
         arrays = {}
         for name in attrs["arrays"]:
             try:
-                arrays[name] = group[name][...]
+                arrays[name] = np.asarray(_array_in(group, name, self.path)[...])
             except (KeyError, ValueError, RuntimeError) as error:
                 raise DamagedDataError(
                     f"{self.path}: damaged store: the compressed form's array "
@@ -649,10 +651,10 @@ class BTFStore:
             source capture.
         """
         checker = ChunkChecker(self.path, verify=verify)
-        written = self._group["written"]
+        written = self._array("written")
         flags, problems = read_flags(checker, written, self._pair_name)
-        reflectance = self._group["reflectance"]
-        corners = self._group["corners_xy"] if "corners_xy" in self._group else None
+        reflectance = self._array("reflectance")
+        corners = self._array("corners_xy") if "corners_xy" in self._group else None
         for pair in np.flatnonzero(flags).tolist():
             for array, required in ((reflectance, True), (corners, False)):
                 if array is None:
@@ -662,7 +664,7 @@ class BTFStore:
                 if outcome is not None and (required or outcome[0] == "corrupt"):
                     key = chunk_key(array, coords)
                     problems.append(ChunkProblem(self._pair_name(pair), key, *outcome, (pair,)))
-        arrays = [self._group[name] for name in _ARRAYS]
+        arrays = [self._array(name) for name in _ARRAYS]
         problems += self._compressed_problems(checker, arrays)
         attrs = self._fresh_attrs()
         return IntegrityReport(
@@ -689,7 +691,7 @@ class BTFStore:
         report = self.check()
         if report.flags_disagree or report.problems:
             self._set_complete(False)
-        written = self._group["written"]
+        written = self._array("written")
         for problem in report.problems:
             if problem.problem == "corrupt":
                 (self.path / problem.key).unlink(missing_ok=True)
@@ -701,24 +703,25 @@ class BTFStore:
         return report.problems
 
     def _compressed_problems(
-        self, checker: ChunkChecker, arrays: list[zarr.Array]
+        self, checker: ChunkChecker, arrays: list[zarr.Array[Any]]
     ) -> list[ChunkProblem]:
         """Missing or corrupt chunks of a complete compressed form (its arrays are added to
         ``arrays``, for the checksum state)."""
         if COMPRESSED_GROUP not in self._group:
             return []
-        group = self._group[COMPRESSED_GROUP]
-        if group.attrs.get("complete") is not True:
+        group = self._compressed_group()
+        attrs: dict[str, Any] = dict(group.attrs)
+        if attrs.get("complete") is not True:
             return []
         problems = []
         item = f"compressed form ({COMPRESSED_GROUP}/)"
-        for name in group.attrs.get("arrays", []):
+        for name in attrs.get("arrays", []):
             node = f"{COMPRESSED_GROUP}/{name}"
             problem = metadata_problem(self.path, node)
             if problem:
                 problems.append(ChunkProblem(item, f"{node}/zarr.json", "missing"))
                 continue
-            array = group[name]
+            array = _array_in(group, name, self.path)
             arrays.append(array)
             # Written with every chunk, when it has checksums; before, chunks of only the fill
             # value were left out.
@@ -741,10 +744,21 @@ class BTFStore:
     def _pair_name(self, pair: int) -> str:
         return f"pair {pair}"
 
-    def _read_small(self, array: zarr.Array) -> np.ndarray:
+    def _array(self, name: str) -> zarr.Array[Any]:
+        return _array_in(self._group, name, self.path)
+
+    def _compressed_group(self) -> zarr.Group:
+        group = self._group[COMPRESSED_GROUP]
+        if not isinstance(group, zarr.Group):
+            raise DamagedDataError(
+                f"{self.path}: damaged store: {COMPRESSED_GROUP} is an array; compress again"
+            )
+        return group
+
+    def _read_small(self, array: zarr.Array[Any]) -> np.ndarray:
         """A whole small array (directions, wavelengths); unreadable is a damaged store."""
         try:
-            return array[:]
+            return np.asarray(array[:])
         except (ValueError, RuntimeError) as error:
             raise DamagedDataError(
                 f"{self.path}: damaged store: {array.path} cannot be read "
@@ -753,7 +767,7 @@ class BTFStore:
 
     def _require_chunks(self, pairs: Iterable[int]) -> None:
         """Raise when a written pair's reflectance chunk is missing (it would read as NaN)."""
-        reflectance = self._group["reflectance"]
+        reflectance = self._array("reflectance")
         for pair in pairs:
             key = chunk_key(reflectance, (int(pair), 0, 0, 0))
             if not (self.path / key).is_file():
@@ -765,7 +779,7 @@ class BTFStore:
     def _decoded(self, pairs: int | slice) -> np.ndarray:
         """Reflectance of ``pairs``; a chunk that cannot be decoded is a damaged store."""
         try:
-            return self._group["reflectance"][pairs]
+            return np.asarray(self._array("reflectance")[pairs])
         except (ValueError, RuntimeError) as error:  # checksum and decompression errors
             where = f"pair {pairs}: " if isinstance(pairs, int) else ""
             raise DamagedDataError(
@@ -789,7 +803,7 @@ class BTFStore:
     def _all_written(self) -> bool:
         """Whether every flag is set, reading only flags not known to be set and stopping at
         the first unset one (cheap for a writer that goes in order, correct with several)."""
-        written = self._group["written"]
+        written = self._array("written")
         for pair in np.flatnonzero(~self._known_written):
             if not written[int(pair)]:
                 return False
@@ -806,6 +820,14 @@ class BTFStore:
     def _drop_compressed(self) -> None:
         if COMPRESSED_GROUP in self._group:
             del self._group[COMPRESSED_GROUP]
+
+
+def _array_in(group: zarr.Group, name: str, path: Path) -> zarr.Array[Any]:
+    """The array ``name`` of ``group``; a group there is a damaged store."""
+    array = group[name]
+    if not isinstance(array, zarr.Array):
+        raise DamagedDataError(f"{path}: damaged store: {array.path} is a group, not an array")
+    return array
 
 
 def _compressed_chunks(values: np.ndarray) -> tuple[int, ...]:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -69,7 +70,7 @@ def select_frames(
 
 def plan_frames(
     store: CaptureStore, camera: str, **settings: object
-) -> tuple[np.ndarray, list[dict]]:
+) -> tuple[np.ndarray, list[dict[str, Any]]]:
     """The frames ``(n, H, W)`` (float64 DN) of ``camera`` whose plan steps have ``settings``
     (e.g. ``kind="geometric"``, ``light_id=5``; settings the index lacks, such as a dome's
     ``tilt_deg``, included), in capture order, and those steps."""

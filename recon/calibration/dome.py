@@ -26,6 +26,7 @@ texel averaged, and white balance by the white reference under the same LED:
 from __future__ import annotations
 
 import warnings
+from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 
@@ -85,7 +86,7 @@ def curve_linearity(curve: np.ndarray, offset: float = 0.0) -> float:
 
 
 @contextmanager
-def _iteration_budget():
+def _iteration_budget() -> Iterator[None]:
     """Robertson's iteration on the spectral camera's low-signal series creeps toward its fixed
     point and may use its whole iteration budget; the calibration uses the curve it reached
     (its linearity is checked against the frames' exposure in the tests), so the convergence

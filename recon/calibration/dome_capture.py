@@ -253,7 +253,8 @@ class DomeCalibration:
             arrays[f"rgb_dark/{camera}"] = calibration.dark.astype(np.float32)
         temporary = path.with_name(f".{path.name}.writing")
         with temporary.open("wb") as file:
-            np.savez_compressed(file, **arrays)
+            # the stub's allow_pickle keyword (a bool) stands in the way of **arrays
+            np.savez_compressed(file, **arrays)  # type: ignore[arg-type]
         os.replace(temporary, path)
         return path
 
@@ -367,7 +368,10 @@ class _WhiteSquare:
 
 
 def _geometric_calibration(
-    store: CaptureStore, camera: str, nominal: CameraGeometry, grey: Callable
+    store: CaptureStore,
+    camera: str,
+    nominal: CameraGeometry,
+    grey: Callable[[np.ndarray], np.ndarray],
 ) -> GeometricCalibration:
     geometry = store.attrs["rig"]["geometry"]
     target = geometry["geometric_target"]

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import cv2
 import numpy as np
@@ -122,7 +123,7 @@ class CameraGeometry:
                 f"rotation_world_to_camera (3x3) and position_m (3), got {error}"
             ) from None
 
-    def to_json(self) -> dict[str, list]:
+    def to_json(self) -> dict[str, list[Any]]:
         return {
             "camera_matrix": self.camera_matrix.tolist(),
             "distortion": self.distortion.tolist(),
@@ -245,7 +246,7 @@ def focal_length_uncertainty(
     return float(np.sqrt(covariance[6, 6]) / camera_matrix[0, 0])
 
 
-def _listing(found: np.ndarray, expected: np.ndarray, inner_corners: tuple[int, int]):
+def _listing(found: np.ndarray, expected: np.ndarray, inner_corners: tuple[int, int]) -> np.ndarray:
     """``found`` reordered to the board's listing: as OpenCV listed them, from the opposite
     end (the board turned by 180 degrees), or with its rows or columns in reverse, whichever
     lies nearest to the expected image points."""

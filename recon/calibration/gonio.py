@@ -34,6 +34,7 @@ import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -111,7 +112,7 @@ def extend_curve(curve: np.ndarray, *, fit_levels: int = 64, trim_levels: int = 
     return curve
 
 
-def white_reflectance(rig: dict, bands_nm: np.ndarray) -> np.ndarray:
+def white_reflectance(rig: dict[str, Any], bands_nm: np.ndarray) -> np.ndarray:
     """The white standard's data-sheet reflectance :math:`W_\\lambda` (stored with the capture)
     at the band centres."""
     sheet = rig.get("white_reflectance")
@@ -213,7 +214,8 @@ class GonioCalibration:
         missing = [name for name in _KEYS if name not in document]
         if missing:
             raise InputError(f"{path}: calibration lacks {missing}", remedy=Remedy.calibrate)
-        arrays, numbers = {}, {}
+        arrays: dict[str, np.ndarray] = {}
+        numbers: dict[str, float] = {}
         for name in _KEYS:
             try:
                 if name in _ARRAY_KEYS:
@@ -232,8 +234,12 @@ class GonioCalibration:
                 f"{path}: bands_nm, run_factors and planned_exposure_s need one value per band"
             )
         return cls(
-            **arrays,
-            **numbers,
+            bands_nm=arrays["bands_nm"],
+            inverse_response=arrays["inverse_response"],
+            run_factors=arrays["run_factors"],
+            planned_exposure_s=arrays["planned_exposure_s"],
+            base_s=numbers["base_s"],
+            white_fill=numbers["white_fill"],
             round_to_s=document["round_to_s"],
             source=str(document["source"]),
         )

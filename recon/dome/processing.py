@@ -35,6 +35,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from scipy import ndimage
@@ -145,10 +146,10 @@ def dome_directions(run: DomeRun, calibration: DomeCalibration) -> tuple[np.ndar
         for camera in run.rgb_cameras:
             lights.append(to_sample @ leds[light])
             views.append(calibration.geometry[camera].geometry.position_in_sample(angles[view]))
-    lights, views = np.array(lights), np.array(views)
+    light_dirs, view_dirs = np.array(lights), np.array(views)
     return (
-        lights / np.linalg.norm(lights, axis=1, keepdims=True),
-        views / np.linalg.norm(views, axis=1, keepdims=True),
+        light_dirs / np.linalg.norm(light_dirs, axis=1, keepdims=True),
+        view_dirs / np.linalg.norm(view_dirs, axis=1, keepdims=True),
     )
 
 
@@ -319,7 +320,7 @@ def _solve_group(
     store: CaptureStore,
     btf: BTFStore,
     group: list[int],
-    solver: Mapping[str, object],
+    solver: Mapping[str, Any],
     advance: Callable[..., None],
 ) -> None:
     """Reconstruct the images ``group`` jointly and write their pairs (step 2 and 3);
@@ -358,7 +359,7 @@ def process_dome(
     manual_corners: Mapping[str, np.ndarray] | None = None,
     resume: bool = False,
     show_progress: bool = False,
-    solver: Mapping[str, object] | None = None,
+    solver: Mapping[str, Any] | None = None,
     band_partner: str | None = None,
     target_relative_noise: float = TARGET_RELATIVE_NOISE,
     created: Callable[[BTFStore], None] = lambda btf: None,

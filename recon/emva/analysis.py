@@ -30,6 +30,7 @@ import logging
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, SupportsFloat
 
 import numpy as np
 from emva1288.process import Data1288, LoadImageData, ParseEmvaDescriptorFile, Results1288
@@ -117,7 +118,7 @@ class EMVAAnalysis:
         }
 
 
-def run_results1288(data: dict, *, saturation_index: int | None = None) -> Results1288:
+def run_results1288(data: dict[str, Any], *, saturation_index: int | None = None) -> Results1288:
     """The ``emva1288`` package's results object on data in its ``Data1288`` layout.
 
     ``saturation_index`` forces the saturation step (``Results1288``'s ``index_u_ysat``)
@@ -144,9 +145,9 @@ def _run_package(descriptor: EMVADescriptor) -> tuple[Data1288, Results1288]:
     return data, run_results1288(data.data, saturation_index=saturation)
 
 
-def _finite(value: object) -> float:
-    value = float(value)
-    return value if math.isfinite(value) else math.nan
+def _finite(value: SupportsFloat) -> float:
+    number = float(value)
+    return number if math.isfinite(number) else math.nan
 
 
 def analyse_measurement(descriptor: str | Path | EMVADescriptor) -> EMVAAnalysis:

@@ -30,7 +30,7 @@ from collections import Counter
 from collections.abc import Iterable
 from dataclasses import dataclass, replace
 from pathlib import Path, PureWindowsPath
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from PIL import Image
@@ -120,7 +120,7 @@ def _fail(path: Path, line: int, message: str) -> InputError:
     return InputError(f"{path}: line {line}: {message}")
 
 
-def _parse_line(path: Path, number: int, text: str) -> tuple[str, tuple]:
+def _parse_line(path: Path, number: int, text: str) -> tuple[str, tuple[Any, ...]]:
     tokens = text.split()
     form = _FORMS.get(tokens[0])
     if form is None:
@@ -260,7 +260,7 @@ def read_descriptor(path: str | Path) -> EMVADescriptor:
         elif entry in ("b", "d"):
             close_step()
             photons = values[1] if entry == "b" else 0.0
-            kind = "bright" if entry == "b" else "dark"
+            kind: Literal["bright", "dark"] = "bright" if entry == "b" else "dark"
             steps.append(EMVAStep(kind, values[0], photons, (), number))
         elif entry == "n":
             if size is not None:

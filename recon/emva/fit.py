@@ -36,12 +36,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from scipy import optimize
 
-from recon.emva.analysis import EMVAAnalysis, run_results1288
+from recon.emva.analysis import EMVAAnalysis, PhotonTransfer, run_results1288
 from recon.emva.linear_model import (
     QUANTIZATION_VARIANCE_DN2,
     knee_oecf,
@@ -118,7 +118,7 @@ def _mean_above_dark(
 
 
 def _predicted_temporal(
-    transfer,
+    transfer: PhotonTransfer,
     *,
     gain: float,
     responsivity: float,
@@ -127,7 +127,7 @@ def _predicted_temporal(
     read_dn: float,
     offset: float,
     top: float,
-) -> dict:
+) -> dict[str, Any]:
     """Means and variances the model predicts for every step, in the package's layout."""
     dark_dn = dark_rate / (1 + knee) * transfer.exposure_s
     bright_dn = responsivity * transfer.photons + dark_dn

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -54,7 +55,11 @@ class SparseInput:
     spectra: np.ndarray
 
 
-_SPECTRALIZATION = {"appearance": "rgbxy", "weights": EnergyWeights(delta=0.0), "tol": 1e-8}
+_SPECTRALIZATION: dict[str, Any] = {
+    "appearance": "rgbxy",
+    "weights": EnergyWeights(delta=0.0),
+    "tol": 1e-8,
+}
 
 
 def _spectralization(data: SparseInput, p_dyn: float = 0.0, prior: str = "spectra") -> np.ndarray:

@@ -43,7 +43,9 @@ def demosaic(
     return np.asarray(DEMOSAIC_METHODS[method](mosaic, pattern))
 
 
-def bin_quads(mosaic: np.ndarray, *, pattern: Literal["RGGB", "BGGR", "GRBG", "GBRG"] = "RGGB"):
+def bin_quads(
+    mosaic: np.ndarray, *, pattern: Literal["RGGB", "BGGR", "GRBG", "GBRG"] = "RGGB"
+) -> np.ndarray:
     """Superpixel demosaicing: each 2x2 Bayer quad of ``mosaic`` ``(..., 2H, 2W)`` becomes one
     RGB pixel ``(..., H, W, 3)`` (its red, the mean of its two greens, its blue).
 
@@ -58,7 +60,7 @@ def bin_quads(mosaic: np.ndarray, *, pattern: Literal["RGGB", "BGGR", "GRBG", "G
     if pattern not in ("RGGB", "BGGR", "GRBG", "GBRG"):
         raise InputError(f"pattern: expected RGGB, BGGR, GRBG or GBRG, got {pattern!r}")
     sites = {(0, 0): pattern[0], (0, 1): pattern[1], (1, 0): pattern[2], (1, 1): pattern[3]}
-    planes = {"R": [], "G": [], "B": []}
+    planes: dict[str, list[np.ndarray]] = {"R": [], "G": [], "B": []}
     for (row, column), channel in sites.items():
         planes[channel].append(mosaic[..., row::2, column::2])
     return np.stack([np.mean(planes[channel], axis=0) for channel in "RGB"], axis=-1)

@@ -48,6 +48,7 @@ References
 from __future__ import annotations
 
 import warnings
+from typing import Any
 
 import numpy as np
 from scipy import ndimage
@@ -130,7 +131,7 @@ def _sigma(sigma_px: object) -> float:
     return float(sigma_px)
 
 
-def _clip_limits(clip_limits: object, levels: int | None) -> tuple[float, float]:
+def _clip_limits(clip_limits: Any, levels: int | None) -> tuple[float, float]:
     """``(low, high)`` as floats, low < high; ``None`` means ``(0, levels - 1)``."""
     if clip_limits is None and levels is not None:
         return 0.0, float(levels - 1)
@@ -262,12 +263,15 @@ def _recover(
         x = np.where(has_weight, irradiance(curve), 0.0)
         energy = (t * x[None, :]).ravel()
         with np.errstate(invalid="ignore", divide="ignore"):
-            left = np.bincount(low_flat, weights=left_weight * energy, minlength=levels)
+            # np.ndarray: NumPy's stub types bincount as integer, also with float weights
+            left: np.ndarray = np.bincount(low_flat, weights=left_weight * energy, minlength=levels)
             left /= left_total
             if right_weight is None:
                 update = left  # Robertson Eq. 11: the mean of t_i x_j over E_m.
             else:
-                right = np.bincount(high_flat, weights=right_weight * energy, minlength=levels)
+                right: np.ndarray = np.bincount(
+                    high_flat, weights=right_weight * energy, minlength=levels
+                )
                 right /= right_total
                 # Eq. 10.8: the mean of the two weighted means; where one side is empty (e.g.
                 # integral values, delta = 0) the other side alone.

@@ -58,7 +58,7 @@ from __future__ import annotations
 import json
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Literal, NamedTuple
+from typing import Any, Literal, NamedTuple
 
 import numpy as np
 from skimage import measure, transform
@@ -264,9 +264,9 @@ def _contour_quadrilateral(
                 corners.append(point)
     if len(corners) != 4:
         return None
-    corners = np.array(corners)
-    angles = np.arctan2(*(corners - corners.mean(axis=0)).T[::-1])
-    return corners[np.argsort(angles)]
+    found = np.array(corners)
+    angles = np.arctan2(*(found - found.mean(axis=0)).T[::-1])
+    return found[np.argsort(angles)]
 
 
 def _adequate(
@@ -286,9 +286,9 @@ def _adequate(
     )
 
 
-def _positive_range(value: object, name: str) -> tuple[float, float]:
+def _positive_range(value: Any, name: str) -> tuple[float, float]:
     try:
-        low, high = (float(item) for item in value)  # type: ignore[union-attr]
+        low, high = (float(item) for item in value)
     except (TypeError, ValueError) as error:
         raise InputError(f"{name}: expected (min, max) in pixels, got {value!r}") from error
     if not (np.isfinite(low) and np.isfinite(high) and 0 <= low < high):

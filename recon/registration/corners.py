@@ -361,7 +361,7 @@ def fit_corner_model(
     fixed = (None, None) if widths is None else (float(widths[0]), float(widths[1]))
     span = (0.5, size - 0.5)
     found = optimize.brute(squared_error, (span, span), args=fixed, Ns=grid_points, finish=None)
-    if fit_edge_width:
+    if fit_edge_width and widths is not None:
         start = np.concatenate([found, np.log(widths)])
         polished = optimize.minimize(
             lambda p: squared_error(p[:2], *np.exp(p[2:])),

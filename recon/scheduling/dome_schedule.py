@@ -36,6 +36,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -437,7 +438,7 @@ def _search(
     loads = [0.0] * n
     held: list[set[int]] = [set() for _ in range(n)]
     image_of_item = [0] * m
-    best: list = [None, math.inf]
+    best: list[Any] = [None, math.inf]
     if start is not None:
         best = [start.copy(), float(np.maximum(np.bincount(start, t, n), rgb_s).sum())]
     nodes = 0
@@ -563,12 +564,12 @@ def _improve(instance: _Instance, image_of_item: np.ndarray, n: int) -> np.ndarr
         return band not in bands[(image_of_item == image) & (items != leaving)]
 
     def step() -> bool:
-        for a in items:
+        for a in range(items.size):
             source = image_of_item[a]
             for target in range(n):
                 if target == source:
                     continue
-                for c in (-1, *items[image_of_item == target]):
+                for c in (-1, *items[image_of_item == target].tolist()):
                     shift = t[a] - (t[c] if c >= 0 else 0.0)
                     if (
                         gain(source, target, shift) > tol
@@ -606,8 +607,8 @@ def _solve(instance: _Instance, n: int, node_limit: int) -> tuple[BandSchedule |
     def total(image_of_item: np.ndarray) -> float:
         return float(np.maximum(np.bincount(image_of_item, t, n), rgb_s).sum())
 
-    starts = [_greedy(instance, n, fullest) for fullest in (False, True)]
-    starts = [_improve(instance, start, n) for start in starts if start is not None]
+    greedy = [_greedy(instance, n, fullest) for fullest in (False, True)]
+    starts = [_improve(instance, start, n) for start in greedy if start is not None]
     image_of_item = min(starts, key=total) if starts else None
     lower = _root_bound(t, rgb_s, n)
     tol = 1e-9 * max(float(t.sum()), n * rgb_s)
@@ -623,7 +624,7 @@ def _solve(instance: _Instance, n: int, node_limit: int) -> tuple[BandSchedule |
     image_of_item = _balance(instance, image_of_item, n)
     spectral = np.bincount(image_of_item, weights=t, minlength=n)
     image_s = np.maximum(spectral, rgb_s)
-    total = float(image_s.sum())
+    total_s = float(image_s.sum())
     schedule = BandSchedule(
         images=tuple(
             tuple(sorted(int(b) for b in instance.bands[image_of_item == image]))
@@ -632,8 +633,8 @@ def _solve(instance: _Instance, n: int, node_limit: int) -> tuple[BandSchedule |
         spectral_s=spectral,
         image_s=image_s,
         rgb_s=rgb_s,
-        total_s=total,
-        increase=total / (n * rgb_s) - 1.0,
+        total_s=total_s,
+        increase=total_s / (n * rgb_s) - 1.0,
         optimal=decided,
     )
     return schedule, decided
@@ -777,7 +778,7 @@ def fewest_images(
     instance = _instance(exposures, rgb, repeat_bands, limit)
     nodes = _node_limit(node_limit)
     copies = 2 if instance.bands.size > exposures.size else 1
-    first = max(copies, _bins_lower_bound(instance.exposures_s, instance.image_limit_s))
+    first = max(copies, _bins_lower_bound(instance.exposures_s, float(limit)))
     proven = True
     for n in range(first, instance.exposures_s.size + 1):
         schedule, decided = _solve(instance, n, nodes)

@@ -32,6 +32,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from pykdtree.kdtree import KDTree
@@ -53,12 +54,12 @@ _THREADS = 2  # threads of the link rule's rounds
 _SPLIT_ROWS = 50_000  # rows of a round above which it is split between them
 
 
-def _rgb(images: np.ndarray, **_) -> np.ndarray:
+def _rgb(images: np.ndarray, **_: object) -> np.ndarray:
     """Eq. 6.4: :math:`\\pi^{RGB}_{app} = id`."""
     return images.reshape(-1, images.shape[-1])
 
 
-def _rgbxy(images: np.ndarray, *, xy_scale: float = 0.25, **_) -> np.ndarray:
+def _rgbxy(images: np.ndarray, *, xy_scale: float = 0.25, **_: object) -> np.ndarray:
     """Eq. 6.5: :math:`[V_i, x_i, y_i]`, coordinates scaled to ``xy_scale`` times the mean RGB
     spread (per image side) so that colour dominates and space breaks ties between metamers."""
     count, height, width, _ = images.shape
@@ -70,7 +71,7 @@ def _rgbxy(images: np.ndarray, *, xy_scale: float = 0.25, **_) -> np.ndarray:
     return np.concatenate([rgb, np.tile(xy, (count, 1))], axis=1)
 
 
-def _patch(images: np.ndarray, *, patch_radius: int = 1, **_) -> np.ndarray:
+def _patch(images: np.ndarray, *, patch_radius: int = 1, **_: object) -> np.ndarray:
     """Eq. 6.6: the :math:`(2m+1)^2` neighbourhood's RGB, centre weighted by
     :math:`\\alpha_{center} = (2m+1)^2 - 1`; image borders are mirrored."""
     m = int(patch_radius)
@@ -94,7 +95,7 @@ APPEARANCE_SPACES: dict[str, Callable[..., np.ndarray]] = {
 }
 
 
-def appearance_points(images: np.ndarray, space: str = "rgbxy", **options) -> np.ndarray:
+def appearance_points(images: np.ndarray, space: str = "rgbxy", **options: Any) -> np.ndarray:
     """Project RGB images into an appearance space (thesis Eq. 6.4-6.6).
 
     Parameters

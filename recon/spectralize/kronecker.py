@@ -95,10 +95,10 @@ class KroneckerSolveInfo:
     directions: np.ndarray
 
 
-def _shift_groups(shifts: np.ndarray, mean_diagonal: float) -> list[tuple[float | None, list]]:
+def _shift_groups(shifts: np.ndarray, mean_diagonal: float) -> list[tuple[float | None, list[int]]]:
     """Group column indices by preconditioner: ``None`` for Jacobi, else the smallest shift of
     a group whose shifts lie within a factor of two (zero-shifts form their own group)."""
-    groups: list[tuple[float | None, list]] = []
+    groups: list[tuple[float | None, list[int]]] = []
     jacobi = [column for column, s in enumerate(shifts) if s >= _JACOBI_SHIFT * mean_diagonal]
     if jacobi:
         groups.append((None, jacobi))
@@ -115,10 +115,10 @@ def _shift_groups(shifts: np.ndarray, mean_diagonal: float) -> list[tuple[float 
     return groups
 
 
-def _equal_shifts(shifts: np.ndarray, columns: list) -> list[tuple[float, list]]:
+def _equal_shifts(shifts: np.ndarray, columns: list[int]) -> list[tuple[float, list[int]]]:
     """Split ``columns`` into runs of numerically equal shifts (clipped at zero)."""
     scale = max(float(np.max(np.abs(shifts))), 1.0)
-    runs: list[tuple[float, list]] = []
+    runs: list[tuple[float, list[int]]] = []
     for column in sorted(columns, key=lambda c: shifts[c]):
         shift = max(float(shifts[column]), 0.0)
         if runs and abs(shift - runs[-1][0]) <= 1e-9 * scale:
@@ -232,6 +232,7 @@ def _solve_part(
     """One thread's share of a group: conjugate gradients on the right-hand sides ``block``
     (multigrid ``cycle``, or Jacobi where it is ``None``). Returns the solutions, the iterations
     per column and whether all converged."""
+    preconditioner: Callable[[np.ndarray, np.ndarray], np.ndarray]
     if cycle is None:
         preconditioner = _Jacobi(spatial.diagonal(), shifts)
     else:

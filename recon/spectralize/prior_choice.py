@@ -26,6 +26,7 @@ References
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy import ndimage
@@ -79,7 +80,7 @@ def choose_prior(
     response: np.ndarray,
     known_pixels: np.ndarray,
     known_spectra: np.ndarray,
-    **options,
+    **options: Any,
 ) -> PriorChoice:
     """Pick the appearance prior (``"spectra"`` or ``"regression"``) by held-out spots.
 

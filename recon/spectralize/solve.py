@@ -43,6 +43,7 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 from scipy import sparse
@@ -168,14 +169,14 @@ class EnergyWeights:
 class SpectralizationProblem:
     """An assembled energy: its terms, absolute weights, scale factors :math:`f_i` and graph."""
 
-    terms: list
+    terms: list[Any]
     weights: list[float]
     scale: np.ndarray  # f_i, (n_pixels,)
     image_shape: tuple[int, int, int]  # (n_images, height, width)
     n_bands: int
     graph_links: int
     graph_added: int
-    timings_s: dict = field(default_factory=dict)
+    timings_s: dict[str, float] = field(default_factory=dict)
     base: np.ndarray | None = None  # (n_pixels, K): f-scaled B of prior="regression", or None
 
     @property
@@ -279,7 +280,7 @@ class SpectralizationResult:
     converged: bool
     graph_links: int
     graph_added: int
-    timings_s: dict
+    timings_s: dict[str, float]
 
 
 def _as_images(rgb: np.ndarray) -> np.ndarray:
@@ -406,7 +407,7 @@ def _device_term(data: DeviceIntegrals, scale: np.ndarray, bands: int) -> Device
     return DeviceIntegralTerm(sparse.diags(root) @ weights, root * values)
 
 
-def _regression_matrix(scaled_rgb: np.ndarray, data_terms: list) -> np.ndarray:
+def _regression_matrix(scaled_rgb: np.ndarray, data_terms: list[Any]) -> np.ndarray:
     """:math:`W` ``(C, K)``: the least-squares map from the known pixels' camera values to their
     spectra (both f-scaled), :math:`\\min_W \\lVert V_P W - D \\rVert^2`, the inverse matrix of
     Hardeberg (thesis Sec. 6.1)."""
@@ -430,7 +431,7 @@ def build_problem(
     device_integrals: DeviceIntegrals | None = None,
     weights: EnergyWeights = EnergyWeights(),
     appearance: str = "rgb",
-    appearance_options: dict | None = None,
+    appearance_options: dict[str, Any] | None = None,
     neighbours: int = 3,
     p_dyn: float = 0.0,
     prior: str = "spectra",
@@ -481,7 +482,7 @@ def build_problem(
     scale = dynamic_scale(images, p_dyn)
     scaled_rgb = images.reshape(-1, channels) * scale[:, None]
 
-    data_terms: list = []
+    data_terms: list[Any] = []
     if point_spectra is not None:
         data_terms.append(_point_term(point_spectra, scale, bands, grid))
     data_terms += [_band_term(b, scale, image_shape, bands) for b in band_images]
@@ -586,7 +587,7 @@ def reconstruct(
     max_iterations: int = 500,
     initial: np.ndarray | None = None,
     progress: bool = False,
-    **energy,
+    **energy: Any,
 ) -> SpectralizationResult:
     """Reconstruct spectral images and report how (thesis chapters 6, 10); see
     :func:`spectralize` for the plain entry point.
@@ -678,7 +679,7 @@ def reconstruct(
             problem, used, max_iterations, tol, scaled_initial, progress
         )
     timings = {**problem.timings_s, "assembly": assembly_s, "solve": time.perf_counter() - started}
-    energy = problem.energy(scaled, coefficients)
+    energy_at_solution = problem.energy(scaled, coefficients)
     if problem.base is not None:
         scaled = scaled + problem.base
     spectra = scaled
@@ -688,7 +689,7 @@ def reconstruct(
         spectra=spectra.reshape(*np.shape(rgb)[:-1], problem.n_bands),
         solver=used,
         iterations=iterations,
-        energy=energy,
+        energy=energy_at_solution,
         converged=converged,
         graph_links=problem.graph_links,
         graph_added=problem.graph_added,
@@ -705,7 +706,7 @@ def spectralize(
     band_images: Sequence[BandImage] | None = None,
     appearance: str = "rgb",
     k: int = 3,
-    **options,
+    **options: Any,
 ) -> np.ndarray:
     """Spectral image from RGB plus known spectra and/or noisy band images (the project's
     stable entry point; thesis Eq. 6.10 and 10.12).
@@ -747,7 +748,7 @@ def spectralize(
             "known_pixels, known_spectra: give both (indices and their spectra) or neither"
         )
     point_spectra = None
-    if known_pixels is not None:
+    if known_pixels is not None and known_spectra is not None:
         point_spectra = PointSpectra(np.asarray(known_pixels), known_spectra)
     return reconstruct(
         rgb,

@@ -151,7 +151,8 @@ def test_capture_dry_run_then_capture_then_refuse_to_overwrite(tmp_path):
     assert done.exit_code == 0, done.output
     assert json.loads(done.output)["complete"] is True
     again = runner.invoke(app, ["capture", "demo", str(store)])
-    assert again.exit_code == 2 and "exists" in again.stderr and "spectwin capture resume" in again.stderr
+    assert again.exit_code == 2 and "exists" in again.stderr
+    assert "spectwin capture resume" in again.stderr
 
 
 def test_dry_run_counts_the_pairs_whose_marks_leave_the_window(tmp_path):

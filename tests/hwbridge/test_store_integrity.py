@@ -11,7 +11,7 @@ import zarr
 
 from hwbridge.errors import DamagedDataError
 from hwbridge.integrity import has_checksums
-from hwbridge.session import run_session
+from hwbridge.session import SessionDevices, SessionSettings, run_session
 from hwbridge.store import CaptureStore, FrameRecord
 
 PLAN = [{"camera": "k4", "kind": "dark", "exposure_s": 0.1}] + [
@@ -21,43 +21,46 @@ PLAN = [{"camera": "k4", "kind": "dark", "exposure_s": 0.1}] + [
 SHAPE = (16, 12)
 
 
-class StepCamera:
-    """A camera whose frame is a function of the seed and the step, like the simulated ones."""
-
-    frame_shape = SHAPE
-
-    def __init__(self):
-        self.snaps = []
-
-    def set_exposure(self, exposure_s):
-        self.exposure_s = exposure_s
-
-    def set_step(self, seed, step):
-        self.step = (seed, step)
-
-    def snap(self):
-        self.snaps.append(self.step[1])
-        values = np.random.default_rng(self.step).integers(100, 4000, SHAPE)
-        return values.astype(np.uint16), {"timestamp": 1.0}
-
-
 class Filter:
+    band_nm = None
+
     def set(self, band_nm):
         self.band_nm = band_nm
 
 
-def _capture(path, backend="sim", **options):
-    return run_session(
-        path,
-        PLAN,
-        cameras={"k4": StepCamera()},
-        tunable_filter=Filter(),
+class StepCamera:
+    """A camera whose frame is a function of the step, like the simulated ones; it tells the
+    step from the band its filter is tuned to (none: the dark frame)."""
+
+    frame_shape = SHAPE
+
+    def __init__(self, tunable_filter):
+        self.snaps, self._filter = [], tunable_filter
+
+    def set_exposure(self, exposure_s):
+        self.exposure_s = exposure_s
+
+    def snap(self):
+        bands = [step.get("band_nm") for step in PLAN]
+        step = bands.index(self._filter.band_nm)
+        self.snaps.append(step)
+        values = np.random.default_rng([5, step]).integers(100, 4000, SHAPE)
+        return values.astype(np.uint16), {"timestamp": 1.0}
+
+
+def _devices():
+    tunable_filter = Filter()
+    return SessionDevices(cameras={"k4": StepCamera(tunable_filter)}, tunable_filter=tunable_filter)
+
+
+def _capture(path, backend="sim"):
+    settings = SessionSettings(
         rig={"rig": "gonioreflectometer", "program": "test"},
         backend=backend,
         seed=5,
         show_progress=False,
-        **options,
     )
+    return run_session(path, PLAN, _devices(), settings)
 
 
 @pytest.fixture(scope="module")
@@ -131,19 +134,10 @@ def test_a_damaged_index_chunk_of_a_real_capture_costs_one_frame(tmp_path, damag
 def test_resuming_a_simulated_capture_takes_the_damaged_frames_again(store, pristine, damage):
     damage(store / "frames/k4/c/1/0/0")
     damage(store / "frames/k4/c/4/0/0")
-    camera = StepCamera()
-    resumed = run_session(
-        store,
-        PLAN,
-        cameras={"k4": camera},
-        tunable_filter=Filter(),
-        rig={},
-        backend="sim",
-        seed=5,
-        resume=True,
-        show_progress=False,
-    )
-    assert camera.snaps == [1, 4]  # only the damaged steps were taken again
+    devices = _devices()
+    settings = SessionSettings(rig={}, backend="sim", seed=5, resume=True, show_progress=False)
+    resumed = run_session(store, PLAN, devices, settings)
+    assert devices.cameras["k4"].snaps == [1, 4]  # only the damaged steps were taken again
     assert [p.key for p in resumed.recaptured] == ["frames/k4/c/1/0/0", "frames/k4/c/4/0/0"]
     assert resumed.complete and CaptureStore.open(store).check().healthy
     np.testing.assert_array_equal(
@@ -158,23 +152,14 @@ def test_resuming_a_real_or_replayed_capture_with_damaged_frames_is_refused(
     path = _capture(tmp_path / "run.capture.zarr", backend=backend).path
     damage(path / "frames/k4/c/2/0/0")
     damage(path / "frames/k4/c/3/0/0")
-    camera = StepCamera()
+    devices = _devices()
+    settings = SessionSettings(rig={}, backend=backend, seed=5, resume=True, show_progress=False)
     with pytest.raises(DamagedDataError) as refused:
-        run_session(
-            path,
-            PLAN,
-            cameras={"k4": camera},
-            tunable_filter=Filter(),
-            rig={},
-            backend=backend,
-            seed=5,
-            resume=True,
-            show_progress=False,
-        )
+        run_session(path, PLAN, devices, settings)
     message = str(refused.value)
     assert "camera k4 step 2 (frame 2): frames/k4/c/2/0/0 is" in message
     assert f"a {backend} capture cannot take its frames again" in message
-    assert "\n" not in message and camera.snaps == []
+    assert "\n" not in message and devices.cameras["k4"].snaps == []
     assert CaptureStore.open(path).pending_steps() == []  # nothing was changed
 
 

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from hwbridge.dome_layout import ALL_LEDS, SPECTRAL_CAMERA, camera_steps
-from hwbridge.session import capture_steps, locked_session_store
+from hwbridge.session import SessionSettings, capture_steps, locked_session_store
 from hwbridge.store import CaptureStore
 from recon.radiometric.demosaic import bin_quads, demosaic
 from recon.registration.border import register_frame
@@ -86,10 +86,10 @@ def calibration(tmp_path_factory) -> CaptureStore:
             )
         )
     ]
-    devices = program.devices()
     path = tmp_path_factory.mktemp("dome") / "calibration.capture.zarr"
-    with locked_session_store(path, plan, devices, rig=rig, backend="sim", seed=SEED) as store:
-        capture_steps(store, steps, devices, seed=SEED)
+    settings = SessionSettings(rig=rig, backend="sim", seed=SEED)
+    with locked_session_store(path, plan, program.devices(), settings) as store:
+        capture_steps(store, steps, program.devices(SEED, steps))
     store = CaptureStore.open(path)
     assert sorted(set(range(len(plan))) - set(store.pending_steps())) == steps
     return store

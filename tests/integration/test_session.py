@@ -17,7 +17,7 @@ import pytest
 from hwbridge.errors import InputError, SessionInterrupted, StoreBusy
 from hwbridge.lock import StoreLock, lock_owner
 from hwbridge.plans import dark_series, estimate_duration_s, gonio_sample_run
-from hwbridge.session import run_session
+from hwbridge.session import SessionDevices, SessionSettings, run_session
 from hwbridge.store import CaptureStore
 from twin.gonio.sim_session import demo_plan, demo_program, run_demo_session
 
@@ -269,7 +269,12 @@ def test_bad_sessions_are_refused_and_overwrite_nothing(tmp_path):
         run_demo_session(path, SEED + 1, resume=True)
     np.testing.assert_array_equal(CaptureStore.open(path).frames("k4")[:], before)
     with pytest.raises(InputError, match="cameras"):
-        run_session(tmp_path / "x.zarr", demo_plan(), cameras={}, rig={}, backend="sim", seed=0)
+        run_session(
+            tmp_path / "x.zarr",
+            demo_plan(),
+            SessionDevices(cameras={}),
+            SessionSettings({}, "sim", 0),
+        )
 
 
 def test_white_and_chart_plans():
@@ -293,7 +298,10 @@ def test_an_exposure_outside_the_camera_range_stops_the_session_cleanly(tmp_path
     )
     with pytest.raises(ValueError, match="outside"):
         run_session(
-            tmp_path / "s.zarr", plan, cameras={"k4": camera}, rig={}, backend="sim", seed=0
+            tmp_path / "s.zarr",
+            plan,
+            SessionDevices(cameras={"k4": camera}),
+            SessionSettings({}, "sim", 0),
         )
     store = CaptureStore.open(tmp_path / "s.zarr")
     assert not store.complete and store.pending_steps() == [0]

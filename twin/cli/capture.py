@@ -18,7 +18,7 @@ import shlex
 from collections import Counter
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated, Any, NoReturn
+from typing import TYPE_CHECKING, Annotated, Any, NoReturn
 
 import typer
 from typer.core import TyperGroup
@@ -33,6 +33,9 @@ from twin.cli.errors import (
     run_failed,
 )
 from twin.cli.output import JsonFlag, SchedulerOption, WorkersOption, print_summary
+
+if TYPE_CHECKING:
+    from twin.kinds.kind import ProgramSettings
 
 __all__ = ["capture_app", "register"]
 
@@ -191,7 +194,7 @@ def _capture(
     store: Path,
     rig: str,
     program_name: str,
-    settings: dict[str, Any],
+    settings: dict[str, Any] | ProgramSettings,
     *,
     fault_rate: float = 0.0,
     dry_run: bool = False,

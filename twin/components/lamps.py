@@ -35,7 +35,7 @@ __all__ = [
     "HMI_F575_LINES",
     "EmissionLine",
     "HMILamp",
-    "Lamp",
+    "LightSource",
     "PhosphorWhiteLED",
     "QTHLamp",
     "cie_illuminant",
@@ -77,7 +77,7 @@ def _require_exposure(t0_s: float, exposure_s: float) -> None:
         raise InputError(f"exposure_s: expected a positive exposure time, got {exposure_s}")
 
 
-class Lamp(Protocol):
+class LightSource(Protocol):
     """What the rigs need of a light source.
 
     A lamp's output is a sum of fixed spectral parts whose weights change in time
@@ -236,14 +236,16 @@ class HMILamp:
 
     def _relative_parts(self, wavelengths_nm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         continuum = planck_spectral_radiance(wavelengths_nm, self.continuum_temperature_k)
-        continuum = continuum / planck_spectral_radiance(560.0, self.continuum_temperature_k)
+        continuum = continuum / planck_spectral_radiance(
+            np.array(560.0), self.continuum_temperature_k
+        )
         lines = sum(line.profile(wavelengths_nm) for line in self.lines)
         return continuum, lines + np.zeros_like(continuum)
 
     def continuum_and_lines(self, wavelengths_nm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Time-averaged continuum and line parts in W sr^-1 nm^-1 at drift 1."""
         scale = _intensity_scale(
-            lambda wavelengths: sum(self._relative_parts(wavelengths)),
+            lambda wavelengths: np.add(*self._relative_parts(wavelengths)),
             self.radiant_intensity_w_sr,
         )
         continuum, lines = self._relative_parts(np.asarray(wavelengths_nm, dtype=np.float64))
@@ -339,7 +341,7 @@ def cie_illuminant(name: str, grid: WavelengthGrid) -> SampledSpectra:
     return resample(from_colour(colour.SDS_ILLUMINANTS[name]), grid, method="pchip")
 
 
-def lamp_model(spectrum: str) -> Lamp:
+def lamp_model(spectrum: str) -> LightSource:
     """The gonioreflectometer lamp a rig file names: ``"hmi"`` (Broncolor F575, flickering
     lines) or ``"qth"`` (the 1000 W tungsten-halogen lamp), thesis 3.2.2."""
     models = {"hmi": HMILamp, "qth": QTHLamp}

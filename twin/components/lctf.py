@@ -16,6 +16,7 @@ References
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -73,7 +74,7 @@ class LiquidCrystalTunableFilter:
             raise InputError(f"leakage: expected a transmission in [0, 1), got {self.leakage}")
 
     @classmethod
-    def varispec(cls, model: str = "VS-10", **overrides: object) -> LiquidCrystalTunableFilter:
+    def varispec(cls, model: str = "VS-10", **overrides: Any) -> LiquidCrystalTunableFilter:
         """The VariSpec ``model`` ("VS-07", "VS-10" or "VS-20") with optional overrides."""
         if model not in VARISPEC_FWHM_NM:
             raise InputError(f"model: expected one of {sorted(VARISPEC_FWHM_NM)}, got {model!r}")

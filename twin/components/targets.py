@@ -124,8 +124,8 @@ def camera_chart_reflectances(grid: WavelengthGrid) -> SampledSpectra:
     fields = np.concatenate(
         [training.values[diffuse], resample(macbeth, training.grid, method="box").values]
     )
-    names = [name for name, kept in zip(training.names, diffuse, strict=True) if kept]
-    names += [f"colorchecker {name}" for name in macbeth.names]
+    names = [name for name, kept in zip(training.names or (), diffuse, strict=True) if kept]
+    names += [f"colorchecker {name}" for name in macbeth.names or ()]
     esser = esser_reflectances(training.grid).values
     distance = np.sqrt(((esser[:, None, :] - fields[None]) ** 2).mean(axis=2)).min(axis=1)
     for _ in range(CAMERA_CHART_FIELDS - len(fields)):

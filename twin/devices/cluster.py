@@ -60,13 +60,13 @@ from distributed import Client, Event, Future, LocalCluster, WorkerPlugin, as_co
 
 from hwbridge.lock import StoreLock
 from hwbridge.session import (
-    SessionDevices,
+    SessionSettings,
     SignalStop,
     StopRequest,
+    capture_pending,
     capture_steps,
     locked_session_store,
     raise_if_interrupted,
-    run_session,
 )
 from hwbridge.store import CaptureStore, FrameRecord
 from recon.btf.processing import (
@@ -81,6 +81,7 @@ from recon.btf.store import BTFStore
 from recon.calibration.gonio import GonioCalibration
 from recon.errors import InputError
 from recon.progress import progress_steps
+from twin.devices.sim_devices import DeviceRecipe
 
 __all__ = [
     "RendererSetup",
@@ -289,7 +290,7 @@ def _worker_store(path: str, stamp: tuple[int, int]) -> CaptureStore:
 
 def _capture_task(
     store_path: str,
-    devices: Callable[[], SessionDevices],
+    devices: DeviceRecipe,
     seed: int,
     steps: list[int],
     stop: Event,
@@ -300,8 +301,7 @@ def _capture_task(
     taken = capture_steps(
         _worker_store(store_path, (metadata.st_mtime_ns, metadata.st_size)),
         steps,
-        devices(),
-        seed=seed,
+        devices(seed, steps),
         record=False,
         stop=_EventStop(stop),
     )
@@ -310,8 +310,8 @@ def _capture_task(
 
 def run_capture(
     store: str | Path,
-    plan: list[dict],
-    devices: Callable[[], SessionDevices],
+    plan: list[dict[str, Any]],
+    devices: DeviceRecipe,
     *,
     rig: dict[str, Any],
     seed: int,
@@ -330,17 +330,17 @@ def run_capture(
     plan
         One dict per step (:mod:`hwbridge.plans`).
     devices
-        Builds the session's devices when called; it must pickle to run on a cluster
-        (e.g. :class:`twin.devices.sim_devices.SimGonioDevices`).
+        Builds the session's devices for the seed and the steps they take; it must pickle to
+        run on a cluster (e.g. :class:`twin.devices.sim_devices.SimGonioDevices`).
     rig, seed, backend
-        Stored with the plan (:func:`hwbridge.session.open_session_store`).
+        Stored with the plan (:class:`hwbridge.session.SessionSettings`).
     resume
         Continue an interrupted capture (serial or distributed, either way).
     show_progress
         A progress bar over the steps.
     client
-        ``None`` for :func:`hwbridge.session.run_session`, else a Dask client
-        (:func:`dask_client`).
+        ``None`` to capture in this process (:func:`hwbridge.session.capture_pending`), else a
+        Dask client (:func:`dask_client`).
     max_steps
         Most steps per task (:func:`view_tasks`).
 
@@ -356,24 +356,17 @@ def run_capture(
     SessionInterrupted
         SIGINT or SIGTERM stopped the capture (on a cluster: after the workers' current steps).
     """
-    if client is None:
-        return run_session(
-            store,
-            plan,
-            **devices(),
-            rig=rig,
-            backend=backend,
-            seed=seed,
-            resume=resume,
-            show_progress=show_progress,
-        )
+    settings = SessionSettings(
+        rig=rig, backend=backend, seed=seed, resume=resume, show_progress=show_progress
+    )
     with (
         SignalStop() as stop,
-        locked_session_store(
-            store, plan, devices(), rig=rig, backend=backend, seed=seed, resume=resume
-        ) as session,
+        locked_session_store(store, plan, devices(seed, []), settings) as session,
     ):
         pending = session.pending_steps()
+        if client is None:
+            capture_pending(session, devices(seed, pending), settings, stop)
+            return session
         client.register_plugin(RendererSetup(), name=RendererSetup.name)
         [recipe] = client.scatter([devices], broadcast=True, hash=False)
         path = str(session.path.resolve())

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from hwbridge.errors import InputError
+from hwbridge.protocols import Camera, LedArray, RotationStage, TunableFilter
 from hwbridge.session import SessionDevices
 from twin.devices.sim_devices import (
     SimLedArray,
@@ -60,19 +61,22 @@ class DomeDevices:
     stage_port: str | None = None
     led_port: str | None = None
     lctf_port: str | None = None
-    cameras: Mapping[str, Any] = field(default_factory=dict)
+    cameras: Mapping[str, Camera] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.backend not in BACKENDS:
             raise InputError(f"backend: expected one of {BACKENDS}, got {self.backend!r}")
-        ports = {
-            "stage_port": self.stage_port,
-            "led_port": self.led_port,
-            "lctf_port": self.lctf_port,
-        }
-        missing = [key for key, port in ports.items() if not port]
-        if self.backend == "real" and missing:
+        if self.backend == "real":
+            self._real_ports()
+
+    def _real_ports(self) -> tuple[str, str, str]:
+        """The serial ports of the real stage, LEDs and LCTF."""
+        stage, leds, lctf = self.stage_port, self.led_port, self.lctf_port
+        if not (stage and leds and lctf):
+            ports = {"stage_port": stage, "led_port": leds, "lctf_port": lctf}
+            missing = [key for key, port in ports.items() if not port]
             raise InputError(f"the real dome needs the serial ports {missing}")
+        return stage, leds, lctf
 
     @classmethod
     def for_rig(cls, config: DomeConfig, **settings: Any) -> DomeDevices:
@@ -81,21 +85,25 @@ class DomeDevices:
 
     def __call__(self) -> SessionDevices:
         """Build the devices and stage them (a device that fails to stage unstages the others)."""
+        stage: RotationStage
+        leds: LedArray
+        lctf: TunableFilter
         if self.backend == "sim":
             rig = VirtualRig()
-            stage: Any = SimRotationStage(rig, step_deg=self.step_deg)
-            leds: Any = SimLedArray(rig, self.led_count, drive_current_ma=self.drive_current_ma)
-            lctf: Any = SimTunableFilter(rig)
+            stage = SimRotationStage(rig, step_deg=self.step_deg)
+            leds = SimLedArray(rig, self.led_count, drive_current_ma=self.drive_current_ma)
+            lctf = SimTunableFilter(rig)
         else:
             from hwbridge.drivers.apt_rotation_stage import AptRotationStage
             from hwbridge.drivers.dmx_led_array import DmxLedArray
             from hwbridge.drivers.varispec import VariSpec
 
-            stage = AptRotationStage(self.stage_port, step_deg=self.step_deg)
+            stage_port, led_port, lctf_port = self._real_ports()
+            stage = AptRotationStage(stage_port, step_deg=self.step_deg)
             leds = DmxLedArray(
-                self.led_port, count=self.led_count, drive_current_ma=self.drive_current_ma
+                led_port, count=self.led_count, drive_current_ma=self.drive_current_ma
             )
-            lctf = VariSpec(self.lctf_port)
+            lctf = VariSpec(lctf_port)
         staged = []
         try:
             for device in (stage, leds, lctf):
@@ -110,5 +118,4 @@ class DomeDevices:
             positioner=stage,
             tunable_filter=lctf,
             leds=leds,
-            led_count=self.led_count,
         )

@@ -5,25 +5,26 @@ their plan in this process or over a Dask cluster (:func:`twin.devices.cluster.r
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from hwbridge.session import SessionDevices
 from hwbridge.store import CaptureStore
 from recon.errors import InputError
 from twin.devices.cluster import run_capture
+from twin.devices.sim_devices import DeviceRecipe
 from twin.sensor.model import Sensor
 
 if TYPE_CHECKING:
     from distributed import Client
+    from typing_extensions import TypeIs
 
 __all__ = ["ProgramCapture", "check_exposures", "check_fault_rate", "check_seed", "is_whole"]
 
 
-def is_whole(value: object) -> bool:
+def is_whole(value: object) -> TypeIs[int | np.integer]:
     """Whether ``value`` is a whole number (not a bool)."""
     return isinstance(value, int | np.integer) and not isinstance(value, bool)
 
@@ -59,8 +60,8 @@ class ProgramCapture:
     them, and pickles for the workers of a cluster), the store's ``rig`` attribute and the
     session ``seed``."""
 
-    plan: list[dict]
-    devices: Callable[[], SessionDevices]
+    plan: list[dict[str, Any]]
+    devices: DeviceRecipe
     rig: dict[str, Any]
     seed: int
 

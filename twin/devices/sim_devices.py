@@ -3,9 +3,13 @@
 The tunable filter, the positioner and the camera share a :class:`VirtualRig` state: the camera's
 frame depends on the band the filter is tuned to and the view the positioner has set. Frames come
 from the sensor model (``twin.sensor.model``) fed by a *signal*: the mean photo-electrons of the
-current
-state over the exposure window (the lamp's flicker included, see ``twin.gonio.signals``). Step
-``k`` of a session with seed ``s`` draws its noise from ``numpy.random.default_rng([s, k])``
+current state over the exposure window (the lamp's flicker included, see
+``twin.gonio.signals``).
+
+A rig is built for the plan steps a session will take, in order (all of them, unless it resumes
+or is one task of a distributed capture) and for the session's seed; each frame taken moves it
+on to the next step, so the camera knows which step it takes from the rig, not from the session.
+Step ``k`` of a session with seed ``s`` draws its noise from ``numpy.random.default_rng([s, k])``
 and starts its exposure at the plan's start time for that step, so a resumed session reproduces
 an uninterrupted one, and a capture split over Dask workers a serial one. Optional fault injection
 raises timeouts and disconnects.
@@ -24,21 +28,22 @@ simulated or real, for cameras of the caller's.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
 from hwbridge.dome_targets import check_current_ma, led_pattern, single_led, stage_angle_deg
 from hwbridge.errors import DeviceDisconnected, DeviceTimeout, InputError
-from hwbridge.protocols import description, reading
+from hwbridge.protocols import Reading, description, reading
 from hwbridge.session import SessionDevices
-from recon.spectra import DEFAULT_GRID
-from twin.components.lamps import HMILamp
+from recon.spectra import DEFAULT_GRID, WavelengthGrid
+from twin.components.lamps import HMILamp, LightSource
 from twin.sensor.model import Sensor
 
 __all__ = [
+    "DeviceRecipe",
     "Signal",
     "SimCamera",
     "SimDomeDevices",
@@ -55,7 +60,12 @@ __all__ = [
 
 @dataclass
 class VirtualRig:
-    """State shared by the simulated devices of one rig."""
+    """State shared by the simulated devices of one rig.
+
+    ``steps`` are the plan steps the rig takes, in this order (``None``: every step of the
+    plan, from the first), ``seed`` the session's; each frame taken moves the rig on to the
+    next step (:meth:`frame_taken`).
+    """
 
     band_nm: float | None = None
     view_id: int = -1
@@ -64,9 +74,26 @@ class VirtualRig:
     led_current_ma: float = 0.0
     stage_deg: float = 0.0
     clock_s: float = 0.0  # start of the current exposure (set by the camera for each step)
-    step: int = -1  # the plan step being taken (set by the camera), for what the plan places
+    seed: int = 0
+    steps: Sequence[int] | None = None
+    frames_taken: int = 0
     fault_rate: float = 0.0
     fault_rng: np.random.Generator | None = None
+
+    @property
+    def step(self) -> int:
+        """The plan step being taken: what it places on the holder, its noise, its start."""
+        if self.steps is None:
+            return self.frames_taken
+        if self.frames_taken >= len(self.steps):
+            raise InputError(
+                f"the simulated rig was built for {len(self.steps)} steps and has taken them all"
+            )
+        return int(self.steps[self.frames_taken])
+
+    def frame_taken(self) -> None:
+        """Move on to the next step."""
+        self.frames_taken += 1
 
     def maybe_fail(self, what: str) -> None:
         """With probability ``fault_rate``, a timeout or (as often) a disconnect."""
@@ -104,10 +131,10 @@ class SimTunableFilter:
         self._rig.maybe_fail(f"{self.name}.set")
         self._rig.band_nm = float(wavelength_nm)
 
-    def read(self) -> dict[str, dict[str, Any]]:
+    def read(self) -> Reading:
         return reading(f"{self.name}_wavelength_nm", self._rig.band_nm)
 
-    def describe(self) -> dict[str, dict[str, Any]]:
+    def describe(self) -> Reading:
         return description(
             f"{self.name}_wavelength_nm", source="simulated", dtype="number", shape=[], units="nm"
         )
@@ -123,10 +150,10 @@ class SimLamp:
         self._rig.maybe_fail(f"{self.name}.set")
         self._rig.lamp_on = bool(on)
 
-    def read(self) -> dict[str, dict[str, Any]]:
+    def read(self) -> Reading:
         return reading(f"{self.name}_on", self._rig.lamp_on)
 
-    def describe(self) -> dict[str, dict[str, Any]]:
+    def describe(self) -> Reading:
         return description(
             f"{self.name}_on", source="simulated", dtype="boolean", shape=[], units=""
         )
@@ -180,12 +207,12 @@ class SimLedArray:
     def light(self, led: int, current_ma: float | None = None) -> None:
         self.set(single_led(led, self.count, self.name), current_ma)
 
-    def read(self) -> dict[str, dict[str, Any]]:
+    def read(self) -> Reading:
         pattern = self._rig.led_pattern
         currents = np.zeros(self.count) if pattern is None else pattern * self._rig.led_current_ma
         return reading(f"{self.name}_current_ma", currents)
 
-    def describe(self) -> dict[str, dict[str, Any]]:
+    def describe(self) -> Reading:
         return description(
             f"{self.name}_current_ma",
             source="simulated",
@@ -225,10 +252,10 @@ class SimRotationStage:
         self._rig.maybe_fail(f"{self.name}.set")
         self._rig.stage_deg = angle
 
-    def read(self) -> dict[str, dict[str, Any]]:
+    def read(self) -> Reading:
         return reading(f"{self.name}_angle_deg", self._rig.stage_deg)
 
-    def describe(self) -> dict[str, dict[str, Any]]:
+    def describe(self) -> Reading:
         return description(
             f"{self.name}_angle_deg", source="simulated", dtype="number", shape=[], units="deg"
         )
@@ -241,8 +268,8 @@ class SimSpectrometer:
     def __init__(
         self,
         rig: VirtualRig,
-        lamp: Any,
-        grid: Any,
+        lamp: LightSource,
+        grid: WavelengthGrid,
         *,
         efficiency: float = 1e-3,
         name: str = "monitor",
@@ -265,12 +292,12 @@ class SimSpectrometer:
         spectrum = self._lamp.exposure_integral(self._grid, self._rig.clock_s, 1.0).values
         self._last = self._efficiency * spectrum * (1.0 if self._rig.lamp_on else 0.0)
 
-    def read(self) -> dict[str, dict[str, Any]]:
+    def read(self) -> Reading:
         if self._last is None:
             raise InputError(f"{self.name}: no spectrum yet; call trigger() first")
         return reading(f"{self.name}_counts", self._last)
 
-    def describe(self) -> dict[str, dict[str, Any]]:
+    def describe(self) -> Reading:
         return description(
             f"{self.name}_counts",
             source="simulated",
@@ -294,10 +321,10 @@ class SimPositioner:
         self._rig.maybe_fail(f"{self.name}.set")
         self._rig.view_id = view
 
-    def read(self) -> dict[str, dict[str, Any]]:
+    def read(self) -> Reading:
         return reading(f"{self.name}_view_id", self._rig.view_id)
 
-    def describe(self) -> dict[str, dict[str, Any]]:
+    def describe(self) -> Reading:
         return description(
             f"{self.name}_view_id", source="simulated", dtype="integer", shape=[], units=""
         )
@@ -311,7 +338,8 @@ class SimCamera:
     """A camera of the twin: the signal of the rig's state -> the sensor model -> raw frames.
 
     ``start_times_s[k]`` is when the exposure of plan step ``k`` starts (``hwbridge.plans.
-    plan_start_times_s``): it sets the lamp's flicker phase for that frame.
+    plan_start_times_s``): it sets the lamp's flicker phase for that frame. Which step a frame
+    is, the camera reads from the rig (:attr:`VirtualRig.step`).
     """
 
     def __init__(
@@ -326,8 +354,6 @@ class SimCamera:
         self.name, self._rig, self._sensor, self._signal = name, rig, sensor, signal
         self._start_times_s = np.asarray(start_times_s, dtype=np.float64)
         self._exposure_s = sensor.config.exposure_range_s[0]
-        self._rng = np.random.default_rng()
-        self._start_s = 0.0
         self._shutter_open = True
 
     @property
@@ -348,30 +374,27 @@ class SimCamera:
         """Closed for dark frames: only dark signal reaches the sensor."""
         self._shutter_open = bool(open_)
 
-    def set_step(self, seed: int, step: int) -> None:
-        """Derive the noise and the exposure start of the next frame from the plan step, and
-        tell the rig which step it is (a dome signal reads what the plan put on the holder)."""
-        self._rng = np.random.default_rng([seed, step])
-        self._start_s = float(self._start_times_s[step])
-        self._rig.clock_s = self._start_s
-        self._rig.step = int(step)
-
     def snap(self) -> tuple[np.ndarray, dict[str, Any]]:
+        """The frame of the rig's step: its noise drawn from ``[seed, step]``, its exposure
+        starting at the step's start time; the rig moves on to its next step."""
         self._rig.maybe_fail(f"{self.name}.snap")
+        step = self._rig.step
+        start_s = float(self._start_times_s[step])
+        self._rig.clock_s = start_s
         if self._shutter_open and self._rig.lamp_on:
-            electrons = np.asarray(
-                self._signal(self._rig, self._start_s, self._exposure_s), np.float32
-            )
+            electrons = np.asarray(self._signal(self._rig, start_s, self._exposure_s), np.float32)
         else:  # shutter closed: dark signal only (R, G, B planes for a colour sensor)
             channels = (3,) if self._sensor.is_colour else ()
             electrons = np.zeros((*self.frame_shape, *channels), np.float32)
-        frame = self._sensor.capture(electrons, self._exposure_s, self._rng)
+        rng = np.random.default_rng([self._rig.seed, step])
+        frame = self._sensor.capture(electrons, self._exposure_s, rng)
+        self._rig.frame_taken()
         return frame, {"timestamp": time.time(), "exposure_s": self._exposure_s}
 
-    def read(self) -> dict[str, dict[str, Any]]:
+    def read(self) -> Reading:
         return reading(f"{self.name}_exposure_s", self._exposure_s)
 
-    def describe(self) -> dict[str, dict[str, Any]]:
+    def describe(self) -> Reading:
         return description(
             f"{self.name}_image",
             source=f"simulated {self._sensor.config.name}",
@@ -381,14 +404,31 @@ class SimCamera:
         )
 
 
+class DeviceRecipe(Protocol):
+    """Builds a simulated session's devices, in the process that takes its steps, for the
+    session ``seed`` and the plan ``steps`` they take, in this order (``None``: every step)."""
+
+    def __call__(self, seed: int = 0, steps: Sequence[int] | None = None) -> SessionDevices: ...
+
+
+def _rig(seed: int, steps: Sequence[int] | None, fault_rate: float, fault_seed: int) -> VirtualRig:
+    return VirtualRig(
+        seed=seed,
+        steps=None if steps is None else tuple(steps),
+        fault_rate=fault_rate,
+        fault_rng=np.random.default_rng([fault_seed, 99]),
+    )
+
+
 @dataclass(frozen=True, eq=False)
 class SimGonioDevices:
     """The simulated gonioreflectometer's devices for one plan, as a recipe.
 
-    Calling it builds, over a fresh :class:`VirtualRig`, the camera ``camera_id`` (``sensor`` fed
-    by ``signal``, exposure ``k`` starting at ``start_times_s[k]``), the LCTF, the positioner
-    over ``views`` views and the HMI lamp monitor. It holds plain data, so it pickles: each Dask
-    worker of a distributed capture builds its own devices from it (:mod:`twin.devices.cluster`).
+    Calling it (a :class:`DeviceRecipe`) builds, over a fresh :class:`VirtualRig` for the
+    session's seed and steps, the camera ``camera_id`` (``sensor`` fed by ``signal``, exposure
+    ``k`` starting at ``start_times_s[k]``), the LCTF, the positioner over ``views`` views and
+    the HMI lamp monitor. It holds plain data, so it pickles: each Dask worker of a distributed
+    capture builds its own devices from it (:mod:`twin.devices.cluster`).
 
     Attributes
     ----------
@@ -415,10 +455,8 @@ class SimGonioDevices:
     fault_rate: float = 0.0
     fault_seed: int = 0
 
-    def __call__(self) -> SessionDevices:
-        rig = VirtualRig(
-            fault_rate=self.fault_rate, fault_rng=np.random.default_rng([self.fault_seed, 99])
-        )
+    def __call__(self, seed: int = 0, steps: Sequence[int] | None = None) -> SessionDevices:
+        rig = _rig(seed, steps, self.fault_rate, self.fault_seed)
         camera = SimCamera(rig, self.sensor, self.signal, self.start_times_s, name=self.camera_id)
         return SessionDevices(
             cameras={self.camera_id: camera},
@@ -433,11 +471,12 @@ class SimDomeDevices:
     """The simulated LED dome's devices for one plan, as a recipe (it pickles, like
     :class:`SimGonioDevices`).
 
-    Calling it builds, over a fresh :class:`VirtualRig`, one camera per entry of ``cameras``
-    (its sensor fed by its signal, exposure ``k`` starting at ``start_times_s[k]``), the tunable
-    filter in front of the spectral camera, the rotation stage (:class:`SimRotationStage`) and
-    the array of ``led_count`` LEDs (:class:`SimLedArray`, at full scale unless a step asks for
-    another current).
+    Calling it (a :class:`DeviceRecipe`) builds, over a fresh :class:`VirtualRig` for the
+    session's seed and steps, one camera per entry of ``cameras`` (its sensor fed by its signal,
+    exposure ``k`` starting at ``start_times_s[k]``), the tunable filter in front of the
+    spectral camera, the rotation stage (:class:`SimRotationStage`) and the array of
+    ``led_count`` LEDs (:class:`SimLedArray`, at full scale unless a step asks for another
+    current).
 
     Attributes
     ----------
@@ -461,10 +500,8 @@ class SimDomeDevices:
     fault_rate: float = 0.0
     fault_seed: int = 0
 
-    def __call__(self) -> SessionDevices:
-        rig = VirtualRig(
-            fault_rate=self.fault_rate, fault_rng=np.random.default_rng([self.fault_seed, 99])
-        )
+    def __call__(self, seed: int = 0, steps: Sequence[int] | None = None) -> SessionDevices:
+        rig = _rig(seed, steps, self.fault_rate, self.fault_seed)
         return SessionDevices(
             cameras={
                 camera_id: SimCamera(rig, sensor, signal, self.start_times_s, name=camera_id)
@@ -473,5 +510,4 @@ class SimDomeDevices:
             tunable_filter=SimTunableFilter(rig),
             positioner=SimRotationStage(rig, step_deg=self.step_deg),
             leds=SimLedArray(rig, self.led_count, max_current_ma=self.led_full_scale_ma),
-            led_count=self.led_count,
         )

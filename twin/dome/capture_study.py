@@ -108,13 +108,13 @@ class ReconstructionErrors:
         }
 
 
-def dome_light_directions(setup: DomeSetup, leds: Sequence[int]) -> np.ndarray:
+def dome_light_directions(setup: DomeSetup, leds: Sequence[int] | np.ndarray) -> np.ndarray:
     """Unit directions ``(n, 3)`` of dome LEDs ``leds`` (stage at 0)."""
     directions = dome_geometry(setup.cameras.config).led_directions
-    leds = np.asarray(leds, int)
-    if leds.min() < 0 or leds.max() >= len(directions):
+    indices = np.asarray(leds, int)
+    if indices.min() < 0 or indices.max() >= len(directions):
         raise InputError(f"leds: expected indices in [0, {len(directions) - 1}]")
-    return directions[leds]
+    return directions[indices]
 
 
 def simulate_capture(

@@ -18,6 +18,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -73,7 +74,7 @@ def band_schedules(exposures_s: np.ndarray) -> dict[str, dict]:
     noisiest = np.argsort(-exposures)
     repeats = 0
     while (
-        fewest_images(exposures, repeat_bands=noisiest[: repeats + 1]).n_images <= 10
+        fewest_images(exposures, repeat_bands=noisiest[: repeats + 1].tolist()).n_images <= 10
         and repeats < exposures.size
     ):
         repeats += 1
@@ -81,10 +82,10 @@ def band_schedules(exposures_s: np.ndarray) -> dict[str, dict]:
         "8_images": schedule_bands(exposures, 8),
         "fewest_images": fewest_images(exposures),
         "10_images": schedule_bands(
-            exposures, 10, repeat_bands=noisiest[:repeats], image_limit_s=exposures.max()
+            exposures, 10, repeat_bands=noisiest[:repeats].tolist(), image_limit_s=exposures.max()
         ),
     }
-    out = {
+    out: dict[str, Any] = {
         name: {
             "images": [list(map(int, image)) for image in plan.images],
             "n_images": plan.n_images,

@@ -14,6 +14,7 @@ the plate's top at z = 0); the stage turns it all about z.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -44,7 +45,7 @@ __all__ = [
     "wedge_pose",
 ]
 
-CHECKERBOARD = {"columns": 9, "rows": 8, "square_m": 0.005, "margin_m": 0.003}
+CHECKERBOARD: dict[str, Any] = {"columns": 9, "rows": 8, "square_m": 0.005, "margin_m": 0.003}
 """The geometric calibration target: 9 x 8 squares of 5 mm (8 x 7 inner corners) on a white
 card with a 3 mm border, 51 x 46 mm: it covers the holder's opening and stays inside its frame."""
 

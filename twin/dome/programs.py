@@ -294,7 +294,7 @@ class DomeCaptureProgram(ProgramCapture):
             light = -3 - order[light] // per_pass[step["camera"]]
         return step["camera"], step.get("view_id"), light, step["kind"]
 
-    def dry_run(self) -> dict[str, object]:
+    def dry_run(self) -> dict[str, Any]:
         """The plan in numbers, capturing nothing: steps, frames per camera and kind, stage
         positions, LEDs, renders, frame size, the estimated duration (cameras in parallel,
         :func:`hwbridge.dome_plans.dome_duration_s`) and the storage of the frames and their

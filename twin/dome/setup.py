@@ -214,7 +214,7 @@ def dome_setup(
         ),
         np.tile(hdr_set, _RGB_DARK_FRAMES),
         cameras.rgb_frames(
-            np.broadcast_to(white_rgb_rate, chart_rgb.shape), THESIS_RGB_EXPOSURES_S, rng
+            np.broadcast_to(white_rgb_rate, chart_rgb.shape), np.array(THESIS_RGB_EXPOSURES_S), rng
         ),
         np.array(THESIS_RGB_EXPOSURES_S),
         bit_depth=cameras.rgb.config.bit_depth,

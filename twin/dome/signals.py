@@ -171,7 +171,7 @@ class RenderedDomeSignal:
         """Rates ``(H, W, n_channels)`` of one state at full-scale current (the last state and
         the last pass of LEDs kept)."""
         key = (content, stage_deg, leds)
-        if key == self._key:
+        if key == self._key and self._rates is not None:
             return self._rates
         scene = self._scene
         if len(leds) == 1 and scene.led_renders == "pose":
@@ -183,7 +183,7 @@ class RenderedDomeSignal:
                 scene.led_bands.get(led, every) if self._camera == SPECTRAL_CAMERA else every
                 for led in block
             ]
-            if (content, stage_deg, block) != self._pass_key:
+            if (content, stage_deg, block) != self._pass_key or self._pass is None:
                 self._pass = None  # the last pass's memory is free for the next
                 self._pass = self._render(content, stage_deg, block, "pose", wanted)
                 self._pass_key = (content, stage_deg, block)

@@ -119,7 +119,7 @@ class GonioPairs:
             raise InputError("directions: the rig reaches none of the direction pairs")
         self.light_dirs = np.asarray(light_dirs, np.float64)[keep]
         self.view_dirs = np.asarray(view_dirs, np.float64)[keep]
-        self.poses: list[GonioPose] = [solution.poses[i] for i in keep]
+        self.poses = [pose for i in keep if (pose := solution.poses[i]) is not None]
         self.skipped = int(len(solution.poses) - keep.size)
 
 
@@ -284,19 +284,19 @@ class CaptureProgram(ProgramCapture):
         check_fault_rate(self.devices.fault_rate)
         check_exposures(self.plan, {self.devices.camera_id: self.devices.sensor})
 
-    def dry_run(self) -> dict[str, object]:
+    def dry_run(self) -> dict[str, Any]:
         """The plan in numbers, capturing nothing: steps, frames per camera and per kind,
         views, frame size, samples per pixel of the renders (where it renders), the estimated
         duration (the rig's timing,
         :func:`twin.gonio.capture_time.estimate_plan_s`) and the storage the frames and their
         index take uncompressed (the store compresses them)."""
         devices = self.devices()
-        monitor = devices.get("monitor")
+        monitor = devices.monitor
         samples = monitor.samples if monitor is not None else 0
         frames = Counter(step["camera"] for step in self.plan)
         storage = 0
         for camera, count in frames.items():
-            height, width = devices["cameras"][camera].frame_shape
+            height, width = devices.cameras[camera].frame_shape
             storage += count * (2 * height * width + _INDEX_BYTES + 4 * samples)
         duration_s = estimate_plan_s(self.config or load_rig("gonio"), self.plan, self.poses)
         height, width = self.devices.sensor.height, self.devices.sensor.width
@@ -322,9 +322,8 @@ class CaptureProgram(ProgramCapture):
         if self.name != "gonio-run":
             return {}
         pixels = int(self.rig["sensor_px"])
-        needed = np.array(
-            [_marks_window_px(self.config, pose, pixels) for pose in self.poses.values()]
-        )
+        config = self.config or load_rig("gonio")
+        needed = np.array([_marks_window_px(config, pose, pixels) for pose in self.poses.values()])
         return {
             "pairs_with_marks_outside_window": int((needed > self.devices.sensor.width).sum()),
             "window_px_holding_marks": int(needed.max()),

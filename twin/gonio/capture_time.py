@@ -45,7 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from twin.components.lamps import FINE_GRID, lamp_model
+from twin.components.lamps import FINE_GRID, HMILamp, lamp_model
 from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.rigs.gonio_kinematics import GonioPose, GonioSolution, solve_pairs
 from twin.rigs.rig_config import GonioConfig
@@ -117,11 +117,11 @@ def estimate_plan_s(
 
 def order_pairs(solution: GonioSolution) -> np.ndarray:
     """Capture order of the pairs (indices): lamp runs, rail sweep, nearest-neighbour poses."""
-    poses = solution.poses
+    poses = {i: pose for i, pose in enumerate(solution.poses) if pose is not None}
     order: list[int] = []
-    lamp_ids = sorted({pose.lamp_id for pose in poses if pose is not None})
+    lamp_ids = sorted({pose.lamp_id for pose in poses.values()})
     for lamp_id in lamp_ids:
-        run = [i for i, pose in enumerate(poses) if pose is not None and pose.lamp_id == lamp_id]
+        run = [i for i, pose in poses.items() if pose.lamp_id == lamp_id]
         rails = np.round([poses[i].rail_deg for i in run], 6)
         for rail in np.unique(rails):
             stop = [run[k] for k in np.flatnonzero(rails == rail)]
@@ -161,7 +161,7 @@ def band_exposures_s(
     ).sum(axis=0)
     round_to = (
         1 / lamp.flicker_hz
-        if placement.spectrum == "hmi" and config.exposure.round_to_flicker_period
+        if isinstance(lamp, HMILamp) and config.exposure.round_to_flicker_period
         else None
     )
     exposures = equalized_exposures_s(

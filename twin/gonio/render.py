@@ -4,14 +4,14 @@ The material on its holder is rotated by the robot pose, the K4 + VariSpec camer
 rail, the lamp at its position. One render of the light transport at the wavelength nodes
 (:mod:`twin.render.node_transport`) gives the photo-electron rates of all 33 bands under every
 lamp part (HMI: continuum and flickering lines); any exposure window is their weighted sum
-(``Lamp.part_exposure_s``), run through the sensor model.
+(``LightSource.part_exposure_s``), run through the sensor model.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from twin.components.lamps import FINE_GRID, Lamp, lamp_model
+from twin.components.lamps import FINE_GRID, LightSource, lamp_model
 from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.materials import Material
 from twin.materials.sample_holder import holder_parts
@@ -40,7 +40,7 @@ image over each pixel's area where edges cross it, which registration measures: 
 0.10 px at 64, and the BTF's error against the truth is the same at all three (BENCHMARKS.md)."""
 
 
-def gonio_lamp(config: GonioConfig, lamp_id: str) -> tuple[Lamp, np.ndarray]:
+def gonio_lamp(config: GonioConfig, lamp_id: str) -> tuple[LightSource, np.ndarray]:
     """The lamp model and position of ``lamp_id``."""
     placement = next(lamp for lamp in config.lamps if lamp.id == lamp_id)
     lamp = lamp_model(placement.spectrum)
@@ -108,7 +108,7 @@ class GonioScene:
             self._weights[placement.id] = np.concatenate(
                 [
                     node_weights(channels * spectral_parts.row(name))
-                    for name in spectral_parts.names
+                    for name in spectral_parts.names or ()
                 ],
                 axis=1,
             ).astype(np.float32)  # (n_nodes, n_parts * n_bands)

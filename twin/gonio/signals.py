@@ -1,9 +1,9 @@
 """Signals for the simulated cameras: mean photo-electrons of a frame from the rig's state.
 
-Lamps are sums of fixed spectral parts with time-varying weights (``twin.components.Lamp``), so
-a signal stores photo-electron *rates* per part and band and weights them by
-``Lamp.part_exposure_s(start, exposure)``: HMI frames whose exposure is not a multiple of 1/15 s
-then vary with the flicker phase, as on the real rig (thesis 3.2.2).
+Lamps are sums of fixed spectral parts with time-varying weights
+(``twin.components.LightSource``), so a signal stores photo-electron *rates* per part and band and
+weights them by ``LightSource.part_exposure_s(start, exposure)``: HMI frames whose exposure is not
+a multiple of 1/15 s then vary with the flicker phase, as on the real rig (thesis 3.2.2).
 
 - :class:`WhiteReferenceSignal`: the Zenith white standard facing the lamp (analytic, uniform).
 - :class:`RenderedGonioSignal`: the material on its holder rendered by Mitsuba for the view the
@@ -14,9 +14,11 @@ then vary with the flicker phase, as on the real rig (thesis 3.2.2).
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+
 import numpy as np
 
-from twin.components.lamps import FINE_GRID, Lamp
+from twin.components.lamps import FINE_GRID, LightSource
 from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.devices.sim_devices import VirtualRig
 from twin.gonio.render import GONIO_SPP, GonioScene, gonio_lamp
@@ -40,7 +42,12 @@ class WhiteReferenceSignal:
     ``filter_model`` (default the VS-10), uniform."""
 
     def __init__(
-        self, sensor: Sensor, lamp: Lamp, *, distance_m: float = 2.0, filter_model: str = "VS-10"
+        self,
+        sensor: Sensor,
+        lamp: LightSource,
+        *,
+        distance_m: float = 2.0,
+        filter_model: str = "VS-10",
     ):
         lctf = LiquidCrystalTunableFilter.varispec(filter_model)
         self._bands_nm = np.asarray(lctf.band_centres_nm)
@@ -67,7 +74,7 @@ class RenderedGonioSignal:
         self,
         config: GonioConfig,
         material: Material | None,
-        poses: list[GonioPose],
+        poses: Sequence[GonioPose] | Mapping[int, GonioPose],
         *,
         pixels: int,
         spp: int = GONIO_SPP,

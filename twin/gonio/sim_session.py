@@ -22,11 +22,10 @@ from hwbridge.plans import dark_series, gonio_sample_run, plan_start_times_s
 from hwbridge.store import CaptureStore
 from twin.components.lamps import HMILamp
 from twin.components.lctf import LiquidCrystalTunableFilter
-from twin.devices.sim_devices import SimGonioDevices
-from twin.gonio.capture import CaptureProgram
+from twin.devices.sim_devices import Signal, SimGonioDevices
+from twin.gonio.capture import CaptureProgram, GonioPairs
 from twin.gonio.signals import RenderedGonioSignal, WhiteReferenceSignal
 from twin.materials import load_material
-from twin.rigs.gonio_kinematics import solve_pairs
 from twin.rigs.hemisphere import direction
 from twin.rigs.rig_config import load_rig
 from twin.sensor.model import Sensor
@@ -61,7 +60,8 @@ def demo_program(
     config = load_rig("gonio")
     light = direction(np.array([v[0] for v in _VIEWS]), np.array([v[1] for v in _VIEWS]))
     view = direction(np.array([v[2] for v in _VIEWS]), np.array([v[3] for v in _VIEWS]))
-    poses = list(solve_pairs(config, light, view).poses)
+    poses = GonioPairs(config, light, view).poses  # both pairs are reachable
+    signal: Signal
     if rendered:
         signal = RenderedGonioSignal(config, load_material("colorchecker16"), poses, pixels=_PIXELS)
     else:

@@ -82,7 +82,8 @@ def _run(settings: GonioRunSettings, fault_rate: float, dry_run: bool):
         from twin.gonio.capture_time import band_exposures_s
         from twin.rigs.rig_config import load_rig
 
-        _, exposures_s = band_exposures_s(load_rig("gonio"))
+        _, model_exposures_s = band_exposures_s(load_rig("gonio"))
+        exposures_s = tuple(float(value) for value in model_exposures_s)
         notes["exposures"] = "the rig model's band plan (no calibration given)"
     built = gonio_measurement_program(
         np.asarray(exposures_s, np.float64),

@@ -6,8 +6,10 @@ with (on ``MATERIAL_GRID``) and the pairs of parts designed to be metameric for 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from pydantic import TypeAdapter
 
@@ -34,7 +36,7 @@ __all__ = ["MATERIAL_DIR", "MATERIAL_GRID", "Material", "available_materials", "
 
 MATERIAL_DIR = scene_folder("materials")
 
-_BUILDERS = {
+_BUILDERS: dict[str, Callable[[Any], Any]] = {  # each builder takes its own kind of config
     "colorchecker16": build_colorchecker16,
     "red_fabric": build_fabric,
     "lego": build_lego,
@@ -59,7 +61,7 @@ class _Document:
     adapter = TypeAdapter(MaterialConfig)
 
     @classmethod
-    def model_validate(cls, document: dict):
+    def model_validate(cls, document: dict) -> MaterialConfig:
         return cls.adapter.validate_python(document)
 
 

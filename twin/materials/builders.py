@@ -150,7 +150,8 @@ def build_fabric(config: FabricConfig):
         )
     ]
     for name, meshes in threads.items():
-        mesh = trimesh.util.concatenate(meshes)
+        # trimesh types the result as any Geometry (or a list); for meshes it is one Trimesh
+        mesh: trimesh.Trimesh = trimesh.util.concatenate(meshes)  # type: ignore[assignment]
         if name == "silver":
             parts.append(
                 SurfacePart(
@@ -182,7 +183,8 @@ def build_lego(config: LegoConfig):
         parts.append(
             SurfacePart(
                 name,
-                trimesh.util.concatenate(meshes),
+                # trimesh types the result as any Geometry (or a list); for meshes it is one Trimesh
+                trimesh.util.concatenate(meshes),  # type: ignore[arg-type]
                 on_fine_grid(reflectance),
                 roughness=config.roughness,
             )
@@ -210,7 +212,8 @@ def build_wallpaper(config: WallpaperConfig):
     parts = [
         SurfacePart(
             name,
-            mesh.submesh([np.flatnonzero(mask)], append=True),
+            # trimesh types the result as any Geometry (or a list); for meshes it is one Trimesh
+            mesh.submesh([np.flatnonzero(mask)], append=True),  # type: ignore[arg-type]
             on_fine_grid(spectra[name]),
             roughness=config.roughness,
         )

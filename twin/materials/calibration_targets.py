@@ -117,7 +117,8 @@ def checkerboard_target(
     black = SampledSpectra(FINE_GRID, np.full(FINE_GRID.size, 0.03))
     return [
         SurfacePart("checker_card", card, white),
-        SurfacePart("checker_print", trimesh.util.concatenate(squares), black),
+        # trimesh types the result as any Geometry (or a list); for meshes it is one Trimesh
+        SurfacePart("checker_print", trimesh.util.concatenate(squares), black),  # type: ignore[arg-type]
     ]
 
 

@@ -42,7 +42,8 @@ def _square_ring(
         box((centre, 0, z), (width, 2 * inner, height)),
         box((-centre, 0, z), (width, 2 * inner, height)),
     ]
-    return SurfacePart(name, trimesh.util.concatenate(meshes), reflectance)
+    # trimesh types the result as any Geometry (or a list); for meshes it is one Trimesh
+    return SurfacePart(name, trimesh.util.concatenate(meshes), reflectance)  # type: ignore[arg-type]
 
 
 def holder_parts() -> list[SurfacePart]:

@@ -78,10 +78,9 @@ class SurfacePart:
         if len(self.mesh.faces) == 0:
             raise InputError(f"{self.name}: the mesh has no faces")
         if self.texture is not None:
-            self._check_texture()
+            self._check_texture(self.texture.values)
 
-    def _check_texture(self) -> None:
-        values = self.texture.values
+    def _check_texture(self, values: np.ndarray) -> None:
         if values.ndim != 3 or min(values.shape[:2]) < 1:
             raise InputError(
                 f"{self.name}: expected a texture of shape (height, width, wavelengths), got "

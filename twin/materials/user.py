@@ -60,7 +60,9 @@ def flat_patch(size_m: float) -> trimesh.Trimesh:
     )
 
 
-def _file(folder: Path, name: str, field: str) -> Path:
+def _file(folder: Path, name: str | None, field: str) -> Path:
+    if name is None:
+        raise InputError(f"{field}: expected a file name")
     path = Path(name) if Path(name).is_absolute() else folder / name
     if not path.is_file():
         raise InputError(f"{field}: no file {path}")
@@ -116,13 +118,12 @@ def _colour_spectrum(entry: str, field: str) -> SampledSpectra:
 
 def _csv_column(path: Path, column: str | None, field: str) -> SampledSpectra:
     table = read_spectra_csv(path.resolve())
-    if column is None and len(table.names) > 1:
-        raise InputError(
-            f"{field}: {path} has the columns {list(table.names)}; name one with column"
-        )
-    if column is not None and column not in table.names:
-        raise InputError(f"{field}: {path} has no column {column!r}: {list(table.names)}")
-    return SampledSpectra(table.grid, table.values[table.names.index(column or table.names[0])])
+    names = table.names or ()
+    if column is None and len(names) > 1:
+        raise InputError(f"{field}: {path} has the columns {list(names)}; name one with column")
+    if column is not None and column not in names:
+        raise InputError(f"{field}: {path} has no column {column!r}: {list(names)}")
+    return SampledSpectra(table.grid, table.values[names.index(column or names[0])])
 
 
 def _spectrum(config: SpectrumConfig, folder: Path, field: str) -> SampledSpectra:

@@ -94,7 +94,7 @@ def example_card_truth() -> tuple[SampledSpectra, np.ndarray]:
     """The painted card's true reflectance ``(64, 64, 33)`` on ``DEFAULT_GRID`` and the
     ``(3, 2)`` pixels where its three chips' spectra are given."""
     chips = read_spectra_csv("spectra/reflectances/dupont_paint_chips.csv")
-    spectra = np.stack([chips.values[chips.names.index(name)] for name in _CARD_CHIPS])
+    spectra = np.stack([chips.row(name).values for name in _CARD_CHIPS])
     on_grid = resample(SampledSpectra(chips.grid, spectra), DEFAULT_GRID, out_of_range="clamp")
     texture, labels = material_mosaic(
         on_grid.values, (64, 64), cells=12, shading=(1.0, 1.0), seed=3
@@ -109,7 +109,7 @@ def _card(folder: Path) -> Path:
     encoded = colour.cctf_encoding(linear, function="sRGB")
     io.imsave(folder / "card.png", np.round(255 * encoded).astype(np.uint8), check_contrast=False)
     chips = read_spectra_csv("spectra/reflectances/dupont_paint_chips.csv")
-    rows = [chips.values[chips.names.index(name)] for name in _CARD_CHIPS]
+    rows = [chips.row(name).values for name in _CARD_CHIPS]
     table = np.column_stack([chips.wavelengths_nm, *rows])
     header = "wavelength_nm," + ",".join(_CARD_CHIPS)
     np.savetxt(folder / "spots.csv", table, delimiter=",", header=header, comments="", fmt="%.6g")

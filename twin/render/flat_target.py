@@ -12,6 +12,7 @@ relation for the white standard), so each band of the render has the closed form
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -154,7 +155,7 @@ def render_flat_target(
     bands: SampledSpectra,
     *,
     seed: int = 0,
-    **layout: object,
+    **layout: Any,
 ) -> np.ndarray:
     """Render the chart of :func:`flat_target_scene`: band radiance image ``(H, W, n_bands)``."""
     return render_scene(flat_target_scene(reflectances, irradiance, bands, **layout), seed)

@@ -88,7 +88,7 @@ def render_lit(
 
     if not groups:
         return render({}, channels)
-    total = 0.0
+    total: np.ndarray | float = 0.0
     for group in groups:
         film, areas = lamp_weighted_channels(channels, group.spectrum)
         dark = {
@@ -98,4 +98,4 @@ def render_lit(
             for name, entry in other.entries.items()
         }
         total = total + render({**dark, **group.entries}, film) * areas
-    return total
+    return np.asarray(total)

@@ -516,17 +516,17 @@ class NodeScene:
             groups.setdefault(chosen, []).append(lamp)
         for chosen, members in groups.items():
             ks = list(chosen)
-            lamp = slice(None) if len(members) == len(wanted) else np.array(members)
-            part = diffuse_sum[:, lamp, None] * reference[:, None, ks]
-            part += glossy_sum[:, lamp, None] * weights[:, ks].sum(axis=0)
-            _add_lanes(part, pixel, [(edge[lamp], difference[:, ks])])
+            lamp_rows = slice(None) if len(members) == len(wanted) else np.array(members)
+            part = diffuse_sum[:, lamp_rows, None] * reference[:, None, ks]
+            part += glossy_sum[:, lamp_rows, None] * weights[:, ks].sum(axis=0)
+            _add_lanes(part, pixel, [(edge[lamp_rows], difference[:, ks])])
             for after, (after_diffuse, after_glossy) in zip(bounced, later, strict=True):
                 terms = [
-                    (after_diffuse[lamp], after.diffuse[:, ks]),
-                    (after_glossy[lamp], after.glossy[:, ks]),
+                    (after_diffuse[lamp_rows], after.diffuse[:, ks]),
+                    (after_glossy[lamp_rows], after.glossy[:, ks]),
                 ]
                 _add_lanes(part, after.pixels, terms)
-            values[:, lamp, : len(ks)] = part
+            values[:, lamp_rows, : len(ks)] = part
         return values * np.float32(1 / samples)
 
     def _lamp_factors(self, vertex, lamps):
@@ -643,7 +643,9 @@ class NodeScene:
         active = si.is_valid()
         weight = None
         for depth in range(bounces + 1):
-            part = dr.gather(mi.UInt32, part_of, dr.reinterpret_array(mi.UInt32, si.shape), active)
+            shape_ids = dr.reinterpret_array(mi.UInt32, si.shape)
+            # Mitsuba's stub leaves reinterpret_array's result untyped (object)
+            part = dr.gather(mi.UInt32, part_of, shape_ids, active)  # type: ignore[arg-type]
             texel = _texel_index(si.uv, part, texels, active)
             rho = [
                 dr.gather(mi.Float, reflectance, texel * count + n, active) for n in range(count)
@@ -756,7 +758,7 @@ class NodeScene:
         spectrum = []
         for n in range(count):
             index = part * count + n
-            complex_index = mi.Complex2f(
+            complex_index = mi.Complex2f(  # type: ignore[operator]  # a variant's type, not in the stub
                 dr.gather(mi.Float, eta_table, index, active),
                 dr.gather(mi.Float, k_table, index, active),
             )

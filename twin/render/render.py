@@ -38,4 +38,7 @@ def render_scene(scene: dict | mi.Scene, seed: int = 0, spp: int | None = None) 
     activate()
     if isinstance(scene, dict):
         scene = mi.load_dict(scene)
-    return np.array(mi.render(scene, seed=seed, spp=0 if spp is None else int(spp)), np.float64)
+    # Mitsuba's stubs type load_dict's result as dict | Scene and the seed as UInt32 (an int is
+    # taken)
+    image = mi.render(scene, seed=seed, spp=0 if spp is None else int(spp))  # type: ignore[arg-type]
+    return np.array(image, np.float64)

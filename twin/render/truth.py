@@ -166,16 +166,18 @@ def _part_basis(part) -> tuple[list[np.ndarray], list[str]]:
 
 
 def _basis(material: Material, surface: bool) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
-    spectra, names = [], []
+    spectra: list[np.ndarray] = []
+    names: list[str] = []
     for part in material.parts:
         part_spectra, part_names = _part_basis(part)
-        spectra, names = spectra + part_spectra, names + part_names
-    names = tuple(names)
+        spectra += part_spectra
+        names += part_names
     if surface:
-        spectra, names = spectra + [np.ones(FINE_GRID.size)], names + ("surface",)
+        spectra.append(np.ones(FINE_GRID.size))
+        names.append("surface")
     fine = np.array(spectra)
     passbands = band_passbands(DEFAULT_GRID)
-    return fine, fine @ (passbands.values * FINE_GRID.quadrature_weights()).T, names
+    return fine, fine @ (passbands.values * FINE_GRID.quadrature_weights()).T, tuple(names)
 
 
 def texture_truth(

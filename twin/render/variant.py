@@ -92,7 +92,7 @@ def activate() -> VariantReport:
         return _active
     found = llvm_version()
     variant, reason = choose_variant(
-        os.environ.get("SPECTWIN_VARIANT"), found, cuda=dr.has_backend(dr.JitBackend.CUDA)
+        os.environ.get("SPECTWIN_VARIANT"), found, cuda=bool(dr.has_backend(dr.JitBackend.CUDA))
     )
     if variant == FALLBACK_VARIANT and "SPECTWIN_VARIANT" not in reason:
         warnings.warn(

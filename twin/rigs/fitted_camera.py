@@ -46,9 +46,11 @@ def _rounded(value: float, digits: int = _SIGNIFICANT) -> float:
     return round(value, digits - 1 - math.floor(math.log10(abs(value))))
 
 
-def descriptor_reference(path: Path) -> str:
+def descriptor_reference(path: Path | None) -> str:
     """How a camera file names its descriptor: relative to spectwin's measured data when it
     lies there (so the shipped camera works wherever spectwin is installed), else absolute."""
+    if path is None:
+        raise InputError("measurement: a fitted camera needs the descriptor's file")
     path = Path(path).resolve()
     try:
         return path.relative_to(data_path().resolve()).as_posix()
@@ -146,7 +148,7 @@ def _header(fit: FittedSensor, config: CameraConfig, source: str) -> list[str]:
         else "the full well clips first: full_well_e puts the variance peak at the measured "
         "saturation."
     )
-    qe = config.quantum_efficiency
+    qe = _QE_SHAPE  # the shape of the camera's quantum efficiency (fitted_camera_config)
     descriptor = analysis.descriptor
     paragraphs = [
         f"{config.name}: fitted by `spectwin camera fit` to the EMVA 1288 measurement {source} "

@@ -169,7 +169,9 @@ def solve_pairs(config: GonioConfig, light_local=None, view_local=None) -> Gonio
         directions = sattler_directions()
         light_local = np.repeat(directions, len(directions), axis=0)
         view_local = np.tile(directions, (len(directions), 1))
-    poses, exact, reasons = [], [], []
+    poses: list[GonioPose | None] = []
+    exact: list[bool] = []
+    reasons: list[str] = []
     for light, view in zip(light_local, view_local, strict=True):
         pose = _solve_exact(config, light, view)
         if pose is not None:

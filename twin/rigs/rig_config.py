@@ -8,7 +8,7 @@ YAML file; unknown keys, missing keys and out-of-range values are rejected with 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, Literal, overload
 
 from pydantic import Field, model_validator
 
@@ -163,11 +163,22 @@ def available_rigs() -> list[str]:
     return scene_names(RIG_DIR)
 
 
+@overload
+def load_rig(name_or_path: Literal["gonio"]) -> GonioConfig: ...
+@overload
+def load_rig(name_or_path: Literal["dome"]) -> DomeConfig: ...
+@overload
+def load_rig(name_or_path: str | Path) -> GonioConfig | DomeConfig: ...
 def load_rig(name_or_path: str | Path) -> GonioConfig | DomeConfig:
     """Load a rig by file name in ``scenes/rigs`` (``"gonio"``, ``"dome"``) or by path."""
     path = resolve_scene_file(name_or_path, RIG_DIR, "rig")
     document = read_yaml_mapping(path)
-    kinds = {"gonioreflectometer": GonioConfig, "dome": DomeConfig}
+    kinds: dict[str, type[GonioConfig] | type[DomeConfig]] = {
+        "gonioreflectometer": GonioConfig,
+        "dome": DomeConfig,
+    }
     if document.get("rig") not in kinds:
         raise InputError(f"{path}: rig: expected 'gonioreflectometer' or 'dome'")
-    return validate_document(kinds[document["rig"]], document, path)
+    config = validate_document(kinds[document["rig"]], document, path)
+    assert isinstance(config, GonioConfig | DomeConfig)
+    return config

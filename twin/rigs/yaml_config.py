@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from importlib import resources
 from pathlib import Path
-from typing import Annotated, TypeVar
+from typing import Annotated, Any, Protocol, TypeVar
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
@@ -22,7 +22,15 @@ __all__ = [
     "validate_document",
 ]
 
-Model = TypeVar("Model", bound=BaseModel)
+Model = TypeVar("Model", covariant=True)
+
+
+class Validator(Protocol[Model]):
+    """A pydantic model class, or anything that validates a document the same way."""
+
+    def model_validate(self, obj: Any, /) -> Model: ...
+
+
 Positive = Annotated[float, Field(gt=0)]
 NonNegative = Annotated[float, Field(ge=0)]
 
@@ -67,7 +75,7 @@ def read_yaml_mapping(path: Path) -> dict:
     return document
 
 
-def validate_document(model: type[Model], document: dict, path: Path) -> Model:
+def validate_document(model: Validator[Model], document: dict, path: Path) -> Model:
     """Validate ``document`` against ``model``; the error lists every offending field."""
     try:
         return model.model_validate(document)

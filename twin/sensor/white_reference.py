@@ -3,7 +3,7 @@
 The Zenith Ultra-White standard faces the lamp at a known distance; its radiance
 :math:`W(\\lambda) E(\\lambda) / \\pi` (Lambertian, Eq. 3.3) reaches the camera through the
 optics. Because lamps are sums of fixed spectral parts with time-varying weights
-(``twin.components.Lamp``), the mean signal is computed once per part, in photo-electrons per
+(``twin.components.LightSource``), the mean signal is computed once per part, in photo-electrons per
 second, and any exposure window is a weighted sum of those rates.
 """
 
@@ -15,7 +15,7 @@ import numpy as np
 
 from recon.errors import InputError
 from recon.spectra import SampledSpectra
-from twin.components.lamps import FINE_GRID, Lamp
+from twin.components.lamps import FINE_GRID, LightSource
 from twin.components.targets import zenith_white_reflectance
 from twin.sensor.model import Sensor
 
@@ -24,7 +24,7 @@ __all__ = ["equalized_exposures_s", "white_reference_rates"]
 
 def white_reference_rates(
     sensor: Sensor,
-    lamp: Lamp,
+    lamp: LightSource,
     bands: SampledSpectra | None = None,
     *,
     distance_m: float,

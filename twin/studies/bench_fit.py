@@ -228,11 +228,13 @@ def fit_lamp(
 
     powers = np.array([np.mean(item.log_ratio) for item in pixels])
     starts = _LAMP_STARTS_M + reference if bench.lamp.fit_position else reference[None, :]
-    best = None
-    for start in starts:
-        solution = least_squares(residuals, np.concatenate([start, powers]), method="lm")
-        if best is None or solution.cost < best.cost:
-            best = solution
+    best = min(
+        (
+            least_squares(residuals, np.concatenate([start, powers]), method="lm")
+            for start in starts
+        ),
+        key=lambda solution: solution.cost,
+    )
     position = best.x[:3] if bench.lamp.fit_position else reference
     return LampFit(
         position_m=position,

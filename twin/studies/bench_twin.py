@@ -292,7 +292,7 @@ def bench_twin(
         )
         return image.reshape(*shape, len(bands_nm), 3).transpose(2, 0, 1, 3) * per_electron
 
-    channel_index = bayer_channel_index(*shape, camera.mosaic)
+    channel_index = bayer_channel_index(shape[0], shape[1], camera.mosaic)
     masks = patch_masks(labels, len(bench.chart.patches), erode_px=bench.chart.erode_px)
     fit_masks = masks[[bench.chart.patches.index(name) for name in bench.fit.patches]]
 

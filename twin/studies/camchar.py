@@ -6,6 +6,7 @@ import json
 import time
 from dataclasses import asdict
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib.image import imsave
@@ -19,7 +20,7 @@ from twin.studies.camchar_scenes import ChartScenario, render_chart_photo
 __all__ = ["run_camchar"]
 
 
-def run_camchar(scenario: ChartScenario, out_dir: Path, *, seed: int = 0) -> dict[str, object]:
+def run_camchar(scenario: ChartScenario, out_dir: Path, *, seed: int = 0) -> dict[str, Any]:
     """Render the scenario, estimate the response (basic and extended), write PNGs and JSON."""
     out_dir.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()

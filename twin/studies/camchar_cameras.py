@@ -30,6 +30,7 @@ import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import colour
 import numpy as np
@@ -210,7 +211,7 @@ def characterize_cameras(
     return results
 
 
-def _statistics(results: list[CameraCharacterization], method: str) -> dict[str, object]:
+def _statistics(results: list[CameraCharacterization], method: str) -> dict[str, Any]:
     errors = np.array([result.errors_pct[method] for result in results])
     hardest = np.argsort(errors)[::-1][:3]
     return {
@@ -242,7 +243,7 @@ def run_camchar_cameras(
     cameras: Sequence[str] | None = None,
     seed: int = 0,
     progress: bool = False,
-) -> dict[str, object]:
+) -> dict[str, Any]:
     """Characterize the cameras (module description) and write ``table.csv`` (per camera and
     method), ``errors.png`` (per-camera errors), ``worst_camera.png`` (the curves of the camera
     hardest for the method with prior) and ``summary.json``; return the summary."""

@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -31,15 +32,15 @@ _FLICKER_EXPOSURES_S = (0.02, 0.3)  # the sweep, around the multiples of 1/15 s
 def _photon_transfer(sensor: Sensor, rng: np.random.Generator, exposure_s: float) -> dict:
     shape = (sensor.height, sensor.width) + ((3,) if sensor.is_colour else ())
     levels_e = np.linspace(0.0, 1.1, 45) * sensor.saturation_capacity_e
-    means, variances = [], []
+    pair_means, pair_variances = [], []
     for level in levels_e:
         first, second = (
             sensor.capture(np.full(shape, level, np.float32), exposure_s, rng).astype(np.float64)
             for _ in range(2)
         )
-        means.append((first.mean() + second.mean()) / 2)
-        variances.append(np.var(first - second) / 2)
-    means, variances = np.array(means), np.array(variances)
+        pair_means.append((first.mean() + second.mean()) / 2)
+        pair_variances.append(np.var(first - second) / 2)
+    means, variances = np.array(pair_means), np.array(pair_variances)
     dark_mean, dark_variance = means[0], variances[0]
     linear = (levels_e > 0) & (levels_e < 0.7 * sensor.saturation_capacity_e)
     gain = np.polyfit(means[linear] - dark_mean, variances[linear] - dark_variance, 1)[0]
@@ -85,7 +86,7 @@ def _flicker_sweep(sensor: Sensor, rng: np.random.Generator) -> dict:
 
 def run_camera_report(
     camera: str, out_dir: Path, *, roi: int = 64, seed: int = 0
-) -> dict[str, object]:
+) -> dict[str, Any]:
     """Simulate the bench test of ``camera``; write ``camera_report.png`` and ``summary.json``."""
     out_dir.mkdir(parents=True, exist_ok=True)
     sensor = Sensor(camera, roi=(roi, roi))
@@ -108,7 +109,7 @@ def run_camera_report(
     shown = axes[1].imshow(dark, cmap="magma", vmax=np.percentile(dark, 99.5))
     axes[1].set_title(f"mean dark electrons, {long_s:g} s (full sensor)")
     figure.colorbar(shown, ax=axes[1])
-    summary: dict[str, object] = {
+    summary: dict[str, Any] = {
         "camera": sensor.config.name,
         "roi_px": roi,
         "seed": seed,

@@ -22,6 +22,7 @@ from collections.abc import Callable
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -41,7 +42,7 @@ from twin.studies.demo_report import (
     write_report,
 )
 from twin.studies.demo_spectralization import band_image_spectralization
-from twin.validate.gonio_evaluation import evaluate_gonio, write_gonio_figure
+from twin.validate.gonio_evaluation import GonioEvaluation, evaluate_gonio, write_gonio_figure
 from twin.validate.render_back import validate_btf
 
 __all__ = ["DEMO_RINGS", "DemoSettings", "run_demo"]
@@ -86,7 +87,7 @@ def run_demo(
     settings: DemoSettings = DemoSettings(),
     *,
     step: Callable[[str], None] = lambda name: None,
-) -> dict[str, object]:
+) -> dict[str, Any]:
     """Run the demo into ``out`` (module docstring); returns the metrics written."""
     out = Path(out)
     _prepare(out)
@@ -128,6 +129,8 @@ def run_demo(
         plot_textures(btf, out / "textures.png")
     with stage("evaluation against the truth"):
         evaluation = evaluate_gonio(out / "cc.btf.zarr")
+        if not isinstance(evaluation, GonioEvaluation):  # a chart is evaluated field by field
+            raise TypeError(f"expected a chart's evaluation, got {type(evaluation).__name__}")
         write_gonio_figure(evaluation, btf, out / "evaluation.png")
     with stage("spectralization"):
         spectralization = band_image_spectralization(

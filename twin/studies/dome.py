@@ -32,6 +32,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from scipy import ndimage
@@ -238,7 +239,7 @@ def exposure_comparison(
     *,
     led: int = SINGLE_IMAGE_LEDS[0],
     hybrid_scales: Sequence[float] = (1.0, 0.25, 1 / 12),
-) -> dict[str, object]:
+) -> dict[str, Any]:
     """Hybrid captures (RGB set + all band exposures of one image, counted one after the other)
     against spectral-only captures with long exposures (10.5, Fig. 10.24), errors on the
     material texels.
@@ -338,7 +339,7 @@ def _band_rates(setup: DomeSetup, capture: DomeCapture) -> np.ndarray:
     return capture.truth[0] * (white / zenith_white_reflectance(BAND_GRID).values)
 
 
-def cross_check(setup: DomeSetup, rng: np.random.Generator) -> dict[str, object]:
+def cross_check(setup: DomeSetup, rng: np.random.Generator) -> dict[str, Any]:
     """Fig. 10.4: the colour checker's RGB predicted from a spectral image (long exposures,
     calibrated, times :math:`R_{cam}`) against its measured HDR RGB, per field (medians over
     each field's inner texels)."""

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -52,7 +53,7 @@ def write_error_histograms(
     fig.savefig(path, dpi=90)
 
 
-def write_texel_spectra(results: Mapping[str, object], path: Path) -> None:
+def write_texel_spectra(results: Mapping[str, Any], path: Path) -> None:
     """Per material, four texels of its first image: truth, reconstruction, noisy bands.
 
     ``results`` maps material names to :class:`twin.studies.dome.SingleImage` results.

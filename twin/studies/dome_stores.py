@@ -369,8 +369,12 @@ def store_study(
     result: dict = {"capture": size.__dict__, "folder": str(folder), "materials": {}}
     calibration = None
     for material in materials:
+
+        def material_step(name: str, material: str = material) -> None:
+            step(f"{material}: {name}")
+
         run_store, calibration_store = capture_study_stores(
-            folder, material, size, seed=seed, step=lambda name, m=material: step(f"{m}: {name}")
+            folder, material, size, seed=seed, step=material_step
         )
         if calibration is None:
             step("calibrating the dome from its calibration store")
@@ -390,5 +394,7 @@ def store_study(
         ).summary()
         summary["view_fixed_shift"] = view_fixed_shift(summary, moved)
         result["materials"][material] = summary
+    if calibration is None:
+        raise InputError("materials: expected at least one material")
     result["exposure_10_5"] = store_exposure_ratio(run_store, calibration)
     return result

@@ -20,6 +20,7 @@ import json
 import math
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -118,7 +119,9 @@ def photon_transfer_figure(real: EMVAAnalysis, twin: EMVAAnalysis, camera: str) 
     linearity_axes.set_title("linearity (5-95 % of saturation)")
     for axes in (transfer_axes, sensitivity_axes, linearity_axes):
         axes.legend(fontsize=8)
-    figure.suptitle(f"EMVA 1288: {camera} against {real.descriptor.path.parent.name}")
+    source = real.descriptor.path
+    measured = source.parent.name if source is not None else "a measurement"
+    figure.suptitle(f"EMVA 1288: {camera} against {measured}")
     figure.tight_layout()
     return figure
 
@@ -131,7 +134,7 @@ def run_emva_comparison(
     wavelength_nm: float | None = None,
     seed: int = 0,
     step: Callable[[int, int], None] | None = None,
-) -> dict[str, object]:
+) -> dict[str, Any]:
     """Repeat a real EMVA 1288 measurement with a twin camera and compare the analyses.
 
     Parameters
@@ -184,7 +187,7 @@ def run_emva_comparison(
     }
     figure = photon_transfer_figure(real, twin, config.name)
     figure.savefig(out_dir / "photon_transfer.png", dpi=110)
-    summary: dict[str, object] = {
+    summary: dict[str, Any] = {
         "camera": config.name,
         "descriptor": str(plan.path),
         "twin_descriptor": str(written.path),

@@ -10,10 +10,12 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib.image import imsave
 
+from recon.errors import InputError
 from recon.radiometric.demosaic import demosaic
 from twin.dome.render import dome_camera, dome_rates
 from twin.gonio.capture_time import band_exposures_s
@@ -35,12 +37,14 @@ def _exposure_for(rates: np.ndarray, saturation_e: float, limits: tuple[float, f
 
 def run_gallery(
     out_dir: Path, *, pixels: int = 256, spp: int = 64, seed: int = 0
-) -> dict[str, object]:
+) -> dict[str, Any]:
     """Render and simulate the frames; write ``<rig>_<material>.png`` and ``gallery.json``."""
     out_dir.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(seed)
     gonio, dome = load_rig("gonio"), load_rig("dome")
     pose = solve_pairs(gonio, direction(30.0, 0.0)[None], direction(15.0, 180.0)[None]).poses[0]
+    if pose is None:
+        raise InputError("gonio: the robot reaches no pose near the gallery's pair")
     _, exposures = band_exposures_s(gonio)
     written = []
     for name in available_materials():

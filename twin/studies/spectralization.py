@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -137,7 +138,7 @@ def _study_case(
     wavelengths: np.ndarray,
     out_dir: Path,
     sweeps: bool,
-) -> dict[str, object]:
+) -> dict[str, Any]:
     shape = truth.shape[:2]
     whisk = run_protocol(truth, response, whisk_broom_mask(shape))
     push = run_protocol(truth, response, push_broom_mask(shape))
@@ -148,7 +149,7 @@ def _study_case(
     )
     _maps(whisk, f"{name}: whisk-broom, 250 spots, 1 % RGB noise", out_dir / f"{name}_maps.png")
     _spectra(truth, whisk, wavelengths, name, out_dir / f"{name}_spectra.png")
-    summary: dict[str, object] = {
+    summary: dict[str, Any] = {
         "shape": list(truth.shape),
         "whisk_broom": whisk.mean_errors,
         "push_broom": push.mean_errors,
@@ -200,12 +201,12 @@ def run_study(
     texels: int = 96,
     materials: tuple[str, ...] = ("red_fabric", "wallpaper", "lego"),
     sweeps: bool = True,
-) -> dict[str, object]:
+) -> dict[str, Any]:
     """Run the chapter 7 protocols on twin textures and the llanos2019 image; write figures."""
     out_dir.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
     response = study_response()
-    summary: dict[str, object] = {"camera": "Nikon D70 x D65", "cases": {}}
+    summary: dict[str, Any] = {"camera": "Nikon D70 x D65", "cases": {}}
     for index, material in enumerate(materials):
         truth = twin_texture(material, texels=texels)
         summary["cases"][material] = _study_case(

@@ -36,6 +36,8 @@ from twin.dome.programs import (
     dome_run_program,
 )
 from twin.dome.setup import THESIS_LONGEST_BAND_S
+from twin.rigs.rig_config import DomeConfig
+from twin.studies.sweep_plans import DomePlan
 from twin.studies.sweep_points import capture_into, storage_mb
 from twin.validate.dome_evaluation import evaluate_dome
 
@@ -60,7 +62,7 @@ def check_dome_point(point: DesignPoint) -> None:
     """Refuse a point whose plan its rig cannot take: a size beyond the rig's, a band schedule
     of more images than LEDs (the LEDs take the schedule's images in turn: the bands of the
     images past the last LED would never be exposed), exposures no schedule fits."""
-    plan = point.plan
+    config, plan = point.typed(DomeConfig, DomePlan)
     if plan.schedule_images is not None and plan.schedule_images > plan.leds:
         raise InputError(
             f"schedule_images: expected at most plan.leds ({plan.leds}) images, got "
@@ -68,7 +70,7 @@ def check_dome_point(point: DesignPoint) -> None:
             "be exposed"
         )
     dome_plan_parts(
-        point.rig,
+        config,
         _size(plan),
         longest_band_s=plan.longest_band_s or THESIS_LONGEST_BAND_S,
         schedule_images=plan.schedule_images,
@@ -87,7 +89,7 @@ def _exposure_h(plan: list[dict], spectral: bool) -> float:
 def measure_dome_point(point: DesignPoint, folder: Path) -> dict:
     """Capture, process and evaluate ``point`` in ``folder`` (module docstring); its measures
     (:func:`twin.studies.sweep_points.run_point` runs it and keeps the result)."""
-    config, plan = point.rig, point.plan
+    config, plan = point.typed(DomeConfig, DomePlan)
     calibration_program = dome_calibration_program(
         size=_size(plan),
         dark_frames=plan.dark_frames,

@@ -33,7 +33,7 @@ import json
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, TypeVar
 
 import numpy as np
 from pydantic import Field, field_validator
@@ -63,6 +63,8 @@ __all__ = [
 
 SWEEP_DIR = scene_folder("sweeps")
 _MAX_POINTS = 10_000
+Config = TypeVar("Config", bound=StrictModel)
+Plan = TypeVar("Plan", bound=StrictModel)
 
 
 @dataclass(frozen=True)
@@ -93,9 +95,10 @@ class SweepRange(StrictModel):
             raise ValueError("expected exactly one of num and step")
         if self.stop < self.start:
             raise ValueError(f"empty range: stop {self.stop} is below start {self.start}")
+        values: np.ndarray
         if self.num is not None:
             values = np.linspace(self.start, self.stop, self.num)
-        else:
+        elif self.step is not None:
             count = int(np.floor((self.stop - self.start) / self.step + 1e-9)) + 1
             values = self.start + self.step * np.arange(count)
         whole = all(float(v).is_integer() for v in (self.start, self.stop, self.step or 1))
@@ -151,6 +154,13 @@ class DesignPoint:
         digest = hashlib.sha256(json.dumps(design, sort_keys=True).encode()).hexdigest()[:10]
         return f"{self.index:04d}-{digest}"
 
+    def typed(self, config: type[Config], plan: type[Plan]) -> tuple[Config, Plan]:
+        """The rig and plan of the point as the kind's models ``config`` and ``plan`` (what
+        :func:`load_sweep` validated them as); another kind's point is refused."""
+        if isinstance(self.rig, config) and isinstance(self.plan, plan):
+            return self.rig, self.plan
+        raise InputError(f"{self.where}: expected a design point of {config.__name__}")
+
 
 @dataclass(frozen=True)
 class Sweep:
@@ -165,7 +175,7 @@ class Sweep:
     objectives: tuple[str, str]
     measures: dict[str, str]
 
-    def describe(self) -> dict[str, object]:
+    def describe(self) -> dict[str, Any]:
         return {
             "sweep": self.name,
             "file": str(self.path),
@@ -192,7 +202,7 @@ def _set_path(document: Any, parts: list[str], value: Any, path: str) -> None:
     head, rest = parts[0], parts[1:]
     if isinstance(document, list):
         if head == "*":
-            targets = range(len(document))
+            targets: range | list[int] = range(len(document))
         elif head.isdigit() and int(head) < len(document):
             targets = [int(head)]
         else:

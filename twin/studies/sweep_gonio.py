@@ -35,6 +35,8 @@ from twin.gonio.capture import (
     gonio_pairs,
 )
 from twin.gonio.render import GONIO_SPP
+from twin.rigs.rig_config import GonioConfig
+from twin.studies.sweep_plans import GonioPlan
 from twin.studies.sweep_points import capture_into, storage_mb
 from twin.validate.held_out import held_out_errors
 
@@ -49,7 +51,7 @@ _CALIBRATION_PIXELS = 64
 def check_gonio_point(point: DesignPoint) -> None:
     """Refuse a point whose plan its rig cannot take: pixels beyond the camera's, texels beyond
     the pixels, a sampling of which the robot reaches no pair."""
-    config, plan = point.rig, point.plan
+    config, plan = point.typed(GonioConfig, GonioPlan)
     check_capture_settings(config, pixels=plan.pixels, spp=plan.spp or GONIO_SPP)
     if plan.texels > plan.pixels:
         raise InputError(
@@ -62,7 +64,7 @@ def check_gonio_point(point: DesignPoint) -> None:
 def measure_gonio_point(point: DesignPoint, folder: Path) -> dict:
     """Capture, process and evaluate ``point`` in ``folder`` (module docstring); its measures
     (:func:`twin.studies.sweep_points.run_point` runs it and keeps the result)."""
-    config, plan = point.rig, point.plan
+    config, plan = point.typed(GonioConfig, GonioPlan)
     calibration_store = capture_into(
         gonio_calibration_program(pixels=_CALIBRATION_PIXELS, seed=point.seed, config=config),
         folder / "cal.capture.zarr",

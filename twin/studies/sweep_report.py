@@ -32,7 +32,7 @@ def pareto_front(objectives: np.ndarray) -> np.ndarray:
     no_worse = (values[:, None, :] <= values[None, :, :]).all(axis=2)
     better = (values[:, None, :] < values[None, :, :]).any(axis=2)
     dominated = (no_worse & better).any(axis=0)
-    return ~dominated
+    return np.logical_not(dominated)
 
 
 def write_table(rows: list[dict], parameters: list[str], measures: list[str], out: Path) -> None:

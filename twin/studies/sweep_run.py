@@ -105,7 +105,11 @@ def run_sweep(
     started = time.perf_counter()
     pending = [p for p in sweep.points if point_result(out / "points" / p.key) is None]
     _run_points(out, pending, measure, client, progress)
-    rows = [point_result(out / "points" / point.key) for point in sweep.points]
+    results = [point_result(out / "points" / point.key) for point in sweep.points]
+    rows = [row for row in results if row is not None]
+    if len(rows) < len(results):
+        unfinished = [p.label for p, row in zip(sweep.points, results, strict=True) if row is None]
+        raise RuntimeError(f"points without a result after the run: {unfinished}")
     objectives = np.array([[row["measures"][name] for name in sweep.objectives] for row in rows])
     for row, on_front in zip(rows, pareto_front(objectives), strict=True):
         row["on_front"] = bool(on_front)

@@ -94,7 +94,9 @@ def _residual_map(
         pixels = figure.add_subplot(2, len(bands), len(bands) + index + 1)
         pixels.imshow(residual, cmap="RdBu_r", vmin=-0.5, vmax=0.5)
         pixels.set(title=f"pixels, {1000 * exposure:g} ms", xticks=[], yticks=[])
-    figure.colorbar(image, ax=figure.axes, shrink=0.6, label="(predicted - measured) / measured")
+    if image is not None:
+        label = "(predicted - measured) / measured"
+        figure.colorbar(image, ax=figure.axes, shrink=0.6, label=label)
     figure.savefig(path, dpi=100, bbox_inches="tight")
 
 

@@ -175,7 +175,9 @@ def _capture(btf_path: Path, btf: BTFStore) -> CaptureStore:
         ) from None
 
 
-def chart_field_errors(material, view_dirs, measured, truth, grid, interior):
+def chart_field_errors(
+    material, view_dirs, measured, truth, grid, interior
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Per pair ``(n_pairs, n_diffuse_fields)`` the diffuse fields' mean-spectrum errors (Eq.
     6.8, Delta E94; NaN for a field whose interior the view's parallax moves off the texture)
     and ``(n_pairs,)`` the per-texel means inside them."""
@@ -193,7 +195,12 @@ def chart_field_errors(material, view_dirs, measured, truth, grid, interior):
         inside = masks.any(axis=0)
         texel_relative.append(relative_error(estimate[inside], reference[inside]).mean())
         texel_colour.append(delta_e94(estimate[inside], reference[inside], grid).mean())
-    return [np.array(values) for values in (relative, colour, texel_relative, texel_colour)]
+    return (
+        np.array(relative),
+        np.array(colour),
+        np.array(texel_relative),
+        np.array(texel_colour),
+    )
 
 
 def evaluate_dome(

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -62,7 +63,7 @@ class GonioEvaluation:
     measured_means: np.ndarray  # (n_pairs, n_fields, K)
     truth_means: np.ndarray
 
-    def summary(self) -> dict[str, object]:
+    def summary(self) -> dict[str, Any]:
         matte = ~self.glossy
         return {
             "pairs_compared": int(self.field_error.shape[0]),
@@ -161,26 +162,26 @@ def evaluate_gonio(
     corners = btf.corners_xy()[written]
     corner_error = np.linalg.norm(corners - _true_corners(capture, btf)[written], axis=2)
     if not chart:
-        measured = np.stack([btf.read_pair(pair, allow_incomplete=True) for pair in written])
+        measured = np.stack([btf.read_pair(int(pair), allow_incomplete=True) for pair in written])
         return compare_texels(written, measured, truth, btf.grid, corner_error)
     field_means, truth_means, texel_errors = [], [], []
     for index, pair in enumerate(written):  # one pair in memory at a time
-        measured = btf.read_pair(pair, allow_incomplete=True)
+        measured = btf.read_pair(int(pair), allow_incomplete=True)
         fields = field_masks(material, btf.view_dirs[pair], texels, interior=interior)
         field_means.append(fields.means(measured))
         truth_means.append(fields.means(truth[index]))
         per_texel = relative_error(measured, truth[index])
         texel_errors.append([per_texel[mask].mean() for mask in fields.masks])
-    field_means, truth_means = np.array(field_means), np.array(truth_means)
+    measured_fields, true_fields = np.array(field_means), np.array(truth_means)
     return GonioEvaluation(
         fields.names,
         fields.glossy,
         written,
-        relative_error(field_means, truth_means),
+        relative_error(measured_fields, true_fields),
         np.array(texel_errors),
         corner_error,
-        field_means,
-        truth_means,
+        measured_fields,
+        true_fields,
     )
 
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -45,7 +46,7 @@ class GonioTexelEvaluation:
     truth: np.ndarray
     grid: WavelengthGrid
 
-    def summary(self) -> dict[str, object]:
+    def summary(self) -> dict[str, Any]:
         relative, colour = self.relative_pct, self.delta_e94
         return {
             "pairs_compared": int(self.pairs.size),

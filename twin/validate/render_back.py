@@ -59,7 +59,7 @@ def validate_btf(
     map_height: int = 64,
     passbands: Callable[[Any], Any] | None = None,
     step: Callable[[str], None] = lambda name: None,
-) -> dict[str, object]:
+) -> dict[str, Any]:
     """Render Figure 4.6 and the 45/0 comparison for the BTF at ``btf_path`` into ``out``.
 
     Parameters

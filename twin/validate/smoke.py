@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -45,7 +46,7 @@ def run_smoke(
     incidence_deg: float = 30.0,
     seed: int = 0,
     tolerance: float = SMOKE_TOLERANCE,
-) -> dict[str, object]:
+) -> dict[str, Any]:
     """Render the chart, compare with the closed form, write EXR, PNGs and ``summary.json``.
 
     Returns
@@ -76,12 +77,13 @@ def run_smoke(
     )
     render_s = time.perf_counter() - started
     expected = analytic_band_radiance(chart, irradiance, bands, incidence_deg=incidence_deg)
-    measured = patch_means(image, len(chart.names), columns=CHART_COLUMNS)
+    chart_names = chart.names or ()
+    measured = patch_means(image, len(chart_names), columns=CHART_COLUMNS)
     relative_error = measured / expected - 1
 
     # Band integral / passband area = mean spectral radiance in the band (W m^-2 sr^-1 nm^-1).
     passband_area = band_integrals(SampledSpectra(FINE_GRID, np.ones(FINE_GRID.size)), bands)
-    band_grid = WavelengthGrid(lctf.band_centres_nm)
+    band_grid = WavelengthGrid(np.array(lctf.band_centres_nm))
     spectral_image = (image / passband_area).astype(np.float32)
     write_spectral_exr(
         out_dir / "colorchecker_qth.exr",
@@ -94,7 +96,7 @@ def run_smoke(
         out_dir / "colorchecker_qth.png", spectral_to_srgb(spectral_image, band_grid, white=white)
     )
     _plot_bands(
-        out_dir / "band_radiance.png", band_grid.wavelengths_nm, chart.names, measured, expected
+        out_dir / "band_radiance.png", band_grid.wavelengths_nm, chart_names, measured, expected
     )
 
     summary = {

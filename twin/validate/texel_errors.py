@@ -13,19 +13,23 @@ __all__ = ["texel_errors"]
 
 def texel_errors(
     measured: np.ndarray, truth: np.ndarray, grid: WavelengthGrid, material: np.ndarray
-) -> list[np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Errors of ``measured`` against ``truth`` (both ``(n_pairs, H, W, K)``) where ``material``
     ``(n_pairs, H, W)`` is true.
 
     Returns
     -------
-    list of numpy.ndarray
+    tuple of numpy.ndarray
         Eq. 6.8 (%) and Delta E94 per pair and texel ``(n_pairs, H * W)``, NaN where no material
         shows, then their means per pair ``(n_pairs,)`` (NaN for a pair that shows none).
     """
     relative = np.where(material, relative_error(measured, truth), np.nan)
     colour = np.where(material, delta_e94(measured, truth, grid), np.nan)
-    flat = [values.reshape(len(values), -1) for values in (relative, colour)]
+    relative_flat, colour_flat = (values.reshape(len(values), -1) for values in (relative, colour))
     counts = material.reshape(len(material), -1).sum(axis=1)
-    means = [np.where(material.reshape(counts.size, -1), v, 0).sum(1) for v in flat]
-    return [*flat, *(np.where(counts > 0, mean / np.maximum(counts, 1), np.nan) for mean in means)]
+    shown = material.reshape(counts.size, -1)
+    relative_mean, colour_mean = (
+        np.where(counts > 0, np.where(shown, flat, 0).sum(1) / np.maximum(counts, 1), np.nan)
+        for flat in (relative_flat, colour_flat)
+    )
+    return relative_flat, colour_flat, relative_mean, colour_mean

@@ -10,7 +10,7 @@ import json
 import pytest
 from typer.testing import CliRunner
 
-from hwbridge.session import capture_steps, locked_session_store
+from hwbridge.session import SessionSettings, capture_steps, locked_session_store
 from hwbridge.store import CaptureStore
 from recon.errors import InputError
 from twin.cli.app import app
@@ -101,11 +101,9 @@ def test_sizes_the_rig_cannot_take_are_refused():
 def test_resume_of_a_dome_run_reads_its_settings_and_takes_no_others(tmp_path):
     path = tmp_path / "run.capture.zarr"
     program = dome_run_program("lego", size=DomeCaptureSize(1, 3, 1, 8, 4), seed=5)
-    devices = program.devices()
-    with locked_session_store(
-        path, program.plan, devices, rig=program.rig, backend="sim", seed=5
-    ) as store:
-        capture_steps(store, range(2), devices, seed=5)  # the alignment frames
+    settings = SessionSettings(rig=program.rig, backend="sim", seed=5)
+    with locked_session_store(path, program.plan, program.devices(), settings) as store:
+        capture_steps(store, range(2), program.devices(5, range(2)))  # the alignment frames
     kind, stored = capture_program(CaptureStore.open(path))
     assert (kind.name, stored.name) == ("dome", "dome-run")
     assert stored.stored(CaptureStore.open(path)) == DomeRunSettings(
@@ -144,7 +142,7 @@ def test_a_store_that_does_not_record_its_led_renders_resumes_one_render_per_led
     program = dome_run_program("lego", size=DomeCaptureSize(1, 3, 1, 8, 4, "single"), seed=5)
     rig = {name: value for name, value in program.rig.items() if name != "led_renders"}
     with locked_session_store(
-        path, program.plan, program.devices(), rig=rig, backend="sim", seed=5
+        path, program.plan, program.devices(), SessionSettings(rig=rig, backend="sim", seed=5)
     ):
         pass
     capture = CaptureStore.open(path)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from hwbridge.session import capture_steps, locked_session_store
+from hwbridge.session import SessionSettings, capture_steps, locked_session_store
 from hwbridge.store import CaptureStore
 from recon.calibration.gonio import GonioCalibration
 from recon.errors import InputError
@@ -38,10 +38,9 @@ def calibration(tmp_path_factory):
 
 def _partial(path, program, steps: int) -> None:
     """Capture the first ``steps`` steps of ``program`` into a new store (a capture cut short)."""
-    with locked_session_store(
-        path, program.plan, program.devices(), rig=program.rig, backend="sim", seed=program.seed
-    ) as store:
-        capture_steps(store, range(steps), program.devices(), seed=program.seed)
+    settings = SessionSettings(rig=program.rig, backend="sim", seed=program.seed)
+    with locked_session_store(path, program.plan, program.devices(), settings) as store:
+        capture_steps(store, range(steps), program.devices(program.seed, range(steps)))
 
 
 @pytest.mark.parametrize(

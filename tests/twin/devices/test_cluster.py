@@ -2,6 +2,7 @@
 results
 of one process, bit for bit (timestamps are wall-clock time and differ)."""
 
+import dataclasses
 import json
 import os
 import signal
@@ -18,7 +19,7 @@ from typer.testing import CliRunner
 from hwbridge.errors import InputError, SessionInterrupted, StoreBusy
 from hwbridge.lock import StoreLock, lock_owner
 from hwbridge.plans import plan_start_times_s
-from hwbridge.session import capture_steps, open_session_store
+from hwbridge.session import SessionSettings, capture_steps, open_session_store
 from hwbridge.store import CaptureStore
 from recon.btf.processing import process_gonio
 from recon.btf.store import BTFStore
@@ -161,8 +162,9 @@ def _demo_devices(seed: int) -> SimGonioDevices:
 def test_a_capture_cut_short_resumes_on_the_cluster_with_the_same_frames(client, tmp_path):
     reference = run_demo_session(tmp_path / "reference.capture.zarr", 11)
     path, plan, devices = tmp_path / "resumed.capture.zarr", demo_plan(), _demo_devices(11)
-    store = open_session_store(path, plan, devices(), rig={}, backend="sim", seed=11)
-    capture_steps(store, range(len(plan) // 2), devices(), seed=11)  # then the session died
+    store = open_session_store(path, plan, devices(11), SessionSettings({}, "sim", 11))
+    steps = range(len(plan) // 2)
+    capture_steps(store, steps, devices(11, steps))  # then the session died
     assert not store.complete
     resumed = run_demo_session(path, 11, resume=True, client=client)
     _assert_same_capture(resumed, reference, "k4")
@@ -177,24 +179,24 @@ def _done(path) -> int:
 
 
 class _GatedCamera:
-    """A camera that holds every step from ``first_gated`` on until the file ``gate`` exists."""
+    """A camera taking ``steps`` that holds every step from ``first_gated`` on until the file
+    ``gate`` exists."""
 
-    def __init__(self, camera, gate: Path, first_gated: int):
-        self._camera, self._gate, self._first_gated, self._step = camera, gate, first_gated, 0
+    def __init__(self, camera, steps, gate: Path, first_gated: int):
+        self._camera, self._steps, self._taken = camera, list(steps), 0
+        self._gate, self._first_gated = gate, first_gated
 
     def __getattr__(self, name):
         return getattr(self._camera, name)
 
-    def set_step(self, seed: int, step: int) -> None:
-        self._step = step
-        self._camera.set_step(seed, step)
-
     def snap(self):
         deadline = time.monotonic() + 120
-        while self._step >= self._first_gated and not self._gate.exists():
+        while self._steps[self._taken] >= self._first_gated and not self._gate.exists():
             assert time.monotonic() < deadline, "the gate was never opened"
             time.sleep(0.01)
-        return self._camera.snap()
+        frame = self._camera.snap()
+        self._taken += 1
+        return frame
 
 
 class _GatedDevices:
@@ -204,13 +206,13 @@ class _GatedDevices:
     def __init__(self, devices, gate: Path, first_gated: int):
         self._devices, self._gate, self._first_gated = devices, gate, first_gated
 
-    def __call__(self):
-        session = self._devices()
-        session["cameras"] = {
-            name: _GatedCamera(camera, self._gate, self._first_gated)
-            for name, camera in session["cameras"].items()
+    def __call__(self, seed, steps):
+        session = self._devices(seed, steps)
+        cameras = {
+            name: _GatedCamera(camera, steps, self._gate, self._first_gated)
+            for name, camera in session.cameras.items()
         }
-        return session
+        return dataclasses.replace(session, cameras=cameras)
 
 
 def test_sigint_stops_a_capture_on_the_cluster_inside_the_coordinators_lock(
@@ -277,8 +279,8 @@ def test_sigint_stops_a_capture_on_the_cluster_inside_the_coordinators_lock(
 
 def test_a_capture_on_the_cluster_is_refused_while_another_writer_holds_the_store(client, tmp_path):
     path, plan, devices = tmp_path / "held.capture.zarr", demo_plan(), _demo_devices(11)
-    store = open_session_store(path, plan, devices(), rig={}, backend="sim", seed=11)
-    capture_steps(store, range(4), devices(), seed=11)
+    store = open_session_store(path, plan, devices(11), SessionSettings({}, "sim", 11))
+    capture_steps(store, range(4), devices(11, range(4)))
     with StoreLock.acquire(path):
         with pytest.raises(StoreBusy, match=f"PID {os.getpid()}"):
             run_demo_session(path, 11, resume=True, client=client)
@@ -288,12 +290,12 @@ def test_a_capture_on_the_cluster_is_refused_while_another_writer_holds_the_stor
 def test_workers_of_one_session_fill_disjoint_steps_of_one_store(tmp_path):
     plan, devices = demo_plan(), _demo_devices(1)
     path = tmp_path / "shared.capture.zarr"
-    coordinator = open_session_store(path, plan, devices(), rig={}, backend="sim", seed=1)
+    coordinator = open_session_store(path, plan, devices(1), SessionSettings({}, "sim", 1))
     tasks = view_tasks(plan, coordinator.pending_steps())
     assert [len(task) for task in tasks] == [6, 33, 33]
     for task in tasks[::-1]:  # each "worker" opens the store, builds its own devices, writes
         # its frames and returns their records; the coordinator writes index and flags
-        taken = capture_steps(CaptureStore.open(path), task, devices(), seed=1, record=False)
+        taken = capture_steps(CaptureStore.open(path), task, devices(1, task), record=False)
         assert [step for step, _ in taken] == task
         assert set(task) <= set(coordinator.pending_steps())  # frames written, not yet recorded
         steps, records = zip(*taken, strict=True)

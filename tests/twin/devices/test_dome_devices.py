@@ -7,7 +7,7 @@ import pytest
 from hwbridge.dome_plans import DomeCameraIds, DomeExposures, dome_run
 from hwbridge.errors import InputError
 from hwbridge.plans import chart_photographs, plan_start_times_s
-from hwbridge.session import run_session
+from hwbridge.session import SessionSettings, run_session
 from twin.components.lamps import HMILamp
 from twin.devices.dome_devices import DomeDevices
 from twin.devices.sim_devices import SimCamera, VirtualRig
@@ -67,18 +67,15 @@ def test_a_dome_plan_runs_on_the_simulated_and_the_real_devices(tmp_path, backen
         **ports,
     )
     devices = recipe()
-    stage, leds = devices["positioner"], devices["leds"]
+    stage, leds = devices.positioner, devices.leds
     calls = []
     _record_sets(stage, calls)
     _record_sets(leds, calls)  # light(led) switches through set(pattern)
     store = run_session(
         tmp_path / f"dome-{backend}.capture.zarr",
         plan,
-        **devices,
-        rig={},
-        backend=backend,
-        seed=0,
-        show_progress=False,
+        devices,
+        SessionSettings(rig={}, backend=backend, seed=0, show_progress=False),
     )
     assert store.complete and store.frames("k4").shape[0] == 2 * (1 + 3)
     (angle,) = stage.read().values()
@@ -91,7 +88,7 @@ def test_a_dome_plan_runs_on_the_simulated_and_the_real_devices(tmp_path, backen
     assert targets == [{"view_id": 0}] * 8 + [{"view_id": 1}] * 8
     lit = [np.flatnonzero(call).tolist() for call in calls if not isinstance(call, dict)]
     assert lit[:2] == [list(range(198))] * 2 and lit[2:8] == [[0], [0], [1], [1], [2], [2]]
-    for device in (stage, leds, devices["tunable_filter"]):
+    for device in (stage, leds, devices.tunable_filter):
         device.unstage()
 
 
@@ -102,11 +99,8 @@ def test_a_light_the_dome_does_not_have_stops_the_session(tmp_path):
         run_session(
             tmp_path / "s.capture.zarr",
             plan,
-            **devices,
-            rig={},
-            backend="sim",
-            seed=0,
-            show_progress=False,
+            devices,
+            SessionSettings(rig={}, backend="sim", seed=0, show_progress=False),
         )
 
 

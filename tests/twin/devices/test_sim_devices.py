@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from hwbridge.errors import InputError
-from hwbridge.protocols import Camera, Positioner, TunableFilter
+from hwbridge.protocols import Camera, Positioner, Shutter, TunableFilter
 from twin.components.lamps import HMILamp, QTHLamp
 from twin.devices.sim_devices import SimCamera, SimPositioner, SimTunableFilter, VirtualRig
 from twin.gonio.signals import WhiteReferenceSignal
@@ -26,12 +26,13 @@ def test_white_reference_signal_carries_the_hmi_flicker():
 
 
 def test_simulated_devices_follow_the_protocols_and_share_state():
-    rig = VirtualRig()
+    rig = VirtualRig(seed=1, steps=[2, 0])
     sensor = Sensor("coolsnap_k4", roi=(8, 8))
     camera = SimCamera(rig, sensor, WhiteReferenceSignal(sensor, HMILamp()), np.zeros(3), name="k4")
     lctf, positioner = SimTunableFilter(rig), SimPositioner(rig, 2)
     assert (
         isinstance(camera, Camera)
+        and isinstance(camera, Shutter)
         and isinstance(lctf, TunableFilter)
         and isinstance(positioner, Positioner)
     )
@@ -39,14 +40,33 @@ def test_simulated_devices_follow_the_protocols_and_share_state():
     positioner.set({"view_id": 1})
     assert rig.band_nm == 550.0 and rig.view_id == 1
     camera.set_exposure(0.1)
-    camera.set_step(1, 0)
+    assert rig.step == 2
     bright, _ = camera.snap()
+    assert rig.step == 0  # each frame moves the rig on to its next step
     camera.set_shutter(False)
-    camera.set_step(1, 0)
     dark, _ = camera.snap()
     assert bright.mean() > dark.mean() + 100
+    with pytest.raises(InputError, match="built for 2 steps"):
+        camera.snap()
     with pytest.raises(InputError, match="view_id"):
         positioner.set({"view_id": 5})
+
+
+def test_a_simulated_frame_follows_from_the_seed_and_the_step_the_rig_takes():
+    sensor = Sensor("coolsnap_k4", roi=(8, 8))
+    signal = WhiteReferenceSignal(sensor, HMILamp())
+
+    def frames(seed, steps):
+        camera = SimCamera(
+            VirtualRig(band_nm=550.0, seed=seed, steps=steps), sensor, signal, [0.0] * 3
+        )
+        camera.set_exposure(0.1)
+        return [camera.snap()[0] for _ in steps]
+
+    first, second, third = frames(1, [0, 1, 2])
+    np.testing.assert_array_equal(frames(1, [2, 1])[0], third)  # a resumed session's frame
+    assert not np.array_equal(first, second)
+    assert not np.array_equal(frames(2, [0])[0], first)
 
 
 @pytest.mark.render
@@ -116,7 +136,7 @@ def test_sessions_record_the_lamp_monitor_with_lit_frames(tmp_path):
 
 def test_sessions_switch_the_step_led_on_alone(tmp_path):
     from hwbridge.plans import chart_photographs, plan_start_times_s
-    from hwbridge.session import run_session
+    from hwbridge.session import SessionDevices, SessionSettings, run_session
     from twin.devices.sim_devices import SimLedArray
 
     plan = chart_photographs("k4", [0.05], [3, 7, -2])
@@ -137,13 +157,8 @@ def test_sessions_switch_the_step_led_on_alone(tmp_path):
     store = run_session(
         tmp_path / "leds.capture.zarr",
         plan,
-        cameras={"k4": camera},
-        leds=leds,
-        led_count=198,
-        rig={},
-        backend="sim",
-        seed=0,
-        show_progress=False,
+        SessionDevices(cameras={"k4": camera}, leds=leds),
+        SessionSettings(rig={}, backend="sim", seed=0, show_progress=False),
     )
     assert store.complete
     assert patterns[0] == [3] and patterns[1] == [7] and len(patterns[2]) == 198

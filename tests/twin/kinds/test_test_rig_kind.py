@@ -11,6 +11,7 @@ Ohta) within the photon noise the sensor model gives.
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -71,8 +72,8 @@ class _Devices:
     reflectance: tuple[float, ...]
     plan: tuple[dict, ...]
 
-    def __call__(self) -> SessionDevices:
-        rig = VirtualRig()
+    def __call__(self, seed: int = 0, steps: Sequence[int] | None = None) -> SessionDevices:
+        rig = VirtualRig(seed=seed, steps=None if steps is None else tuple(steps))
         sensor = Sensor("coolsnap_k4", roi=(PIXELS, PIXELS))
         starts = plan_start_times_s(list(self.plan))
         camera = SimCamera(rig, sensor, _Signal(self.reflectance), starts, name="camera")

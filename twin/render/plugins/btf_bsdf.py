@@ -214,7 +214,7 @@ def compressed_product_table(
 def written_table(btf: BTFStore, *, lobes: bool = False) -> BTFTable:
     """The written pairs of a BTF store on their product set (:func:`product_table`)."""
     written = np.flatnonzero(btf.written())
-    values = np.stack([btf.read_pair(pair, allow_incomplete=True) for pair in written])
+    values = np.stack([btf.read_pair(int(pair), allow_incomplete=True) for pair in written])
     return product_table(
         btf.light_dirs[written], btf.view_dirs[written], values, btf.grid, lobes=lobes
     )
@@ -276,7 +276,7 @@ def interpolate_table(
     does (without its lookup grid)."""
     light_indices, light_weights = barycentric(table.light_dirs, np.atleast_2d(light))
     view_indices, view_weights = barycentric(table.view_dirs, np.atleast_2d(view))
-    texture = 0.0
+    texture: np.ndarray | float = 0.0
     for i, wi in zip(light_indices[0], light_weights[0], strict=True):
         for j, wj in zip(view_indices[0], view_weights[0], strict=True):
             if wi * wj > 0:
@@ -284,7 +284,7 @@ def interpolate_table(
     if table.lobes is not None:
         lobes = table.lobes.values(np.atleast_2d(light), np.atleast_2d(view))
         texture = texture + lobes[0][..., None]
-    return texture
+    return np.asarray(texture)
 
 
 def btf_bsdf(table: BTFTable | CompressedTable, *, resolution: int = 128) -> dict[str, object]:

@@ -31,7 +31,8 @@ class PluginData:
     """
 
     def __init__(self, prefix: str):
-        self._prefix, self._items, self._keys = prefix, {}, itertools.count()
+        self._prefix, self._keys = prefix, itertools.count()
+        self._items: dict[str, Any] = {}
 
     def keep(self, item: Any) -> str:
         """Keep ``item`` and return the key to put in the scene dict.
