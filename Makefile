@@ -1,5 +1,5 @@
 # The two commands of the README. Both run the idempotent bootstrap first.
-.PHONY: bootstrap demo test lint
+.PHONY: bootstrap demo test test-fast lint
 VENV_BIN := .venv/bin
 
 bootstrap:
@@ -8,8 +8,15 @@ bootstrap:
 demo: bootstrap
 	$(VENV_BIN)/spectwin demo --out out/demo
 
+# The suite on every core (test files spread over worker processes), the 20 slowest shown.
 test: bootstrap
-	$(VENV_BIN)/python -m pytest -q
+	$(VENV_BIN)/python -m pytest -q -n auto --dist loadfile --durations=20
+
+# The inner loop: the libraries' unit tests and the architecture and error checks, no renders.
+test-fast: bootstrap
+	$(VENV_BIN)/python -m pytest -q -n auto --dist loadfile -m "not render and not hardware" \
+		tests/recon tests/hwbridge tests/twin/rigs tests/twin/components tests/twin/sensor \
+		tests/test_errors.py tests/test_architecture.py recon hwbridge --ignore tests/recon/experiments
 
 lint: bootstrap
 	$(VENV_BIN)/ruff check .
