@@ -49,6 +49,7 @@ import numpy as np
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
+from hwbridge.dome_layout import ALL_LEDS
 from hwbridge.errors import (
     DeviceDisconnected,
     DeviceTimeout,
@@ -398,7 +399,7 @@ def capture_steps(
                 light = int(settings["light_id"])
                 switch = (
                     (lambda: leds.set(np.ones(led_count, bool)))
-                    if light == -2
+                    if light == ALL_LEDS
                     else (lambda led=light: leds.light(led))
                 )
                 _, seen = _with_retries(switch, leds, retries, backoff_s)
