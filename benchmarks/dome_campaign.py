@@ -67,7 +67,7 @@ def _run(program, store, devices, leds: int) -> dict[str, object]:
     lit = [i for i in first if plan[i].get("light_id") in chosen]
     aligned = timed_stages(_STAGES, lambda: capture_steps(store, alignment, devices, seed=0))
     each = timed_stages(_STAGES, lambda: capture_steps(store, lit, devices, seed=0))
-    positions = program.rig["stage_positions"]
+    positions = program.rig.stage_positions
     scale = len(all_leds) / len(chosen)
     projected_s = positions * (aligned["total"]["wall_s"] + scale * each["total"]["wall_s"])
     projected_cpu_s = positions * (aligned["total"]["cpu_s"] + scale * each["total"]["cpu_s"])
@@ -148,7 +148,7 @@ def main() -> None:
         "material": arguments.material if arguments.program == "run" else None,
         "led_renders": arguments.led_renders,
         "frame_size": dry_run["frame_size"],
-        "spp": program.rig["spp"],
+        "spp": program.rig.spp,
         "plan_steps": len(program.plan),
         "renders": dry_run["renders"],
         "store_creation_s": round(create_s, 2),

@@ -190,7 +190,7 @@ class Spectrum(StoreModel):
     )
 
 
-_GONIO_LIT = ("camera_id", "lamp", "config", "white_reflectance")
+_GONIO_LIT = ("config", "white_reflectance")
 
 
 class GonioRigAttrs(RigAttrs):
@@ -219,9 +219,9 @@ class GonioRigAttrs(RigAttrs):
         description="`demo`, `gonio-calibration` or `gonio-run`"
     )
     camera: str = Field(description="the camera model (`scenes/cameras`)")
+    camera_id: str = Field(description="the camera's id in the store")
     window_px: int = Field(gt=0, description="side of the frames read out")
-    camera_id: str | None = Field(None, description="the camera's id in the store")
-    lamp: str | None = Field(None, description="spectrum of the lamp (`hmi`: flickers)")
+    lamp: str = Field(description="spectrum of the lamp (`hmi`: flickers)")
     config: dict[str, Any] | None = Field(None, description="the rig model (`scenes/rigs`)")
     white_reflectance: Spectrum | None = Field(
         None, description="the white standard's reflectance factor (data sheet)"

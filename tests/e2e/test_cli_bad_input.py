@@ -18,6 +18,7 @@ import pytest
 from typer.testing import CliRunner
 
 from hwbridge.lock import StoreLock
+from hwbridge.schema import GonioRigAttrs
 from hwbridge.store import CaptureStore, FrameRecord
 from recon.btf.store import BTFStore
 from recon.calibration.gonio import GonioCalibration
@@ -266,7 +267,14 @@ def _capture(path: Path, *, complete: bool) -> None:
     plan = [{"camera": "k4", "kind": "dark", "exposure_s": 0.1}] * 2
     store = CaptureStore.create(
         path,
-        rig={"rig": "gonioreflectometer", "camera": "coolsnap_k4"},
+        rig=GonioRigAttrs(
+            rig="gonioreflectometer",
+            program="demo",
+            camera="coolsnap_k4",
+            camera_id="k4",
+            window_px=4,
+            lamp="hmi",
+        ),
         backend="sim",
         seed=0,
         plan=plan,

@@ -130,7 +130,7 @@ def import_(
     }
     if rgb:
         summary["from_rgb"] = f"sRGB, upsampled by {upsampling}"
-        summary["format"] = rgb_source(btf)["layout"]
+        summary["format"] = rgb_source(btf).layout
     print_summary(summary, "imported BTF", as_json)
 
 

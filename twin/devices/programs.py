@@ -7,10 +7,11 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from hwbridge.schema import RigAttrs
 from hwbridge.session import SessionDevices
 from hwbridge.store import CaptureStore
 from recon.errors import InputError
@@ -56,12 +57,12 @@ def check_exposures(plan: list[dict], sensors: Mapping[str, Sensor]) -> None:
 
 class ProgramCapture:
     """Capturing of a program that holds its ``plan``, its ``devices`` (a recipe that builds
-    them, and pickles for the workers of a cluster), the store's ``rig`` attribute and the
-    session ``seed``."""
+    them, and pickles for the workers of a cluster), the store's ``rig`` attribute (the model of
+    the rig's kind) and the session ``seed``."""
 
     plan: list[dict]
     devices: Callable[[], SessionDevices]
-    rig: dict[str, Any]
+    rig: RigAttrs
     seed: int
 
     def run(
