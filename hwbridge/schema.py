@@ -84,10 +84,11 @@ def parse(model: type[Model], data: object, where: str) -> Model:
         return model.model_validate(data)
     except ValidationError as error:
         first = error.errors()[0]
-        field = ".".join(str(part) for part in first["loc"]) or model.__name__
+        location = ".".join(str(part) for part in first["loc"])
+        field = f"{location}: " if location else ""
         more = f" (and {error.error_count() - 1} more)" if error.error_count() > 1 else ""
         message = first["msg"].removeprefix("Value error, ")
-        raise InputError(f"{where}: {field}: {message}{more}") from None
+        raise InputError(f"{where}: {field}{message}{more}") from None
 
 
 def refuse_other_version(
