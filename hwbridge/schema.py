@@ -143,7 +143,7 @@ class CaptureAttrs(StoreModel):
 
     schema_version: int = Field(description="version of these attributes (`SCHEMA_VERSION`)")
     rig: dict[str, Any] = Field(
-        description="the rig and program, a `RigAttrs` of the rig's kind (`rig`)"
+        description="the rig and the program that captured: a `RigAttrs` of the rig's kind"
     )
     backend: Backend = Field(description="`sim`, `real` or `replay`")
     seed: int = Field(ge=0, description="session seed (noise, faults, robot repeatability)")
