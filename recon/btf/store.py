@@ -698,21 +698,18 @@ class BTFStore:
                     problems.append(ChunkProblem(self._pair_name(pair), key, *outcome, (pair,)))
         arrays = [self._group[name] for name in _ARRAYS]
         problems += self._compressed_problems(checker, arrays)
-        attrs = self._fresh_attrs()
+        attrs = self.metadata
         return IntegrityReport(
             path=self.path,
             kind="BTF",
             unit="pair",
             total=self.n_pairs,
             pending=np.flatnonzero(~flags).tolist(),
-            complete_flag=bool(attrs.get("complete", False)),
+            complete_flag=attrs.complete,
             problems=problems,
             checksums=checksum_state(checker.checksums(array) for array in arrays),
             verified=verify,
-            provenance={
-                "material": attrs.get("material"),
-                "source_capture": attrs.get("source_capture"),
-            },
+            provenance={"material": attrs.material, "source_capture": attrs.source_capture},
         )
 
     def prepare_resume(self) -> list[ChunkProblem]:
