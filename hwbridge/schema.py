@@ -72,8 +72,26 @@ Model = TypeVar("Model", bound=BaseModel)
 
 
 def parse(model: type[Model], data: object, where: str) -> Model:
-    """``data`` validated as ``model``; a mismatch raises :class:`~hwbridge.errors.InputError`
-    in one line that names ``where`` (the store and attribute), the field and what it expected.
+    """``data`` validated as ``model``, in one line on a mismatch.
+
+    Parameters
+    ----------
+    model
+        The model.
+    data
+        The attributes as stored (JSON).
+    where
+        The store and attribute, for the message.
+
+    Returns
+    -------
+    Model
+        The validated model.
+
+    Raises
+    ------
+    InputError
+        Naming ``where``, the first field that does not fit and what it expected.
 
     Examples
     --------
@@ -100,9 +118,29 @@ def refuse_other_version(
     *,
     remedy: Remedy | None = None,
 ) -> None:
-    """Raise :class:`~hwbridge.errors.InputError` unless ``found``, the store's version
-    ``attribute``, is ``expected``: one line naming the store, its version and the expected
-    one (a store without the attribute was made before stores recorded it)."""
+    """Refuse a store whose version is not ``expected``.
+
+    Parameters
+    ----------
+    path
+        The store.
+    store
+        What it is, for the message (``"a capture store"``).
+    attribute
+        Its version attribute, in words (``"schema version"``).
+    found
+        The version it records (``None``: it records none, made before stores recorded it).
+    expected
+        The version this code reads.
+    remedy
+        What the user can do about it.
+
+    Raises
+    ------
+    InputError
+        Unless ``found`` is ``expected``: one line naming the store, its version and the
+        expected one.
+    """
     if found == expected:
         return
     have = "none recorded" if found is None else repr(found)
