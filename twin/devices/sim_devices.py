@@ -33,6 +33,7 @@ import numpy as np
 from hwbridge.dome_targets import check_current_ma, led_pattern, single_led, stage_angle_deg
 from hwbridge.errors import DeviceDisconnected, DeviceTimeout, InputError
 from hwbridge.protocols import description, reading
+from hwbridge.schema import NO_VIEW
 from hwbridge.session import SessionDevices
 from recon.spectra import DEFAULT_GRID
 from twin.components.lamps import HMILamp
@@ -58,7 +59,7 @@ class VirtualRig:
     """State shared by the simulated devices of one rig."""
 
     band_nm: float | None = None
-    view_id: int = -1
+    view_id: int = NO_VIEW
     lamp_on: bool = True
     led_pattern: np.ndarray | None = None
     led_current_ma: float = 0.0
