@@ -42,9 +42,10 @@ from typing import Any
 
 import numpy as np
 
-from hwbridge.dome_layout import ALL_LEDS, NO_LIGHT
+from hwbridge.dome_layout import ALL_LEDS
 from hwbridge.errors import InputError
 from hwbridge.plans import dark_series, plan_step
+from hwbridge.schema import NO_LIGHT, NO_VIEW
 
 __all__ = [
     "DomeCameraIds",
@@ -205,8 +206,9 @@ def dome_run(
     Returns
     -------
     list of dict
-        Per stage position: the alignment frames (``kind="alignment"``, ``light_id=-2``), then
-        per LED the RGB cameras' HDR sets and the scheduled spectral bands (``kind="sample"``).
+        Per stage position: the alignment frames (``kind="alignment"``, ``light_id``
+        :data:`~hwbridge.dome_layout.ALL_LEDS`), then per LED the RGB cameras' HDR sets and the
+        scheduled spectral bands (``kind="sample"``).
     """
     positions = _check_ids("stage_positions", stage_positions)
     lights = _check_ids("leds", leds)
@@ -310,7 +312,7 @@ def dome_calibration(
 
 def _slot_key(step: dict[str, Any]) -> tuple[Any, ...]:
     return (
-        step.get("view_id", -1),
+        step.get("view_id", NO_VIEW),
         step.get("light_id", NO_LIGHT),
         step["kind"],
         step.get("tilt_deg"),
@@ -330,7 +332,7 @@ def _timeline(plan: list[dict[str, Any]], timing: DomeTiming) -> tuple[np.ndarra
         if key != slot:
             clock = max(cameras.values(), default=clock)
             cameras, slot = {}, key
-            if key[0] != -1 and key[0] != view:
+            if key[0] != NO_VIEW and key[0] != view:
                 clock += timing.stage_move_s
                 view = key[0]
             if key[1] != NO_LIGHT and key[1] != light:

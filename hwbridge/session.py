@@ -56,6 +56,7 @@ import numpy as np
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
+from hwbridge.dome_layout import ALL_LEDS
 from hwbridge.errors import (
     DeviceDisconnected,
     DeviceTimeout,
@@ -443,7 +444,7 @@ def capture_steps(
             if leds is not None and light != -1:
                 switch = (
                     partial(leds.set, np.ones(leds.count, bool))
-                    if light == -2
+                    if light == ALL_LEDS
                     else partial(leds.light, light)
                 )
                 _, seen = _with_retries(switch, leds, retries, backoff_s)

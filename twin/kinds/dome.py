@@ -147,15 +147,14 @@ def _process(
             show_progress=show_progress,
             created=lambda _: lock.move_into(),
         )
-    attrs = btf.attrs
-    offsets = list(attrs["marks_offset_px"].values())
+    found = btf.metadata
     summary = {
         "btf": str(out),
         "shape": list(btf.shape),
         "complete": btf.complete,
-        "max_marks_offset_px": float(np.max(offsets)),
-        "projected_marks": attrs["projected_marks"],
-        "saturated_texels": attrs["saturated_texels"],
+        "max_marks_offset_px": float(np.max(list(found.marks_offset_px.values()))),
+        "projected_marks": list(found.projected_marks),
+        "saturated_texels": found.saturated_texels,
     }
     return Outcome("dome processing", summary)
 

@@ -177,12 +177,13 @@ def _process(
             show_progress=show_progress,
             client=client,
         )
-    unregistered = btf.attrs["unregistered_pairs"]
+    found = btf.metadata
+    unregistered = list(found.unregistered_pairs)
     summary = {
         "btf": str(out),
         "shape": list(btf.shape),
         "complete": btf.complete,
-        "coarse_corner_pairs": btf.attrs["coarse_corner_pairs"],
+        "coarse_corner_pairs": list(found.coarse_corner_pairs),
         "unregistered_pairs": unregistered,
         "cluster": cluster,
     }
