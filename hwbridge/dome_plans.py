@@ -145,33 +145,59 @@ def _spectral_step(
     kind: str,
     exposure_s: float,
     band_nm: float | None = None,
-    **settings: float | int,
+    *,
+    light_id: int | None = None,
+    view_id: int | None = None,
+    tilt_deg: float | None = None,
 ) -> dict[str, Any]:
     band = exposures.reference_band_nm if band_nm is None else band_nm
-    return plan_step(cameras.spectral, kind, exposure_s, band_nm=float(band), **settings)
+    return plan_step(
+        cameras.spectral,
+        kind,
+        exposure_s,
+        band_nm=float(band),
+        light_id=light_id,
+        view_id=view_id,
+        tilt_deg=tilt_deg,
+    )
 
 
 def _hdr_sets(
-    cameras: DomeCameraIds, exposures: DomeExposures, kind: str, **settings: float | int
+    cameras: DomeCameraIds, exposures: DomeExposures, kind: str, *, view_id: int, light_id: int
 ) -> list[dict[str, Any]]:
     """Every RGB camera's HDR set, camera after camera."""
     return [
-        plan_step(camera, kind, t, **settings)
+        plan_step(camera, kind, t, view_id=view_id, light_id=light_id)
         for camera in cameras.rgb
         for t in exposures.rgb_hdr_s
     ]
 
 
 def _all_leds_frames(
-    cameras: DomeCameraIds, exposures: DomeExposures, kind: str, **settings: float | int
+    cameras: DomeCameraIds,
+    exposures: DomeExposures,
+    kind: str,
+    *,
+    view_id: int,
+    tilt_deg: float | None = None,
 ) -> list[dict[str, Any]]:
     """One frame of every camera with every LED on (the spectral camera in the reference band)."""
     rgb = [
-        plan_step(camera, kind, exposures.all_leds_s[camera], light_id=ALL_LEDS, **settings)
+        plan_step(
+            camera,
+            kind,
+            exposures.all_leds_s[camera],
+            light_id=ALL_LEDS,
+            view_id=view_id,
+            tilt_deg=tilt_deg,
+        )
         for camera in cameras.rgb
     ]
     spectral = exposures.all_leds_s[cameras.spectral]
-    return rgb + [_spectral_step(cameras, exposures, kind, spectral, light_id=ALL_LEDS, **settings)]
+    spectral_step = _spectral_step(
+        cameras, exposures, kind, spectral, light_id=ALL_LEDS, view_id=view_id, tilt_deg=tilt_deg
+    )
+    return [*rgb, spectral_step]
 
 
 def _check_ids(name: str, values: Sequence[int], count: int | None = None) -> list[int]:

@@ -45,6 +45,7 @@ __all__ = [
     "Spectrum",
     "StoreModel",
     "parse",
+    "recorded",
     "refuse_other_version",
 ]
 
@@ -69,6 +70,7 @@ class StoreModel(BaseModel):
 
 
 Model = TypeVar("Model", bound=BaseModel)
+Value = TypeVar("Value")
 
 
 def parse(model: type[Model], data: object, where: str) -> Model:
@@ -107,6 +109,37 @@ def parse(model: type[Model], data: object, where: str) -> Model:
         more = f" (and {error.error_count() - 1} more)" if error.error_count() > 1 else ""
         message = first["msg"].removeprefix("Value error, ")
         raise InputError(f"{where}: {field}{message}{more}") from None
+
+
+def recorded(value: Value | None, what: str) -> Value:
+    """``value``, a field that is optional in its model but that the store at hand records (a
+    field of :attr:`RigAttrs.program_fields` for its program, or one that processing sets).
+
+    Parameters
+    ----------
+    value
+        The field's value.
+    what
+        The store and field, for the message.
+
+    Returns
+    -------
+    Value
+        ``value``, known not to be ``None``.
+
+    Raises
+    ------
+    InputError
+        If ``value`` is ``None``: the store does not record it.
+
+    Examples
+    --------
+    >>> recorded(64, "rig.sensor_px")
+    64
+    """
+    if value is None:
+        raise InputError(f"{what}: not recorded in the store")
+    return value
 
 
 def refuse_other_version(

@@ -73,6 +73,7 @@ from hwbridge.protocols import (
     Stageable,
     TunableFilter,
 )
+from hwbridge.schema import RigAttrs
 from hwbridge.store import CaptureStore, FrameRecord
 
 __all__ = [
@@ -203,7 +204,8 @@ class SessionSettings:
     Attributes
     ----------
     rig, backend, seed
-        Stored with the plan as the store's attributes (``backend``: ``"sim"``, ``"real"`` or
+        Stored with the plan as the store's attributes (``rig``: the rig's model, a
+        :class:`~hwbridge.schema.RigAttrs`, or its JSON form) (``backend``: ``"sim"``, ``"real"`` or
         ``"replay"``).
     resume
         Continue the store instead of creating it; it must hold the same plan and seed. Steps
@@ -215,7 +217,7 @@ class SessionSettings:
         A progress bar over the steps, on standard error.
     """
 
-    rig: dict[str, Any]
+    rig: RigAttrs | Mapping[str, Any]
     backend: str
     seed: int
     resume: bool = False

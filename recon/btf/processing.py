@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hwbridge.schema import GonioRigAttrs
+from hwbridge.schema import GonioRigAttrs, recorded
 from hwbridge.store import CaptureStore
 from recon.btf.store import BTFStore
 from recon.calibration.gonio import (
@@ -299,7 +299,12 @@ def process_pairs(
             continue
         texture = extract_texture(
             image,
-            inset_corners(corners, float(run.rig.sample_fraction)),
+            inset_corners(
+                corners,
+                float(
+                    recorded(run.rig.sample_fraction, f"{run.capture_path}: rig.sample_fraction")
+                ),
+            ),
             resolution=btf.texels[0],
         )
         btf.write_pair(

@@ -39,7 +39,14 @@ from pathlib import Path
 import numpy as np
 
 from hwbridge.dome_layout import SPECTRAL_CAMERA
-from hwbridge.schema import DomeGeometry, DomeHolder, DomeRigAttrs, RigAttrs, Spectrum
+from hwbridge.schema import (
+    DomeGeometry,
+    DomeHolder,
+    DomeRigAttrs,
+    RigAttrs,
+    Spectrum,
+    recorded,
+)
 from hwbridge.store import CaptureStore
 from recon.calibration.capture_io import plan_frames, select_frames
 from recon.calibration.dome import (
@@ -393,7 +400,10 @@ def _spectral_calibration(
     reference = reference_band_nm(store)
     series = select_frames(store, SPECTRAL_CAMERA, kind="oecf", band_nm=reference)
     lit, steps = plan_frames(store, SPECTRAL_CAMERA, kind="white", light_id=rig.calibration_led)
-    last = {float(step.band_nm): slot for slot, step in enumerate(steps)}
+    last = {
+        float(recorded(step.band_nm, f"{store.path}: plan step band_nm")): slot
+        for slot, step in enumerate(steps)
+    }
     slots = [last[float(band)] for band in bands]
     times, means = _mean_darks(store, SPECTRAL_CAMERA)
     spectral = calibrate_spectral_camera(

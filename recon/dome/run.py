@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from hwbridge.dome_layout import SPECTRAL_CAMERA
-from hwbridge.schema import DomeRigAttrs
+from hwbridge.schema import DomeRigAttrs, recorded
 from hwbridge.store import CaptureStore
 from recon.calibration.dome_capture import dome_rig
 from recon.errors import InputError
@@ -61,7 +61,7 @@ class DomeRun:
 
     @property
     def sample_size_m(self) -> float:
-        return float(self.rig.sample_size_m)
+        return float(recorded(self.rig.sample_size_m, f"{self.capture_path}: rig.sample_size_m"))
 
     @property
     def bands_nm(self) -> np.ndarray:

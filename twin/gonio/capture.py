@@ -43,7 +43,7 @@ from hwbridge.plans import (
     response_curve_series,
     white_reference_run,
 )
-from hwbridge.schema import NO_VIEW, GonioRigAttrs, Spectrum
+from hwbridge.schema import NO_VIEW, GonioRigAttrs, Spectrum, recorded
 from hwbridge.store import CaptureStore
 from recon.calibration.spectral import HMI_FLICKER_PERIOD_S
 from recon.errors import InputError
@@ -323,7 +323,7 @@ class CaptureProgram(ProgramCapture):
         holds every pair's pieces; empty for other programs."""
         if self.name != "gonio-run":
             return {}
-        pixels = int(self.rig.sensor_px)
+        pixels = int(recorded(self.rig.sensor_px, "rig.sensor_px"))
         config = self.config or load_rig("gonio")
         needed = np.array([_marks_window_px(config, pose, pixels) for pose in self.poses.values()])
         return {
@@ -346,7 +346,7 @@ def stored_settings(store: CaptureStore) -> dict[str, Any]:
     rig = store.rig_attrs(GonioRigAttrs)
     settings: dict[str, Any] = {"program": rig.program, "seed": attrs.seed}
     if rig.program == "gonio-run":
-        pixels = int(rig.sensor_px)
+        pixels = int(recorded(rig.sensor_px, f"{store.path}: rig.sensor_px"))
         settings |= {
             "material": rig.material,
             "pixels": pixels,

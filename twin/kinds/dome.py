@@ -12,6 +12,7 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import Field
 
+from hwbridge.schema import recorded
 from hwbridge.store import CaptureStore
 from twin.kinds.kind import Outcome, ProgramKind, ProgramSettings, RigKind
 from twin.rigs.rig_config import DomeConfig
@@ -152,8 +153,10 @@ def _process(
         "btf": str(out),
         "shape": list(btf.shape),
         "complete": btf.complete,
-        "max_marks_offset_px": float(np.max(list(found.marks_offset_px.values()))),
-        "projected_marks": list(found.projected_marks),
+        "max_marks_offset_px": float(
+            np.max(list(recorded(found.marks_offset_px, f"{out}: marks_offset_px").values()))
+        ),
+        "projected_marks": list(recorded(found.projected_marks, f"{out}: projected_marks")),
         "saturated_texels": found.saturated_texels,
     }
     return Outcome("dome processing", summary)

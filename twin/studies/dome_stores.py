@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from hwbridge.dome_layout import SPECTRAL_CAMERA
-from hwbridge.schema import DomeRigAttrs
+from hwbridge.schema import DomeRigAttrs, recorded
 from hwbridge.store import CaptureStore
 from recon.calibration.dome import DARK_VALUE_OFFSET
 from recon.calibration.dome_capture import DomeCalibration, calibrate_dome
@@ -266,7 +266,7 @@ def same_images(
         band_partner=band_partner,
     )
     found = btf.metadata
-    partner = found.band_partner
+    partner = recorded(found.band_partner, f"{btf.path}: band_partner")
     cameras = [camera for _ in run.images for camera in run.rgb_cameras]
     bands = [
         run.image_bands(image) if camera == partner else []
@@ -286,7 +286,7 @@ def same_images(
         cameras,
         partner,
         [light for _, light in run.images],
-        list(found.projected_marks),
+        list(recorded(found.projected_marks, f"{btf.path}: projected_marks")),
     )
 
 

@@ -34,6 +34,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from skimage.registration import phase_cross_correlation
 
+from hwbridge.schema import recorded
 from hwbridge.store import CaptureStore
 from recon.btf.schema import BTFAttrs
 from recon.btf.store import BTFStore
@@ -153,7 +154,7 @@ def _nominal_corners(
     """The sample square's corners on the plate as the nominal cameras project them (+0.5)."""
     rig = dome_rig(capture, "dome-run")
     geometry = rig.geometry
-    half = float(rig.sample_size_m) / 2
+    half = float(recorded(rig.sample_size_m, f"{capture.path}: rig.sample_size_m")) / 2
     square = np.array([[-half, half, 0], [half, half, 0], [half, -half, 0], [-half, -half, 0]])
     corners = []
     for pair in pairs:
@@ -233,7 +234,7 @@ def evaluate_dome(
     btf = BTFStore.open(btf_path)
     found = btf.metadata
     capture = _capture(btf_path, found)
-    dome_pairs = found.dome_pairs
+    dome_pairs = recorded(found.dome_pairs, f"{btf.path}: dome_pairs")
     chosen = np.arange(btf.n_pairs) if pairs is None else np.asarray(pairs, int)
     if chosen.size == 0 or chosen.min() < 0 or chosen.max() >= btf.n_pairs:
         raise InputError(f"pairs: expected indices in 0..{btf.n_pairs - 1}")

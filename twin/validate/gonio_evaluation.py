@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from hwbridge.schema import GonioRigAttrs
+from hwbridge.schema import GonioRigAttrs, recorded
 from hwbridge.store import CaptureStore
 from recon.btf.store import BTFStore
 from recon.errors import InputError
@@ -92,7 +92,8 @@ def _true_corners(capture: CaptureStore, btf: BTFStore) -> np.ndarray:
     rig = capture.rig_attrs(GonioRigAttrs)
     pairs = GonioPairs(config, btf.light_dirs, btf.view_dirs)
     poses = actual_poses(config, pairs.poses, capture.metadata.seed)
-    pixels, window = int(rig.sensor_px), rig.window_px
+    pixels = int(recorded(rig.sensor_px, f"{capture.path}: rig.sensor_px"))
+    window = rig.window_px
     return np.stack(
         [
             gonio_camera(config, pose.rail_deg, pixels, window).project(texture_corners_world(pose))
