@@ -179,7 +179,7 @@ def refuse_other_version(
     have = "none recorded" if found is None else repr(found)
     raise InputError(
         f"{path}: {store} of {attribute} {have}, expected {expected} (written by another "
-        "version of spectwin)",
+        "version of the software)",
         remedy=remedy,
     )
 

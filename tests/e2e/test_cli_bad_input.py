@@ -158,7 +158,7 @@ PROBES: list[tuple[list[str], int, str]] = [
         ["process", "@OLD_CAPTURE", "--calibration", "@CAL", "--out", "@NEW_BTF"],
         2,
         "old.capture.zarr: a capture store of schema version 0, expected 1 (written by another "
-        "version of spectwin)",
+        "version of the software)",
     ),
     (
         ["process", "@UNVERSIONED_CAPTURE", "--calibration", "@CAL", "--out", "@NEW_BTF"],
@@ -224,8 +224,8 @@ PROBES: list[tuple[list[str], int, str]] = [
     (
         ["compress", "@OLD_BTF"],
         2,
-        "a BTF store of format version 1, expected 2 (written by another version of spectwin); "
-        "spectwin process makes one",
+        "a BTF store of format version 1, expected 2 (written by another version of the "
+        "software); spectwin process makes one",
     ),
     (["compress", "@DAMAGED_CHUNK_BTF"], 1, "pair 1: reflectance/c/1/0/0/0 is corrupt"),
     (["compress", "@DAMAGED_METADATA_BTF"], 1, "reflectance/zarr.json is unreadable"),

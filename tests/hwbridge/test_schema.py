@@ -85,7 +85,7 @@ def test_a_store_of_another_schema_version_is_refused_in_one_line(tmp_path, vers
         CaptureStore.open(path)
     assert str(refused.value) == (
         f"{path}: a capture store of schema version {shown}, expected {SCHEMA_VERSION} (written "
-        "by another version of spectwin)"
+        "by another version of the software)"
     )
 
 

@@ -71,6 +71,6 @@ def test_a_store_of_another_format_version_is_refused_in_one_line(tmp_path, vers
         BTFStore.open(path)
     assert str(refused.value) == (
         f"{path}: a BTF store of format version {shown}, expected {BTF_FORMAT_VERSION} (written "
-        "by another version of spectwin)"
+        "by another version of the software)"
     )
     assert refused.value.remedy is Remedy.process
