@@ -35,7 +35,7 @@ MODELS = {"gonioreflectometer": GonioRigAttrs, "dome": DomeRigAttrs}
 
 def _stored(program, path) -> CaptureStore:
     """A store created for ``program`` (nothing captured), opened again."""
-    cameras = {name: camera.frame_shape for name, camera in program.devices()["cameras"].items()}
+    cameras = {name: camera.frame_shape for name, camera in program.devices().cameras.items()}
     CaptureStore.create(
         path, rig=program.rig, backend="sim", seed=program.seed, plan=program.plan, cameras=cameras
     )
