@@ -73,7 +73,7 @@ def _run(program, store, leds: int) -> dict[str, object]:
     lit = [i for i in first if plan[i].get("light_id") in chosen]
     aligned = _timed(program, store, alignment)
     each = _timed(program, store, lit)
-    positions = program.rig["stage_positions"]
+    positions = program.rig.stage_positions
     scale = len(all_leds) / len(chosen)
     projected_s = positions * (aligned["total"]["wall_s"] + scale * each["total"]["wall_s"])
     projected_cpu_s = positions * (aligned["total"]["cpu_s"] + scale * each["total"]["cpu_s"])
@@ -151,7 +151,7 @@ def main() -> None:
         "material": arguments.material if arguments.program == "run" else None,
         "led_renders": arguments.led_renders,
         "frame_size": dry_run["frame_size"],
-        "spp": program.rig["spp"],
+        "spp": program.rig.spp,
         "plan_steps": len(program.plan),
         "renders": dry_run["renders"],
         "store_creation_s": round(create_s, 2),

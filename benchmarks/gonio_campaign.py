@@ -90,7 +90,7 @@ def main() -> None:
         by_view: dict[int, list[int]] = defaultdict(list)
         for step, settings in enumerate(plan):
             by_view[settings.get("view_id", -1)].append(step)
-        white = program.rig["white_view_id"]
+        white = program.rig.white_view_id
         chosen = np.linspace(0, len(pairs.poses) - 1, arguments.pairs + 1).round().astype(int)
         before = _phase(store, by_view[-1] + by_view[white], program, 0)
         first = _phase(store, by_view[int(chosen[0])], program, 0)
@@ -103,7 +103,7 @@ def main() -> None:
         "load_average_before": [round(value, 2) for value in load_before],
         "load_average_after": [round(value, 2) for value in os.getloadavg()],
         "pixels": arguments.pixels,
-        "spp": program.rig["spp"],
+        "spp": program.rig.spp,
         "plan_steps": len(plan),
         "reachable_pairs": len(pairs.poses),
         "store_creation_s": round(create_s, 2),

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks.common import machine_description, peak_rss_mib, timed
+from hwbridge.schema import GonioRigAttrs
 from recon.btf.compression import compress_btf
 from recon.btf.processing import process_gonio
 from recon.calibration.gonio import calibrate_gonio
@@ -55,7 +56,7 @@ def main() -> None:
     )
     frames = run.frames(CAMERA_ID).shape[0]
     results["measurement_run"] = {
-        "pairs": len(run.attrs["rig"]["light_dirs"]),
+        "pairs": len(run.rig_attrs(GonioRigAttrs).light_dirs),
         "frames": frames,
         "pixels": arguments.pixels,
         "s": seconds,

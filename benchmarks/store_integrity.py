@@ -42,6 +42,7 @@ from zarr.codecs import ZstdCodec
 import hwbridge.store
 import recon.btf.store
 from benchmarks.common import machine_description, peak_rss_mib
+from hwbridge.schema import GonioRigAttrs
 from hwbridge.store import CaptureStore, FrameRecord
 
 
@@ -231,7 +232,7 @@ def pipeline_benchmark(root: Path, repeats: int) -> dict[str, object]:
     source = CaptureStore.open(captured)
     result: dict[str, object] = {
         "variant": variant,
-        "pairs": len(source.attrs["rig"]["light_dirs"]),
+        "pairs": len(source.rig_attrs(GonioRigAttrs).light_dirs),
         "frames": source.frames("k4").shape[0],
         "frame_px": list(source.frames("k4").shape[1:]),
         "capture_with_checksums_s": round(capture_s, 2),

@@ -42,9 +42,10 @@ from typing import Any
 
 import numpy as np
 
-from hwbridge.dome_layout import ALL_LEDS, NO_LIGHT
+from hwbridge.dome_layout import ALL_LEDS
 from hwbridge.errors import InputError
 from hwbridge.plans import dark_series, plan_step
+from hwbridge.schema import NO_LIGHT, NO_VIEW
 
 __all__ = [
     "DomeCameraIds",
@@ -144,33 +145,59 @@ def _spectral_step(
     kind: str,
     exposure_s: float,
     band_nm: float | None = None,
-    **settings: float | int,
+    *,
+    light_id: int | None = None,
+    view_id: int | None = None,
+    tilt_deg: float | None = None,
 ) -> dict[str, Any]:
     band = exposures.reference_band_nm if band_nm is None else band_nm
-    return plan_step(cameras.spectral, kind, exposure_s, band_nm=float(band), **settings)
+    return plan_step(
+        cameras.spectral,
+        kind,
+        exposure_s,
+        band_nm=float(band),
+        light_id=light_id,
+        view_id=view_id,
+        tilt_deg=tilt_deg,
+    )
 
 
 def _hdr_sets(
-    cameras: DomeCameraIds, exposures: DomeExposures, kind: str, **settings: float | int
+    cameras: DomeCameraIds, exposures: DomeExposures, kind: str, *, view_id: int, light_id: int
 ) -> list[dict[str, Any]]:
     """Every RGB camera's HDR set, camera after camera."""
     return [
-        plan_step(camera, kind, t, **settings)
+        plan_step(camera, kind, t, view_id=view_id, light_id=light_id)
         for camera in cameras.rgb
         for t in exposures.rgb_hdr_s
     ]
 
 
 def _all_leds_frames(
-    cameras: DomeCameraIds, exposures: DomeExposures, kind: str, **settings: float | int
+    cameras: DomeCameraIds,
+    exposures: DomeExposures,
+    kind: str,
+    *,
+    view_id: int,
+    tilt_deg: float | None = None,
 ) -> list[dict[str, Any]]:
     """One frame of every camera with every LED on (the spectral camera in the reference band)."""
     rgb = [
-        plan_step(camera, kind, exposures.all_leds_s[camera], light_id=ALL_LEDS, **settings)
+        plan_step(
+            camera,
+            kind,
+            exposures.all_leds_s[camera],
+            light_id=ALL_LEDS,
+            view_id=view_id,
+            tilt_deg=tilt_deg,
+        )
         for camera in cameras.rgb
     ]
     spectral = exposures.all_leds_s[cameras.spectral]
-    return rgb + [_spectral_step(cameras, exposures, kind, spectral, light_id=ALL_LEDS, **settings)]
+    spectral_step = _spectral_step(
+        cameras, exposures, kind, spectral, light_id=ALL_LEDS, view_id=view_id, tilt_deg=tilt_deg
+    )
+    return [*rgb, spectral_step]
 
 
 def _check_ids(name: str, values: Sequence[int], count: int | None = None) -> list[int]:
@@ -205,8 +232,9 @@ def dome_run(
     Returns
     -------
     list of dict
-        Per stage position: the alignment frames (``kind="alignment"``, ``light_id=-2``), then
-        per LED the RGB cameras' HDR sets and the scheduled spectral bands (``kind="sample"``).
+        Per stage position: the alignment frames (``kind="alignment"``, ``light_id``
+        :data:`~hwbridge.dome_layout.ALL_LEDS`), then per LED the RGB cameras' HDR sets and the
+        scheduled spectral bands (``kind="sample"``).
     """
     positions = _check_ids("stage_positions", stage_positions)
     lights = _check_ids("leds", leds)
@@ -310,7 +338,7 @@ def dome_calibration(
 
 def _slot_key(step: dict[str, Any]) -> tuple[Any, ...]:
     return (
-        step.get("view_id", -1),
+        step.get("view_id", NO_VIEW),
         step.get("light_id", NO_LIGHT),
         step["kind"],
         step.get("tilt_deg"),
@@ -330,7 +358,7 @@ def _timeline(plan: list[dict[str, Any]], timing: DomeTiming) -> tuple[np.ndarra
         if key != slot:
             clock = max(cameras.values(), default=clock)
             cameras, slot = {}, key
-            if key[0] != -1 and key[0] != view:
+            if key[0] != NO_VIEW and key[0] != view:
                 clock += timing.stage_move_s
                 view = key[0]
             if key[1] != NO_LIGHT and key[1] != light:

@@ -1,9 +1,10 @@
 """Capture plans: the thesis's procedures as lists of steps, one frame per step.
 
-A step is a plain dict (JSON-able, stored in the capture store's attributes) with the camera that
-takes the frame, the frame kind, the exposure and whatever must be set before: filter band,
-light, view (rig pose). Builders make the procedures of the thesis; ``estimate_duration_s`` gives
-a dry run's duration. The dome's procedures are in :mod:`hwbridge.dome_plans`.
+A step is a plain dict (JSON-able, stored in the capture store's attributes and read back as a
+:class:`hwbridge.schema.PlanStep`) with the camera that takes the frame, the frame kind, the
+exposure and whatever must be set before: filter band, light, view (rig pose). Builders make
+the procedures of the thesis; ``estimate_duration_s`` gives a dry run's duration. The dome's
+procedures are in :mod:`hwbridge.dome_plans`.
 
 References
 ----------
@@ -20,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from hwbridge.errors import InputError
+from hwbridge.schema import NO_LIGHT, NO_VIEW
 
 __all__ = [
     "chart_photographs",
@@ -33,12 +35,34 @@ __all__ = [
 ]
 
 
-def plan_step(camera: str, kind: str, exposure_s: float, **settings: float | int) -> dict[str, Any]:
-    """One step: ``camera`` takes a frame of ``kind`` at ``exposure_s`` after ``settings`` (view,
-    light, band, ...) are set; a non-positive or non-finite exposure is refused."""
+def plan_step(
+    camera: str,
+    kind: str,
+    exposure_s: float,
+    *,
+    light_id: int | None = None,
+    view_id: int | None = None,
+    band_nm: float | None = None,
+    tilt_deg: float | None = None,
+) -> dict[str, Any]:
+    """One step (a :class:`~hwbridge.schema.PlanStep` as the store records it): ``camera``
+    takes a frame of ``kind`` at ``exposure_s`` after the settings given (light, view, band,
+    wedge tilt) are set; a non-positive or non-finite exposure is refused.
+
+    Examples
+    --------
+    >>> plan_step("k4", "dark", 0.5, light_id=NO_LIGHT)
+    {'camera': 'k4', 'kind': 'dark', 'exposure_s': 0.5, 'light_id': -1}
+    """
     if not np.isfinite(exposure_s) or exposure_s <= 0:
         raise InputError(f"exposure_s: expected a positive exposure, got {exposure_s}")
-    return {"camera": camera, "kind": kind, "exposure_s": float(exposure_s), **settings}
+    settings = {"light_id": light_id, "view_id": view_id, "band_nm": band_nm, "tilt_deg": tilt_deg}
+    return {
+        "camera": camera,
+        "kind": kind,
+        "exposure_s": float(exposure_s),
+        **{name: value for name, value in settings.items() if value is not None},
+    }
 
 
 def dark_series(
@@ -48,7 +72,7 @@ def dark_series(
     if frames_per_exposure < 1:
         raise InputError("frames_per_exposure: expected at least one frame")
     return [
-        plan_step(camera, "dark", t, light_id=-1)
+        plan_step(camera, "dark", t, light_id=NO_LIGHT)
         for t in exposures_s
         for _ in range(frames_per_exposure)
     ]
@@ -108,8 +132,8 @@ def plan_start_times_s(
     resumed session sees the same lamp phase at every step as an uninterrupted one."""
     starts, clock, view = [], 0.0, None
     for step in plan:
-        step_view = step.get("view_id", -1)
-        if step_view != -1 and step_view != view:
+        step_view = step.get("view_id", NO_VIEW)
+        if step_view != NO_VIEW and step_view != view:
             clock += per_view_move_s
             view = step_view
         starts.append(clock)

@@ -3,8 +3,9 @@
 A mapping (YAML) names the camera, describes the rig, and lists regular expressions over the
 folder's relative paths; named groups ``exposure_ms``, ``exposure_s`` and ``band_nm`` become index
 fields and each pattern sets the frame ``kind`` (and optionally ``light_id``, ``view_id``). The
-resulting store has backend ``replay`` and reads exactly like a simulated one. Mappings shipped
-with spectwin live in ``hwbridge/mappings`` (``llanos2019``).
+resulting store has backend ``replay`` and reads exactly like a simulated one; its ``rig``
+attribute is the mapping's description of the rig (:class:`hwbridge.schema.ReplayRigAttrs`).
+Mappings shipped with spectwin live in ``hwbridge/mappings`` (``llanos2019``).
 """
 
 from __future__ import annotations
@@ -19,7 +20,8 @@ import yaml
 
 from hwbridge.errors import InputError
 from hwbridge.lock import StoreLock
-from hwbridge.store import FRAME_KINDS, CaptureStore, FrameRecord
+from hwbridge.schema import FRAME_KINDS, NO_LIGHT, NO_VIEW, ReplayRigAttrs, parse
+from hwbridge.store import CaptureStore, FrameRecord
 
 __all__ = ["MAPPING_DIR", "ingest", "load_mapping"]
 
@@ -27,7 +29,9 @@ MAPPING_DIR = Path(__file__).resolve().parent / "mappings"
 
 
 def load_mapping(name_or_path: str | Path) -> dict[str, Any]:
-    """A shipped mapping by name (``"llanos2019"``) or a mapping file by path, validated."""
+    """A shipped mapping by name (``"llanos2019"``) or a mapping file by path, validated; its
+    ``rig`` becomes the store's :class:`~hwbridge.schema.ReplayRigAttrs` (program: the
+    mapping's name)."""
     path = Path(name_or_path)
     if not path.suffix:
         path = MAPPING_DIR / f"{name_or_path}.yaml"
@@ -41,6 +45,10 @@ def load_mapping(name_or_path: str | Path) -> dict[str, Any]:
         if entry.get("kind") not in FRAME_KINDS:
             raise InputError(f"{path}: kind {entry.get('kind')!r} is not one of {FRAME_KINDS}")
         re.compile(entry["pattern"])
+    described = mapping.get("rig") or {}
+    mapping["rig"] = parse(
+        ReplayRigAttrs, {"rig": "replay", "program": path.stem, **described}, f"{path}: rig"
+    )
     return mapping
 
 
@@ -84,7 +92,7 @@ def ingest(source: str | Path, mapping: str | Path, store_path: str | Path) -> C
     with StoreLock.reserve(store_path) as lock:  # one writer per store (hwbridge.lock)
         store = CaptureStore.create(
             store_path,
-            rig=spec.get("rig", {}),
+            rig=spec["rig"],
             backend="replay",
             seed=0,
             plan=plan,
@@ -99,8 +107,8 @@ def ingest(source: str | Path, mapping: str | Path, store_path: str | Path) -> C
                 kind=settings["kind"],
                 exposure_s=settings["exposure_s"],
                 timestamp=(source / relative).stat().st_mtime,
-                light_id=int(entry.get("light_id", -1)),
-                view_id=int(entry.get("view_id", -1)),
+                light_id=int(entry.get("light_id", NO_LIGHT)),
+                view_id=int(entry.get("view_id", NO_VIEW)),
                 band_nm=settings.get("band_nm", float("nan")),
             )
             store.write_frame(step, np.asarray(frame).astype(np.uint16), record)

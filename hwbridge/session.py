@@ -56,6 +56,7 @@ import numpy as np
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
+from hwbridge.dome_layout import ALL_LEDS
 from hwbridge.errors import (
     DeviceDisconnected,
     DeviceTimeout,
@@ -72,6 +73,7 @@ from hwbridge.protocols import (
     Stageable,
     TunableFilter,
 )
+from hwbridge.schema import RigAttrs
 from hwbridge.store import CaptureStore, FrameRecord
 
 __all__ = [
@@ -202,7 +204,8 @@ class SessionSettings:
     Attributes
     ----------
     rig, backend, seed
-        Stored with the plan as the store's attributes (``backend``: ``"sim"``, ``"real"`` or
+        Stored with the plan as the store's attributes (``rig``: the rig's model, a
+        :class:`~hwbridge.schema.RigAttrs`, or its JSON form) (``backend``: ``"sim"``, ``"real"`` or
         ``"replay"``).
     resume
         Continue the store instead of creating it; it must hold the same plan and seed. Steps
@@ -214,7 +217,7 @@ class SessionSettings:
         A progress bar over the steps, on standard error.
     """
 
-    rig: dict[str, Any]
+    rig: RigAttrs | Mapping[str, Any]
     backend: str
     seed: int
     resume: bool = False
@@ -443,7 +446,7 @@ def capture_steps(
             if leds is not None and light != -1:
                 switch = (
                     partial(leds.set, np.ones(leds.count, bool))
-                    if light == -2
+                    if light == ALL_LEDS
                     else partial(leds.light, light)
                 )
                 _, seen = _with_retries(switch, leds, retries, backoff_s)

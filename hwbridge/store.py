@@ -2,8 +2,10 @@
 
 Layout of ``<name>.capture.zarr`` (ARCHITECTURE.md, "Stores"):
 
-- attributes: ``rig`` (the resolved rig definition), ``backend`` (``sim``, ``real``, ``replay``),
-  ``seed``, ``software_version``, ``plan`` (one dict per step), ``complete``;
+- attributes (:class:`hwbridge.schema.CaptureAttrs`): ``schema_version``, ``rig`` (the rig and
+  the program that captured, a :class:`~hwbridge.schema.RigAttrs` of the rig's kind),
+  ``backend`` (``sim``, ``real``, ``replay``), ``seed``, ``software_version``, ``plan`` (one
+  :class:`~hwbridge.schema.PlanStep` per step), ``complete``;
 - ``frames/<camera_id>``: uint16 ``(N, H, W)`` raw frames, one chunk per frame;
 - ``index/<camera_id>/<field>``: per frame ``kind``, ``light_id``, ``view_id``, ``band_nm``,
   ``exposure_s``, ``timestamp``, ``status``, ``pose`` (6 numbers) and ``lamp_monitor``
@@ -13,6 +15,10 @@ Layout of ``<name>.capture.zarr`` (ARCHITECTURE.md, "Stores"):
 A dome capture (thesis 10.2-10.4) uses the same layout with one group per camera (the RGB
 cameras of the arc and the spectral camera); :mod:`hwbridge.dome_layout` says what its index
 fields and its ``rig`` attribute (camera, LED and stage geometry, the targets) hold.
+
+The attributes are read through the models of :mod:`hwbridge.schema` (:attr:`CaptureStore.
+metadata`, :meth:`CaptureStore.rig_attrs`); :meth:`CaptureStore.open` refuses a store of another
+``schema_version`` (or none) in one line.
 
 A simulated capture holds :data:`INDEX_CHUNK_FRAMES` frames per chunk of the index and the
 flags and compresses its frames with Zstd level 1 (a noisy 256 px frame: 0.36 ms to 84 % of its
@@ -49,10 +55,11 @@ are checked for missing and undecodable chunks.
 from __future__ import annotations
 
 import shutil
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 import zarr
@@ -71,14 +78,25 @@ from hwbridge.integrity import (
     read_flags,
     with_empty_chunks,
 )
+from hwbridge.schema import (
+    FRAME_KINDS,
+    NO_LIGHT,
+    NO_VIEW,
+    SCHEMA_VERSION,
+    CaptureAttrs,
+    RigAttrs,
+    parse,
+    refuse_other_version,
+)
 
-__all__ = ["FRAME_KINDS", "INDEX_CHUNK_FRAMES", "CaptureStore", "FrameRecord"]
+__all__ = ["INDEX_CHUNK_FRAMES", "CaptureStore", "FrameRecord"]
+
+Rig = TypeVar("Rig", bound=RigAttrs)
 
 INDEX_CHUNK_FRAMES = 1024
 """Frames (steps) per chunk of the index fields and the progress flags of a simulated capture."""
 _SIMULATED_FRAME_LEVEL = 1  # Zstd level of simulated frames (real ones: Zstd's default, 3)
 
-FRAME_KINDS = ("dark", "white", "chart", "sample", "oecf", "alignment", "geometric")
 _STRING_FIELDS = ("kind", "status")
 _NUMERIC_FIELDS = {
     "light_id": "int32",
@@ -100,8 +118,8 @@ class FrameRecord:
     kind: str
     exposure_s: float
     timestamp: float
-    light_id: int = -1
-    view_id: int = -1
+    light_id: int = NO_LIGHT
+    view_id: int = NO_VIEW
     band_nm: float = float("nan")
     status: str = "ok"
     pose: tuple[float, ...] = (np.nan,) * 6
@@ -141,15 +159,17 @@ class CaptureStore:
         cls,
         path: str | Path,
         *,
-        rig: dict[str, Any],
+        rig: RigAttrs | Mapping[str, Any],
         backend: str,
         seed: int,
-        plan: list[dict[str, Any]],
+        plan: Sequence[Mapping[str, Any]],
         cameras: dict[str, tuple[int, int]],
         monitor_samples: int = 0,
         software_version: str = "0",
     ) -> CaptureStore:
-        """A new, empty store for ``plan`` (each step names its ``camera``); never overwrites."""
+        """A new, empty store for ``plan`` (steps as :class:`~hwbridge.schema.PlanStep` takes
+        them, each naming its ``camera``) and ``rig`` (a :class:`~hwbridge.schema.RigAttrs` of
+        the rig's kind, or as it records itself); never overwrites."""
         path = Path(path)
         if path.exists():
             raise InputError(
@@ -160,7 +180,20 @@ class CaptureStore:
             raise InputError(f"backend: expected 'sim', 'real' or 'replay', got {backend!r}")
         if not plan:
             raise InputError("plan: expected at least one step")
-        unknown = sorted({str(step.get("camera")) for step in plan} - set(cameras))
+        attrs = parse(
+            CaptureAttrs,
+            {
+                "schema_version": SCHEMA_VERSION,
+                "rig": rig.stored() if isinstance(rig, RigAttrs) else dict(rig),
+                "backend": backend,
+                "seed": seed,
+                "software_version": software_version,
+                "plan": plan,
+                "complete": False,
+            },
+            f"{path}: capture store attributes",
+        )
+        unknown = sorted({step.camera for step in attrs.plan} - set(cameras))
         if unknown:
             raise InputError(
                 f"plan: steps name cameras {unknown} that are not among {sorted(cameras)}"
@@ -173,7 +206,7 @@ class CaptureStore:
         per_chunk = INDEX_CHUNK_FRAMES if backend == "sim" else 1
         frame_level = _SIMULATED_FRAME_LEVEL if backend == "sim" else 0
         for camera, (height, width) in cameras.items():
-            count = sum(step["camera"] == camera for step in plan)
+            count = sum(step.camera == camera for step in attrs.plan)
             group.create_array(
                 f"frames/{camera}",
                 shape=(count, height, width),
@@ -228,17 +261,9 @@ class CaptureStore:
             compressors=checksummed_compressors(),
         )
         # The attributes last and in one write: the plan of a full campaign is tens of MB of
-        # JSON, which Zarr writes out again for every attribute set.
-        group.update_attributes(
-            {
-                "rig": rig,
-                "backend": backend,
-                "seed": int(seed),
-                "software_version": software_version,
-                "plan": plan,
-                "complete": False,
-            }
-        )
+        # JSON, which Zarr writes out again for every attribute set. A plan step keeps the
+        # settings it was given, no others.
+        group.update_attributes(attrs.model_dump(mode="json", exclude_unset=True))
         building.rename(path)
         return cls(zarr.open_group(str(path), mode="r+"), path)
 
@@ -261,6 +286,13 @@ class CaptureStore:
             raise InputError(f"{path} is not a capture store (not a Zarr group: {error})") from None
         if "plan" not in group.attrs:
             raise InputError(f"{path} is not a capture store (no plan or progress)")
+        refuse_other_version(
+            path,
+            "a capture store",
+            "schema version",
+            group.attrs.get("schema_version"),
+            SCHEMA_VERSION,
+        )
         stored: dict[str, Any] = dict(group.attrs)
         cameras = sorted({str(step.get("camera")) for step in stored["plan"]})
         for node in _layout(cameras):
@@ -384,7 +416,21 @@ class CaptureStore:
 
     @property
     def attrs(self) -> dict[str, Any]:
+        """The attributes as stored (JSON); read them through :attr:`metadata` and
+        :meth:`rig_attrs`."""
         return dict(self._group.attrs)
+
+    @cached_property
+    def metadata(self) -> CaptureAttrs:
+        """The attributes, validated, as they were when first asked for (the plan of a full
+        campaign takes a second to validate); :attr:`complete` reads the flag as it is now."""
+        return parse(CaptureAttrs, self.attrs, f"{self.path}: capture store attributes")
+
+    def rig_attrs(self, model: type[Rig]) -> Rig:
+        """The ``rig`` attribute validated as ``model`` (the rig's kind's model, or
+        :class:`~hwbridge.schema.RigAttrs` for the rig's name and program); a rig it does not
+        fit raises :class:`~hwbridge.errors.InputError`, naming the field."""
+        return parse(model, self._group.attrs.get("rig"), f"{self.path}: rig attribute")
 
     def frames(self, camera: str) -> zarr.Array[Any]:
         return array_at(self._group, f"frames/{camera}")

@@ -68,7 +68,7 @@ RECON_LAYERS = (
 )
 HWBRIDGE_LAYERS = (
     "hwbridge's modules in layers, each placed: sessions and replay over the drivers, over the "
-    "store, over plans, targets and layouts, over the protocols"
+    "store, over plans, targets and layouts, over the metadata models, over the protocols"
 )
 
 
@@ -78,8 +78,9 @@ HWBRIDGE_LAYERS = (
         (
             "recon/calibration/gonio.py",
             "import hwbridge.session",
-            "recon reads capture stores: of hwbridge it imports the store, its integrity checks, "
-            "the dome's store layout and (recon.errors) the errors, nothing else",
+            "recon reads capture stores: of hwbridge it imports the store, its metadata models, "
+            "its integrity checks, the dome's store layout and (recon.errors) the errors, "
+            "nothing else",
         ),
         ("hwbridge/store.py", "import hwbridge.drivers", HWBRIDGE_LAYERS),
         ("recon/emva/fit.py", "import recon.dome", RECON_LAYERS),

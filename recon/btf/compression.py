@@ -634,12 +634,12 @@ def load_compressed(store: BTFStore | str | Path) -> CompressedBTF:
     if missing:
         raise InputError(f"{store.path}: the compressed form lacks arrays {missing}")
     return CompressedBTF(
-        shape=tuple(attrs["shape"]),
+        shape=attrs.shape,
         grid=store.grid,
-        layout=attrs["layout"],
+        layout=attrs.layout,
         **{name.replace("/", "_"): arrays[name] for name in _ARRAY_NAMES},
-        n_brightness_requested=int(attrs["n_brightness_requested"]),
-        n_spectral_requested=int(attrs["n_spectral_requested"]),
-        brightness_floor=float(attrs["brightness_floor"]),
-        svd=dict(attrs.get("svd", {})),
+        n_brightness_requested=attrs.n_brightness_requested,
+        n_spectral_requested=attrs.n_spectral_requested,
+        brightness_floor=attrs.brightness_floor,
+        svd=dict(attrs.svd),
     )

@@ -183,6 +183,7 @@ def import_exr_slices(
         material=attributes.pop("material", "imported"),
         source_capture=attributes.pop("source_capture", None),
         calibration=attributes.pop("calibration", None),
+        rig=attributes.pop("rig", None),
     )
     for name, value in attributes.items():
         store.set_attribute(name, value)

@@ -35,10 +35,10 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
+from hwbridge.schema import GonioRigAttrs, recorded
 from hwbridge.store import CaptureStore
 from recon.btf.store import BTFStore
 from recon.calibration.gonio import (
@@ -71,14 +71,6 @@ __all__ = [
 ]
 
 _INDEX_FIELDS = ("kind", "view_id", "band_nm", "exposure_s", "lamp_monitor")
-_RIG_KEYS = (
-    "light_dirs",
-    "view_dirs",
-    "expected_corners_xy",
-    "sample_fraction",
-    "white_view_id",
-    "material",
-)
 
 
 def inset_corners(corners_xy: np.ndarray, fraction: float) -> np.ndarray:
@@ -91,13 +83,12 @@ def inset_corners(corners_xy: np.ndarray, fraction: float) -> np.ndarray:
     return texture_transform(corners_xy).inverse(square)
 
 
-def _rig(store: CaptureStore) -> dict[str, Any]:
-    rig = store.attrs["rig"]
-    missing = [key for key in _RIG_KEYS if key not in rig]
-    if missing:
+def _rig(store: CaptureStore) -> GonioRigAttrs:
+    rig = store.rig_attrs(GonioRigAttrs)
+    if rig.program != "gonio-run":
         raise InputError(
-            f"{store.path}: the capture's rig attribute lacks {missing}; expected a measurement "
-            "run of the gonioreflectometer (program gonio-run)",
+            f"{store.path}: a capture of program {rig.program}; expected a measurement run of "
+            "the gonioreflectometer (program gonio-run)",
             remedy=Remedy.capture_gonio_run,
         )
     return rig
@@ -105,12 +96,12 @@ def _rig(store: CaptureStore) -> dict[str, Any]:
 
 def check_gonio_run(
     store: CaptureStore, calibration: GonioCalibration
-) -> tuple[dict[str, Any], str, dict[str, np.ndarray]]:
+) -> tuple[GonioRigAttrs, str, dict[str, np.ndarray]]:
     """Refuse a capture that is not a measurement run of the gonioreflectometer, or whose white
     photographs are at other bands than the calibration's: from the attributes and the index,
     before any frame is read. Returns the rig attribute, the camera id and the index."""
     rig = _rig(store)
-    camera = str(rig.get("camera_id", "k4"))
+    camera = rig.camera_id
     index = store.index(camera, _INDEX_FIELDS)
     white_bands = np.sort(index["band_nm"][index["kind"] == "white"].astype(np.float64))
     if white_bands.shape != calibration.bands_nm.shape or not np.allclose(
@@ -145,7 +136,7 @@ class GonioRun:
     index
         The index fields of the run's frames that pairs are selected by.
     rig
-        The capture's ``rig`` attribute.
+        The capture's ``rig`` attribute (a run's: its directions, marks and sample are set).
     """
 
     capture_path: Path
@@ -155,7 +146,7 @@ class GonioRun:
     factors: np.ndarray
     reference: np.ndarray
     index: dict[str, np.ndarray]
-    rig: dict[str, Any]
+    rig: GonioRigAttrs
 
 
 @dataclass
@@ -211,14 +202,14 @@ def open_btf_store(
         return btf
     return BTFStore.create(
         out,
-        light_dirs=np.asarray(run.rig["light_dirs"], np.float64),
-        view_dirs=np.asarray(run.rig["view_dirs"], np.float64),
+        light_dirs=np.asarray(run.rig.light_dirs, np.float64),
+        view_dirs=np.asarray(run.rig.view_dirs, np.float64),
         texels=texels,
         grid=run.calibration.grid,
-        material=str(run.rig["material"]),
+        material=str(run.rig.material),
         source_capture=run.capture_path,
         calibration={"run_factors": run.factors.tolist(), "source": run.calibration.source},
-        rig=run.rig.get("rig"),
+        rig=run.rig.rig,
     )
 
 
@@ -280,8 +271,8 @@ def process_pairs(
         The pairs of ``pairs`` registered coarsely or not at all (those are left unwritten).
     """
     store = CaptureStore.open(run.capture_path) if store is None else store
-    light_dirs = np.asarray(run.rig["light_dirs"], np.float64)
-    expected = np.asarray(run.rig["expected_corners_xy"], np.float64)
+    light_dirs = np.asarray(run.rig.light_dirs, np.float64)
+    expected = np.asarray(run.rig.expected_corners_xy, np.float64)
     calibration = run.calibration
     outcomes = PairOutcomes()
     for pair in pairs:
@@ -308,7 +299,12 @@ def process_pairs(
             continue
         texture = extract_texture(
             image,
-            inset_corners(corners, float(run.rig["sample_fraction"])),
+            inset_corners(
+                corners,
+                float(
+                    recorded(run.rig.sample_fraction, f"{run.capture_path}: rig.sample_fraction")
+                ),
+            ),
             resolution=btf.texels[0],
         )
         btf.write_pair(
@@ -325,7 +321,7 @@ def process_pairs(
 def record_outcomes(btf: BTFStore, outcomes: Iterable[PairOutcomes]) -> None:
     """Store the pairs of a processing pass that were registered coarsely (added to those of
     earlier passes) and those left unregistered (replacing the earlier list: they were retried)."""
-    coarse = set(btf.attrs.get("coarse_corner_pairs", []))
+    coarse = set(btf.metadata.coarse_corner_pairs or ())
     unregistered: list[int] = []
     for outcome in outcomes:
         coarse.update(outcome.coarse)

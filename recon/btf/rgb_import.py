@@ -27,12 +27,12 @@ from __future__ import annotations
 
 import csv
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from recon.btf.bonn_formats import read_image_archive, read_ubo2014
 from recon.btf.rgb_images import RGBImageSet
+from recon.btf.schema import RgbSource
 from recon.btf.store import BTFStore
 from recon.errors import InputError
 from recon.progress import progress_steps
@@ -55,9 +55,9 @@ RGB_COLUMNS = ("file", "light_theta_deg", "light_phi_deg", "view_theta_deg", "vi
 _READERS = {".zip": read_image_archive, ".btf": read_ubo2014}
 
 
-def rgb_source(store: BTFStore) -> dict[str, Any] | None:
+def rgb_source(store: BTFStore) -> RgbSource | None:
     """The store's ``rgb_source`` attribute (module docstring), ``None`` for a spectral BTF."""
-    return store.attrs.get("rgb_source")
+    return store.metadata.rgb_source
 
 
 def is_rgb_source(path: Path) -> bool:

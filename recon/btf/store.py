@@ -8,9 +8,11 @@ written, and the store calls itself complete only when every pair is.
 
 Layout of ``<name>.btf.zarr`` (ARCHITECTURE.md, "Stores"):
 
-- attributes: ``format`` (``"spectwin.btf"``), ``format_version``, ``units`` (``"1/sr"``),
-  ``material``, ``source_capture`` (path of the capture store it was calibrated from, or null),
-  ``calibration`` (a JSON summary of the calibration), ``complete``;
+- attributes (:class:`recon.btf.schema.BTFAttrs`): ``format`` (``"spectwin.btf"``),
+  ``format_version`` (a store of another version is refused on opening), ``units``
+  (``"1/sr"``), ``material``, ``rig`` (of the source capture), ``source_capture`` (path of the
+  capture store it was calibrated from, or null), ``calibration`` (a JSON summary of the
+  calibration), ``complete``, and what processing adds (:meth:`BTFStore.set_attribute`);
 - ``reflectance``: float32 ``(n_pairs, H, W, K)``, one chunk per direction pair, band axis last,
   texel ``(y, x)`` row-major; unwritten pairs hold NaN;
 - ``light_dirs``, ``view_dirs``: float64 ``(n_pairs, 3)`` unit vectors in the sample frame
@@ -19,7 +21,8 @@ Layout of ``<name>.btf.zarr`` (ARCHITECTURE.md, "Stores"):
 - ``written``: bool ``(n_pairs,)``, one chunk per pair, set only after the pair's texture is
   written;
 - ``pca/``: optional compressed form (thesis 4.1.2; written by :mod:`recon.btf.compression`),
-  with its own ``complete`` attribute set after all of its arrays.
+  with its own attributes (:class:`recon.btf.schema.CompressedAttrs`), ``complete`` set after
+  all of its arrays.
 
 Conventions shared with the capture store (``hwbridge.store``): a store is never overwritten by
 :meth:`BTFStore.create`; data are written before the flag that declares them; one writer owns each
@@ -64,6 +67,14 @@ from hwbridge.integrity import (
     read_flags,
     with_empty_chunks,
 )
+from hwbridge.schema import parse, refuse_other_version
+from recon.btf.schema import (
+    BTF_FORMAT,
+    BTF_FORMAT_VERSION,
+    BTF_UNITS,
+    BTFAttrs,
+    CompressedAttrs,
+)
 from recon.errors import DamagedDataError, InputError, Remedy
 from recon.spectra import WavelengthGrid
 
@@ -76,10 +87,6 @@ __all__ = [
     "write_btf",
 ]
 
-BTF_FORMAT = "spectwin.btf"
-BTF_FORMAT_VERSION = 1
-BTF_UNITS = "1/sr"
-"""Units of every store's reflectance (a BRDF value per texel)."""
 COMPRESSED_GROUP = "pca"
 """Name of the group that holds the compressed form (ARCHITECTURE.md: ``pca/``)."""
 
@@ -164,11 +171,15 @@ class BTFStore:
                 f"{path}: not a BTF store (format attribute {attrs.get('format')!r}, expected "
                 f"{BTF_FORMAT!r})"
             )
-        if attrs.get("format_version") != BTF_FORMAT_VERSION:
-            raise InputError(
-                f"{path}: BTF store format version {attrs.get('format_version')!r} is not "
-                f"supported (expected {BTF_FORMAT_VERSION})"
-            )
+        refuse_other_version(
+            path,
+            "a BTF store",
+            "format version",
+            attrs.get("format_version"),
+            BTF_FORMAT_VERSION,
+            remedy=Remedy.process,
+        )
+        parse(BTFAttrs, dict(attrs), f"{path}: BTF store attributes")
         problems = {name: metadata_problem(path, name) for name in _ARRAYS}
         if problems["written"] and not (path / "written").is_dir():
             # ``written`` is created last: without it (and its chunks) the creation stopped.
@@ -250,7 +261,7 @@ class BTFStore:
         calibration
             JSON-serialisable summary of the calibration (white reference, exposure plan, ...).
         rig
-            The kind of rig the source capture was made with (its ``attrs["rig"]["rig"]``), or
+            The kind of rig the source capture was made with (the ``rig`` of its rig attribute), or
             ``None`` for a BTF from elsewhere (imported).
         """
         path = Path(path)
@@ -266,11 +277,8 @@ class BTFStore:
             raise InputError(f"grid: expected a WavelengthGrid, got {type(grid).__name__}")
         if not isinstance(material, str) or not material.strip():
             raise InputError(f"material: expected a non-empty name, got {material!r}")
-        calibration = _json_attr("calibration", dict(calibration or {}))
-        n_pairs, n_bands = light_dirs.shape[0], grid.size
-
-        group = zarr.open_group(str(path), mode="w-", zarr_format=3)
-        group.attrs.update(
+        attrs = parse(
+            BTFAttrs,
             {
                 "format": BTF_FORMAT,
                 "format_version": BTF_FORMAT_VERSION,
@@ -278,10 +286,15 @@ class BTFStore:
                 "material": material,
                 "rig": rig,
                 "source_capture": None if source_capture is None else str(source_capture),
-                "calibration": calibration,
+                "calibration": _json_attr("calibration", dict(calibration or {})),
                 "complete": False,
-            }
+            },
+            f"{path}: BTF store attributes",
         )
+        n_pairs, n_bands = light_dirs.shape[0], grid.size
+
+        group = zarr.open_group(str(path), mode="w-", zarr_format=3)
+        group.attrs.update(attrs.model_dump(mode="json", exclude_unset=True))
         group.create_array(
             "reflectance",
             shape=(n_pairs, height, width, n_bands),
@@ -378,12 +391,18 @@ class BTFStore:
 
     @property
     def material(self) -> str:
-        return str(self._group.attrs["material"])
+        return self.metadata.material
 
     @property
     def attrs(self) -> dict[str, Any]:
-        """All attributes (provenance included) as a plain dict, as now on disk."""
+        """All attributes (provenance included) as a plain dict, as now on disk; read them
+        through :attr:`metadata`."""
         return dict(self._fresh_attrs())
+
+    @property
+    def metadata(self) -> BTFAttrs:
+        """The attributes, validated, as now on disk."""
+        return parse(BTFAttrs, self.attrs, f"{self.path}: BTF store attributes")
 
     @property
     def complete(self) -> bool:
@@ -516,9 +535,17 @@ class BTFStore:
         return complete
 
     def set_attribute(self, name: str, value: Any) -> None:
-        """Record a JSON-serialisable attribute (e.g. processing facts) on the store."""
+        """Record what processing found: one of the attributes of :class:`~recon.btf.schema.
+        BTFAttrs` that creation leaves unset (``unregistered_pairs``, ``dome_pairs``, ...),
+        checked against the model."""
         self._require_writable()
-        self._group.attrs[name] = _json_attr(name, value)
+        added = [key for key, info in BTFAttrs.model_fields.items() if not info.is_required()]
+        if name not in added:
+            raise InputError(f"attribute {name!r}: expected one of {added}")
+        checked = parse(
+            BTFAttrs, {**self._fresh_attrs(), name: value}, f"{self.path}: attribute {name}"
+        )
+        self._group.attrs[name] = checked.model_dump(mode="json", include={name})[name]
 
     def corners_xy(self) -> np.ndarray:
         """``(n_pairs, 4, 2)`` registered image corners per pair (NaN where none were given)."""
@@ -587,14 +614,19 @@ class BTFStore:
         )
 
     def write_compressed(self, arrays: Mapping[str, np.ndarray], attrs: Mapping[str, Any]) -> None:
-        """Replace the ``pca/`` group with ``arrays`` (names may contain ``/``) and ``attrs``.
+        """Replace the ``pca/`` group with ``arrays`` (names may contain ``/``) and ``attrs``
+        (:class:`~recon.btf.schema.CompressedAttrs` without ``arrays`` and ``complete``).
 
         The group's ``complete`` attribute turns true only after every array is written. The
         store itself must be complete: a compressed form describes the finished BTF.
         """
         self._require_writable()
         self._require_complete(False, "compress")
-        attrs = _json_attr("attrs", dict(attrs))
+        described = parse(
+            CompressedAttrs,
+            {**attrs, "arrays": sorted(arrays), "complete": True},
+            f"{self.path}: {COMPRESSED_GROUP}/ attributes",
+        )
         self._drop_compressed()
         group = self._group.create_group(COMPRESSED_GROUP, attributes={"complete": False})
         for name, values in arrays.items():
@@ -607,21 +639,23 @@ class BTFStore:
                 compressors=checksummed_compressors(),
             )
             with_empty_chunks(array)[...] = values
-        group.attrs.update({**attrs, "arrays": sorted(arrays), "complete": True})
+        group.attrs.update(described.model_dump(mode="json"))
 
-    def read_compressed(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    def read_compressed(self) -> tuple[dict[str, np.ndarray], CompressedAttrs]:
         """The arrays and attributes of the ``pca/`` group; raise if absent or incomplete."""
         if COMPRESSED_GROUP not in self._group:
             raise InputError(f"{self.path}: no compressed form ({COMPRESSED_GROUP}/)")
         group = self._compressed_group()
-        attrs: dict[str, Any] = dict(group.attrs)
-        if attrs.get("complete") is not True:
+        if group.attrs.get("complete") is not True:
             raise InputError(
                 f"{self.path}: the compressed form ({COMPRESSED_GROUP}/) was not completely "
                 "written; compress again"
             )
+        attrs = parse(
+            CompressedAttrs, dict(group.attrs), f"{self.path}: {COMPRESSED_GROUP}/ attributes"
+        )
         arrays = {}
-        for name in attrs["arrays"]:
+        for name in attrs.arrays:
             try:
                 arrays[name] = np.asarray(_array_in(group, name, self.path)[...])
             except (KeyError, ValueError, RuntimeError) as error:
@@ -666,21 +700,18 @@ class BTFStore:
                     problems.append(ChunkProblem(self._pair_name(pair), key, *outcome, (pair,)))
         arrays = [self._array(name) for name in _ARRAYS]
         problems += self._compressed_problems(checker, arrays)
-        attrs = self._fresh_attrs()
+        attrs = self.metadata
         return IntegrityReport(
             path=self.path,
             kind="BTF",
             unit="pair",
             total=self.n_pairs,
             pending=np.flatnonzero(~flags).tolist(),
-            complete_flag=bool(attrs.get("complete", False)),
+            complete_flag=attrs.complete,
             problems=problems,
             checksums=checksum_state(checker.checksums(array) for array in arrays),
             verified=verify,
-            provenance={
-                "material": attrs.get("material"),
-                "source_capture": attrs.get("source_capture"),
-            },
+            provenance={"material": attrs.material, "source_capture": attrs.source_capture},
         )
 
     def prepare_resume(self) -> list[ChunkProblem]:

@@ -9,11 +9,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from hwbridge.dome_layout import camera_steps
+from hwbridge.schema import PlanStep
 from hwbridge.store import CaptureStore
 from recon.errors import InputError
 
@@ -64,22 +64,23 @@ def select_frames(
         band_nm=index["band_nm"][slots],
         light_id=index["light_id"][slots],
         view_id=index["view_id"][slots],
-        backend=store.attrs["backend"],
+        backend=store.metadata.backend,
     )
 
 
 def plan_frames(
     store: CaptureStore, camera: str, **settings: object
-) -> tuple[np.ndarray, list[dict[str, Any]]]:
+) -> tuple[np.ndarray, list[PlanStep]]:
     """The frames ``(n, H, W)`` (float64 DN) of ``camera`` whose plan steps have ``settings``
-    (e.g. ``kind="geometric"``, ``light_id=5``; settings the index lacks, such as a dome's
-    ``tilt_deg``, included), in capture order, and those steps."""
-    plan = store.attrs["plan"]
+    (fields of :class:`~hwbridge.schema.PlanStep`, e.g. ``kind="geometric"``, ``light_id=5``;
+    settings the index lacks, such as a dome's ``tilt_deg``, included), in capture order, and
+    those steps."""
+    plan = store.metadata.plan
     steps = camera_steps(plan, camera)
     slots = [
         slot
         for slot, step in enumerate(steps)
-        if all(plan[step].get(name) == value for name, value in settings.items())
+        if all(getattr(plan[step], name) == value for name, value in settings.items())
     ]
     if not slots:
         raise InputError(f"{store.path}: no frames of camera {camera!r} with {settings}")

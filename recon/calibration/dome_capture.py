@@ -32,14 +32,21 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from hwbridge.dome_layout import SPECTRAL_CAMERA
+from hwbridge.schema import (
+    DomeGeometry,
+    DomeHolder,
+    DomeRigAttrs,
+    RigAttrs,
+    Spectrum,
+    recorded,
+)
 from hwbridge.store import CaptureStore
 from recon.calibration.capture_io import plan_frames, select_frames
 from recon.calibration.dome import (
@@ -92,32 +99,27 @@ _CAPTURE_REMEDY = {
 }
 
 
-def dome_rig(store: CaptureStore, program: str, keys: Sequence[str]) -> dict[str, Any]:
+def dome_rig(store: CaptureStore, program: str) -> DomeRigAttrs:
     """The ``rig`` attribute of a dome capture made by ``program`` (``dome-calibration`` or
-    ``dome-run``) that has ``keys``; anything else is refused, naming what it is or lacks."""
-    rig = store.attrs.get("rig") or {}
-    if rig.get("rig") != "dome" or rig.get("program") != program:
+    ``dome-run``); anything else is refused, naming what it is or lacks."""
+    try:
+        recorded: RigAttrs | None = store.rig_attrs(RigAttrs)
+    except InputError:
+        recorded = None
+    if recorded is None or (recorded.rig, recorded.program) != ("dome", program):
         raise InputError(
             f"{store.path}: expected a capture of the dome by program {program}, got program "
-            f"{rig.get('program')!r}",
+            f"{getattr(recorded, 'program', None)!r}",
             remedy=_CAPTURE_REMEDY[program],
         )
-    missing = [key for key in keys if key not in rig]
-    if missing:
-        raise InputError(f"{store.path}: the capture's rig attribute lacks {missing}")
-    return rig
+    return store.rig_attrs(DomeRigAttrs)
 
 
-def rig_spectrum(rig: Mapping[str, Any], name: str, grid: WavelengthGrid) -> np.ndarray:
+def rig_spectrum(spectrum: Spectrum, grid: WavelengthGrid) -> np.ndarray:
     """A spectrum the capture stores with its rig (``led_spectrum``, ``white_reflectance``,
     ``rgb_response``), linearly interpolated to ``grid`` (rows first)."""
-    entry = rig.get(name)
-    if not isinstance(entry, Mapping) or {"wavelengths_nm", "values"} - set(entry):
-        raise InputError(
-            f"capture rig attribute {name}: expected {{'wavelengths_nm': [...], 'values': [...]}}"
-        )
-    source = WavelengthGrid(np.asarray(entry["wavelengths_nm"], np.float64))
-    values = SampledSpectra(source, np.asarray(entry["values"], np.float64))
+    source = WavelengthGrid(np.asarray(spectrum.wavelengths_nm, np.float64))
+    values = SampledSpectra(source, np.asarray(spectrum.values, np.float64))
     return resample(values, grid, out_of_range="zero").values
 
 
@@ -340,8 +342,8 @@ def _mean_darks(
 class _WhiteSquare:
     """The white standard's central square at stage position 0, as one camera sees it."""
 
-    def __init__(self, geometry: CameraGeometry, holder: Mapping[str, Any]):
-        side = 2 * WHITE_FRACTION * float(holder["opening_half_m"])
+    def __init__(self, geometry: CameraGeometry, holder: DomeHolder):
+        side = 2 * WHITE_FRACTION * holder.opening_half_m
         self.points_m = np.concatenate(
             [texel_centres_m(WHITE_TEXELS, side), np.zeros((WHITE_TEXELS, WHITE_TEXELS, 1))],
             axis=-1,
@@ -369,39 +371,39 @@ class _WhiteSquare:
 
 def _geometric_calibration(
     store: CaptureStore,
+    geometry: DomeGeometry,
     camera: str,
     nominal: CameraGeometry,
     grey: Callable[[np.ndarray], np.ndarray],
 ) -> GeometricCalibration:
-    geometry = store.attrs["rig"]["geometry"]
-    target = geometry["geometric_target"]
+    target = geometry.geometric_target
     frames, steps = plan_frames(store, camera, kind="geometric")
     poses = []
     for step in steps:
         pose = np.eye(4)
-        pose[:3, :3] = stage_rotation(geometry["stage_angles_deg"][step["view_id"]])
-        poses.append(pose @ np.asarray(target["target_to_sample"][f"{step['tilt_deg']:g}"]))
+        pose[:3, :3] = stage_rotation(geometry.stage_angles_deg[step.view_id])
+        poses.append(pose @ np.asarray(target.target_to_sample[f"{step.tilt_deg:g}"]))
     return calibrate_camera_geometry(
         [grey(frame) for frame in frames],
         poses,
-        np.asarray(target["corners_m"]),
-        tuple(target["inner_corners"]),
+        np.asarray(target.corners_m),
+        target.inner_corners,
         nominal,
     )
 
 
 def _spectral_calibration(
-    store: CaptureStore, rig: Mapping[str, Any], white: _WhiteSquare, led: np.ndarray
+    store: CaptureStore, rig: DomeRigAttrs, white: _WhiteSquare, led: np.ndarray
 ) -> tuple[SpectralCameraCalibration, np.ndarray]:
     """The spectral camera's calibration and its white scale per LED (module docstring)."""
-    bands = np.asarray(rig["bands_nm"], np.float64)
-    cameras = rig["geometry"]["cameras"]
+    bands = np.asarray(rig.bands_nm, np.float64)
     reference = reference_band_nm(store)
     series = select_frames(store, SPECTRAL_CAMERA, kind="oecf", band_nm=reference)
-    lit, steps = plan_frames(
-        store, SPECTRAL_CAMERA, kind="white", light_id=int(rig["calibration_led"])
-    )
-    last = {float(step["band_nm"]): slot for slot, step in enumerate(steps)}
+    lit, steps = plan_frames(store, SPECTRAL_CAMERA, kind="white", light_id=rig.calibration_led)
+    last = {
+        float(recorded(step.band_nm, f"{store.path}: plan step band_nm")): slot
+        for slot, step in enumerate(steps)
+    }
     slots = [last[float(band)] for band in bands]
     times, means = _mean_darks(store, SPECTRAL_CAMERA)
     spectral = calibrate_spectral_camera(
@@ -410,20 +412,20 @@ def _spectral_calibration(
         series.frames,
         series.exposure_s,
         lit[slots],
-        np.array([steps[slot]["exposure_s"] for slot in slots]),
+        np.array([steps[slot].exposure_s for slot in slots]),
         led,
-        rig_spectrum(rig, "white_reflectance", WavelengthGrid(bands)),
+        rig_spectrum(rig.white_reflectance, WavelengthGrid(bands)),
         sigma_px=SERIES_SIGMA_PX,
-        bit_depth=int(cameras[SPECTRAL_CAMERA]["bit_depth"]),
+        bit_depth=rig.geometry.cameras[SPECTRAL_CAMERA].bit_depth,
         white_region=white.region(means.shape[1:]),
     )
-    positions = np.asarray(rig["geometry"]["led_positions_m"], np.float64)
+    positions = np.asarray(rig.geometry.led_positions_m, np.float64)
     scales = []
-    for light in _run_leds(store):
+    for light in _run_leds(store, rig):
         frames, steps = plan_frames(
             store, SPECTRAL_CAMERA, kind="white", light_id=light, band_nm=reference
         )
-        rate = spectral.linear_rate(frames[0], steps[0]["exposure_s"])
+        rate = spectral.linear_rate(frames[0], steps[0].exposure_s)
         scales.append(white.scale(rate, positions[light])[0])
     return spectral, np.array(scales)
 
@@ -440,19 +442,21 @@ def reference_band_nm(store: CaptureStore) -> float:
     return float(bands[0])
 
 
-def _run_leds(store: CaptureStore) -> list[int]:
+def _run_leds(store: CaptureStore, rig: DomeRigAttrs) -> list[int]:
     """The LEDs the white standard was photographed under, in plan order (module docstring)."""
-    plan = store.attrs["plan"]
-    calibration_led = store.attrs["rig"]["calibration_led"]
-    leds = [s["light_id"] for s in plan if s["kind"] == "white" and s["camera"] != SPECTRAL_CAMERA]
-    return list(dict.fromkeys(leds)) or [calibration_led]
+    leds = [
+        step.light_id
+        for step in store.metadata.plan
+        if step.kind == "white" and step.camera != SPECTRAL_CAMERA
+    ]
+    return list(dict.fromkeys(leds)) or [rig.calibration_led]
 
 
 def _rgb_calibration(
-    store: CaptureStore, camera: str, rig: Mapping[str, Any], white: _WhiteSquare
+    store: CaptureStore, camera: str, rig: DomeRigAttrs, white: _WhiteSquare
 ) -> tuple[RgbCameraCalibration, np.ndarray]:
     """An RGB camera's response, dark level and white per LED (module docstring)."""
-    hdr_set = np.asarray(rig["rgb_exposures_s"], np.float64)
+    hdr_set = np.asarray(rig.rgb_exposures_s, np.float64)
     series = select_frames(store, camera, kind="oecf")
     times, darks = _mean_darks(store, camera, np.sort(hdr_set))
     calibration = rgb_camera_response(
@@ -461,13 +465,13 @@ def _rgb_calibration(
         darks,
         times,
         hdr_set,
-        bit_depth=int(rig["geometry"]["cameras"][camera]["bit_depth"]),
+        bit_depth=rig.geometry.cameras[camera].bit_depth,
     )
-    positions = np.asarray(rig["geometry"]["led_positions_m"], np.float64)
+    positions = np.asarray(rig.geometry.led_positions_m, np.float64)
     scales = []
-    for light in _run_leds(store):
+    for light in _run_leds(store, rig):
         frames, steps = plan_frames(store, camera, kind="white", light_id=light)
-        order = [list(hdr_set).index(step["exposure_s"]) for step in steps]
+        order = [list(hdr_set).index(step.exposure_s) for step in steps]
         image = rgb_linear_image(calibration, frames[np.argsort(order)])
         scales.append(white.scale(image, positions[light]))
     return calibration, np.array(scales)
@@ -490,26 +494,28 @@ def calibrate_dome(
     DomeCalibration
     """
     store = store if isinstance(store, CaptureStore) else CaptureStore.open(store)
-    rig = dome_rig(store, "dome-calibration", ("rgb_response", "led_spectrum"))
-    grid = WavelengthGrid(np.asarray(rig["bands_nm"], np.float64))
-    led = rig_spectrum(rig, "led_spectrum", grid)
-    white_reflectance = rig_spectrum(rig, "white_reflectance", grid)
-    cameras = rig["geometry"]["cameras"]
-    nominal = {camera: CameraGeometry.from_json(entry) for camera, entry in cameras.items()}
+    rig = dome_rig(store, "dome-calibration")
+    grid = WavelengthGrid(np.asarray(rig.bands_nm, np.float64))
+    led = rig_spectrum(rig.led_spectrum, grid)
+    white_reflectance = rig_spectrum(rig.white_reflectance, grid)
+    cameras = rig.geometry.cameras
+    nominal = {camera: CameraGeometry.nominal(entry) for camera, entry in cameras.items()}
     geometry, rgb, rgb_white = {}, {}, {}
     with progress_steps("calibrate", len(cameras), enabled=show_progress) as advance:
         for camera in cameras:
             grey = _grey_frame(camera)
-            geometry[camera] = _geometric_calibration(store, camera, nominal[camera], grey)
-            white = _WhiteSquare(geometry[camera].geometry, rig["geometry"]["holder"])
+            geometry[camera] = _geometric_calibration(
+                store, rig.geometry, camera, nominal[camera], grey
+            )
+            white = _WhiteSquare(geometry[camera].geometry, rig.geometry.holder)
             if camera == SPECTRAL_CAMERA:
                 spectral, spectral_white = _spectral_calibration(store, rig, white, led)
             else:
                 rgb[camera], rgb_white[camera] = _rgb_calibration(store, camera, rig, white)
             advance()
     fine = SampledSpectra(
-        WavelengthGrid(np.asarray(rig["rgb_response"]["wavelengths_nm"], np.float64)),
-        np.asarray(rig["rgb_response"]["values"], np.float64),
+        WavelengthGrid(np.asarray(rig.rgb_response.wavelengths_nm, np.float64)),
+        np.asarray(rig.rgb_response.values, np.float64),
     )
     return DomeCalibration(
         source=str(store.path),
@@ -517,7 +523,7 @@ def calibrate_dome(
         led_per_band=led,
         white_per_band=white_reflectance,
         reference_band_nm=reference_band_nm(store),
-        leds=np.asarray(_run_leds(store), int),
+        leds=np.asarray(_run_leds(store, rig), int),
         spectral=spectral,
         spectral_white=spectral_white,
         rgb=rgb,
@@ -528,9 +534,9 @@ def calibrate_dome(
             for camera, result in geometry.items()
         },
         response=band_response(
-            fine, rig_spectrum(rig, "led_spectrum", fine.grid), white_reflectance, grid
+            fine, rig_spectrum(rig.led_spectrum, fine.grid), white_reflectance, grid
         ),
-        window_px=int(rig["window_px"]),
+        window_px=rig.window_px,
     )
 
 

@@ -46,6 +46,7 @@ from typing import Any
 import cv2
 import numpy as np
 
+from hwbridge.schema import DomeCamera
 from recon.errors import InputError
 
 __all__ = [
@@ -107,9 +108,18 @@ class CameraGeometry:
     position_m: np.ndarray
 
     @classmethod
+    def nominal(cls, camera: DomeCamera) -> CameraGeometry:
+        """The nominal camera a dome store records (its geometry's ``cameras``)."""
+        return cls(
+            np.asarray(camera.camera_matrix, np.float64),
+            np.asarray(camera.distortion, np.float64),
+            np.asarray(camera.rotation_world_to_camera, np.float64),
+            np.asarray(camera.position_m, np.float64),
+        )
+
+    @classmethod
     def from_json(cls, entry: Mapping[str, object]) -> CameraGeometry:
-        """From a camera of a dome store's ``rig["geometry"]["cameras"]`` (the nominal camera) or
-        from :meth:`to_json`."""
+        """From :meth:`to_json` (a calibration file's summary)."""
         try:
             return cls(
                 np.asarray(entry["camera_matrix"], np.float64).reshape(3, 3),

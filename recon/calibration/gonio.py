@@ -34,10 +34,10 @@ import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
+from hwbridge.schema import GonioRigAttrs
 from hwbridge.store import CaptureStore
 from recon.calibration.capture_io import select_frames
 from recon.calibration.spectral import HMI_FLICKER_PERIOD_S, plan_exposures, run_white_factors
@@ -112,16 +112,16 @@ def extend_curve(curve: np.ndarray, *, fit_levels: int = 64, trim_levels: int = 
     return curve
 
 
-def white_reflectance(rig: dict[str, Any], bands_nm: np.ndarray) -> np.ndarray:
+def white_reflectance(rig: GonioRigAttrs, bands_nm: np.ndarray) -> np.ndarray:
     """The white standard's data-sheet reflectance :math:`W_\\lambda` (stored with the capture)
     at the band centres."""
-    sheet = rig.get("white_reflectance")
-    if not isinstance(sheet, dict) or {"wavelengths_nm", "values"} - set(sheet):
+    sheet = rig.white_reflectance
+    if sheet is None:
         raise InputError(
-            "capture rig attribute white_reflectance: expected {'wavelengths_nm': [...], "
-            "'values': [...]} (the white standard's data sheet)"
+            f"capture of program {rig.program}: records no white_reflectance (the white "
+            "standard's data sheet)"
         )
-    return np.interp(bands_nm, sheet["wavelengths_nm"], sheet["values"])
+    return np.interp(bands_nm, sheet.wavelengths_nm, sheet.values)
 
 
 @dataclass(frozen=True)
@@ -254,7 +254,7 @@ def store_white_factors(
     bands = white.band_nm[order].astype(np.float64)
     exposure = white.exposure_s[order]
     signal = darks.linear_signal(white.frames[order], exposure, inverse_response)
-    reflectance = white_reflectance(store.attrs["rig"], bands)
+    reflectance = white_reflectance(store.rig_attrs(GonioRigAttrs), bands)
     return bands, run_white_factors(signal, exposure, reflectance)
 
 
@@ -276,10 +276,10 @@ def _response_series_curve(store: CaptureStore, camera: str, bit_depth: int) -> 
 
 
 def lamp_rounding_s(store: CaptureStore) -> float | None:
-    """The rounding of the exposure plan for the lamp a capture store records (``rig["lamp"]``):
-    whole flicker periods, 1/15 s, for the HMI lamp (thesis 3.2.2); ``None`` for a steady QTH
-    lamp."""
-    return None if store.attrs["rig"].get("lamp", "hmi") == "qth" else HMI_FLICKER_PERIOD_S
+    """The rounding of the exposure plan for the lamp a capture store records (its rig's
+    ``lamp``): whole flicker periods, 1/15 s, for the HMI lamp (thesis 3.2.2); ``None`` for a
+    steady QTH lamp."""
+    return None if store.rig_attrs(GonioRigAttrs).lamp == "qth" else HMI_FLICKER_PERIOD_S
 
 
 def calibrate_gonio(
@@ -308,8 +308,9 @@ def calibrate_gonio(
     store = store if isinstance(store, CaptureStore) else CaptureStore.open(store)
     if not 0 < white_fill < 1:
         raise InputError(f"white_fill: expected a fraction in (0, 1), got {white_fill}")
-    camera = str(store.attrs["rig"].get("camera_id", "k4"))
-    if camera not in {step["camera"] for step in store.attrs["plan"]}:
+    rig = store.rig_attrs(GonioRigAttrs)
+    camera = rig.camera_id
+    if camera not in {step.camera for step in store.metadata.plan}:
         raise InputError(f"{store.path}: no frames of camera {camera!r}")
     kinds = set(store.index(camera, ["kind"])["kind"].tolist())
     missing = [kind for kind in ("dark", "oecf", "white") if kind not in kinds]
@@ -322,7 +323,7 @@ def calibrate_gonio(
     darks = dark_model(store, camera)
     curve = extend_curve(_response_series_curve(store, camera, bit_depth))
     bands, factors = store_white_factors(store, camera, darks, curve)
-    reflectance = white_reflectance(store.attrs["rig"], bands)
+    reflectance = white_reflectance(rig, bands)
     dark_level = float(np.median(darks.mean_frames[0]))
     top = dark_level + white_fill * (2**bit_depth - 1 - dark_level)
     target = float(interpolate_curve(curve, np.array([top]))[0]) - float(

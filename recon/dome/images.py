@@ -24,10 +24,10 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
+from hwbridge.schema import DomeHolder
 from recon.calibration.dome import RgbCameraCalibration
 from recon.calibration.dome_capture import DomeCalibration, rgb_linear_image
 from recon.calibration.dome_geometric import CameraGeometry, stage_rotation
@@ -77,7 +77,7 @@ class Registration:
 def register_view(
     image: np.ndarray,
     geometry: CameraGeometry,
-    holder: Mapping[str, Any],
+    holder: DomeHolder,
     stage_deg: float,
     sample_size_m: float,
     *,
@@ -88,7 +88,7 @@ def register_view(
     docstring); ``manual_corners`` (keyed ``frame_id``) replace the detection of marks. Where
     the marks are not found (a steep view leaves the print a pixel or two wide) the calibrated
     camera's projection of them stands in."""
-    marks_m = np.asarray(holder["registration_corners_m"], np.float64)
+    marks_m = np.asarray(holder.registration_corners_m, np.float64)
     expected = geometry.project(marks_m @ stage_rotation(stage_deg).T) + 0.5
     try:
         marks, found = (

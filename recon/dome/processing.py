@@ -115,9 +115,9 @@ def check_dome_run(run: DomeRun, calibration: DomeCalibration) -> None:
             f"{run.capture_path}: bands {run.bands_nm.tolist()} nm, the calibration's "
             f"{calibration.bands_nm.tolist()} nm"
         )
-    if int(run.rig["window_px"]) != calibration.window_px:
+    if run.rig.window_px != calibration.window_px:
         raise InputError(
-            f"{run.capture_path}: frames of {run.rig['window_px']} px, the calibration's of "
+            f"{run.capture_path}: frames of {run.rig.window_px} px, the calibration's of "
             f"{calibration.window_px} px; expected a calibration at the run's texture size",
             remedy=Remedy.calibrate_texels,
         )
@@ -137,9 +137,9 @@ def dome_directions(run: DomeRun, calibration: DomeCalibration) -> tuple[np.ndar
     """Light and view directions ``(n_pairs, 3)`` in the sample frame: pair ``i`` is image
     ``i // n_cameras`` seen by RGB camera ``i % n_cameras``; the LED's position from the rig,
     the camera's from its calibration."""
-    geometry = run.rig["geometry"]
-    leds = np.asarray(geometry["led_positions_m"], np.float64)
-    angles = geometry["stage_angles_deg"]
+    geometry = run.rig.geometry
+    leds = np.asarray(geometry.led_positions_m, np.float64)
+    angles = geometry.stage_angles_deg
     lights, views = [], []
     for view, light in run.images:
         to_sample = stage_rotation(angles[view]).T
@@ -191,13 +191,13 @@ class DomeProcessing:
     saturated_texels: int = 0
 
     def grid(self, view: int) -> TexelGrid:
-        angle = self.run.rig["geometry"]["stage_angles_deg"][view]
-        return TexelGrid(self.texels, self.run.sample_size_m, float(angle))
+        angle = self.run.rig.geometry.stage_angles_deg[view]
+        return TexelGrid(self.texels, self.run.sample_size_m, angle)
 
     def register(self, store: CaptureStore) -> None:
         """Register every camera at every stage position, and the spectral camera's texture
         onto the partner's (step 1)."""
-        geometry = self.run.rig["geometry"]
+        geometry = self.run.rig.geometry
         textures = {}
         for camera in (*self.run.rgb_cameras, SPECTRAL_CAMERA):
             for view in self.run.views:
@@ -216,8 +216,8 @@ class DomeProcessing:
                 self.registrations[camera, view] = register_view(
                     image,
                     self.calibration.geometry[camera].geometry,
-                    geometry["holder"],
-                    geometry["stage_angles_deg"][view],
+                    geometry.holder,
+                    geometry.stage_angles_deg[view],
                     self.run.sample_size_m,
                     frame_id=f"{camera}_view{view}",
                     manual_corners=self.manual_corners,
@@ -245,7 +245,7 @@ class DomeProcessing:
             self.registrations[camera, view].corners_xy,
             self.grid(view),
             light,
-            np.asarray(self.run.rig["geometry"]["led_positions_m"][light]),
+            np.asarray(self.run.rig.geometry.led_positions_m[light]),
         )
         saturated = ~np.isfinite(values)
         self.saturated_texels += int(saturated.any(axis=-1).sum())
@@ -258,7 +258,7 @@ class DomeProcessing:
         registration = self.registrations[SPECTRAL_CAMERA, view]
         slots = self.run.slots(SPECTRAL_CAMERA, "sample", view, light)
         frames = store.read_frames(SPECTRAL_CAMERA, slots)
-        position = np.asarray(self.run.rig["geometry"]["led_positions_m"][light])
+        position = np.asarray(self.run.rig.geometry.led_positions_m[light])
         index = self.run.index[SPECTRAL_CAMERA]
         shift = self.band_shift[view]
         return [
@@ -311,7 +311,7 @@ def _open_btf(work: DomeProcessing, out: Path, resume: bool) -> BTFStore:
             "p_dyn": P_DYN,
             "target_relative_noise": TARGET_RELATIVE_NOISE,
         },
-        rig=work.run.rig.get("rig"),
+        rig=work.run.rig.rig,
     )
 
 
@@ -410,7 +410,7 @@ def process_dome(
     out = Path(out)
     if texels is None:
         existing = resume and out.exists()
-        texels = BTFStore.open(out).texels[0] if existing else int(run.rig["texels"])
+        texels = BTFStore.open(out).texels[0] if existing else run.rig.texels
     if band_partner is None:
         band_partner = spectral_partner(run, calibration)
     elif band_partner not in run.rgb_cameras:
@@ -434,7 +434,7 @@ def process_dome(
         group
         for group in joint_groups(
             [run.image_bands(image) for image in range(len(run.images))],
-            len(run.rig["band_schedule"]),
+            len(run.rig.band_schedule),
             run.bands_nm.size,
         )
         if any(image * cameras + c in pending for image in group for c in range(cameras))

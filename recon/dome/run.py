@@ -16,11 +16,11 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from hwbridge.dome_layout import SPECTRAL_CAMERA
+from hwbridge.schema import DomeRigAttrs, recorded
 from hwbridge.store import CaptureStore
 from recon.calibration.dome_capture import dome_rig
 from recon.errors import InputError
@@ -28,7 +28,6 @@ from recon.errors import InputError
 __all__ = ["DomeRun", "joint_groups", "open_dome_run"]
 
 _FIELDS = ("kind", "view_id", "light_id", "exposure_s", "band_nm")
-_RIG_KEYS = ("material", "sample_size_m", "texels", "geometry", "bands_nm", "band_schedule")
 
 
 @dataclass(frozen=True)
@@ -40,7 +39,8 @@ class DomeRun:
     capture_path
         The run's capture store.
     rig
-        Its ``rig`` attribute.
+        Its ``rig`` attribute (a run's: ``material``, ``sample_size_m`` and
+        ``stage_positions`` are set).
     rgb_cameras
         The RGB cameras, in the store's order.
     images
@@ -50,22 +50,22 @@ class DomeRun:
     """
 
     capture_path: Path
-    rig: dict[str, Any]
+    rig: DomeRigAttrs
     rgb_cameras: tuple[str, ...]
     images: tuple[tuple[int, int], ...]
     index: dict[str, dict[str, np.ndarray]]
 
     @property
     def material(self) -> str:
-        return str(self.rig["material"])
+        return str(self.rig.material)
 
     @property
     def sample_size_m(self) -> float:
-        return float(self.rig["sample_size_m"])
+        return float(recorded(self.rig.sample_size_m, f"{self.capture_path}: rig.sample_size_m"))
 
     @property
     def bands_nm(self) -> np.ndarray:
-        return np.asarray(self.rig["bands_nm"], np.float64)
+        return np.asarray(self.rig.bands_nm, np.float64)
 
     @property
     def views(self) -> list[int]:
@@ -116,8 +116,8 @@ def open_dome_run(capture: str | Path | CaptureStore) -> DomeRun:
     """Read a dome run's attributes and index; refuse a store that is not one, naming what it
     lacks, before any frame is read."""
     store = capture if isinstance(capture, CaptureStore) else CaptureStore.open(capture)
-    rig = dome_rig(store, "dome-run", _RIG_KEYS)
-    cameras = list(rig["geometry"]["cameras"])
+    rig = dome_rig(store, "dome-run")
+    cameras = list(rig.geometry.cameras)
     if SPECTRAL_CAMERA not in cameras or len(cameras) < 2:
         raise InputError(
             f"{store.path}: expected RGB cameras and the {SPECTRAL_CAMERA!r} camera, got {cameras}"

@@ -15,9 +15,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import zarr
 from typer.testing import CliRunner
 
 from hwbridge.lock import StoreLock
+from hwbridge.schema import GonioRigAttrs
 from hwbridge.store import CaptureStore, FrameRecord
 from recon.btf.store import BTFStore
 from recon.calibration.gonio import GonioCalibration
@@ -153,6 +155,17 @@ PROBES: list[tuple[list[str], int, str]] = [
     (["calibrate", "@CAPTURE", "--out", "@EMPTY"], 2, "is a folder; expected a file name"),
     # process
     (
+        ["process", "@OLD_CAPTURE", "--calibration", "@CAL", "--out", "@NEW_BTF"],
+        2,
+        "old.capture.zarr: a capture store of schema version 0, expected 1 (written by another "
+        "version of the software)",
+    ),
+    (
+        ["process", "@UNVERSIONED_CAPTURE", "--calibration", "@CAL", "--out", "@NEW_BTF"],
+        2,
+        "a capture store of schema version none recorded, expected 1",
+    ),
+    (
         ["process", "@EMPTY", "--calibration", "@CAL", "--out", "@NEW_BTF"],
         2,
         "is not a capture store",
@@ -208,6 +221,12 @@ PROBES: list[tuple[list[str], int, str]] = [
     (["compress", "@PLAIN"], 2, "is a file: expected a BTF store"),
     (["compress", "@CAPTURE"], 2, "not a BTF store"),
     (["compress", "@INCOMPLETE_BTF"], 2, "finish it with spectwin process --resume"),
+    (
+        ["compress", "@OLD_BTF"],
+        2,
+        "a BTF store of format version 1, expected 2 (written by another version of the "
+        "software); spectwin process makes one",
+    ),
     (["compress", "@DAMAGED_CHUNK_BTF"], 1, "pair 1: reflectance/c/1/0/0/0 is corrupt"),
     (["compress", "@DAMAGED_METADATA_BTF"], 1, "reflectance/zarr.json is unreadable"),
     (["compress", "@BTF", "--brightness", "0"], 2, "'--brightness'"),
@@ -234,6 +253,9 @@ PROBES: list[tuple[list[str], int, str]] = [
     (["store", "check", "@PLAIN"], 2, "is a file: expected a capture store or a BTF store"),
     (["store", "check", "@EMPTY"], 2, "is not a spectwin store"),
     (["store", "check", "@CAPTURE", "--bogus"], 2, "No such option: --bogus"),
+    (["store", "check", "@OLD_CAPTURE"], 2, "a capture store of schema version 0, expected 1"),
+    (["store", "check", "@UNVERSIONED_CAPTURE"], 2, "schema version none recorded, expected 1"),
+    (["store", "check", "@OLD_BTF"], 2, "old.btf.zarr: a BTF store of format version 1, expected"),
     (["store", "nosuch"], 2, "No such command 'nosuch'"),
     # camchar
     (["camchar", "--camera", "nosuch"], 2, "'Nikon D70'"),
@@ -266,7 +288,14 @@ def _capture(path: Path, *, complete: bool) -> None:
     plan = [{"camera": "k4", "kind": "dark", "exposure_s": 0.1}] * 2
     store = CaptureStore.create(
         path,
-        rig={"rig": "gonioreflectometer", "camera": "coolsnap_k4"},
+        rig=GonioRigAttrs(
+            rig="gonioreflectometer",
+            program="demo",
+            camera="coolsnap_k4",
+            camera_id="k4",
+            window_px=4,
+            lamp="hmi",
+        ),
         backend="sim",
         seed=0,
         plan=plan,
@@ -294,6 +323,16 @@ def _btf(
     )
     for pair in range(written):
         store.write_pair(pair, np.full((texels, texels, DEFAULT_GRID.size), 0.2, np.float32))
+
+
+def _with_version(path: Path, attribute: str, version: int | None) -> None:
+    """The store at ``path`` as another version of spectwin wrote it: its version ``attribute``
+    set to ``version`` (``None``: left out, as before stores recorded it)."""
+    group = zarr.open_group(str(path), mode="r+")
+    if version is None:
+        del group.attrs[attribute]
+    else:
+        group.attrs[attribute] = version
 
 
 def make_inputs(root: Path) -> dict[str, Path]:
@@ -328,6 +367,9 @@ def make_inputs(root: Path) -> dict[str, Path]:
             "LOCKED_CAPTURE": "locked.capture.zarr",
             "LOCKED_NEW": "locked_new.capture.zarr",
             "LOCKED_BTF": "locked.btf.zarr",
+            "OLD_CAPTURE": "old.capture.zarr",
+            "UNVERSIONED_CAPTURE": "unversioned.capture.zarr",
+            "OLD_BTF": "old.btf.zarr",
         }.items()
     }
     paths["PLAIN"].write_text("not a store\n")
@@ -350,6 +392,11 @@ def make_inputs(root: Path) -> dict[str, Path]:
     for name in ("DAMAGED_CHUNK_BTF", "DAMAGED_METADATA_BTF"):
         _btf(paths[name], written=2)
     _capture(paths["LOCKED_CAPTURE"], complete=False)
+    for name, version in (("OLD_CAPTURE", 0), ("UNVERSIONED_CAPTURE", None)):
+        _capture(paths[name], complete=True)
+        _with_version(paths[name], "schema_version", version)
+    _btf(paths["OLD_BTF"], written=2)
+    _with_version(paths["OLD_BTF"], "format_version", 1)
     _btf(paths["LOCKED_BTF"], written=1)
     _HELD.append(StoreLock.acquire(paths["LOCKED_CAPTURE"]))
     _HELD.append(StoreLock.acquire(paths["LOCKED_BTF"]))

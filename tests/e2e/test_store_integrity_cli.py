@@ -17,6 +17,7 @@ import pytest
 import zarr
 from typer.testing import CliRunner
 
+from hwbridge.schema import SCHEMA_VERSION
 from hwbridge.store import CaptureStore
 from recon.btf.store import BTFStore
 from recon.calibration.gonio import GonioCalibration
@@ -236,6 +237,7 @@ def test_store_check_says_no_checksums_for_an_old_store(tmp_path):
     group = zarr.open_group(str(path), mode="w-", zarr_format=3)
     group.attrs.update(
         {
+            "schema_version": SCHEMA_VERSION,
             "rig": {},
             "backend": "real",
             "seed": 3,

@@ -13,6 +13,7 @@ from hwbridge.dome_plans import (
     dome_start_times_s,
 )
 from hwbridge.errors import InputError
+from hwbridge.schema import PlanStep
 
 HDR = (0.05, 0.186, 0.666, 2.5)  # thesis 10.4
 CAMERAS = DomeCameraIds((rgb_camera_id(0), rgb_camera_id(6)), "spectral")
@@ -56,7 +57,8 @@ def test_the_run_takes_per_stage_position_an_alignment_set_then_hdr_sets_and_sch
         (1, 9, 550.0, 1.0),
         (1, 9, 650.0, 2.0),
     ]
-    assert camera_steps(plan, "spectral")[0] == 2  # the spectral alignment frame
+    steps = [PlanStep.model_validate(step) for step in plan]
+    assert camera_steps(steps, "spectral")[0] == 2  # the spectral alignment frame
 
 
 def test_the_calibration_has_dark_series_response_series_white_and_geometric_frames():

@@ -8,9 +8,9 @@ from hwbridge.errors import InputError
 from hwbridge.store import CaptureStore, FrameRecord
 
 PLAN = [
-    {"camera": "k4", "kind": "dark"},
-    {"camera": "rgb0", "kind": "sample"},
-    {"camera": "k4", "kind": "sample"},
+    {"camera": "k4", "kind": "dark", "exposure_s": 0.5},
+    {"camera": "rgb0", "kind": "sample", "exposure_s": 0.5},
+    {"camera": "k4", "kind": "sample", "exposure_s": 0.5},
 ]
 CAMERAS = {"k4": (8, 6), "rgb0": (4, 4)}
 
@@ -60,7 +60,7 @@ def test_a_simulated_capture_batches_its_index_and_compresses_frames_faster(
 ):
     """Simulated frames can be taken again: their index and flags share chunks of 1024 frames
     and frames get Zstd level 1; a real capture keeps one frame per chunk and Zstd's default."""
-    plan = [{"camera": "k4", "kind": "sample"}] * 2000
+    plan = [{"camera": "k4", "kind": "sample", "exposure_s": 0.5}] * 2000
     store = CaptureStore.create(
         tmp_path / "run.capture.zarr",
         rig={},
@@ -118,7 +118,7 @@ def test_bad_input_is_refused_and_nothing_is_overwritten(tmp_path):
             rig={},
             backend="sim",
             seed=0,
-            plan=[{"camera": "x"}],
+            plan=[{"camera": "x", "kind": "dark", "exposure_s": 0.5}],
             cameras=CAMERAS,
         )
     with pytest.raises(InputError, match="backend"):

@@ -11,6 +11,7 @@ import zarr
 
 from hwbridge.errors import DamagedDataError
 from hwbridge.integrity import has_checksums
+from hwbridge.schema import SCHEMA_VERSION
 from hwbridge.session import SessionDevices, SessionSettings, run_session
 from hwbridge.store import CaptureStore, FrameRecord
 
@@ -239,11 +240,21 @@ def test_damaged_metadata_is_one_line_naming_the_file(store, node, what, damage)
 
 
 def _old_store(path):
-    """A store laid out as before checksums: Zarr's default codecs, ``kind`` and ``status`` in
-    one chunk per camera (the oldest layout), frames one chunk each."""
+    """A store laid out as before checksums (with today's attributes): Zarr's default codecs,
+    ``kind`` and ``status`` in one chunk per camera (the oldest layout), frames one chunk
+    each."""
     group = zarr.open_group(str(path), mode="w-", zarr_format=3)
     plan = PLAN[:3]
-    group.attrs.update({"rig": {}, "backend": "sim", "seed": 1, "plan": plan, "complete": True})
+    group.attrs.update(
+        {
+            "schema_version": SCHEMA_VERSION,
+            "rig": {},
+            "backend": "sim",
+            "seed": 1,
+            "plan": plan,
+            "complete": True,
+        }
+    )
     frames = group.create_array("frames/k4", shape=(3, *SHAPE), chunks=(1, *SHAPE), dtype="uint16")
     frames[:] = np.arange(1, 4, dtype=np.uint16)[:, None, None] * 100
     for name in ("kind", "status"):

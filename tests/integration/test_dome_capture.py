@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from hwbridge.dome_layout import ALL_LEDS, SPECTRAL_CAMERA, camera_steps
+from hwbridge.schema import PlanStep
 from hwbridge.session import SessionSettings, capture_steps, locked_session_store
 from hwbridge.store import CaptureStore
 from recon.radiometric.demosaic import bin_quads, demosaic
@@ -72,7 +73,7 @@ def calibration(tmp_path_factory) -> CaptureStore:
     geometric frame of the top RGB camera and the spectral camera (the rest stays pending)."""
     program = dome_calibration_program(size=CALIBRATION_SIZE, dark_frames=3, seed=SEED)
     plan, rig = program.plan, program.rig
-    reference_s = rig["band_exposures_s"][rig["bands_nm"].index(550.0)]
+    reference_s = rig.band_exposures_s[rig.bands_nm.index(550.0)]
     steps = [
         step
         for step, settings in enumerate(plan)
@@ -82,7 +83,7 @@ def calibration(tmp_path_factory) -> CaptureStore:
             and settings["exposure_s"] == reference_s
             and (
                 settings["kind"] == "dark"
-                or (settings["kind"] == "white" and settings["light_id"] == rig["calibration_led"])
+                or (settings["kind"] == "white" and settings["light_id"] == rig.calibration_led)
             )
         )
     ]
@@ -95,13 +96,13 @@ def calibration(tmp_path_factory) -> CaptureStore:
     return store
 
 
-def _frames(store: CaptureStore, camera: str, **wanted) -> tuple[np.ndarray, list[dict]]:
+def _frames(store: CaptureStore, camera: str, **wanted) -> tuple[np.ndarray, list[PlanStep]]:
     """The frames of ``camera`` whose plan steps have the ``wanted`` settings, and the steps."""
-    plan = store.attrs["plan"]
+    plan = store.metadata.plan
     slots = [
         slot
         for slot, step in enumerate(camera_steps(plan, camera))
-        if all(plan[step].get(key) == value for key, value in wanted.items())
+        if all(getattr(plan[step], key) == value for key, value in wanted.items())
     ]
     steps = [plan[camera_steps(plan, camera)[slot]] for slot in slots]
     return store.read_frames(camera, slots).astype(np.float64), steps
@@ -119,7 +120,7 @@ def test_stored_white_frames_carry_the_closed_form_signal(calibration):
     _, band_white = dome_cameras(1, texel_px=2).white_rates()
     band = list(THESIS_BANDS_NM).index(550.0)
     frames, steps = _frames(calibration, SPECTRAL_CAMERA, kind="white", band_nm=550.0, light_id=led)
-    exposure = steps[0]["exposure_s"]
+    exposure = steps[0].exposure_s
     darks, _ = _frames(calibration, SPECTRAL_CAMERA, kind="dark", exposure_s=exposure)
     assert len(darks) == 3
     signal = frames[0] - darks.mean(axis=0)
@@ -146,11 +147,11 @@ def _board_corners(store: CaptureStore, camera: str):
     return found, frames.shape[1:]
 
 
-def _target_to_world(geometry: dict, step: dict) -> np.ndarray:
+def _target_to_world(geometry: dict, step: PlanStep) -> np.ndarray:
     """4x4 pose of the checkerboard of a geometric frame in the world: on its wedge
     (``target_to_sample``), turned by the stage."""
-    pose = np.asarray(geometry["geometric_target"]["target_to_sample"][f"{step['tilt_deg']:g}"])
-    turn = np.radians(geometry["stage_angles_deg"][step["view_id"]])
+    pose = np.asarray(geometry["geometric_target"]["target_to_sample"][f"{step.tilt_deg:g}"])
+    turn = np.radians(geometry["stage_angles_deg"][step.view_id])
     stage = np.eye(4)
     stage[:2, :2] = [[math.cos(turn), -math.sin(turn)], [math.sin(turn), math.cos(turn)]]
     return stage @ pose
@@ -261,13 +262,13 @@ def test_the_holders_marks_are_found_where_the_metadata_puts_them(run):
     for camera in ("rgb00", SPECTRAL_CAMERA):
         frames, steps = _frames(run, camera, kind="alignment")
         for frame, step in zip(frames, steps, strict=True):
-            expected = np.asarray(marks[camera]["marker_corners_xy"][str(step["view_id"])])
+            expected = np.asarray(marks[camera]["marker_corners_xy"][str(step.view_id)])
             if camera == SPECTRAL_CAMERA:
                 found = register_frame(frame, expected_xy=expected + 0.5) - 0.5
             else:  # one value per Bayer quad: half the resolution
                 quads = bin_quads(frame).mean(axis=-1)
                 found = (register_frame(quads, expected_xy=(expected + 0.5) / 2)) * 2 - 0.5
-            assert np.abs(found - expected).max() < 1.0, (camera, step["view_id"])
+            assert np.abs(found - expected).max() < 1.0, (camera, step.view_id)
 
 
 def test_the_material_is_rendered_in_the_sample_frames(run):
@@ -277,5 +278,5 @@ def test_the_material_is_rendered_in_the_sample_frames(run):
     frames, steps = _frames(run, "rgb00", kind="sample", exposure_s=0.666)
     side = run.attrs["rig"]["window_px"]
     opening = frames[:, side // 2 - side // 8 : side // 2 + side // 8]
-    assert [step["view_id"] for step in steps] == [0, 1]
+    assert [step.view_id for step in steps] == [0, 1]
     assert np.abs(opening[0] - opening[1]).mean() > 5 * math.sqrt(opening[0].mean())

@@ -130,7 +130,8 @@ def import_(
     }
     if rgb:
         summary["from_rgb"] = f"sRGB, upsampled by {upsampling}"
-        summary["format"] = (rgb_source(btf) or {}).get("layout")
+        recorded = rgb_source(btf)
+        summary["format"] = recorded.layout if recorded is not None else None
     print_summary(summary, "imported BTF", as_json)
 
 

@@ -178,7 +178,7 @@ def _interrupted(store: Path, done: int | None = None, total: int | None = None)
             typer.echo("interrupted before the store was created; nothing was written", err=True)
             raise typer.Exit(INTERRUPTED)
         capture = CaptureStore.open(store)
-        total = len(capture.attrs["plan"])
+        total = len(capture.metadata.plan)
         done = total - len(capture.pending_steps())
     then = (
         "the capture is complete"
@@ -245,7 +245,7 @@ def _capture(
         with dask_client(workers, scheduler) as client:
             summary["cluster"] = cluster_description(client)
             result = built.run(store, resume=resume, show_progress=not as_json, client=client)
-        cameras = dict.fromkeys(step["camera"] for step in result.attrs["plan"])
+        cameras = dict.fromkeys(step.camera for step in result.metadata.plan)
         indexes = [result.index(camera, ["kind", "status"]) for camera in cameras]
         recaptured = [
             f"{problem.item}: {problem.key} was {problem.problem}" for problem in result.recaptured

@@ -305,7 +305,7 @@ def validate(
 
     require_output_folder(out)
     require_sound_btf(btf, "validate", allow_unregistered=True, compressed=compressed)
-    rig = BTFStore.open(btf).attrs.get("rig")  # None: imported, narrow bands
+    rig = BTFStore.open(btf).metadata.rig  # None: imported, narrow bands
     with console.status("validating") as status:
         metrics = validate_btf(
             btf,

@@ -69,16 +69,17 @@ def _kind(path: Path) -> str:
 def _source_provenance(source: str | None) -> dict[str, Any]:
     """Seed and program of the capture a BTF was processed from (when it can be read)."""
     from hwbridge.errors import DamagedDataError, InputError
+    from hwbridge.schema import RigAttrs
     from hwbridge.store import CaptureStore
 
     if not source:
         return {"seed": None, "program": None}
     try:
-        attrs = CaptureStore.open(source).attrs
+        capture = CaptureStore.open(source)
+        seed, rig = capture.metadata.seed, capture.rig_attrs(RigAttrs)
     except (InputError, DamagedDataError):
         return {"seed": None, "program": "(source capture unreadable)"}
-    rig = attrs.get("rig") or {}
-    return {"seed": attrs.get("seed"), "program": rig.get("program")}
+    return {"seed": seed, "program": rig.program}
 
 
 @store_app.command("check")
@@ -166,7 +167,7 @@ def require_sound_btf(
         run_failed(f"{path}: damaged BTF store: {damage}; {remedy}")
     pending = report.pending
     if allow_unregistered:
-        unregistered = set(BTFStore.open(path).attrs.get("unregistered_pairs") or [])
+        unregistered = set(BTFStore.open(path).metadata.unregistered_pairs or ())
         pending = [pair for pair in pending if pair not in unregistered]
     if pending:
         fail(

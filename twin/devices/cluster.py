@@ -50,7 +50,7 @@ import signal
 import threading
 import time
 import uuid
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -59,6 +59,7 @@ import numpy as np
 from distributed import Client, Event, Future, LocalCluster, WorkerPlugin, as_completed, wait
 
 from hwbridge.lock import StoreLock
+from hwbridge.schema import NO_VIEW, RigAttrs
 from hwbridge.session import (
     SessionSettings,
     SignalStop,
@@ -213,13 +214,13 @@ def view_tasks(
         raise InputError(f"max_steps: expected at least 1, got {max_steps}")
     tasks: list[list[int]] = []
     for step in steps:
-        view = plan[step].get("view_id", -1)
+        view = plan[step].get("view_id", NO_VIEW)
         last = tasks[-1] if tasks else None
         if (
             last is not None
             and len(last) < max_steps
             and last[-1] == step - 1
-            and plan[last[-1]].get("view_id", -1) == view
+            and plan[last[-1]].get("view_id", NO_VIEW) == view
         ):
             last.append(step)
         else:
@@ -313,7 +314,7 @@ def run_capture(
     plan: list[dict[str, Any]],
     devices: DeviceRecipe,
     *,
-    rig: dict[str, Any],
+    rig: RigAttrs | Mapping[str, Any],
     seed: int,
     backend: str = "sim",
     resume: bool = False,

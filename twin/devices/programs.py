@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from hwbridge.schema import RigAttrs
 from hwbridge.store import CaptureStore
 from recon.errors import InputError
 from twin.devices.cluster import run_capture
@@ -57,12 +58,12 @@ def check_exposures(plan: list[dict], sensors: Mapping[str, Sensor]) -> None:
 
 class ProgramCapture:
     """Capturing of a program that holds its ``plan``, its ``devices`` (a recipe that builds
-    them, and pickles for the workers of a cluster), the store's ``rig`` attribute and the
-    session ``seed``."""
+    them, and pickles for the workers of a cluster), the store's ``rig`` attribute (the model of
+    the rig's kind) and the session ``seed``."""
 
     plan: list[dict[str, Any]]
     devices: DeviceRecipe
-    rig: dict[str, Any]
+    rig: RigAttrs
     seed: int
 
     def run(

@@ -37,6 +37,7 @@ import numpy as np
 from hwbridge.dome_targets import check_current_ma, led_pattern, single_led, stage_angle_deg
 from hwbridge.errors import DeviceDisconnected, DeviceTimeout, InputError
 from hwbridge.protocols import Reading, description, reading
+from hwbridge.schema import NO_VIEW
 from hwbridge.session import SessionDevices
 from recon.spectra import DEFAULT_GRID, WavelengthGrid
 from twin.components.lamps import HMILamp, LightSource
@@ -68,7 +69,7 @@ class VirtualRig:
     """
 
     band_nm: float | None = None
-    view_id: int = -1
+    view_id: int = NO_VIEW
     lamp_on: bool = True
     led_pattern: np.ndarray | None = None
     led_current_ma: float = 0.0

@@ -21,6 +21,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from hwbridge.dome_layout import SPECTRAL_CAMERA
+from hwbridge.schema import DomeCamera, DomeGeometry
 from recon.errors import InputError
 from twin.dome.holder import holder_geometry, target_geometry
 from twin.dome.render import dome_camera, stage_matrix
@@ -78,7 +79,7 @@ def _opencv(view: PinholeCamera) -> tuple[np.ndarray, np.ndarray]:
 
 def _camera_entry(
     config: DomeConfig, camera_id: str, size: FrameSize, stage_views: Sequence[int]
-) -> dict[str, object]:
+) -> DomeCamera:
     arc = camera_arc_index(camera_id)
     view, sensor, _ = dome_camera(config, arc, size.pixels, window=size.window)
     rotation, matrix = _opencv(view)
@@ -88,22 +89,20 @@ def _camera_entry(
     for stage in stage_views:
         world = corners @ stage_matrix(angles[stage])[:3, :3].T
         marks[str(stage)] = (view.project(world) - 0.5).tolist()
-    entry: dict[str, object] = {
-        "role": "spectral" if arc == SPECTRAL_CAMERA else "rgb",
-        "definition": sensor.config.name,
-        "mosaic": "none" if not sensor.is_colour else "RGGB",
-        "bit_depth": sensor.config.bit_depth,
-        "position_m": np.asarray(view.position_m, float).tolist(),
-        "rotation_world_to_camera": rotation.tolist(),
-        "camera_matrix": matrix.tolist(),
-        "distortion": [0.0] * 5,
-        "frame_px": [size.window, size.window],
-        "pixel_pitch_m": size.pitch_m,
-        "marker_corners_xy": marks,
-    }
-    if arc != SPECTRAL_CAMERA:
-        entry["arc_index"] = arc
-    return entry
+    return DomeCamera(
+        role="spectral" if arc == SPECTRAL_CAMERA else "rgb",
+        definition=sensor.config.name,
+        mosaic="none" if not sensor.is_colour else "RGGB",
+        arc_index=None if arc == SPECTRAL_CAMERA else arc,
+        bit_depth=sensor.config.bit_depth,
+        position_m=np.asarray(view.position_m, float).tolist(),
+        rotation_world_to_camera=rotation.tolist(),
+        camera_matrix=matrix.tolist(),
+        distortion=[0.0] * 5,
+        frame_px=(size.window, size.window),
+        pixel_pitch_m=size.pitch_m,
+        marker_corners_xy=marks,
+    )
 
 
 def geometry_metadata(
@@ -113,20 +112,18 @@ def geometry_metadata(
     *,
     stage_views: Sequence[int],
     tilts_deg: Sequence[float] = (),
-) -> dict[str, object]:
+) -> DomeGeometry:
     """The ``geometry`` of a dome store's ``rig`` attribute (:mod:`hwbridge.dome_layout`):
     stage angles, LED positions, every camera of ``camera_ids`` with the nominal image points of
     the registration marks at ``stage_views``, the holder, and the checkerboard at
     ``tilts_deg``."""
     geometry = dome_geometry(config)
-    return {
-        "frame": "world: origin at the sample centre on the stage, z up, metres; the sample "
+    return DomeGeometry(
+        frame="world: origin at the sample centre on the stage, z up, metres; the sample "
         "frame is the world turned about z by the stage angle",
-        "stage_angles_deg": geometry.stage_angles_deg.tolist(),
-        "led_positions_m": geometry.led_positions_m.tolist(),
-        "cameras": {
-            camera: _camera_entry(config, camera, size, stage_views) for camera in camera_ids
-        },
-        "holder": holder_geometry(),
-        "geometric_target": target_geometry(list(tilts_deg)),
-    }
+        stage_angles_deg=geometry.stage_angles_deg.tolist(),
+        led_positions_m=geometry.led_positions_m.tolist(),
+        cameras={camera: _camera_entry(config, camera, size, stage_views) for camera in camera_ids},
+        holder=holder_geometry(),
+        geometric_target=target_geometry(list(tilts_deg)),
+    )

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from hwbridge.schema import CheckerboardTarget, DomeHolder
 from recon.errors import InputError
 from twin.materials import Material
 from twin.materials.calibration_targets import (
@@ -110,28 +111,28 @@ def holder_scene_parts(content: str, material: Material | None) -> list[SurfaceP
     return holder_parts() + extra
 
 
-def holder_geometry() -> dict[str, object]:
+def holder_geometry() -> DomeHolder:
     """The holder's registration geometry for a store's metadata (:mod:`hwbridge.dome_layout`):
     the print's outer corners in the texture's corner order ``(0,0), (1,0), (1,1), (0,1)``
     (sample ``(-h, +h), (+h, +h), (+h, -h), (-h, -h)``), the print's half-sizes and the
     opening's."""
-    return {
-        "registration_corners_m": registration_corners()[[1, 0, 3, 2]].tolist(),
-        "print_inner_half_m": PRINT_INNER_HALF_M,
-        "print_outer_half_m": PRINT_OUTER_HALF_M,
-        "opening_half_m": PAPER_INNER_HALF_M,
-    }
+    return DomeHolder(
+        registration_corners_m=registration_corners()[[1, 0, 3, 2]].tolist(),
+        print_inner_half_m=PRINT_INNER_HALF_M,
+        print_outer_half_m=PRINT_OUTER_HALF_M,
+        opening_half_m=PAPER_INNER_HALF_M,
+    )
 
 
-def target_geometry(tilts_deg: list[float]) -> dict[str, object]:
+def target_geometry(tilts_deg: list[float]) -> CheckerboardTarget:
     """The checkerboard for a store's metadata: squares, inner corners in the target frame and
     its pose on the wedge for every tilt in ``tilts_deg``."""
     columns, rows = CHECKERBOARD["columns"], CHECKERBOARD["rows"]
-    return {
-        "kind": "checkerboard",
-        "squares": [columns, rows],
-        "inner_corners": [columns - 1, rows - 1],
-        "square_m": CHECKERBOARD["square_m"],
-        "corners_m": checkerboard_corners(columns, rows, CHECKERBOARD["square_m"]).tolist(),
-        "target_to_sample": {f"{tilt:g}": wedge_pose(tilt).tolist() for tilt in tilts_deg},
-    }
+    return CheckerboardTarget(
+        kind="checkerboard",
+        squares=(columns, rows),
+        inner_corners=(columns - 1, rows - 1),
+        square_m=CHECKERBOARD["square_m"],
+        corners_m=checkerboard_corners(columns, rows, CHECKERBOARD["square_m"]).tolist(),
+        target_to_sample={f"{tilt:g}": wedge_pose(tilt).tolist() for tilt in tilts_deg},
+    )

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from hwbridge.dome_layout import SPECTRAL_CAMERA, rgb_camera_id
+from hwbridge.dome_layout import ALL_LEDS, SPECTRAL_CAMERA, rgb_camera_id
 from hwbridge.dome_plans import (
     DomeCameraIds,
     DomeExposures,
@@ -40,6 +40,7 @@ from hwbridge.dome_plans import (
     dome_run,
     dome_start_times_s,
 )
+from hwbridge.schema import NO_LIGHT, NO_VIEW, DomeRigAttrs, Spectrum
 from hwbridge.store import CaptureStore
 from recon.errors import InputError
 from twin.components.lamps import FINE_GRID, PhosphorWhiteLED
@@ -251,8 +252,8 @@ def calibration_plan(parts: DomePlanParts, dark_frames: int) -> list[dict]:
     )
 
 
-def _spectrum(values: np.ndarray) -> dict[str, list[float]]:
-    return {"wavelengths_nm": FINE_GRID.wavelengths_nm.tolist(), "values": values.tolist()}
+def _spectrum(values: np.ndarray) -> Spectrum:
+    return Spectrum(wavelengths_nm=FINE_GRID.wavelengths_nm.tolist(), values=values.tolist())
 
 
 @dataclass(frozen=True, eq=False)
@@ -262,13 +263,13 @@ class DomeCaptureProgram(ProgramCapture):
     Attributes
     ----------
     name
-        ``dome-calibration`` or ``dome-run`` (the store's ``rig["program"]``).
+        ``dome-calibration`` or ``dome-run`` (the ``program`` of the store's rig).
     plan
         One dict per step (:mod:`hwbridge.dome_plans`).
     devices
         The devices' recipe (it pickles, for the workers of a cluster).
     rig
-        The store's ``rig`` attribute (:mod:`hwbridge.dome_layout`).
+        The store's ``rig`` attribute.
     seed
         The session seed.
     timing
@@ -280,7 +281,7 @@ class DomeCaptureProgram(ProgramCapture):
     name: str
     plan: list[dict]
     devices: SimDomeDevices
-    rig: dict[str, Any]
+    rig: DomeRigAttrs
     seed: int
     timing: DomeTiming
     scene: DomeScene
@@ -288,10 +289,10 @@ class DomeCaptureProgram(ProgramCapture):
     def _render(self, step: dict, order: dict[int, int], per_pass: dict[str, int]) -> tuple:
         """What one render (or pass of LEDs, :mod:`twin.dome.signals`) of ``step`` shows;
         ``order`` numbers the LEDs lit one at a time in plan order, ``per_pass`` gives each
-        camera's LEDs per pass."""
-        light = step.get("light_id", -1)
-        if self.rig["led_renders"] == "pose" and light >= 0:
-            light = -3 - order[light] // per_pass[step["camera"]]
+        camera's LEDs per pass (a pass counted down from below :data:`ALL_LEDS`)."""
+        light = step.get("light_id", NO_LIGHT)
+        if self.rig.led_renders == "pose" and light >= 0:
+            light = ALL_LEDS - 1 - order[light] // per_pass[step["camera"]]
         return step["camera"], step.get("view_id"), light, step["kind"]
 
     def dry_run(self) -> dict[str, Any]:
@@ -300,7 +301,7 @@ class DomeCaptureProgram(ProgramCapture):
         :func:`hwbridge.dome_plans.dome_duration_s`) and the storage of the frames and their
         index uncompressed."""
         frames = Counter(step["camera"] for step in self.plan)
-        side = self.rig["window_px"]
+        side = self.rig.window_px
         order = {led: index for index, led in enumerate(self.scene.single_leds)}
         per_pass = {
             camera: leds_per_pass(side, self.scene.pass_channels(camera_arc_index(camera)))
@@ -318,12 +319,12 @@ class DomeCaptureProgram(ProgramCapture):
             "steps": len(self.plan),
             "frames": dict(frames),
             "kinds": dict(Counter(step["kind"] for step in self.plan)),
-            "stage_positions": len({s.get("view_id", -1) for s in self.plan} - {-1}),
-            "leds": len({s.get("light_id", -1) for s in self.plan} - {-1, -2}),
+            "stage_positions": len({s.get("view_id", NO_VIEW) for s in self.plan} - {NO_VIEW}),
+            "leds": len({s.get("light_id", NO_LIGHT) for s in self.plan} - {NO_LIGHT, ALL_LEDS}),
             "renders": len(renders),
-            "led_renders": self.rig["led_renders"],
+            "led_renders": self.rig.led_renders,
             "frame_size": f"{side} x {side} px",
-            "spp": self.rig["spp"],
+            "spp": self.rig.spp,
             "estimated_duration_s": duration_s,
             "estimated_duration_h": duration_s / 3600,
             "storage_mb": len(self.plan) * per_frame / 1e6,
@@ -335,7 +336,7 @@ def _led_bands(plan: list[dict], bands_nm) -> dict[int, tuple[int, ...]]:
     under it (:attr:`twin.dome.signals.DomeScene.led_bands`)."""
     bands: dict[int, set[int]] = {}
     for step in plan:
-        if step["camera"] == SPECTRAL_CAMERA and step.get("light_id", -1) >= 0:
+        if step["camera"] == SPECTRAL_CAMERA and step.get("light_id", NO_LIGHT) >= 0:
             band = band_index(bands_nm, step["band_nm"])
             bands.setdefault(int(step["light_id"]), set()).add(band)
     return {led: tuple(sorted(chosen)) for led, chosen in bands.items()}
@@ -351,9 +352,11 @@ def _program(
     material: str | None,
     seed: int,
     fault_rate: float,
-    settings: dict[str, object],
+    stage_positions: int | None = None,
+    dark_frames: int | None = None,
 ) -> DomeCaptureProgram:
-    """The program of ``plan``: its devices, rendered scene and store metadata."""
+    """The program of ``plan``: its devices, rendered scene and store metadata (a run's
+    ``material`` and ``stage_positions``, a calibration's ``dark_frames``)."""
     frame = FrameSize(config, size.texels)
     sample = load_material(material) if material is not None else None
     exposures = parts.exposures
@@ -367,7 +370,9 @@ def _program(
         size.spp,
         exposures.bands_nm,
         size.led_renders,
-        tuple(dict.fromkeys(step["light_id"] for step in plan if step.get("light_id", -1) >= 0)),
+        tuple(
+            dict.fromkeys(step["light_id"] for step in plan if step.get("light_id", NO_LIGHT) >= 0)
+        ),
         _led_bands(plan, exposures.bands_nm),
     )
     roi = (frame.window, frame.window)
@@ -389,32 +394,35 @@ def _program(
         fault_rate=float(fault_rate),
         fault_seed=seed,
     )
-    views = sorted({step["view_id"] for step in plan if step.get("view_id", -1) >= 0})
+    views = sorted({step["view_id"] for step in plan if step.get("view_id", NO_VIEW) >= 0})
     tilts = sorted({step["tilt_deg"] for step in plan if "tilt_deg" in step})
-    rig = {
-        "rig": "dome",
-        "program": name,
-        **settings,
-        "texels": size.texels,
-        "spp": size.spp,
-        "led_renders": size.led_renders,
-        "pixels": frame.pixels,
-        "window_px": frame.window,
-        "leds": size.leds,
-        "rgb_cameras": size.rgb_cameras,
-        "rgb_exposures_s": list(exposures.rgb_hdr_s),
-        "bands_nm": list(exposures.bands_nm),
-        "band_exposures_s": list(exposures.band_s),
-        "band_schedule": [list(image) for image in exposures.schedule],
-        "calibration_led": parts.calibration_led,
-        "led_current_ma": LED_FULL_SCALE_MA,
-        "led_spectrum": _spectrum(PhosphorWhiteLED().intensity(FINE_GRID).values),
-        "white_reflectance": _spectrum(zenith_white_reflectance(FINE_GRID).values),
-        "rgb_response": _spectrum(Sensor(config.rgb_camera).electron_responses(FINE_GRID).values),
-        "geometry": geometry_metadata(
+    rig = DomeRigAttrs(
+        rig="dome",
+        program=name,
+        material=material,
+        sample_size_m=None if sample is None else sample.size_m,
+        stage_positions=stage_positions,
+        dark_frames=dark_frames,
+        texels=size.texels,
+        spp=size.spp,
+        led_renders=size.led_renders,
+        pixels=frame.pixels,
+        window_px=frame.window,
+        leds=size.leds,
+        rgb_cameras=size.rgb_cameras,
+        rgb_exposures_s=exposures.rgb_hdr_s,
+        bands_nm=exposures.bands_nm,
+        band_exposures_s=exposures.band_s,
+        band_schedule=exposures.schedule,
+        calibration_led=parts.calibration_led,
+        led_current_ma=LED_FULL_SCALE_MA,
+        led_spectrum=_spectrum(PhosphorWhiteLED().intensity(FINE_GRID).values),
+        white_reflectance=_spectrum(zenith_white_reflectance(FINE_GRID).values),
+        rgb_response=_spectrum(Sensor(config.rgb_camera).electron_responses(FINE_GRID).values),
+        geometry=geometry_metadata(
             config, parts.cameras.all, frame, stage_views=views, tilts_deg=tilts
         ),
-    }
+    )
     return DomeCaptureProgram(name, plan, devices, rig, seed, timing, scene)
 
 
@@ -450,11 +458,7 @@ def dome_run_program(
         material=material,
         seed=seed,
         fault_rate=fault_rate,
-        settings={
-            "material": material,
-            "sample_size_m": load_material(material).size_m,
-            "stage_positions": size.stage_positions,
-        },
+        stage_positions=size.stage_positions,
     )
 
 
@@ -492,17 +496,16 @@ def dome_calibration_program(
         material=None,
         seed=seed,
         fault_rate=fault_rate,
-        settings={"dark_frames": dark_frames},
+        dark_frames=dark_frames,
     )
 
 
 def stored_dome_settings(store: CaptureStore) -> dict[str, Any]:
     """The program and settings a dome store was made with, as ``spectwin capture`` names them:
     ``program``, ``seed``, ``stage_positions``, ``leds``, ``rgb_cameras``, ``texels``, ``spp``,
-    ``led_renders`` (``single`` for a store that does not record it: made before the passes)
-    and ``material`` (run) or ``dark_frames`` (calibration)."""
-    rig = store.attrs.get("rig") or {}
-    settings = {"program": rig["program"], "seed": store.attrs["seed"], "led_renders": "single"}
+    ``led_renders`` and ``material`` (run) or ``dark_frames`` (calibration)."""
+    rig = store.rig_attrs(DomeRigAttrs)
+    settings = {"program": rig.program, "seed": store.metadata.seed}
     names = (
         "stage_positions",
         "leds",
@@ -513,4 +516,5 @@ def stored_dome_settings(store: CaptureStore) -> dict[str, Any]:
         "material",
         "dark_frames",
     )
-    return settings | {name: rig[name] for name in names if name in rig}
+    recorded = {name: getattr(rig, name) for name in names}
+    return settings | {name: value for name, value in recorded.items() if value is not None}

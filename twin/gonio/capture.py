@@ -43,6 +43,7 @@ from hwbridge.plans import (
     response_curve_series,
     white_reference_run,
 )
+from hwbridge.schema import NO_VIEW, GonioRigAttrs, Spectrum, recorded
 from hwbridge.store import CaptureStore
 from recon.calibration.spectral import HMI_FLICKER_PERIOD_S
 from recon.errors import InputError
@@ -190,21 +191,22 @@ def is_flickering(config: GonioConfig) -> bool:
     return any(placement.spectrum == "hmi" for placement in config.lamps)
 
 
-def _rig_attrs(config: GonioConfig, pixels: int, program: str) -> dict[str, object]:
+def _rig_attrs(config: GonioConfig, pixels: int, program: str, **run: Any) -> GonioRigAttrs:
+    """The store's ``rig`` attribute of ``program``; a run adds its own fields (``run``)."""
     white = zenith_white_reflectance(DEFAULT_GRID)
-    return {
-        "rig": "gonioreflectometer",
-        "program": program,
-        "camera": config.camera.definition,
-        "camera_id": CAMERA_ID,
-        "window_px": pixels,
-        "lamp": config.lamps[0].spectrum,
-        "config": config.model_dump(mode="json"),
-        "white_reflectance": {
-            "wavelengths_nm": white.wavelengths_nm.tolist(),
-            "values": white.values.tolist(),
-        },
-    }
+    return GonioRigAttrs(
+        rig="gonioreflectometer",
+        program=program,
+        camera=config.camera.definition,
+        camera_id=CAMERA_ID,
+        window_px=pixels,
+        lamp=config.lamps[0].spectrum,
+        config=config.model_dump(mode="json"),
+        white_reflectance=Spectrum(
+            wavelengths_nm=white.wavelengths_nm.tolist(), values=white.values.tolist()
+        ),
+        **run,
+    )
 
 
 class _GonioSignal:
@@ -256,7 +258,7 @@ class CaptureProgram(ProgramCapture):
     Attributes
     ----------
     name
-        ``demo``, ``gonio-calibration`` or ``gonio-run`` (the store's ``rig["program"]``).
+        ``demo``, ``gonio-calibration`` or ``gonio-run`` (the ``program`` of the store's rig).
     plan
         One dict per step (:mod:`hwbridge.plans`).
     devices
@@ -274,7 +276,7 @@ class CaptureProgram(ProgramCapture):
     name: str
     plan: list[dict]
     devices: SimGonioDevices
-    rig: dict[str, Any]
+    rig: GonioRigAttrs
     seed: int
     poses: dict[int, GonioPose]
     config: GonioConfig | None = None
@@ -305,9 +307,9 @@ class CaptureProgram(ProgramCapture):
             "steps": len(self.plan),
             "frames": dict(frames),
             "kinds": dict(Counter(step["kind"] for step in self.plan)),
-            "views": len({step.get("view_id", -1) for step in self.plan} - {-1}),
+            "views": len({step.get("view_id", NO_VIEW) for step in self.plan} - {NO_VIEW}),
             "frame_size": f"{height} x {width} px",
-            **({"spp": self.rig["spp"]} if "spp" in self.rig else {}),
+            **({"spp": self.rig.spp} if self.rig.spp is not None else {}),
             "estimated_duration_s": duration_s,
             "estimated_duration_h": duration_s / 3600,
             "storage_mb": storage / 1e6,
@@ -321,7 +323,7 @@ class CaptureProgram(ProgramCapture):
         holds every pair's pieces; empty for other programs."""
         if self.name != "gonio-run":
             return {}
-        pixels = int(self.rig["sensor_px"])
+        pixels = int(recorded(self.rig.sensor_px, "rig.sensor_px"))
         config = self.config or load_rig("gonio")
         needed = np.array([_marks_window_px(config, pose, pixels) for pose in self.poses.values()])
         return {
@@ -335,35 +337,34 @@ def stored_settings(store: CaptureStore) -> dict[str, Any]:
     them: ``program``, ``seed`` and, for a measurement run, ``material``, ``pixels``,
     ``window`` (``None`` when the whole field is read out), ``spp`` and the band
     ``exposures_s`` of its white frames."""
-    attrs = store.attrs
-    rig = attrs.get("rig") or {}
-    if attrs.get("backend") != "sim":
+    attrs = store.metadata
+    if attrs.backend != "sim":
         raise InputError(
-            f"{store.path}: a {attrs.get('backend')!r} store, not made by spectwin capture; only "
+            f"{store.path}: a {attrs.backend!r} store, not made by spectwin capture; only "
             "simulated captures continue where they stopped"
         )
-    settings: dict[str, Any] = {"program": rig.get("program", "demo"), "seed": attrs["seed"]}
-    if settings["program"] == "gonio-run":
-        pixels = int(rig["sensor_px"])
+    rig = store.rig_attrs(GonioRigAttrs)
+    settings: dict[str, Any] = {"program": rig.program, "seed": attrs.seed}
+    if rig.program == "gonio-run":
+        pixels = int(recorded(rig.sensor_px, f"{store.path}: rig.sensor_px"))
         settings |= {
-            "material": rig["material"],
+            "material": rig.material,
             "pixels": pixels,
-            "window": None if int(rig["window_px"]) == pixels else int(rig["window_px"]),
-            "spp": int(rig["spp"]),
-            "sampling": _sampling_name(rig.get("rings", [list(ring) for ring in REDUCED_RINGS])),
+            "window": None if rig.window_px == pixels else rig.window_px,
+            "spp": rig.spp,
+            "sampling": _sampling_name(rig.rings),
             "exposures_s": np.array(
-                [step["exposure_s"] for step in attrs["plan"] if step["kind"] == "white"]
+                [step.exposure_s for step in attrs.plan if step.kind == "white"]
             ),
         }
     return settings
 
 
-def _sampling_name(rings: list | None) -> str | None:
+def _sampling_name(rings: tuple[tuple[float, int], ...] | None) -> str | None:
     """The name in :data:`SAMPLINGS` of a store's rings (``None``: explicit pairs)."""
     if rings is None:
         return None
-    stored = tuple(tuple(ring) for ring in rings)
-    return next((name for name, value in SAMPLINGS.items() if value == stored), None)
+    return next((name for name, value in SAMPLINGS.items() if value == rings), None)
 
 
 def _with_view(steps: list[dict], view: int) -> list[dict]:
@@ -518,18 +519,21 @@ def gonio_measurement_program(
             for pose in pairs.poses
         ]
     )
-    attrs = _rig_attrs(config, side, "gonio-run") | {
-        "sensor_px": pixels,
-        "material": material,
-        "spp": spp,
-        "rings": stored_rings,
-        "white_view_id": n_pairs,
-        "light_dirs": pairs.light_dirs.tolist(),
-        "view_dirs": pairs.view_dirs.tolist(),
-        "skipped_pairs": pairs.skipped,
-        "expected_corners_xy": expected.tolist(),
-        "sample_fraction": sample.size_m / (2 * PRINT_OUTER_HALF_M),
-    }
+    attrs = _rig_attrs(
+        config,
+        side,
+        "gonio-run",
+        sensor_px=pixels,
+        material=material,
+        spp=spp,
+        rings=stored_rings,
+        white_view_id=n_pairs,
+        light_dirs=pairs.light_dirs.tolist(),
+        view_dirs=pairs.view_dirs.tolist(),
+        skipped_pairs=pairs.skipped,
+        expected_corners_xy=expected.tolist(),
+        sample_fraction=sample.size_m / (2 * PRINT_OUTER_HALF_M),
+    )
     devices = SimGonioDevices(CAMERA_ID, sensor, signal, plan_start_times_s(plan), n_pairs + 1)
     return CaptureProgram(
         "gonio-run", plan, devices, attrs, seed, dict(enumerate(pairs.poses)), config

@@ -45,6 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hwbridge.schema import NO_VIEW
 from twin.components.lamps import FINE_GRID, HMILamp, lamp_model
 from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.rigs.gonio_kinematics import GonioPose, GonioSolution, solve_pairs
@@ -104,8 +105,8 @@ def estimate_plan_s(
     timing = config.timing
     total, view, pose = 0.0, None, None
     for step in plan:
-        step_view = step.get("view_id", -1)
-        if step_view != -1 and step_view != view:
+        step_view = step.get("view_id", NO_VIEW)
+        if step_view != NO_VIEW and step_view != view:
             target = poses.get(step_view)
             if pose is not None and target is not None:
                 total += move_seconds(pose, target, config)

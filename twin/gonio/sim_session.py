@@ -19,6 +19,7 @@ import numpy as np
 
 from hwbridge.errors import SessionInterrupted, StoreBusy
 from hwbridge.plans import dark_series, gonio_sample_run, plan_start_times_s
+from hwbridge.schema import GonioRigAttrs
 from hwbridge.store import CaptureStore
 from twin.components.lamps import HMILamp
 from twin.components.lctf import LiquidCrystalTunableFilter
@@ -75,12 +76,14 @@ def demo_program(
         fault_rate=float(fault_rate),
         fault_seed=seed,
     )
-    rig = {
-        "rig": "gonioreflectometer",
-        "program": "demo",
-        "camera": "coolsnap_k4",
-        "window_px": _PIXELS,
-    }
+    rig = GonioRigAttrs(
+        rig="gonioreflectometer",
+        program="demo",
+        camera="coolsnap_k4",
+        camera_id="k4",
+        window_px=_PIXELS,
+        lamp="hmi",
+    )
     return CaptureProgram("demo", plan, devices, rig, seed, dict(enumerate(poses)))
 
 

@@ -12,6 +12,7 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import Field
 
+from hwbridge.schema import recorded
 from hwbridge.store import CaptureStore
 from twin.kinds.kind import Outcome, ProgramKind, ProgramSettings, RigKind
 from twin.rigs.rig_config import DomeConfig
@@ -147,15 +148,16 @@ def _process(
             show_progress=show_progress,
             created=lambda _: lock.move_into(),
         )
-    attrs = btf.attrs
-    offsets = list(attrs["marks_offset_px"].values())
+    found = btf.metadata
     summary = {
         "btf": str(out),
         "shape": list(btf.shape),
         "complete": btf.complete,
-        "max_marks_offset_px": float(np.max(offsets)),
-        "projected_marks": attrs["projected_marks"],
-        "saturated_texels": attrs["saturated_texels"],
+        "max_marks_offset_px": float(
+            np.max(list(recorded(found.marks_offset_px, f"{out}: marks_offset_px").values()))
+        ),
+        "projected_marks": list(recorded(found.projected_marks, f"{out}: projected_marks")),
+        "saturated_texels": found.saturated_texels,
     }
     return Outcome("dome processing", summary)
 

@@ -11,6 +11,7 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import Field
 
+from hwbridge.schema import recorded
 from hwbridge.store import CaptureStore
 from recon.errors import InputError
 from twin.kinds.kind import Outcome, ProgramKind, ProgramSettings, RigKind
@@ -177,12 +178,15 @@ def _process(
             show_progress=show_progress,
             client=client,
         )
-    unregistered = btf.attrs["unregistered_pairs"]
+    found = btf.metadata
+    unregistered = list(recorded(found.unregistered_pairs, f"{out}: unregistered_pairs"))
     summary = {
         "btf": str(out),
         "shape": list(btf.shape),
         "complete": btf.complete,
-        "coarse_corner_pairs": btf.attrs["coarse_corner_pairs"],
+        "coarse_corner_pairs": list(
+            recorded(found.coarse_corner_pairs, f"{out}: coarse_corner_pairs")
+        ),
         "unregistered_pairs": unregistered,
         "cluster": cluster,
     }

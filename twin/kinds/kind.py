@@ -47,7 +47,8 @@ class ProgramKind:
     Attributes
     ----------
     name
-        As the store records it (``attrs["rig"]["program"]``) and ``spectwin capture`` names it.
+        As the store records it (the ``program`` of its rig attribute) and ``spectwin capture``
+        names it.
     settings
         Its frozen settings model (a :class:`ProgramSettings`).
     build

@@ -1,21 +1,21 @@
 """The rig registry: one :class:`RigKind` per kind of rig, looked up by the rig name its stores
 record.
 
-A capture store records its rig in ``attrs["rig"]["rig"]`` and the program that made it in
-``attrs["rig"]["program"]``; a BTF store records the rig of the capture it was processed from in
-``attrs["rig"]``. The commands find what to do with a store by that name here, never by testing
-strings or types themselves. A new rig is a new :class:`RigKind` passed to :func:`register`
-(see ARCHITECTURE.md, "Adding a rig").
+A capture store records its rig and the program that made it in its ``rig`` attribute
+(:class:`hwbridge.schema.RigAttrs`); a BTF store records the rig of the capture it was processed
+from in its ``rig`` (:class:`recon.btf.schema.BTFAttrs`). The commands find what to do with a
+store by that name here, never by testing strings or types themselves. A new rig is a new
+:class:`RigKind` passed to :func:`register` (see ARCHITECTURE.md, "Adding a rig").
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from functools import cache
 from pathlib import Path
 
 from pydantic import BaseModel
 
+from hwbridge.schema import RigAttrs
 from hwbridge.store import CaptureStore
 from recon.btf.store import BTFStore
 from recon.errors import InputError
@@ -73,27 +73,31 @@ def sweep_kind(name: str) -> SweepKind:
 
 
 def capture_rig_kind(capture: CaptureStore) -> RigKind:
-    """The kind of rig that captured ``capture`` (its ``attrs["rig"]["rig"]``)."""
-    rig = capture.attrs.get("rig")
-    name = rig.get("rig") if isinstance(rig, Mapping) else None
-    if name is None:
-        raise InputError(
-            f"{capture.path}: the store records no rig; expected a capture store of one of "
-            f"{sorted(_names())}"
-        )
-    return rig_kind(name)
+    """The kind of rig that captured ``capture`` (the ``rig`` of its rig attribute)."""
+    return rig_kind(_recorded(capture).rig)
 
 
 def capture_program(capture: CaptureStore) -> tuple[RigKind, ProgramKind]:
     """The kind of rig and the capture program that made ``capture``."""
-    kind = capture_rig_kind(capture)
-    return kind, kind.program(str(capture.attrs["rig"].get("program")))
+    recorded = _recorded(capture)
+    kind = rig_kind(recorded.rig)
+    return kind, kind.program(recorded.program)
+
+
+def _recorded(capture: CaptureStore) -> RigAttrs:
+    """The rig and program ``capture`` records."""
+    try:
+        return capture.rig_attrs(RigAttrs)
+    except InputError as error:
+        raise InputError(
+            f"{error}; expected a capture store of one of {sorted(_names())}"
+        ) from None
 
 
 def btf_rig_kind(btf: BTFStore | Path) -> RigKind:
-    """The kind of rig whose capture a BTF store was processed from (its ``attrs["rig"]``)."""
+    """The kind of rig whose capture a BTF store was processed from (its ``rig``)."""
     store = btf if isinstance(btf, BTFStore) else BTFStore.open(btf)
-    name = store.attrs.get("rig")
+    name = store.metadata.rig
     if name is None:
         raise InputError(
             f"{store.path}: a BTF store that no rig of spectwin processed (imported); expected "

@@ -67,7 +67,7 @@ def read_real_capture(bench: BenchConfig) -> RealCapture:
     (:func:`hwbridge.replay.ingest`) and out of it as calibration reads any store."""
     with tempfile.TemporaryDirectory() as folder:
         store = ingest(bench.data_folder(), bench.mapping, Path(folder) / "bench.capture.zarr")
-        camera = str(store.attrs["plan"][0]["camera"])
+        camera = store.metadata.plan[0].camera
         chart = select_frames(store, camera, kind="chart")
         dark = select_frames(store, camera, kind="dark")
     shape = (bench.reduction.height, bench.reduction.width)

@@ -120,7 +120,7 @@ def run_demo(
         btf = process_gonio(capture, calibration, out / "cc.btf.zarr", texels=settings.texels)
         if not btf.complete:
             raise InputError(
-                f"processing left pairs unregistered: {btf.attrs['unregistered_pairs']}"
+                f"processing left pairs unregistered: {list(btf.metadata.unregistered_pairs or ())}"
             )
         reflectance = np.asarray(btf.reflectance())
         compressed = compress_btf(reflectance, btf.grid, layout="joint")

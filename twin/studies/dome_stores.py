@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from hwbridge.dome_layout import SPECTRAL_CAMERA
+from hwbridge.schema import DomeRigAttrs, recorded
 from hwbridge.store import CaptureStore
 from recon.calibration.dome import DARK_VALUE_OFFSET
 from recon.calibration.dome_capture import DomeCalibration, calibrate_dome
@@ -118,13 +119,14 @@ def capture_study_stores(
 
 def _check_capture_size(path: Path, size: DomeCaptureSize) -> None:
     """Refuse to reuse or resume a store captured at another size."""
-    rig = CaptureStore.open(path).attrs["rig"]
+    rig = CaptureStore.open(path).rig_attrs(DomeRigAttrs)
     wanted = asdict(size)
-    differing = [name for name, value in wanted.items() if name in rig and rig[name] != value]
+    recorded = {name: getattr(rig, name) for name in wanted}
+    differing = [name for name, value in wanted.items() if recorded[name] not in (None, value)]
     if differing:
         raise InputError(
             f"{path}: captured with "
-            + ", ".join(f"{name}={rig[name]}" for name in differing)
+            + ", ".join(f"{name}={recorded[name]}" for name in differing)
             + "; expected "
             + ", ".join(f"{name}={wanted[name]}" for name in differing)
             + " (use another stores folder, or remove this store)"
@@ -263,7 +265,8 @@ def same_images(
         show_progress=True,
         band_partner=band_partner,
     )
-    partner = btf.attrs["band_partner"]
+    found = btf.metadata
+    partner = recorded(found.band_partner, f"{btf.path}: band_partner")
     cameras = [camera for _ in run.images for camera in run.rgb_cameras]
     bands = [
         run.image_bands(image) if camera == partner else []
@@ -283,7 +286,7 @@ def same_images(
         cameras,
         partner,
         [light for _, light in run.images],
-        list(btf.attrs["projected_marks"]),
+        list(recorded(found.projected_marks, f"{btf.path}: projected_marks")),
     )
 
 
@@ -331,9 +334,9 @@ def store_exposure_ratio(run_store: Path, calibration: DomeCalibration) -> dict[
     that bring the white standard facing the LED to 80 % of the spectral camera's range (its
     rate per band from the calibration, :math:`E_\\lambda L_\\lambda \\rho_\\lambda`; the range
     in the calibrated curve's units above the averaged dark level)."""
-    rig = CaptureStore.open(run_store).attrs["rig"]
+    rig = CaptureStore.open(run_store).rig_attrs(DomeRigAttrs)
     spectral = calibration.spectral
-    full_scale_dn = 2 ** int(rig["geometry"]["cameras"][SPECTRAL_CAMERA]["bit_depth"]) - 1
+    full_scale_dn = 2 ** rig.geometry.cameras[SPECTRAL_CAMERA].bit_depth - 1
     dark = float(np.median(spectral.mean_dark_frames))
     headroom = float(
         interpolate_curve(
@@ -344,7 +347,7 @@ def store_exposure_ratio(run_store: Path, calibration: DomeCalibration) -> dict[
     )
     white_rate = spectral.sensitivity * calibration.led_per_band * calibration.white_per_band
     reference_s = float((0.8 * headroom / white_rate).sum())
-    hybrid_s = float(sum(rig["rgb_exposures_s"]) + sum(rig["band_exposures_s"]))
+    hybrid_s = float(sum(rig.rgb_exposures_s) + sum(rig.band_exposures_s))
     return {
         "hybrid_total_s": hybrid_s,
         "reference_total_s": reference_s,

@@ -34,8 +34,11 @@ import numpy as np
 from matplotlib.figure import Figure
 from skimage.registration import phase_cross_correlation
 
+from hwbridge.schema import recorded
 from hwbridge.store import CaptureStore
+from recon.btf.schema import BTFAttrs
 from recon.btf.store import BTFStore
+from recon.calibration.dome_capture import dome_rig
 from recon.calibration.dome_geometric import CameraGeometry, stage_rotation
 from recon.errors import InputError
 from recon.metrics import delta_e94, relative_error
@@ -145,25 +148,26 @@ class DomeEvaluation:
         }
 
 
-def _nominal_corners(capture: CaptureStore, btf: BTFStore, pairs: np.ndarray) -> np.ndarray:
+def _nominal_corners(
+    capture: CaptureStore, dome_pairs: Sequence[tuple[int, int, str]], pairs: np.ndarray
+) -> np.ndarray:
     """The sample square's corners on the plate as the nominal cameras project them (+0.5)."""
-    rig = capture.attrs["rig"]
-    geometry = rig["geometry"]
-    half = float(rig["sample_size_m"]) / 2
+    rig = dome_rig(capture, "dome-run")
+    geometry = rig.geometry
+    half = float(recorded(rig.sample_size_m, f"{capture.path}: rig.sample_size_m")) / 2
     square = np.array([[-half, half, 0], [half, half, 0], [half, -half, 0], [-half, -half, 0]])
-    dome_pairs = btf.attrs["dome_pairs"]
     corners = []
     for pair in pairs:
         view, _, camera = dome_pairs[pair]
-        nominal = CameraGeometry.from_json(geometry["cameras"][camera])
-        world = square @ stage_rotation(geometry["stage_angles_deg"][view]).T
+        nominal = CameraGeometry.nominal(geometry.cameras[camera])
+        world = square @ stage_rotation(geometry.stage_angles_deg[view]).T
         corners.append(nominal.project(world) + 0.5)
     return np.array(corners)
 
 
-def _capture(btf_path: Path, btf: BTFStore) -> CaptureStore:
-    source = btf.attrs.get("source_capture")
-    if not source or "dome_pairs" not in btf.attrs:
+def _capture(btf_path: Path, found: BTFAttrs) -> CaptureStore:
+    source = found.source_capture
+    if not source or found.dome_pairs is None:
         raise InputError(
             f"{btf_path}: not processed from a dome run (no source capture or dome pairs)"
         )
@@ -228,7 +232,9 @@ def evaluate_dome(
         raise InputError(f"spp: expected a positive number of samples, got {spp!r}")
     btf_path = Path(btf_path)
     btf = BTFStore.open(btf_path)
-    capture = _capture(btf_path, btf)
+    found = btf.metadata
+    capture = _capture(btf_path, found)
+    dome_pairs = recorded(found.dome_pairs, f"{btf.path}: dome_pairs")
     chosen = np.arange(btf.n_pairs) if pairs is None else np.asarray(pairs, int)
     if chosen.size == 0 or chosen.min() < 0 or chosen.max() >= btf.n_pairs:
         raise InputError(f"pairs: expected indices in 0..{btf.n_pairs - 1}")
@@ -268,9 +274,9 @@ def evaluate_dome(
         btf.material,
         chart,
         chosen,
-        np.array([btf.attrs["dome_pairs"][pair][2] for pair in chosen]),
+        np.array([dome_pairs[pair][2] for pair in chosen]),
         *errors,
-        np.linalg.norm(corners - _nominal_corners(capture, btf, chosen), axis=2),
+        np.linalg.norm(corners - _nominal_corners(capture, dome_pairs, chosen), axis=2),
         np.array(shifts),
         measured,
         truth,

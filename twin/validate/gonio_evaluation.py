@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
+from hwbridge.schema import GonioRigAttrs, recorded
 from hwbridge.store import CaptureStore
 from recon.btf.store import BTFStore
 from recon.errors import InputError
@@ -35,7 +36,7 @@ from twin.materials import load_material
 from twin.materials.chart_fields import FieldMasks, field_masks
 from twin.render.truth import truth_btf
 from twin.rigs.hemisphere import spherical_deg
-from twin.rigs.rig_config import GonioConfig, load_rig
+from twin.rigs.rig_config import GonioConfig
 from twin.sensor.band_weights import instrument_passbands
 from twin.validate.gonio_texel_evaluation import GonioTexelEvaluation, compare_texels
 
@@ -81,18 +82,18 @@ class GonioEvaluation:
 
 
 def capture_rig(capture: CaptureStore) -> GonioConfig:
-    """The rig model a twin capture was made with (its ``rig["config"]``; stores written before
-    it was recorded: ``scenes/rigs/gonio.yaml``)."""
-    recorded = capture.attrs["rig"].get("config")
-    return GonioConfig.model_validate(recorded) if recorded else load_rig("gonio")
+    """The rig model a twin measurement run was made with (the ``config`` of its rig
+    attribute)."""
+    return GonioConfig.model_validate(capture.rig_attrs(GonioRigAttrs).config)
 
 
 def _true_corners(capture: CaptureStore, btf: BTFStore) -> np.ndarray:
     config = capture_rig(capture)
-    rig = capture.attrs["rig"]
+    rig = capture.rig_attrs(GonioRigAttrs)
     pairs = GonioPairs(config, btf.light_dirs, btf.view_dirs)
-    poses = actual_poses(config, pairs.poses, int(capture.attrs["seed"]))
-    pixels, window = int(rig.get("sensor_px", rig["window_px"])), int(rig["window_px"])
+    poses = actual_poses(config, pairs.poses, capture.metadata.seed)
+    pixels = int(recorded(rig.sensor_px, f"{capture.path}: rig.sensor_px"))
+    window = rig.window_px
     return np.stack(
         [
             gonio_camera(config, pose.rail_deg, pixels, window).project(texture_corners_world(pose))
@@ -129,7 +130,7 @@ def evaluate_gonio(
             f"{btf_path}: no direction pair is written yet; finish the BTF with spectwin "
             "process --resume"
         )
-    source = btf.attrs.get("source_capture")
+    source = btf.metadata.source_capture
     if not source:
         raise InputError(
             f"{btf_path}: records no source capture; evaluate compares BTFs made by spectwin "

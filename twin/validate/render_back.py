@@ -44,9 +44,9 @@ def _measured_as(btf: BTFStore) -> str:
     source = rgb_source(btf)
     if source is None:
         return "spectral"
-    layout = source.get("layout", "image folder")
-    described = source["colour_space"] + ("" if layout == "image folder" else f", {layout}")
-    return f"RGB ({described}), rendered spectrally after {source['upsampling']}"
+    layout = source.layout
+    described = source.colour_space + ("" if layout == "image folder" else f", {layout}")
+    return f"RGB ({described}), rendered spectrally after {source.upsampling}"
 
 
 def validate_btf(

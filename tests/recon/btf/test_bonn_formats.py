@@ -98,7 +98,7 @@ def test_a_ubo2014_import_is_an_rgb_store_of_reduced_texels(tmp_path, rng, bonn_
     assert store.complete and store.material == "wool" and store.texels == (3, 4)
     assert store.n_pairs == 9
     source = rgb_source(store)
-    assert (source["layout"], source["encoding"], source["texel_reduction"]) == (
+    assert (source.layout, source.encoding, source.texel_reduction) == (
         "UBO2014",
         "linear",
         2,

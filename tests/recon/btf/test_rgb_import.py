@@ -47,7 +47,7 @@ def test_imported_rgb_btf_has_the_tables_directions_and_the_images_colours(tmp_p
         store.view_dirs[1],
         [np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)],
     )
-    assert rgb_source(store) == {
+    assert rgb_source(store).model_dump() == {
         "colour_space": "sRGB",
         "layout": "image folder",
         "encoding": "sRGB",

@@ -18,7 +18,6 @@ from twin.dome.programs import (
     DomeCaptureSize,
     dome_plan_parts,
     dome_run_program,
-    stored_dome_settings,
 )
 from twin.kinds.dome import DomeRunSettings
 from twin.kinds.registry import capture_program
@@ -134,25 +133,6 @@ def test_resume_of_a_dome_run_reads_its_settings_and_takes_no_others(tmp_path):
     assert summary["complete"] and summary["program"] == "dome-run"
     assert sum(summary["frames"].values()) == len(program.plan)
     assert CaptureStore.open(path).pending_steps() == []
-
-
-def test_a_store_that_does_not_record_its_led_renders_resumes_one_render_per_led(tmp_path):
-    """Stores made before the passes rendered every LED alone: their resume does too."""
-    path = tmp_path / "older.capture.zarr"
-    program = dome_run_program("lego", size=DomeCaptureSize(1, 3, 1, 8, 4, "single"), seed=5)
-    rig = {name: value for name, value in program.rig.items() if name != "led_renders"}
-    with locked_session_store(
-        path, program.plan, program.devices(), SessionSettings(rig=rig, backend="sim", seed=5)
-    ):
-        pass
-    capture = CaptureStore.open(path)
-    assert stored_dome_settings(capture)["led_renders"] == "single"
-    _, stored = capture_program(capture)
-    settings = stored.stored(capture)  # what spectwin capture resume continues with
-    assert settings.led_renders == "single"
-    resumed, _ = stored.build(settings, 0.0, True)
-    assert resumed.dry_run()["led_renders"] == "single"
-    assert resumed.dry_run()["renders"] == program.dry_run()["renders"]
 
 
 def test_estimate_dome_prints_the_plans_times_against_the_thesis():

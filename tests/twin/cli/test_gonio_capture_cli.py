@@ -205,7 +205,7 @@ def test_the_capture_renders_at_the_rigs_sample_count_unless_told(tmp_path):
     from twin.dome.programs import DEFAULT_SPP
     from twin.gonio.render import GONIO_SPP
 
-    assert gonio_measurement_program(EXPOSURES_S).rig["spp"] == GONIO_SPP
+    assert gonio_measurement_program(EXPOSURES_S).rig.spp == GONIO_SPP
     dome = ["--leds", "2", "--rgb-cameras", "1", "--texels", "8"]
     for arguments, spp in [
         (["gonio-run"], GONIO_SPP),

@@ -22,6 +22,7 @@ import pytest
 from typer.testing import CliRunner
 
 from hwbridge.plans import plan_start_times_s
+from hwbridge.schema import RigAttrs
 from hwbridge.session import SessionDevices
 from hwbridge.store import CaptureStore
 from recon.btf.store import BTFStore
@@ -125,7 +126,7 @@ def _process(capture, calibration, out, options, show_progress) -> Outcome:
         texels=PIXELS,
         grid=WavelengthGrid(BANDS_NM),
         material="moderate red",
-        rig=capture.attrs["rig"]["rig"],
+        rig=capture.rig_attrs(RigAttrs).rig,
     )
     btf.write_pair(0, np.broadcast_to(reflectance, (PIXELS, PIXELS, BANDS_NM.size)))
     return Outcome("flat-field processing", {"btf": str(out), "complete": btf.complete})
@@ -150,7 +151,7 @@ def _flat_field_kind() -> RigKind:
                 _Program(name, reflectance, settings.seed),
                 {},
             ),
-            lambda capture: ProgramSettings(seed=capture.attrs["seed"]),
+            lambda capture: ProgramSettings(seed=capture.metadata.seed),
         )
 
     def refuse(*_: Any) -> Outcome:
@@ -202,7 +203,7 @@ def test_a_rig_kind_defined_here_is_captured_calibrated_processed_and_evaluated(
     assert refused.exit_code == 2 and "--white-fill is not used by a flat-field" in refused.stderr
     btf = tmp_path / "patch.btf.zarr"
     _invoke("process", patch_store, "--calibration", calibration, "--out", btf, "--json")
-    assert BTFStore.open(btf).attrs["rig"] == NAME
+    assert BTFStore.open(btf).metadata.rig == NAME
     evaluation = _invoke("evaluate", btf, "--json")
 
     # photon noise of the mean over the window: the white's and the patch's, relative
