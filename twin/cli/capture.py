@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import shlex
 from collections import Counter
+from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, NoReturn
@@ -189,22 +190,31 @@ def _interrupted(store: Path, done: int | None = None, total: int | None = None)
     raise typer.Exit(INTERRUPTED)
 
 
+@dataclass(frozen=True)
+class Session:
+    """How a capture runs, beside what it captures: injected faults, a dry run or a resume,
+    where (Dask workers or a scheduler) and what it prints."""
+
+    fault_rate: float = 0.0
+    dry_run: bool = False
+    resume: bool = False
+    workers: int = 1
+    scheduler: str | None = None
+    as_json: bool = False
+
+
 def _capture(
     ctx: typer.Context,
     store: Path,
-    rig: str,
-    program_name: str,
+    names: tuple[str, str],
     settings: dict[str, Any] | ProgramSettings,
-    *,
-    fault_rate: float = 0.0,
-    dry_run: bool = False,
-    resume: bool = False,
-    workers: int = 1,
-    scheduler: str | None = None,
-    as_json: bool = False,
+    session: Session,
 ) -> None:
-    """Build the program from its settings (every one checked, nothing written), then print its
-    dry run or capture it."""
+    """Build the program ``names`` (the rig's name and the program's) from its settings (every
+    one checked, nothing written), then print its dry run or capture it as ``session`` says."""
+    rig, program_name = names
+    fault_rate, dry_run, resume = session.fault_rate, session.dry_run, session.resume
+    workers, scheduler, as_json = session.workers, session.scheduler, session.as_json
     from pydantic import ValidationError
 
     from hwbridge.errors import SessionInterrupted
@@ -284,17 +294,13 @@ def demo(
 
     Example: spectwin capture demo out/demo.capture.zarr
     """
+    program = ("gonioreflectometer", "demo")
     _capture(
         ctx,
         store,
-        "gonioreflectometer",
-        "demo",
+        program,
         {"seed": seed},
-        fault_rate=fault_rate,
-        dry_run=dry_run,
-        workers=workers,
-        scheduler=scheduler,
-        as_json=as_json,
+        Session(fault_rate, dry_run, False, workers, scheduler, as_json),
     )
 
 
@@ -312,16 +318,13 @@ def gonio_calibration(
 
     Example: spectwin capture gonio-calibration out/cal.capture.zarr
     """
+    program = ("gonioreflectometer", "gonio-calibration")
     _capture(
         ctx,
         store,
-        "gonioreflectometer",
-        "gonio-calibration",
+        program,
         {"seed": seed},
-        dry_run=dry_run,
-        workers=workers,
-        scheduler=scheduler,
-        as_json=as_json,
+        Session(0.0, dry_run, False, workers, scheduler, as_json),
     )
 
 
@@ -390,16 +393,9 @@ def gonio_run(
         "spp": spp,
         "exposures_s": exposures_s,
     }
+    program = ("gonioreflectometer", "gonio-run")
     _capture(
-        ctx,
-        store,
-        "gonioreflectometer",
-        "gonio-run",
-        settings,
-        dry_run=dry_run,
-        workers=workers,
-        scheduler=scheduler,
-        as_json=as_json,
+        ctx, store, program, settings, Session(0.0, dry_run, False, workers, scheduler, as_json)
     )
 
 
@@ -441,17 +437,13 @@ def dome_calibration(
         "spp": spp,
         "led_renders": led_renders.value,
     }
+    program = ("dome", "dome-calibration")
     _capture(
         ctx,
         store,
-        "dome",
-        "dome-calibration",
+        program,
         settings,
-        fault_rate=fault_rate,
-        dry_run=dry_run,
-        workers=workers,
-        scheduler=scheduler,
-        as_json=as_json,
+        Session(fault_rate, dry_run, False, workers, scheduler, as_json),
     )
 
 
@@ -491,17 +483,13 @@ def dome_run(
         "spp": spp,
         "led_renders": led_renders.value,
     }
+    program = ("dome", "dome-run")
     _capture(
         ctx,
         store,
-        "dome",
-        "dome-run",
+        program,
         settings,
-        fault_rate=fault_rate,
-        dry_run=dry_run,
-        workers=workers,
-        scheduler=scheduler,
-        as_json=as_json,
+        Session(fault_rate, dry_run, False, workers, scheduler, as_json),
     )
 
 
@@ -533,18 +521,8 @@ def resume(
     kind, program = capture_program(capture)
     if _given(ctx, "fault_rate") and not program.fault_rate:
         fail(f"--fault-rate is not used by {program.name}; leave it out")
-    _capture(
-        ctx,
-        store,
-        kind.name,
-        program.name,
-        program.stored(capture),
-        fault_rate=fault_rate,
-        resume=True,
-        workers=workers,
-        scheduler=scheduler,
-        as_json=as_json,
-    )
+    session = Session(fault_rate, False, True, workers, scheduler, as_json)
+    _capture(ctx, store, (kind.name, program.name), program.stored(capture), session)
 
 
 def register(app: typer.Typer) -> None:
