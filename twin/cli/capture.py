@@ -33,6 +33,7 @@ from twin.cli.errors import (
     require_output_folder,
     run_failed,
 )
+from twin.cli.given import given, option_name
 from twin.cli.output import JsonFlag, SchedulerOption, WorkersOption, print_summary
 
 if TYPE_CHECKING:
@@ -155,16 +156,6 @@ LedRendersOption = Annotated[
 _CAPTURE_ONLY = ("seed", "fault_rate", "workers", "scheduler")
 
 
-def _given(ctx: typer.Context, name: str) -> bool:
-    """Whether option ``name`` was given on the command line."""
-    source = ctx.get_parameter_source(name)
-    return source is not None and source.name == "COMMANDLINE"
-
-
-def _option(ctx: typer.Context, name: str) -> str:
-    return next(p.opts[0] for p in ctx.command.params if p.name == name)
-
-
 def _material(material: str) -> str:
     """A user's material file by its absolute path (the store records where it lies)."""
     return str(Path(material).resolve()) if Path(material).suffix else material
@@ -226,8 +217,8 @@ def _capture(
     program = rig_kind(rig).program(program_name)
     if dry_run:
         for name in _CAPTURE_ONLY:
-            if _given(ctx, name):
-                fail(f"{_option(ctx, name)} is not used by --dry-run, which captures nothing")
+            if given(ctx, name):
+                fail(f"{option_name(ctx, name)} is not used by --dry-run, which captures nothing")
     if isinstance(settings, ProgramSettings):
         model = settings
     else:
@@ -519,7 +510,7 @@ def resume(
         run_failed(f"{store} is being created by another capture; wait for it to finish")
     capture = CaptureStore.open(store)
     kind, program = capture_program(capture)
-    if _given(ctx, "fault_rate") and not program.fault_rate:
+    if given(ctx, "fault_rate") and not program.fault_rate:
         fail(f"--fault-rate is not used by {program.name}; leave it out")
     session = Session(fault_rate, False, True, workers, scheduler, as_json)
     _capture(ctx, store, (kind.name, program.name), program.stored(capture), session)

@@ -38,6 +38,7 @@ from twin.cli.errors import (
     require_output_folder,
     run_failed,
 )
+from twin.cli.given import given, option_name
 from twin.cli.output import JsonFlag, SchedulerOption, WorkersOption, console, print_summary
 from twin.cli.store import require_sound_btf, require_sound_capture
 
@@ -49,21 +50,11 @@ class Layout(StrEnum):
     joint = "joint"
 
 
-def _given(ctx: typer.Context, name: str) -> bool:
-    """Whether option ``name`` was given on the command line."""
-    source = ctx.get_parameter_source(name)
-    return source is not None and source.name == "COMMANDLINE"
-
-
-def _option(ctx: typer.Context, name: str) -> str:
-    return next(p.opts[0] for p in ctx.command.params if p.name == name)
-
-
 def _refuse_unused(ctx: typer.Context, names: tuple[str, ...], used: frozenset[str], what: str):
     """Refuse an option of ``names`` given on the command line that ``used`` does not hold."""
     for name in names:
-        if name not in used and _given(ctx, name):
-            fail(f"{_option(ctx, name)} is not used by {what}; leave it out")
+        if name not in used and given(ctx, name):
+            fail(f"{option_name(ctx, name)} is not used by {what}; leave it out")
 
 
 def _show(outcome, as_json: bool) -> None:
