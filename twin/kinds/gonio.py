@@ -64,11 +64,6 @@ def _run(settings: GonioRunSettings, fault_rate: float, dry_run: bool):
     from twin.gonio.capture import SAMPLINGS, gonio_measurement_program
     from twin.gonio.render import GONIO_SPP
 
-    if settings.window is not None and settings.window > settings.pixels:
-        raise InputError(
-            f"window: {settings.window} is larger than pixels {settings.pixels}; expected at "
-            f"most {settings.pixels}"
-        )
     if settings.sampling is None:
         raise InputError(
             "sampling: captured at its own direction pairs, which a resumed capture cannot rebuild"
