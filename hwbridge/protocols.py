@@ -18,6 +18,7 @@ __all__ = [
     "description",
     "reading",
     "Describable",
+    "Identified",
     "Lamp",
     "LampMonitor",
     "LedArray",
@@ -65,6 +66,13 @@ class Stageable(Protocol):
 
     def unstage(self) -> None:
         """Release after a run."""
+
+
+@runtime_checkable
+class Identified(Protocol):
+    def identity(self) -> dict[str, str]:
+        """Ask the staged device who it is: ``model``, ``serial`` and ``firmware`` as it
+        reports them (one exchange on its wire, which a device check times)."""
 
 
 @runtime_checkable

@@ -34,8 +34,8 @@ import serial
 
 import hwbridge.emulators  # noqa: F401  (registers the apt:// URL handler)
 from hwbridge.dome_targets import stage_angle_deg
+from hwbridge.drivers.serial_wire import open_port, wire
 from hwbridge.errors import (
-    DeviceDisconnected,
     DeviceError,
     DeviceTimeout,
     DriverNotInstalled,
@@ -125,10 +125,11 @@ class AptRotationStage:
         self._apt = _protocol_library()
         self.unstage()
         try:
-            self._port = serial.serial_for_url(
-                self._port_name, baudrate=115200, rtscts=True, timeout=self._timeout_s
+            self._port = open_port(
+                self._port_name, self.name, baudrate=115200, rtscts=True, timeout=self._timeout_s
             )
-            self._port.reset_input_buffer()
+            with wire(self.name):
+                self._port.reset_input_buffer()
             self._unpacker = self._apt.Unpacker(self._port, on_error="raise")
             self._check_model()
             self._send("mod_set_chanenablestate", _CHANNEL, _ENABLE)
@@ -145,15 +146,23 @@ class AptRotationStage:
             self._port = None
 
     def _check_model(self) -> None:
-        self._send("hw_req_info")
-        info = self._await("hw_get_info", "MGMSG_HW_GET_INFO", self._timeout_s)
-        model = info.model_number.split(b"\0")[0].decode("ascii", "replace")
+        model = self.identity()["model"]
         if model != self._model:
             raise DeviceError(
                 f"{self.name}: the controller on {self._port_name} is a {model!r}, expected a "
                 f"{self._model}"
             )
+
+    def identity(self) -> dict[str, str]:
+        """The controller's model, serial number and firmware (``MGMSG_HW_GET_INFO``)."""
+        self._send("hw_req_info")
+        info = self._await("hw_get_info", "MGMSG_HW_GET_INFO", self._timeout_s)
         self._serial_number = info.serial_number
+        return {
+            "model": info.model_number.split(b"\0")[0].decode("ascii", "replace"),
+            "serial": str(info.serial_number),
+            "firmware": ".".join(str(part) for part in info.firmware_version[1:]),
+        }
 
     # -- RotationStage -------------------------------------------------------------------------
 
@@ -226,10 +235,8 @@ class AptRotationStage:
     def _send(self, message: str, *parameters: int) -> None:
         """Write the library's ``message(destination, source, *parameters)``."""
         port = self._require_port()
-        try:
+        with wire(self.name):
             port.write(getattr(self._apt, message)(_USB_CONTROLLER, _HOST, *parameters))
-        except serial.SerialException as error:
-            raise DeviceDisconnected(f"{self.name}: {error}") from error
 
     def _await(self, wanted: str | tuple[str, ...], what: str, timeout_s: float) -> Any:
         """The next message from the controller, which must be (one of) ``wanted``."""
@@ -237,7 +244,8 @@ class AptRotationStage:
         deadline = time.monotonic() + timeout_s
         while True:
             try:
-                message = next(self._unpacker)
+                with wire(self.name):
+                    message = next(self._unpacker)
             except StopIteration:
                 if time.monotonic() >= deadline:
                     raise DeviceTimeout(f"{self.name}: no {what} within {timeout_s:g} s") from None
@@ -246,8 +254,6 @@ class AptRotationStage:
                 raise DeviceError(
                     f"{self.name}: garbled bytes where {what} was expected ({error})"
                 ) from None
-            except serial.SerialException as error:
-                raise DeviceDisconnected(f"{self.name}: {error}") from error
             if message.msg in wanted:
                 return message
             raise DeviceError(

@@ -30,7 +30,8 @@ import serial
 
 import hwbridge.emulators  # noqa: F401  (registers the dmxusbpro:// URL handler)
 from hwbridge.dome_targets import check_current_ma, led_pattern, single_led
-from hwbridge.errors import DeviceDisconnected, DeviceError, DeviceTimeout, InputError
+from hwbridge.drivers.serial_wire import open_port, wire
+from hwbridge.errors import DeviceError, DeviceTimeout, InputError
 from hwbridge.protocols import description, reading
 
 __all__ = ["DmxLedArray"]
@@ -104,8 +105,8 @@ class DmxLedArray:
         """Open the port, read the widget's serial number and parameters, switch all LEDs off."""
         self.unstage()
         try:
-            self._port = serial.serial_for_url(
-                self._port_name, baudrate=57600, timeout=self._timeout_s
+            self._port = open_port(
+                self._port_name, self.name, baudrate=57600, timeout=self._timeout_s
             )
             # The serial number first: asking it stops the DMX output, which starts below.
             serial_bcd = self._request(_GET_SERIAL, b"", "Get Widget Serial Number")
@@ -156,6 +157,16 @@ class DmxLedArray:
             units="mA",
         )
 
+    def identity(self) -> dict[str, str]:
+        """The widget's serial number (read at staging: asking it again would stop the DMX
+        output) and firmware (asked now, with the parameters)."""
+        self._widget |= self._parameters()
+        return {
+            "model": "Enttec DMX USB Pro",
+            "serial": str(self._widget.get("serial", "?")),
+            "firmware": str(self._widget["firmware"]),
+        }
+
     @property
     def widget(self) -> dict[str, Any]:
         """The widget's serial number, firmware version and DMX timing, as read at staging."""
@@ -200,14 +211,14 @@ class DmxLedArray:
     def _write(self, label: int, data: bytes) -> None:
         message = struct.pack("<BBH", _START, label, len(data)) + data + bytes([_END])
         port = self._require_port()
-        try:
+        with wire(self.name):
             port.write(message)
-        except serial.SerialException as error:
-            raise DeviceDisconnected(f"{self.name}: {error}") from error
 
     def _request(self, label: int, data: bytes, what: str) -> bytes:
         """Send a request and return the data of the widget's reply, which must carry ``label``."""
-        self._require_port().reset_input_buffer()  # nothing stale is taken for the answer
+        port = self._require_port()
+        with wire(self.name):
+            port.reset_input_buffer()  # nothing stale is taken for the answer
         self._write(label, data)
         header = self._read(4, what)
         reply_label, length = struct.unpack_from("<BH", header, 1)
@@ -225,10 +236,9 @@ class DmxLedArray:
         return body[:-1]
 
     def _read(self, size: int, what: str) -> bytes:
-        try:
-            data = self._require_port().read(size)
-        except serial.SerialException as error:
-            raise DeviceDisconnected(f"{self.name}: {error}") from error
+        port = self._require_port()
+        with wire(self.name):
+            data = port.read(size)
         if len(data) < size:
             raise DeviceTimeout(
                 f"{self.name}: no complete answer to {what} within {self._timeout_s:g} s"

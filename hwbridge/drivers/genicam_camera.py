@@ -89,6 +89,19 @@ class GenICamCamera:
             self._harvester.reset()
             self._harvester = None
 
+    def identity(self) -> dict[str, str]:
+        """The camera's model, serial number and firmware from its node map."""
+        node_map = self._node_map()
+
+        def node(name: str) -> str:
+            return str(getattr(node_map, name).value) if hasattr(node_map, name) else "?"
+
+        return {
+            "model": f"{node('DeviceVendorName')} {node('DeviceModelName')}",
+            "serial": node("DeviceSerialNumber"),
+            "firmware": node("DeviceFirmwareVersion"),
+        }
+
     @property
     def frame_shape(self) -> tuple[int, int]:
         node_map = self._node_map()

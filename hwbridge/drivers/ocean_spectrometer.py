@@ -58,6 +58,16 @@ class OceanSpectrometer:
             self._device.close()
             self._device = None
 
+    def identity(self) -> dict[str, str]:
+        """The spectrometer's model and serial number (seabreeze reports no firmware)."""
+        if self._device is None:
+            raise DeviceError(f"{self.name}: not staged; call stage() first")
+        return {
+            "model": f"Ocean Optics {self._device.model}",
+            "serial": str(self._device.serial_number),
+            "firmware": "?",
+        }
+
     def trigger(self) -> None:
         """Take one spectrum."""
         if self._device is None:

@@ -14,6 +14,7 @@ from typing import Any
 import serial
 
 import hwbridge.emulators  # noqa: F401  (registers the varispec:// URL handler)
+from hwbridge.drivers.serial_wire import open_port, wire
 from hwbridge.errors import DeviceError, DeviceTimeout, InputError
 from hwbridge.protocols import description, reading
 
@@ -45,8 +46,9 @@ class VariSpec:
 
     def stage(self) -> None:
         """Open the port, select standard comms, initialize if needed, read version and range."""
-        self._port = serial.serial_for_url(self._port_name, baudrate=9600, timeout=self._timeout_s)
-        self._port.reset_input_buffer()
+        self._port = open_port(self._port_name, self.name, baudrate=9600, timeout=self._timeout_s)
+        with wire(self.name):
+            self._port.reset_input_buffer()
         self._command("B0")
         self._command("G0")
         status = self.status()
@@ -56,6 +58,10 @@ class VariSpec:
         if not status["initialized"]:
             self._command("I1")
             self._wait_until_ready()
+        self.identity()
+
+    def identity(self) -> dict[str, str]:
+        """The controller's serial number, firmware revision and range (``V?``)."""
         fields = self._query("V?").split()
         if len(fields) != 5 or fields[0] != "V":
             raise DeviceError(
@@ -64,6 +70,11 @@ class VariSpec:
             )
         self._range_nm = (float(fields[2]), float(fields[3]))
         self._version = {"revision": fields[1], "serial": fields[4]}
+        return {
+            "model": f"VariSpec {fields[2]}-{fields[3]} nm",
+            "serial": fields[4],
+            "firmware": fields[1],
+        }
 
     def unstage(self) -> None:
         if self._port is not None:
@@ -145,20 +156,25 @@ class VariSpec:
 
     def _exchange(self, request: bytes, reply_length: int) -> bytes:
         port = self._require_port()
-        port.write(request)
-        reply = port.read(reply_length)
+        with wire(self.name):
+            port.write(request)
+            reply = port.read(reply_length)
         if len(reply) < reply_length:
             raise DeviceTimeout(f"{self.name}: no answer to {request!r} within {self._timeout_s} s")
         return reply
 
     def _read_line(self) -> str:
-        line = self._require_port().read_until(b"\r")
+        port = self._require_port()
+        with wire(self.name):
+            line = port.read_until(b"\r")
         if not line.endswith(b"\r"):
             raise DeviceTimeout(f"{self.name}: incomplete line {line!r} within {self._timeout_s} s")
         return line[:-1].decode("ascii", "replace")
 
     def _command(self, command: str) -> None:
-        self._require_port().write(command.encode("ascii") + b"\r")
+        port = self._require_port()
+        with wire(self.name):
+            port.write(command.encode("ascii") + b"\r")
         echo = self._read_line()
         if echo != command:
             raise DeviceError(f"{self.name}: sent {command!r}, the controller echoed {echo!r}")

@@ -6,12 +6,18 @@ import sys
 import time
 
 import pytest
-import serial
 
 from hwbridge.drivers.apt_rotation_stage import K10CR1_COUNTS_PER_DEG, AptRotationStage
 from hwbridge.emulators.apt_stage_state import AptStageState
 from hwbridge.emulators.pty_link import EmulatorPty
-from hwbridge.errors import DeviceError, DeviceTimeout, DriverNotInstalled, InputError, Remedy
+from hwbridge.errors import (
+    DeviceDisconnected,
+    DeviceError,
+    DeviceTimeout,
+    DriverNotInstalled,
+    InputError,
+    Remedy,
+)
 
 # The driver imports its protocol library only when it stages: skip here without the extra.
 apt = pytest.importorskip("thorlabs_apt_protocol")
@@ -131,5 +137,5 @@ def test_without_the_library_the_driver_names_the_extra(monkeypatch):
 
 
 def test_unknown_emulator_options_are_refused():
-    with pytest.raises(serial.SerialException, match="unknown"):
+    with pytest.raises(DeviceDisconnected, match="cannot open .*unknown"):
         AptRotationStage("apt://?colour=red").stage()
