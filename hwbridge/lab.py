@@ -201,23 +201,27 @@ class Lab:
     devices: dict[str, DeviceEntry | str]
     path: Path
 
-    def role(self, name: str) -> DeviceEntry | str:
-        """What fills role ``name`` (``sim`` when the file leaves an optional role out)."""
-        return self.devices.get(name, SIM)
+    def device(self, role: str) -> DeviceEntry | None:
+        """The real device of ``role`` (``None``: the twin's, also for an optional role the
+        file leaves out)."""
+        entry = self.devices.get(role, SIM)
+        return None if isinstance(entry, str) else entry
 
-    def camera(self, camera_id: str) -> DeviceEntry | str:
-        """What takes the frames of the dome's camera ``camera_id`` (``spectral``, ``rgb00``
-        ...)."""
+    def camera(self, camera_id: str) -> DeviceEntry | None:
+        """The real camera that takes the frames of ``camera_id`` (the dome's ``spectral``,
+        ``rgb00`` ...; the gonioreflectometer's one camera), ``None``: the twin's."""
+        if self.rig == "gonioreflectometer":
+            return self.device("camera")
         if camera_id == "spectral":
-            return self.role("spectral_camera")
+            return self.device("spectral_camera")
         if "rgb_cameras" in self.devices:
-            return self.devices["rgb_cameras"]
+            return self.device("rgb_cameras")
         if camera_id not in self.devices:
             raise InputError(
                 f"{self.path}: rgb_cameras: the capture uses camera {camera_id}, which the file "
                 "does not name; expected an entry for it (sim or a GenTL producer)"
             )
-        return self.devices[camera_id]
+        return self.device(camera_id)
 
     def wired(self) -> dict[str, DeviceEntry]:
         """The roles a real device fills, by name."""
@@ -307,7 +311,7 @@ def load_lab(path: str | Path) -> Lab:
     ...     "devices: {camera: sim, lctf: /dev/ttyUSB0, monitor: sim,\\n"
     ...     "          positioner: sim, lamp: sim}\\n"
     ... )
-    >>> load_lab(folder / "lab.yaml").role("lctf").port
+    >>> load_lab(folder / "lab.yaml").device("lctf").port
     '/dev/ttyUSB0'
     """
     path = Path(path)

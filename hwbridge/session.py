@@ -196,6 +196,13 @@ class SessionDevices:
     monitor: LampMonitor | None = None
     leds: LedArray | None = None
 
+    def unstage(self) -> None:
+        """Release every device that was staged (closing a real device's port)."""
+        others = (self.tunable_filter, self.positioner, self.monitor, self.leds)
+        for device in (*self.cameras.values(), *others):
+            if isinstance(device, Stageable):
+                device.unstage()
+
 
 @dataclass(frozen=True)
 class SessionSettings:

@@ -26,7 +26,7 @@ except ImportError:  # pragma: no cover - not POSIX
 __all__ = ["open_port", "wire"]
 
 
-def open_port(port: str, name: str, **settings: Any) -> serial.SerialBase:
+def open_port(port: str, name: str, **settings: Any) -> serial.Serial:
     """The serial port (device name or pyserial URL) ``port`` of the device ``name``, open."""
     try:
         return serial.serial_for_url(port, **settings)

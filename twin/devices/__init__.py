@@ -1,4 +1,4 @@
-"""Simulated devices behind the ``hwbridge`` protocols, the dome's devices simulated or real, and
+"""Simulated devices behind the ``hwbridge`` protocols, a lab's real devices in their place, and
 capture over a Dask cluster."""
 
 import lazy_loader
@@ -7,7 +7,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
         "cluster": ["dask_client", "run_capture", "run_process"],
-        "dome_devices": ["DomeDevices"],
+        "lab_devices": ["LabDevices"],
         "sim_devices": ["SimDomeDevices", "SimGonioDevices", "VirtualRig"],
     },
 )

@@ -51,7 +51,7 @@ import threading
 import time
 import uuid
 from collections.abc import Callable, Iterator, Mapping
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -316,7 +316,6 @@ def run_capture(
     *,
     rig: RigAttrs | Mapping[str, Any],
     seed: int,
-    backend: str = "sim",
     resume: bool = False,
     show_progress: bool = False,
     client: Client | None = None,
@@ -333,8 +332,9 @@ def run_capture(
     devices
         Builds the session's devices for the seed and the steps they take; it must pickle to
         run on a cluster (e.g. :class:`twin.devices.sim_devices.SimGonioDevices`).
-    rig, seed, backend
-        Stored with the plan (:class:`hwbridge.session.SessionSettings`).
+    rig, seed
+        Stored with the plan (:class:`hwbridge.session.SessionSettings`), with the recipe's
+        ``backend``.
     resume
         Continue an interrupted capture (serial or distributed, either way).
     show_progress
@@ -358,15 +358,18 @@ def run_capture(
         SIGINT or SIGTERM stopped the capture (on a cluster: after the workers' current steps).
     """
     settings = SessionSettings(
-        rig=rig, backend=backend, seed=seed, resume=resume, show_progress=show_progress
+        rig=rig, backend=devices.backend, seed=seed, resume=resume, show_progress=show_progress
     )
-    with (
-        SignalStop() as stop,
-        locked_session_store(store, plan, devices(seed, []), settings) as session,
-    ):
+    with SignalStop() as stop, ExitStack() as held:
+        sizes = devices(seed, [])  # the frame shapes, read from staged devices
+        held.callback(sizes.unstage)
+        session = held.enter_context(locked_session_store(store, plan, sizes, settings))
+        sizes.unstage()  # a real device is staged once at a time
         pending = session.pending_steps()
         if client is None:
-            capture_pending(session, devices(seed, pending), settings, stop)
+            capturing = devices(seed, pending)
+            held.callback(capturing.unstage)
+            capture_pending(session, capturing, settings, stop)
             return session
         client.register_plugin(RendererSetup(), name=RendererSetup.name)
         [recipe] = client.scatter([devices], broadcast=True, hash=False)

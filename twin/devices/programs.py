@@ -11,11 +11,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from hwbridge.lab import Lab
 from hwbridge.schema import RigAttrs
 from hwbridge.store import CaptureStore
 from recon.errors import InputError
 from twin.devices.cluster import run_capture
-from twin.devices.sim_devices import DeviceRecipe
+from twin.devices.lab_devices import LabDevices
+from twin.devices.sim_devices import SimDomeDevices, SimGonioDevices
 from twin.sensor.model import Sensor
 
 if TYPE_CHECKING:
@@ -62,7 +64,7 @@ class ProgramCapture:
     the rig's kind) and the session ``seed``."""
 
     plan: list[dict[str, Any]]
-    devices: DeviceRecipe
+    devices: SimDomeDevices | SimGonioDevices
     rig: RigAttrs
     seed: int
 
@@ -73,14 +75,20 @@ class ProgramCapture:
         resume: bool = False,
         show_progress: bool = False,
         client: Client | None = None,
+        lab: Lab | None = None,
     ) -> CaptureStore:
         """Capture the plan into ``store`` (or continue it), in this process or over
         ``client``'s cluster (:func:`twin.devices.cluster.run_capture`): the frames are the
-        same."""
+        same. With ``lab``, a devices file, its real devices fill the roles it names
+        (:class:`twin.devices.lab_devices.LabDevices`; in this process only)."""
+        if lab is not None and client is not None:
+            raise InputError(
+                "a capture with a lab's devices runs in this process, not on a cluster"
+            )
         return run_capture(
             Path(store),
             self.plan,
-            self.devices,
+            self.devices if lab is None else LabDevices(lab, self.devices),
             rig=self.rig,
             seed=self.seed,
             resume=resume,

@@ -30,7 +30,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
@@ -56,6 +56,7 @@ __all__ = [
     "SimSpectrometer",
     "SimTunableFilter",
     "VirtualRig",
+    "session_rig",
 ]
 
 
@@ -406,13 +407,21 @@ class SimCamera:
 
 
 class DeviceRecipe(Protocol):
-    """Builds a simulated session's devices, in the process that takes its steps, for the
-    session ``seed`` and the plan ``steps`` they take, in this order (``None``: every step)."""
+    """Builds a session's devices, in the process that takes its steps, for the session
+    ``seed`` and the plan ``steps`` they take, in this order (``None``: every step); its
+    ``backend`` (``sim`` or ``real``) is the store's."""
+
+    @property
+    def backend(self) -> str: ...
 
     def __call__(self, seed: int = 0, steps: Sequence[int] | None = None) -> SessionDevices: ...
 
 
-def _rig(seed: int, steps: Sequence[int] | None, fault_rate: float, fault_seed: int) -> VirtualRig:
+def session_rig(
+    seed: int, steps: Sequence[int] | None, fault_rate: float = 0.0, fault_seed: int = 0
+) -> VirtualRig:
+    """The rig of a session with ``seed`` taking plan ``steps`` (``None``: all), its injected
+    faults drawn from ``[fault_seed, 99]``."""
     return VirtualRig(
         seed=seed,
         steps=None if steps is None else tuple(steps),
@@ -455,9 +464,13 @@ class SimGonioDevices:
     views: int
     fault_rate: float = 0.0
     fault_seed: int = 0
+    backend: ClassVar[str] = "sim"
 
     def __call__(self, seed: int = 0, steps: Sequence[int] | None = None) -> SessionDevices:
-        rig = _rig(seed, steps, self.fault_rate, self.fault_seed)
+        return self.on_rig(session_rig(seed, steps, self.fault_rate, self.fault_seed))
+
+    def on_rig(self, rig: VirtualRig) -> SessionDevices:
+        """The devices over ``rig``."""
         camera = SimCamera(rig, self.sensor, self.signal, self.start_times_s, name=self.camera_id)
         return SessionDevices(
             cameras={self.camera_id: camera},
@@ -500,9 +513,13 @@ class SimDomeDevices:
     led_full_scale_ma: float = 700.0
     fault_rate: float = 0.0
     fault_seed: int = 0
+    backend: ClassVar[str] = "sim"
 
     def __call__(self, seed: int = 0, steps: Sequence[int] | None = None) -> SessionDevices:
-        rig = _rig(seed, steps, self.fault_rate, self.fault_seed)
+        return self.on_rig(session_rig(seed, steps, self.fault_rate, self.fault_seed))
+
+    def on_rig(self, rig: VirtualRig) -> SessionDevices:
+        """The devices over ``rig``."""
         return SessionDevices(
             cameras={
                 camera_id: SimCamera(rig, sensor, signal, self.start_times_s, name=camera_id)
