@@ -66,6 +66,11 @@ class _SerialEntry(_Entry):
 
     port: str = Field(description="serial port, or pyserial URL")
 
+    @property
+    def address(self) -> str:
+        """Where the device is, as the file names it."""
+        return self.port
+
     @field_validator("port")
     @classmethod
     def _an_address(cls, port: str) -> str:
@@ -122,6 +127,11 @@ class GenICamEntry(_Entry):
     producer: Path = Field(description="the GenTL producer (.cti)")
     serial: str | None = Field(None, description="the camera's serial number (default: first)")
 
+    @property
+    def address(self) -> str:
+        """Where the device is, as the file names it."""
+        return f"{self.producer}" + (f" serial {self.serial}" if self.serial else "")
+
     @field_validator("producer")
     @classmethod
     def _a_producer(cls, producer: Path) -> Path:
@@ -138,6 +148,11 @@ class SpectrometerEntry(_Entry):
 
     serial: str | None = Field(None, description="its serial number (default: the first found)")
     integration_s: float = Field(0.01, gt=0, description="integration time")
+
+    @property
+    def address(self) -> str:
+        """Where the device is, as the file names it."""
+        return f"USB serial {self.serial}" if self.serial else "USB (the first found)"
 
 
 DeviceEntry: TypeAlias = StageEntry | LedsEntry | LctfEntry | GenICamEntry | SpectrometerEntry

@@ -13,9 +13,9 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 from hwbridge.errors import SpectwinError
-from hwbridge.lab import DeviceEntry, GenICamEntry, Lab, SpectrometerEntry, open_device
+from hwbridge.lab import DeviceEntry, Lab, open_device
 
-__all__ = ["DeviceCheck", "check_lab"]
+__all__ = ["DeviceCheck", "check_device", "check_lab"]
 
 
 @dataclass(frozen=True)
@@ -57,17 +57,9 @@ class DeviceCheck:
         return asdict(self) | {"ok": self.ok}
 
 
-def _address(entry: DeviceEntry) -> str:
-    if isinstance(entry, GenICamEntry):
-        return f"{entry.producer}" + (f" serial {entry.serial}" if entry.serial else "")
-    if isinstance(entry, SpectrometerEntry):
-        return f"USB serial {entry.serial}" if entry.serial else "USB (first found)"
-    return entry.port
-
-
 def check_device(role: str, entry: DeviceEntry) -> DeviceCheck:
     """Stage the device of ``role``, time its identity and unstage it."""
-    found = DeviceCheck(role, entry.driver, _address(entry))
+    found = DeviceCheck(role, entry.driver, entry.address)
     device = open_device(role, entry)
     try:
         device.stage()

@@ -22,6 +22,10 @@ if TYPE_CHECKING:
 
 __all__ = ["GenICamCamera", "simulated_producer"]
 
+_INFO = ("vendor", "model", "serial_number", "version")
+_EXPOSURE_TOLERANCE = 1e-3
+"""Largest relative difference between the exposure asked for and the one read back."""
+
 
 def simulated_producer() -> Path:
     """The simulated GenTL producer of the ``genicam`` package."""
@@ -46,6 +50,7 @@ class GenICamCamera:
         self._harvester: Harvester | None = None
         self._acquirer: ImageAcquirer | None = None
         self._exposure_s: float | None = None
+        self._info: dict[str, Any] = {}
 
     def stage(self) -> None:
         from harvesters.core import Harvester
@@ -72,14 +77,16 @@ class GenICamCamera:
             raise DeviceError(f"{self.name}: the producer {self._cti.name} offers no camera")
         serials = [info.serial_number for info in devices]
         if self._serial is None:
-            selector: dict[str, Any] | int = 0
+            index = 0
         elif self._serial in serials:
-            selector = {"serial_number": self._serial}
+            index = serials.index(self._serial)
         else:
             raise DeviceError(
                 f"{self.name}: no camera with serial {self._serial!r}; found {serials}"
             )
-        return harvester.create(selector)
+        found = devices[index]
+        self._info = {key: getattr(found, key, "?") for key in _INFO}
+        return harvester.create(index)
 
     def unstage(self) -> None:
         if self._acquirer is not None:
@@ -90,16 +97,13 @@ class GenICamCamera:
             self._harvester = None
 
     def identity(self) -> dict[str, str]:
-        """The camera's model, serial number and firmware from its node map."""
-        node_map = self._node_map()
-
-        def node(name: str) -> str:
-            return str(getattr(node_map, name).value) if hasattr(node_map, name) else "?"
-
+        """The camera's vendor and model, serial number and version as its producer lists
+        them; its node map is read (``Width``) to know it answers."""
+        self._node_map().Width.value
         return {
-            "model": f"{node('DeviceVendorName')} {node('DeviceModelName')}",
-            "serial": node("DeviceSerialNumber"),
-            "firmware": node("DeviceFirmwareVersion"),
+            "model": f"{self._info.get('vendor', '?')} {self._info.get('model', '?')}",
+            "serial": str(self._info.get("serial_number", "?")),
+            "firmware": str(self._info.get("version", "?")),
         }
 
     @property
@@ -108,13 +112,25 @@ class GenICamCamera:
         return (int(node_map.Height.value), int(node_map.Width.value))
 
     def set_exposure(self, exposure_s: float) -> None:
-        """Set ``ExposureTime`` (microseconds) where the camera has it; kept for the metadata."""
+        """Set ``ExposureTime`` (microseconds) and read it back: a camera that took another
+        exposure, or has no ``ExposureTime`` to set, is refused (its frames would be stored
+        under an exposure they were not taken at)."""
         if not np.isfinite(exposure_s) or exposure_s <= 0:
             raise InputError(f"{self.name}: expected a positive exposure time, got {exposure_s}")
-        self._exposure_s = float(exposure_s)
         node_map = self._node_map()
-        if hasattr(node_map, "ExposureTime"):
-            node_map.ExposureTime.value = exposure_s * 1e6
+        if not hasattr(node_map, "ExposureTime"):
+            raise DeviceError(
+                f"{self.name}: the camera ({self._info.get('model', '?')}) has no ExposureTime "
+                "feature; expected a camera whose exposure time can be set"
+            )
+        node_map.ExposureTime.value = exposure_s * 1e6
+        taken_s = float(node_map.ExposureTime.value) / 1e6
+        if abs(taken_s / exposure_s - 1) > _EXPOSURE_TOLERANCE:
+            raise DeviceError(
+                f"{self.name}: asked for an exposure of {exposure_s:g} s, the camera reads back "
+                f"{taken_s:g} s; expected the plan's exposures within the camera's range"
+            )
+        self._exposure_s = taken_s
 
     def snap(self) -> tuple[np.ndarray, dict[str, Any]]:
         """One frame as uint16 ``(H, W)``: mono and Bayer formats as delivered, packed colour

@@ -71,7 +71,7 @@ class VariSpec:
         self._range_nm = (float(fields[2]), float(fields[3]))
         self._version = {"revision": fields[1], "serial": fields[4]}
         return {
-            "model": f"VariSpec {fields[2]}-{fields[3]} nm",
+            "model": f"VariSpec {float(fields[2]):g}-{float(fields[3]):g} nm",
             "serial": fields[4],
             "firmware": fields[1],
         }

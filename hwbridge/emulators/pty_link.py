@@ -2,7 +2,7 @@
 
 ``with EmulatorPty(AptStageState()) as path:`` opens a pty pair and, in a thread, answers every
 byte written to the terminal ``path`` (``/dev/pts/N``) with the state's ``respond`` and sends its
-``due`` messages once they fall due. A driver opens ``path`` as it opens a USB serial adapter
+``due`` messages once they fall due, counting the bytes each way (``received``, ``sent``). A driver opens ``path`` as it opens a USB serial adapter
 (termios, baud rate, RTS/CTS), so its own port code runs as on the real device, not only through
 pyserial's URL handlers. POSIX only.
 """
@@ -26,6 +26,7 @@ class EmulatorPty:
     def __init__(self, state: DeviceState, *, poll_s: float = 0.001):
         self.state, self._poll_s = state, poll_s
         self.path = ""
+        self.received = self.sent = 0  # bytes from and to the host
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._controller = self._terminal = -1
@@ -41,10 +42,12 @@ class EmulatorPty:
     def _serve(self) -> None:
         while not self._stop.is_set():
             ready, _, _ = select.select([self._controller], [], [], self._poll_s)
-            answer = self.state.respond(os.read(self._controller, 4096)) if ready else b""
+            data = os.read(self._controller, 4096) if ready else b""
+            self.received += len(data)
+            answer = self.state.respond(data) if data else b""
             answer += self.state.due(time.monotonic())
             if answer:
-                os.write(self._controller, answer)
+                self.sent += os.write(self._controller, answer)
 
     def __exit__(self, *exc_info: object) -> None:
         self._stop.set()

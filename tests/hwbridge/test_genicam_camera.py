@@ -21,10 +21,9 @@ def camera():
 
 def test_snaps_frames_of_the_advertised_size(camera):
     assert isinstance(camera, Camera)
-    camera.set_exposure(0.01)
     frame, metadata = camera.snap()
     assert frame.dtype == np.uint16 and frame.shape == camera.frame_shape
-    assert metadata["exposure_s"] == 0.01 and metadata["pixel_format"]
+    assert metadata["exposure_s"] is None and metadata["pixel_format"]
     second, _ = camera.snap()
     assert second.shape == frame.shape
     assert "GenICam" in camera.describe()["camera_image"]["source"]
@@ -39,6 +38,19 @@ def test_wrong_serials_producers_and_exposures_are_reported(tmp_path):
         genicam_camera.GenICamCamera(tmp_path / "none.cti").stage()
     with pytest.raises(DeviceError, match="not staged"):
         genicam_camera.GenICamCamera(genicam_camera.simulated_producer()).snap()
+
+
+def test_a_camera_without_an_exposure_time_is_refused_an_exposure(camera):
+    """The simulated producer's camera has no ExposureTime feature: a plan's exposure cannot
+    be set, and the driver says so rather than store frames under an exposure they were not
+    taken at."""
+    assert camera.identity() == {
+        "model": "Machine Vision Games Ltd. Viky",
+        "serial": "1",
+        "firmware": "1.0",
+    }
+    with pytest.raises(DeviceError, match="has no ExposureTime feature"):
+        camera.set_exposure(0.01)
 
 
 def test_a_failed_stage_releases_the_producer_for_the_next_camera():

@@ -37,6 +37,7 @@ from twin.cli.given import given, option_name
 from twin.cli.output import JsonFlag, SchedulerOption, WorkersOption, print_summary
 
 if TYPE_CHECKING:
+    from hwbridge.lab import Lab
     from twin.kinds.kind import ProgramSettings
 
 __all__ = ["capture_app", "register"]
@@ -50,6 +51,15 @@ stop."""
 CAPTURE_STORE = "spectwin.capture_store"
 """Key in ``ctx.meta`` of the store a capture command writes, for the advice of its errors."""
 
+CAPTURE_DEVICES = "spectwin.capture_devices"
+"""Key in ``ctx.meta`` of the devices file of a capture, for the advice to resume it."""
+
+
+def resume_command(store: Path, devices: Path | None) -> str:
+    """The command that continues the capture into ``store`` on the devices of ``devices``."""
+    again = f"spectwin capture resume {shlex.quote(str(store))}"
+    return again if devices is None else f"{again} --devices {shlex.quote(str(devices))}"
+
 
 class CaptureGroup(SpectwinGroup):
     """``spectwin capture``: a program first; a store path in its place (the form without
@@ -59,7 +69,7 @@ class CaptureGroup(SpectwinGroup):
     def advice(self, ctx: Any, remedy: Remedy | None) -> str | None:
         store = ctx.meta.get(CAPTURE_STORE)
         if store is not None and remedy in (Remedy.resume, Remedy.resume_or_rename):
-            again = f"spectwin capture resume {shlex.quote(str(store))}"
+            again = resume_command(store, ctx.meta.get(CAPTURE_DEVICES))
             if remedy is Remedy.resume:
                 return f"continue with {again}"
             return f"continue it with {again} or choose another name"
@@ -77,8 +87,9 @@ class CaptureGroup(SpectwinGroup):
 
 capture_app = typer.Typer(
     cls=CaptureGroup,
-    help="Capture a simulated gonioreflectometer or dome session into a capture store "
-    "(resumable): one program per subcommand.\n\n"
+    help="Capture a gonioreflectometer or dome session into a capture store (resumable): one "
+    "program per subcommand, on the twin's devices or, with --devices lab.yaml, on a lab's "
+    "(the twin's cameras render what the real stage, LEDs and LCTF were told).\n\n"
     "One writer per store: a second capture, resume or process of the same store is refused "
     "while the first runs. Ctrl-C (or SIGTERM) stops after the current frame and says how to "
     "continue.\n\n"
@@ -133,6 +144,16 @@ TexelsOption = Annotated[
 ]
 
 
+DevicesOption = Annotated[
+    Path | None,
+    typer.Option(
+        "--devices",
+        help="A devices file (lab.yaml, see scenes/labs): its real devices fill the roles it "
+        "names, the twin's the roles it leaves sim.",
+    ),
+]
+
+
 class LedRenders(StrEnum):
     pose = "pose"
     single = "single"
@@ -161,8 +182,14 @@ def _material(material: str) -> str:
     return str(Path(material).resolve()) if Path(material).suffix else material
 
 
-def _interrupted(store: Path, done: int | None = None, total: int | None = None) -> NoReturn:
-    """Say how far an interrupted capture got and how to continue it; exit 130."""
+def _interrupted(
+    store: Path,
+    devices: Path | None,
+    done: int | None = None,
+    total: int | None = None,
+) -> NoReturn:
+    """Say how far an interrupted capture (on the devices of ``devices``) got and how to
+    continue it; exit 130."""
     if done is None:
         from hwbridge.store import CaptureStore
 
@@ -175,7 +202,7 @@ def _interrupted(store: Path, done: int | None = None, total: int | None = None)
     then = (
         "the capture is complete"
         if done == total
-        else f"continue with: spectwin capture resume {shlex.quote(str(store))}"
+        else f"continue with: {resume_command(store, devices)}"
     )
     typer.echo(f"interrupted after {done} of {total} frames; {then}", err=True)
     raise typer.Exit(INTERRUPTED)
@@ -184,7 +211,7 @@ def _interrupted(store: Path, done: int | None = None, total: int | None = None)
 @dataclass(frozen=True)
 class Session:
     """How a capture runs, beside what it captures: injected faults, a dry run or a resume,
-    where (Dask workers or a scheduler) and what it prints."""
+    where (Dask workers or a scheduler), what it prints and the lab's devices file."""
 
     fault_rate: float = 0.0
     dry_run: bool = False
@@ -192,6 +219,7 @@ class Session:
     workers: int = 1
     scheduler: str | None = None
     as_json: bool = False
+    devices: Path | None = None
 
 
 def _capture(
@@ -212,13 +240,16 @@ def _capture(
     from hwbridge.lock import require_new_store
     from twin.kinds.registry import ProgramSettings, rig_kind
 
-    ctx.meta[INTERRUPT_REPORT] = lambda: _interrupted(store)  # a Ctrl-C as the command returns
-    ctx.meta[CAPTURE_STORE] = store
+    devices = session.devices
+    # a Ctrl-C as the command returns
+    ctx.meta[INTERRUPT_REPORT] = lambda: _interrupted(store, devices)
+    ctx.meta[CAPTURE_STORE], ctx.meta[CAPTURE_DEVICES] = store, devices
     program = rig_kind(rig).program(program_name)
     if dry_run:
         for name in _CAPTURE_ONLY:
             if given(ctx, name):
                 fail(f"{option_name(ctx, name)} is not used by --dry-run, which captures nothing")
+    lab = None if devices is None or dry_run else _lab(ctx, devices, rig, program_name)
     if isinstance(settings, ProgramSettings):
         model = settings
     else:
@@ -243,9 +274,14 @@ def _capture(
 
     summary["program"] = program.name
     try:
-        with dask_client(workers, scheduler) as client:
-            summary["cluster"] = cluster_description(client)
-            result = built.run(store, resume=resume, show_progress=not as_json, client=client)
+        if lab is not None:
+            wired = lab.wired().items()
+            summary["devices"] = {role: f"{e.driver} on {e.address}" for role, e in wired}
+            result = built.run(store, resume=resume, show_progress=not as_json, lab=lab)
+        else:
+            with dask_client(workers, scheduler) as client:
+                summary["cluster"] = cluster_description(client)
+                result = built.run(store, resume=resume, show_progress=not as_json, client=client)
         cameras = dict.fromkeys(step.camera for step in result.metadata.plan)
         indexes = [result.index(camera, ["kind", "status"]) for camera in cameras]
         recaptured = [
@@ -263,11 +299,31 @@ def _capture(
             summary["recaptured"] = recaptured
         for line in recaptured:
             typer.echo(f"re-captured {line}")
-        print_summary(summary, "capture (simulated backend)", as_json)
+        backend = "simulated backend" if lab is None else f"devices of {devices}"
+        print_summary(summary, f"capture ({backend})", as_json)
     except SessionInterrupted as stop:
-        _interrupted(store, stop.done, stop.total)
+        _interrupted(store, devices, stop.done, stop.total)
     except KeyboardInterrupt:  # outside the session's own handling (the summary), or a second one
-        _interrupted(store)
+        _interrupted(store, devices)
+
+
+def _lab(ctx: typer.Context, devices: Path, rig: str, program: str) -> Lab:
+    """The devices file ``devices``, for ``program`` of ``rig`` (refusing what a lab's
+    devices cannot do: injected faults, a cluster)."""
+    from hwbridge.lab import load_lab
+
+    for name in ("fault_rate", "workers", "scheduler"):
+        if given(ctx, name):
+            fail(
+                f"{option_name(ctx, name)} is not used with --devices: a lab's devices fail on "
+                "their own and are driven from this process"
+            )
+    lab = load_lab(devices)
+    if lab.rig != rig:
+        fail(
+            f"--devices {devices}: is a devices file of the {lab.rig}; {program} runs on the {rig}"
+        )
+    return lab
 
 
 @capture_app.command()
@@ -303,6 +359,7 @@ def gonio_calibration(
     dry_run: DryRunFlag = False,
     workers: WorkersOption = 1,
     scheduler: SchedulerOption = None,
+    devices: DevicesOption = None,
     as_json: JsonFlag = False,
 ) -> None:
     """The gonioreflectometer's calibration: darks, response series, white standard.
@@ -315,7 +372,7 @@ def gonio_calibration(
         store,
         program,
         {"seed": seed},
-        Session(0.0, dry_run, False, workers, scheduler, as_json),
+        Session(0.0, dry_run, False, workers, scheduler, as_json, devices),
     )
 
 
@@ -358,6 +415,7 @@ def gonio_run(
     dry_run: DryRunFlag = False,
     workers: WorkersOption = 1,
     scheduler: SchedulerOption = None,
+    devices: DevicesOption = None,
     as_json: JsonFlag = False,
 ) -> None:
     """A measurement run of the gonioreflectometer: every direction pair in every band of the
@@ -386,7 +444,11 @@ def gonio_run(
     }
     program = ("gonioreflectometer", "gonio-run")
     _capture(
-        ctx, store, program, settings, Session(0.0, dry_run, False, workers, scheduler, as_json)
+        ctx,
+        store,
+        program,
+        settings,
+        Session(0.0, dry_run, False, workers, scheduler, as_json, devices),
     )
 
 
@@ -412,6 +474,7 @@ def dome_calibration(
     dry_run: DryRunFlag = False,
     workers: WorkersOption = 1,
     scheduler: SchedulerOption = None,
+    devices: DevicesOption = None,
     as_json: JsonFlag = False,
 ) -> None:
     """The dome's calibration: darks, response series, white standard under the LEDs,
@@ -434,7 +497,7 @@ def dome_calibration(
         store,
         program,
         settings,
-        Session(fault_rate, dry_run, False, workers, scheduler, as_json),
+        Session(fault_rate, dry_run, False, workers, scheduler, as_json, devices),
     )
 
 
@@ -456,6 +519,7 @@ def dome_run(
     dry_run: DryRunFlag = False,
     workers: WorkersOption = 1,
     scheduler: SchedulerOption = None,
+    devices: DevicesOption = None,
     as_json: JsonFlag = False,
 ) -> None:
     """The dome's measurement of a material: HDR sets and scheduled spectral bands per stage
@@ -480,7 +544,7 @@ def dome_run(
         store,
         program,
         settings,
-        Session(fault_rate, dry_run, False, workers, scheduler, as_json),
+        Session(fault_rate, dry_run, False, workers, scheduler, as_json, devices),
     )
 
 
@@ -491,12 +555,14 @@ def resume(
     fault_rate: FaultRateOption = 0.0,
     workers: WorkersOption = 1,
     scheduler: SchedulerOption = None,
+    devices: DevicesOption = None,
     as_json: JsonFlag = False,
 ) -> None:
     """Continue an interrupted capture with the program and settings recorded in its store
     (damaged frames are captured again).
 
-    Example: spectwin capture resume out/run.capture.zarr
+    Example: spectwin capture resume out/run.capture.zarr (a capture on a lab's devices: with
+    --devices lab.yaml)
     """
     from hwbridge.lock import lock_owner, require_no_writer
     from hwbridge.store import CaptureStore
@@ -512,7 +578,12 @@ def resume(
     kind, program = capture_program(capture)
     if given(ctx, "fault_rate") and not program.fault_rate:
         fail(f"--fault-rate is not used by {program.name}; leave it out")
-    session = Session(fault_rate, False, True, workers, scheduler, as_json)
+    on_a_lab = capture.metadata.backend == "real"
+    if on_a_lab and devices is None:
+        fail(f"{store} was captured on a lab's devices; resume it with --devices LAB.yaml")
+    if not on_a_lab and devices is not None:
+        fail(f"{store} was captured on the twin's devices; resume it without --devices")
+    session = Session(fault_rate, False, True, workers, scheduler, as_json, devices)
     _capture(ctx, store, (kind.name, program.name), program.stored(capture), session)
 
 
