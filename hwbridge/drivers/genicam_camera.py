@@ -99,7 +99,8 @@ class GenICamCamera:
     def identity(self) -> dict[str, str]:
         """The camera's vendor and model, serial number and version as its producer lists
         them; its node map is read (``Width``) to know it answers."""
-        self._node_map().Width.value
+        if int(self._node_map().Width.value) <= 0:
+            raise DeviceError(f"{self.name}: the camera reports no image width")
         return {
             "model": f"{self._info.get('vendor', '?')} {self._info.get('model', '?')}",
             "serial": str(self._info.get("serial_number", "?")),

@@ -2,9 +2,9 @@
 
 ``with EmulatorPty(AptStageState()) as path:`` opens a pty pair and, in a thread, answers every
 byte written to the terminal ``path`` (``/dev/pts/N``) with the state's ``respond`` and sends its
-``due`` messages once they fall due, counting the bytes each way (``received``, ``sent``). A driver opens ``path`` as it opens a USB serial adapter
-(termios, baud rate, RTS/CTS), so its own port code runs as on the real device, not only through
-pyserial's URL handlers. POSIX only.
+``due`` messages once they fall due, counting the bytes each way (``received``, ``sent``). A
+driver opens ``path`` as it opens a USB serial adapter (termios, baud rate, RTS/CTS), so its own
+port code runs as on the real device, not only through pyserial's URL handlers. POSIX only.
 """
 
 from __future__ import annotations
