@@ -31,7 +31,17 @@ def open_port(port: str, name: str, **settings: Any) -> serial.Serial:
     try:
         return serial.serial_for_url(port, **settings)
     except _WIRE_ERRORS as error:
-        raise DeviceDisconnected(f"{name}: cannot open {port} ({error})") from error
+        raise DeviceDisconnected(f"{name}: cannot open {port} ({_reason(error)})") from error
+
+
+def _reason(error: BaseException) -> str:
+    """The operating system's words for why ``error`` happened, where it has them."""
+    cause: BaseException | None = error
+    while cause is not None:
+        if isinstance(cause, OSError) and cause.strerror and "[Errno" not in cause.strerror:
+            return cause.strerror
+        cause = cause.__context__
+    return str(error)
 
 
 @contextmanager
