@@ -7,10 +7,10 @@ import pytest
 from hwbridge.dome_plans import DomeCameraIds, DomeExposures, dome_run
 from hwbridge.errors import InputError
 from hwbridge.lab import load_lab
-from hwbridge.plans import chart_photographs, plan_start_times_s
+from hwbridge.plans import chart_photographs, gonio_sample_run, plan_start_times_s
 from hwbridge.session import SessionSettings, run_session
 from twin.devices.lab_devices import LabDevices, ReadBackLeds, ReadBackStage
-from twin.devices.sim_devices import SimDomeDevices, VirtualRig
+from twin.devices.sim_devices import SimDomeDevices, SimGonioDevices, VirtualRig
 from twin.sensor.model import Sensor
 
 pytest.importorskip("thorlabs_apt_protocol")  # the stage driver's extra
@@ -103,3 +103,28 @@ def test_a_devices_file_with_no_real_device_is_the_simulated_backend(tmp_path):
     )
     plan = _plan()
     assert LabDevices(load_lab(tmp_path / "lab.yaml"), _recipe(plan)).backend == "sim"
+
+
+def test_the_gonioreflectometer_s_lctf_on_the_wire_gives_the_simulated_frames(tmp_path):
+    """The gonioreflectometer's one driven role: its camera renders the band the VariSpec
+    reports."""
+    plan = gonio_sample_run("k4", [0, 1], [450.0, 550.0, 650.0], [0.1, 0.1, 0.1])
+    sensor = Sensor("coolsnap_k4", roi=(8, 8))
+    recipe = SimGonioDevices("k4", sensor, state_signal, plan_start_times_s(plan), views=2)
+    (tmp_path / "lab.yaml").write_text(
+        "rig: gonioreflectometer\ndevices: {camera: sim, lctf: 'varispec://?settle_ms=1', "
+        "monitor: sim, positioner: sim, lamp: sim}\n"
+    )
+    stores = {}
+    for name, devices in (
+        ("sim", recipe),
+        ("lab", LabDevices(load_lab(tmp_path / "lab.yaml"), recipe)),
+    ):
+        built = devices(0, None)
+        settings = SessionSettings(rig={}, backend=devices.backend, seed=0, show_progress=False)
+        stores[name] = run_session(tmp_path / f"{name}.capture.zarr", plan, built, settings)
+        assert built.tunable_filter is not None
+        (band,) = built.tunable_filter.read().values()
+        assert band["value"] == 650.0  # the last step's band, asked of the controller
+        built.unstage()
+    np.testing.assert_array_equal(stores["lab"].frames("k4")[:], stores["sim"].frames("k4")[:])
