@@ -67,8 +67,9 @@ RECON_LAYERS = (
     "calibration, experiments over spectralization, the spectral core at the bottom"
 )
 HWBRIDGE_LAYERS = (
-    "hwbridge's modules in layers, each placed: sessions and replay over the drivers, over the "
-    "store, over plans, targets and layouts, over the metadata models, over the protocols"
+    "hwbridge's modules in layers, each placed: sessions, replay and device checks over the "
+    "devices file, over the drivers, over the store, over plans, targets and layouts, over the "
+    "metadata models, over the protocols"
 )
 
 
