@@ -21,8 +21,7 @@ requests as the real drivers do (:mod:`hwbridge.dome_targets`) and pass the same
 them over a fresh :class:`VirtualRig` when called, in the process that runs the steps.
 :class:`SimDomeDevices` is the simulated dome's, cameras included (their signals read the stage,
 LEDs and filter of the same rig: rendered captures, ``twin.dome``);
-:class:`twin.devices.dome_devices.DomeDevices` builds the dome's stage, LEDs and filter,
-simulated or real, for cameras of the caller's.
+:class:`twin.devices.lab_devices.LabDevices` puts a lab's real devices in their place.
 """
 
 from __future__ import annotations

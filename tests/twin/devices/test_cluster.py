@@ -203,6 +203,8 @@ class _GatedDevices:
     """The demo's device recipe with its camera behind a :class:`_GatedCamera` (pickled by value
     for the workers)."""
 
+    backend = "sim"
+
     def __init__(self, devices, gate: Path, first_gated: int):
         self._devices, self._gate, self._first_gated = devices, gate, first_gated
 
