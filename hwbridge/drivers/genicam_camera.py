@@ -23,6 +23,8 @@ if TYPE_CHECKING:
 __all__ = ["GenICamCamera", "simulated_producer"]
 
 _INFO = ("vendor", "model", "serial_number", "version")
+_EXPOSURE_FEATURES = ("ExposureTime", "ExposureTimeAbs")
+"""The exposure time's feature: the SFNC name, then that of older GigE Vision cameras."""
 _EXPOSURE_TOLERANCE = 1e-3
 """Largest relative difference between the exposure asked for and the one read back."""
 
@@ -113,19 +115,22 @@ class GenICamCamera:
         return (int(node_map.Height.value), int(node_map.Width.value))
 
     def set_exposure(self, exposure_s: float) -> None:
-        """Set ``ExposureTime`` (microseconds) and read it back: a camera that took another
-        exposure, or has no ``ExposureTime`` to set, is refused (its frames would be stored
-        under an exposure they were not taken at)."""
+        """Set the exposure time (``ExposureTime``, or ``ExposureTimeAbs`` of older GigE Vision
+        cameras; microseconds) and read it back: a camera that took another exposure, or has
+        no exposure time to set, is refused (its frames would be stored under an exposure they
+        were not taken at)."""
         if not np.isfinite(exposure_s) or exposure_s <= 0:
             raise InputError(f"{self.name}: expected a positive exposure time, got {exposure_s}")
         node_map = self._node_map()
-        if not hasattr(node_map, "ExposureTime"):
+        feature = next((name for name in _EXPOSURE_FEATURES if hasattr(node_map, name)), None)
+        if feature is None:
             raise DeviceError(
                 f"{self.name}: the camera ({self._info.get('model', '?')}) has no ExposureTime "
                 "feature; expected a camera whose exposure time can be set"
             )
-        node_map.ExposureTime.value = exposure_s * 1e6
-        taken_s = float(node_map.ExposureTime.value) / 1e6
+        node = getattr(node_map, feature)
+        node.value = exposure_s * 1e6
+        taken_s = float(node.value) / 1e6
         if abs(taken_s / exposure_s - 1) > _EXPOSURE_TOLERANCE:
             raise DeviceError(
                 f"{self.name}: asked for an exposure of {exposure_s:g} s, the camera reads back "
