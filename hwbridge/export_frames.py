@@ -41,11 +41,13 @@ from hwbridge.store import CaptureStore, FrameRecord
 __all__ = [
     "FRAMES_FORMAT",
     "SESSION_FILE",
+    "Export",
     "ExportSummary",
     "FrameSidecar",
     "SessionFile",
     "export_frames",
     "frame_name",
+    "prepare_export",
 ]
 
 SESSION_FILE = "session.json"
@@ -137,87 +139,117 @@ def _number(value: float) -> float | None:
     return None if math.isnan(value) else value
 
 
-def export_frames(
-    store: CaptureStore, folder: str | Path, *, advance: Callable[[int], object] | None = None
-) -> ExportSummary:
-    """Write every frame of a complete capture store into ``folder`` (module docstring).
+@dataclass(frozen=True)
+class Export:
+    """A complete capture store checked for export into a new folder (:func:`prepare_export`);
+    :meth:`write` writes it."""
+
+    store: CaptureStore
+    folder: Path
+
+    @property
+    def frames(self) -> dict[str, int]:
+        """Frames per camera, in the order the plan first names the cameras."""
+        plan = self.store.metadata.plan
+        cameras = dict.fromkeys(step.camera for step in plan)
+        return {camera: len(camera_steps(plan, camera)) for camera in cameras}
+
+    def write(self, advance: Callable[[int], object] | None = None) -> ExportSummary:
+        """Write every frame and its sidecar, then ``session.json`` (module docstring).
+
+        Parameters
+        ----------
+        advance
+            Called with 1 after each frame written (a progress bar's step).
+
+        Returns
+        -------
+        ExportSummary
+            The folder and the frames written per camera.
+        """
+        metadata = self.store.metadata
+        for camera in self.frames:
+            place = self.folder / "frames" / camera
+            place.mkdir(parents=True)
+            index = self.store.index(camera)
+            monitor = index.get("lamp_monitor")
+            for slot, step in enumerate(camera_steps(metadata.plan, camera)):
+                frame = self.store.read_frames(camera, [slot])[0]
+                name = frame_name(step, metadata.plan[step])
+                tifffile.imwrite(place / f"{name}.tif", frame)
+                sidecar = FrameSidecar(
+                    step=step,
+                    camera=camera,
+                    kind=str(index["kind"][slot]),
+                    exposure_s=float(index["exposure_s"][slot]),
+                    timestamp=float(index["timestamp"][slot]),
+                    light_id=int(index["light_id"][slot]),
+                    view_id=int(index["view_id"][slot]),
+                    band_nm=_number(float(index["band_nm"][slot])),
+                    status=str(index["status"][slot]),
+                    pose=tuple(_number(float(value)) for value in index["pose"][slot]),
+                    lamp_monitor=(
+                        None
+                        if monitor is None or np.isnan(monitor[slot]).all()
+                        else tuple(float(value) for value in monitor[slot])
+                    ),
+                )
+                (place / f"{name}.json").write_text(sidecar.model_dump_json(indent=1))
+                if advance is not None:
+                    advance(1)
+        session = SessionFile(
+            format=FRAMES_FORMAT,
+            format_version=1,
+            software_version=metadata.software_version,
+            backend=metadata.backend,
+            seed=metadata.seed,
+            rig=metadata.rig,
+            plan=metadata.plan,
+            cameras={camera: self.store.frames(camera).shape[1:] for camera in self.frames},
+        )
+        partial = self.folder / f".{SESSION_FILE}.partial"
+        partial.write_text(session.model_dump_json(indent=1, exclude_unset=True))
+        os.replace(partial, self.folder / SESSION_FILE)
+        rig = metadata.rig
+        return ExportSummary(self.folder, self.frames, str(rig.get("rig")), str(rig.get("program")))
+
+
+def prepare_export(store: CaptureStore, folder: str | Path) -> Export:
+    """Check that ``store`` is complete and ``folder`` new or empty; nothing is written.
 
     Parameters
     ----------
     store
-        A complete capture store.
+        The capture store to export.
     folder
-        A new or empty folder.
-    advance
-        Called with 1 after each frame written (a progress bar's step).
+        Where to write its frames.
 
     Returns
     -------
-    ExportSummary
-        The folder and the frames written per camera.
+    Export
+        :meth:`Export.write` writes the folder.
 
     Raises
     ------
     InputError
-        If the store is incomplete or ``folder`` is a file or a folder that is not empty;
-        nothing is written then.
+        If the store is incomplete or ``folder`` is a file or a folder that is not empty.
     """
     folder = Path(folder)
-    metadata = store.metadata
     pending = store.pending_steps()
     if pending:
+        total = len(store.metadata.plan)
         raise InputError(
-            f"{store.path}: the capture is incomplete ({len(pending)} of {len(metadata.plan)} "
-            f"steps pending, first step {pending[0]}); expected a complete capture store"
+            f"{store.path}: the capture is incomplete ({len(pending)} of {total} steps pending, "
+            f"first step {pending[0]}); expected a complete capture store"
         )
     if folder.exists() and (not folder.is_dir() or any(folder.iterdir())):
         raise InputError(f"{folder} exists and is not an empty folder: expected a new folder")
-    cameras = list(dict.fromkeys(step.camera for step in metadata.plan))
-    shapes = {camera: store.frames(camera).shape[1:] for camera in cameras}
-    written = {}
-    for camera in cameras:
-        place = folder / "frames" / camera
-        place.mkdir(parents=True)
-        steps = camera_steps(metadata.plan, camera)
-        index = store.index(camera)
-        monitor = index.get("lamp_monitor")
-        for slot, step in enumerate(steps):
-            frame = store.read_frames(camera, [slot])[0]
-            name = frame_name(step, metadata.plan[step])
-            tifffile.imwrite(place / f"{name}.tif", frame)
-            sidecar = FrameSidecar(
-                step=step,
-                camera=camera,
-                kind=str(index["kind"][slot]),
-                exposure_s=float(index["exposure_s"][slot]),
-                timestamp=float(index["timestamp"][slot]),
-                light_id=int(index["light_id"][slot]),
-                view_id=int(index["view_id"][slot]),
-                band_nm=_number(float(index["band_nm"][slot])),
-                status=str(index["status"][slot]),
-                pose=tuple(_number(float(value)) for value in index["pose"][slot]),
-                lamp_monitor=(
-                    None
-                    if monitor is None or np.isnan(monitor[slot]).all()
-                    else tuple(float(value) for value in monitor[slot])
-                ),
-            )
-            (place / f"{name}.json").write_text(sidecar.model_dump_json(indent=1))
-            if advance is not None:
-                advance(1)
-        written[camera] = len(steps)
-    session = SessionFile(
-        format=FRAMES_FORMAT,
-        format_version=1,
-        software_version=metadata.software_version,
-        backend=metadata.backend,
-        seed=metadata.seed,
-        rig=metadata.rig,
-        plan=metadata.plan,
-        cameras={camera: (int(shape[0]), int(shape[1])) for camera, shape in shapes.items()},
-    )
-    partial = folder / f".{SESSION_FILE}.partial"
-    partial.write_text(session.model_dump_json(indent=1, exclude_unset=True))
-    os.replace(partial, folder / SESSION_FILE)
-    rig = metadata.rig
-    return ExportSummary(folder, written, str(rig.get("rig")), str(rig.get("program")))
+    return Export(store, folder)
+
+
+def export_frames(
+    store: CaptureStore, folder: str | Path, *, advance: Callable[[int], object] | None = None
+) -> ExportSummary:
+    """Write every frame of a complete capture store into ``folder`` (module docstring):
+    :func:`prepare_export`, then :meth:`Export.write`."""
+    return prepare_export(store, folder).write(advance)
