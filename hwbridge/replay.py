@@ -323,7 +323,7 @@ def _matched(source: Path, loaded: LoadedMapping) -> list[_Frame]:
         if not frames:
             pattern = spec.files[number].pattern
             raise InputError(
-                f"{loaded.path}: files.{number} {pattern!r} matches no file in {source}"
+                f"{loaded.path}: files.{number} pattern {pattern} matches no file in {source}"
             )
     return [frame for frames in found for frame in frames]
 
