@@ -140,6 +140,11 @@ class LoadedMapping:
     path: Path
     spec: Mapping
 
+    def replay_rig(self) -> ReplayRigAttrs:
+        """The store's ``rig`` attribute that the mapping describes (used without a session)."""
+        replay = {"rig": "replay", "program": self.name, **(self.spec.rig or {})}
+        return parse(ReplayRigAttrs, replay, f"{self.path}: rig")
+
 
 def load_mapping(name_or_path: str | Path) -> LoadedMapping:
     """A shipped mapping by name (``"llanos2019"``) or a mapping file by path, validated.
@@ -159,7 +164,10 @@ def load_mapping(name_or_path: str | Path) -> LoadedMapping:
         data = yaml.safe_load(path.read_text())
     except (UnicodeDecodeError, yaml.YAMLError) as error:
         raise InputError(f"{path}: not a YAML file ({' '.join(str(error).split())})") from None
-    return LoadedMapping(path.stem, path, parse(Mapping, data, f"{path}"))
+    loaded = LoadedMapping(path.stem, path, parse(Mapping, data, f"{path}"))
+    if loaded.spec.session is None:
+        loaded.replay_rig()  # a rig that does not fit is the mapping's error, found first
+    return loaded
 
 
 @dataclass(frozen=True)
@@ -479,9 +487,7 @@ def prepare_ingest(source: str | Path, mapping: str | Path, store_path: str | Pa
         rig, seed, software_version = session.rig, session.seed, session.software_version
     else:
         plan = _folder_plan(frames)
-        described = spec.rig or {}
-        replay = {"rig": "replay", "program": loaded.name, **described}
-        rig = parse(ReplayRigAttrs, replay, f"{loaded.path}: rig").stored()
+        rig = loaded.replay_rig().stored()
         seed, software_version = 0, "0"
     records = [
         _record(frame, settings, source) for frame, settings in zip(frames, plan, strict=True)
