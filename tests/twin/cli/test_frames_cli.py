@@ -203,43 +203,35 @@ def _bad_kind(exported, tmp_path):
     return _tiffs(tmp_path, {"selfie_10.tif": PIXELS}), _mapping(tmp_path, mapping)
 
 
-def _unfinished_export(exported, tmp_path):
-    folder = _export_copy(exported, tmp_path)
-    (folder / "session.json").unlink()
-    return folder, "spectwin"
+WHITE = "frames/k4/s000002_white_e0.2s_b550.0nm_v3"  # a frame of the export, without suffix
 
 
-def _frame_missing(exported, tmp_path):
-    folder = _export_copy(exported, tmp_path)
-    (folder / "frames/rgb00/s000003_sample_e0.05s_v0_l5.tif").unlink()
-    return folder, "spectwin"
+def _removed(file):
+    """A copy of the export without ``file``."""
+
+    def make(exported, tmp_path):
+        folder = _export_copy(exported, tmp_path)
+        (folder / file).unlink()
+        return folder, "spectwin"
+
+    return make
 
 
-def _band_missing(exported, tmp_path):
-    folder = _export_copy(exported, tmp_path)
-    for suffix in (".tif", ".json"):
-        frame = folder / f"frames/k4/s000002_white_e0.2s_b550.0nm_v3{suffix}"
-        frame.rename(frame.with_name(f"s000002_white_e0.2s_v3{suffix}"))
-    return folder, "spectwin"
+def _renamed(stem):
+    """A copy of the export with the frame :data:`WHITE` and its sidecar renamed ``stem``."""
 
+    def make(exported, tmp_path):
+        folder = _export_copy(exported, tmp_path)
+        for suffix in (".tif", ".json"):
+            (folder / f"{WHITE}{suffix}").rename(folder / f"frames/k4/{stem}{suffix}")
+        return folder, "spectwin"
 
-def _name_disagrees(exported, tmp_path):
-    folder = _export_copy(exported, tmp_path)
-    for suffix in (".tif", ".json"):
-        frame = folder / f"frames/k4/s000002_white_e0.2s_b550.0nm_v3{suffix}"
-        frame.rename(frame.with_name(f"s000002_white_e0.4s_b550.0nm_v3{suffix}"))
-    return folder, "spectwin"
-
-
-def _sidecar_missing(exported, tmp_path):
-    folder = _export_copy(exported, tmp_path)
-    (folder / "frames/k4/s000002_white_e0.2s_b550.0nm_v3.json").unlink()
-    return folder, "spectwin"
+    return make
 
 
 def _sidecar_unknown_field(exported, tmp_path):
     folder = _export_copy(exported, tmp_path)
-    sidecar = folder / "frames/k4/s000002_white_e0.2s_b550.0nm_v3.json"
+    sidecar = folder / f"{WHITE}.json"
     sidecar.write_text(json.dumps(json.loads(sidecar.read_text()) | {"gain": 2}))
     return folder, "spectwin"
 
@@ -271,15 +263,35 @@ BAD_INGESTS = {
     ),
     "no exposure field": (_no_exposure, "f_10ms.tif: no exposure: expected an exposure_ms"),
     "unknown kind": (_bad_kind, "selfie_10.tif: kind 'selfie': expected one of"),
-    "export not finished": (_unfinished_export, "session.json: no session file"),
-    "a step without its frame": (_frame_missing, "1 of 5 steps have no frame (first step 3)"),
-    "band missing from a name": (_band_missing, "no band_nm in its name; step 2 has 550.0"),
-    "name disagrees with the plan": (_name_disagrees, "exposure_s 0.4 in its name, but step 2"),
-    "sidecar missing": (_sidecar_missing, "no sidecar s000002_white_e0.2s_b550.0nm_v3.json"),
+    "export not finished": (_removed("session.json"), "session.json: no session file"),
+    "a step without its frame": (
+        _removed("frames/rgb00/s000003_sample_e0.05s_v0_l5.tif"),
+        "1 of 5 steps have no frame (first step 3)",
+    ),
+    "band missing from a name": (
+        _renamed("s000002_white_e0.2s_v3"),
+        "no band_nm in its name; step 2 has 550.0",
+    ),
+    "name disagrees with the plan": (
+        _renamed("s000002_white_e0.4s_b550.0nm_v3"),
+        "exposure_s 0.4 in its name, but step 2",
+    ),
+    "sidecar missing": (
+        _removed(f"{WHITE}.json"),
+        "no sidecar s000002_white_e0.2s_b550.0nm_v3.json",
+    ),
     "sidecar unknown field": (_sidecar_unknown_field, "gain: Extra inputs are not permitted"),
     "no such mapping": (_unknown_mapping, "expected a path or one of ['llanos2019', 'spectwin']"),
     "rig and session": (_rig_and_session, "rig and session: expected one"),
 }
+
+
+def _refused(arguments: list[str], message: str) -> None:
+    """``spectwin ARGUMENTS`` exits 2 with one line ``error: ...`` holding ``message``."""
+    result = runner.invoke(app, arguments)
+    assert result.exit_code == 2, result.output
+    assert result.stderr.startswith("error: ") and result.stderr.count("\n") == 1, result.stderr
+    assert message in result.stderr
 
 
 @pytest.mark.parametrize("case", BAD_INGESTS)
@@ -289,10 +301,7 @@ def test_bad_ingests_are_refused_in_one_line_and_write_nothing(exported, tmp_pat
     out = tmp_path / "out"
     out.mkdir()
     store = out / "run.capture.zarr"
-    result = runner.invoke(app, ["ingest", str(source), "--mapping", mapping, "--out", str(store)])
-    assert result.exit_code == 2, result.output
-    assert result.stderr.startswith("error: ") and result.stderr.count("\n") == 1, result.stderr
-    assert message in result.stderr
+    _refused(["ingest", str(source), "--mapping", mapping, "--out", str(store)], message)
     assert list(out.iterdir()) == []
 
 
@@ -301,11 +310,8 @@ def test_an_existing_store_is_refused_before_the_frames_are_read(exported, tmp_p
     store.mkdir()
     (store / "keep").write_text("mine")
     folder = _export_copy(exported, tmp_path)
-    result = runner.invoke(
-        app, ["ingest", str(folder), "--mapping", "spectwin", "--out", str(store)]
-    )
-    assert result.exit_code == 2 and "exists: expected a new store" in result.stderr
-    assert result.stderr.count("\n") == 1
+    arguments = ["ingest", str(folder), "--mapping", "spectwin", "--out", str(store)]
+    _refused(arguments, "run.capture.zarr exists: expected a new store")
     assert [path.name for path in store.iterdir()] == ["keep"]
 
 
@@ -341,9 +347,6 @@ def test_bad_exports_are_refused_in_one_line_and_write_nothing(exported, tmp_pat
     make, message = BAD_EXPORTS[case]
     store, out = make(exported, tmp_path)
     before = sorted(path.name for path in out.iterdir()) if out.is_dir() else None
-    result = runner.invoke(app, ["export-frames", str(store), "--out", str(out)])
-    assert result.exit_code == 2, result.output
-    assert result.stderr.startswith("error: ") and result.stderr.count("\n") == 1, result.stderr
-    assert message in result.stderr
+    _refused(["export-frames", str(store), "--out", str(out)], message)
     after = sorted(path.name for path in out.iterdir()) if out.is_dir() else None
     assert after == before
