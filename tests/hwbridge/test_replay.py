@@ -51,9 +51,9 @@ def test_bad_mappings_and_sources_are_refused(tmp_path):
         load_mapping("nope")
     bad = tmp_path / "bad.yaml"
     bad.write_text("camera: c\nfiles:\n  - pattern: 'x'\n    kind: selfie\n")
-    with pytest.raises(InputError, match="selfie"):
+    with pytest.raises(InputError, match="files.0.kind: Input should be .dark."):
         load_mapping(bad)
     empty = tmp_path / "empty"
     empty.mkdir()
-    with pytest.raises(InputError, match="no file matches"):
+    with pytest.raises(InputError, match="files.0 pattern .* matches no file in"):
         ingest(empty, "llanos2019", tmp_path / "x.zarr")

@@ -18,6 +18,7 @@ from twin.cli.capture import register as register_capture
 from twin.cli.choices import Chart, Light, RGBCamera
 from twin.cli.dome import register as register_dome
 from twin.cli.errors import SpectwinGroup, require_output_folder, run_failed
+from twin.cli.frames import register as register_frames
 from twin.cli.lab import register as register_lab
 from twin.cli.material import register as register_material
 from twin.cli.output import JsonFlag, SeedOption, console, print_summary
@@ -261,6 +262,7 @@ register_capture(app)
 register_pipeline(app)
 register_material(app)
 register_dome(app)
+register_frames(app)
 register_store(app)
 register_lab(app)
 register_sweep(app)
