@@ -14,7 +14,7 @@ import json
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import colour
 import numpy as np
@@ -72,6 +72,7 @@ class _Signal:
 class _Devices:
     reflectance: tuple[float, ...]
     plan: tuple[dict, ...]
+    backend: ClassVar[str] = "sim"
 
     def __call__(self, seed: int = 0, steps: Sequence[int] | None = None) -> SessionDevices:
         rig = VirtualRig(seed=seed, steps=None if steps is None else tuple(steps))
