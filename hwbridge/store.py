@@ -66,9 +66,11 @@ import zarr
 
 from hwbridge.errors import DamagedDataError, InputError, Remedy
 from hwbridge.integrity import (
+    SEAL_DTYPE,
     ChunkChecker,
     ChunkProblem,
     IntegrityReport,
+    Seal,
     array_at,
     checksum_state,
     checksummed_compressors,
@@ -76,6 +78,9 @@ from hwbridge.integrity import (
     group_at,
     metadata_problem,
     read_flags,
+    seal_problem,
+    sealed_content,
+    stored_arrays,
     with_empty_chunks,
 )
 from hwbridge.schema import (
@@ -107,8 +112,10 @@ _NUMERIC_FIELDS = {
 }
 # Index fields every frame writes with a value other than the fill value: a step flagged done
 # must have their chunks (the others hold the fill value legitimately, e.g. no light for a dark).
-_REQUIRED_FIELDS = ("kind", "status", "exposure_s")
-_INDEX_FIELDS = (*_STRING_FIELDS, *_NUMERIC_FIELDS, "pose")
+_REQUIRED_FIELDS = ("kind", "status", "exposure_s", "seal")
+_INDEX_FIELDS = (*_STRING_FIELDS, *_NUMERIC_FIELDS, "pose", "seal")
+# The attributes that define a store's content, sealed at creation (all but the progress).
+_SEALED_ATTRS = ("schema_version", "rig", "backend", "seed", "software_version", "plan")
 
 
 @dataclass(frozen=True)
@@ -148,6 +155,7 @@ class CaptureStore:
             self._slots.append(counts.get(camera, 0))
             counts[camera] = counts.get(camera, 0) + 1
             self._steps.setdefault(camera, []).append(step)
+        self._seal = Seal(str(group.attrs.get("store_id")))
         self.recaptured: list[ChunkProblem] = []
         """Damaged chunks of steps that :meth:`prepare_resume` flagged pending again."""
         # Steps this writer has not seen done. Reading the progress flags touches one chunk per
@@ -180,10 +188,13 @@ class CaptureStore:
             raise InputError(f"backend: expected 'sim', 'real' or 'replay', got {backend!r}")
         if not plan:
             raise InputError("plan: expected at least one step")
+        store_id = Seal.new_id()
         attrs = parse(
             CaptureAttrs,
             {
                 "schema_version": SCHEMA_VERSION,
+                "store_id": store_id,
+                "sealed": {},
                 "rig": rig.stored() if isinstance(rig, RigAttrs) else dict(rig),
                 "backend": backend,
                 "seed": seed,
@@ -236,6 +247,14 @@ class CaptureStore:
                     compressors=checksummed_compressors(),
                 )
             group.create_array(
+                f"{index}/seal",
+                shape=(count,),
+                chunks=(block,),
+                dtype=SEAL_DTYPE,
+                fill_value=0,
+                compressors=checksummed_compressors(),
+            )
+            group.create_array(
                 f"{index}/pose",
                 shape=(count, 6),
                 chunks=(block, 6),
@@ -262,8 +281,13 @@ class CaptureStore:
         )
         # The attributes last and in one write: the plan of a full campaign is tens of MB of
         # JSON, which Zarr writes out again for every attribute set. A plan step keeps the
-        # settings it was given, no others.
-        group.update_attributes(attrs.model_dump(mode="json", exclude_unset=True))
+        # settings it was given, no others. What defines the store's content is sealed.
+        stored = attrs.model_dump(mode="json", exclude_unset=True)
+        content = {name: stored[name] for name in _SEALED_ATTRS}
+        stored["sealed"] = Seal(store_id).settings(
+            sealed_content(content, stored_arrays(group).values())
+        )
+        group.update_attributes(stored)
         building.rename(path)
         return cls(zarr.open_group(str(path), mode="r+"), path)
 
@@ -304,6 +328,18 @@ class CaptureStore:
                     f"damaged capture store: {problem} (the metadata of {node}); restore the "
                     "store from a copy or capture again"
                 )
+        sealed = stored.get("sealed")
+        problem = seal_problem(
+            Seal(str(stored.get("store_id"))),
+            sealed if isinstance(sealed, dict) else {},
+            {name: stored.get(name) for name in _SEALED_ATTRS},
+            stored_arrays(group).values(),
+        )
+        if problem:
+            raise DamagedDataError(
+                f"{path}: damaged capture store: {problem}; restore the store from a copy or "
+                "capture again"
+            )
         return cls(group, path)
 
     # -- writing -------------------------------------------------------------------------------
@@ -338,6 +374,14 @@ class CaptureStore:
                 array_at(index, name)[slots] = values
             poses = np.array([record.pose for record in chosen], np.float64)
             array_at(index, "pose")[slots] = poses
+            frames = self.frames(camera)
+            array_at(index, "seal")[slots] = np.array(
+                [
+                    self._seal.chunk_on_disk(self.path, frames, (slot, 0, 0))
+                    for slot in range(slots.start, slots.stop)
+                ],
+                np.uint64,
+            )
             monitored = [i for i, record in enumerate(chosen) if record.lamp_monitor is not None]
             if not monitored:
                 continue
@@ -448,14 +492,15 @@ class CaptureStore:
         naming camera, step and chunk key."""
         frames = self.frames(camera)
         stack = np.empty((len(slots), *frames.shape[1:]), dtype=frames.dtype)
+        checker = ChunkChecker(self.path, seal=self._seal)
+        seals = self._seals(camera)
         for position, slot in enumerate(slots):
             coords = (int(slot), 0, 0)
             name = self._step_name(self._steps[camera][int(slot)])
-            if not (self.path / chunk_key(frames, coords)).is_file():
-                raise DamagedDataError(
-                    f"{self.path}: damaged capture store: {name}: {chunk_key(frames, coords)} is "
-                    "missing"
-                )
+            found = checker.check(frames, coords, int(seals[int(slot)]))
+            if found:
+                problem = ChunkProblem(name, chunk_key(frames, coords), *found)
+                raise DamagedDataError(f"{self.path}: damaged capture store: {problem}")
             try:
                 stack[position] = frames[int(slot)]
             except (ValueError, RuntimeError) as error:  # checksum or decompression
@@ -482,10 +527,11 @@ class CaptureStore:
             Pending steps, missing and corrupt chunks by camera, step and chunk key, whether
             the store has checksums, and its seed, program and backend.
         """
-        checker = ChunkChecker(self.path, verify=verify)
+        checker = ChunkChecker(self.path, verify=verify, seal=self._seal)
         progress = array_at(self._group, "progress")
         flags, problems = read_flags(checker, progress, self._step_name)
         arrays = {camera: self._unit_arrays(camera) for camera in self._steps}
+        seals = {camera: self._seals(camera) for camera in self._steps}
         outcomes: dict[str, tuple[str, str] | None] = {}
         units: dict[str, tuple[tuple[str, str], list[int]]] = {}
         for step in np.flatnonzero(flags).tolist():
@@ -494,7 +540,8 @@ class CaptureStore:
                 coords = (slot // array.chunks[0], *(0,) * (array.ndim - 1))
                 key = chunk_key(array, coords)
                 if key not in outcomes:  # a chunk shared by frames (older stores) is read once
-                    outcome = checker.check(array, coords)
+                    frame = array.path == f"frames/{camera}"
+                    outcome = checker.check(array, coords, seals[camera][slot] if frame else None)
                     if outcome is not None and outcome[0] == "missing" and not required:
                         outcome = None
                     outcomes[key] = outcome
@@ -572,6 +619,14 @@ class CaptureStore:
         return [(self.frames(camera), True)] + [
             (array_at(index, name), name in _REQUIRED_FIELDS) for name in fields
         ]
+
+    def _seals(self, camera: str) -> np.ndarray:
+        """The seals of ``camera``'s frames; 0 where none is recorded, and everywhere when
+        they cannot be read (:meth:`check` names the chunk)."""
+        try:
+            return np.asarray(array_at(self._group, f"index/{camera}/seal")[:], np.uint64)
+        except (ValueError, RuntimeError):
+            return np.zeros(self.frames(camera).shape[0], np.uint64)
 
     def _step_name(self, step: int) -> str:
         camera, slot = self._camera_and_slot(step)
