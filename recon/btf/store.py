@@ -56,15 +56,20 @@ import numpy as np
 import zarr
 
 from hwbridge.integrity import (
+    SEAL_DTYPE,
     ChunkChecker,
     ChunkProblem,
     IntegrityReport,
+    Seal,
     checksum_state,
     checksummed_compressors,
     chunk_key,
     has_checksums,
     metadata_problem,
     read_flags,
+    seal_problem,
+    sealed_content,
+    stored_arrays,
     with_empty_chunks,
 )
 from hwbridge.schema import parse, refuse_other_version
@@ -91,7 +96,17 @@ COMPRESSED_GROUP = "pca"
 """Name of the group that holds the compressed form (ARCHITECTURE.md: ``pca/``)."""
 
 _UNIT_TOLERANCE = 1e-6
-_ARRAYS = ("reflectance", "light_dirs", "view_dirs", "wavelengths", "written")
+_ARRAYS = ("reflectance", "light_dirs", "view_dirs", "wavelengths", "seal", "written")
+# The attributes that define a store's content, sealed at creation with its directions and bands.
+_SEALED_ATTRS = (
+    "format",
+    "format_version",
+    "units",
+    "material",
+    "rig",
+    "source_capture",
+    "calibration",
+)
 
 
 def _check_directions(name: str, directions: np.ndarray, n_pairs: int | None) -> np.ndarray:
@@ -206,6 +221,19 @@ class BTFStore:
         self.view_dirs = self._read_small(self._array("view_dirs"))
         for directions in (self.light_dirs, self.view_dirs):
             directions.setflags(write=False)
+        self._seal = Seal(str(attrs.get("store_id")))
+        sealed = attrs.get("sealed")
+        problem = seal_problem(
+            self._seal,
+            sealed if isinstance(sealed, dict) else {},
+            _sealed_settings(attrs, self.light_dirs, self.view_dirs, self.grid.wavelengths_nm),
+            stored_arrays(group, skip=COMPRESSED_GROUP).values(),
+        )
+        if problem:
+            raise DamagedDataError(
+                f"{path}: damaged store: {problem}; process the capture again",
+                remedy=Remedy.process,
+            )
         # Flags known to be set (a cache, refreshed lazily: other processes may write pairs); an
         # unreadable flag counts as unset here, and check() reports it.
         written = self._array("written")
@@ -282,6 +310,8 @@ class BTFStore:
             {
                 "format": BTF_FORMAT,
                 "format_version": BTF_FORMAT_VERSION,
+                "store_id": Seal.new_id(),
+                "sealed": {},
                 "units": BTF_UNITS,
                 "material": material,
                 "rig": rig,
@@ -331,6 +361,14 @@ class BTFStore:
             attributes={"units": "px", "meaning": "registered image corners of the texture square"},
             compressors=checksummed_compressors(),
         )
+        group.create_array(
+            "seal",
+            shape=(n_pairs,),
+            chunks=(1,),
+            dtype=SEAL_DTYPE,
+            fill_value=0,
+            compressors=checksummed_compressors(),
+        )
         # Created last: a store whose creation was interrupted lacks it and does not open.
         group.create_array(
             "written",
@@ -339,6 +377,11 @@ class BTFStore:
             dtype="bool",
             fill_value=False,
             compressors=checksummed_compressors(),
+        )
+        stored = attrs.model_dump(mode="json", exclude_unset=True)
+        settings = _sealed_settings(stored, light_dirs, view_dirs, grid.wavelengths_nm)
+        group.attrs["sealed"] = Seal(attrs.store_id).settings(
+            sealed_content(settings, stored_arrays(group).values())
         )
         return cls(group, path, writable=True)
 
@@ -513,7 +556,10 @@ class BTFStore:
             written[pair] = False
             self._known_written[pair] = False
         self._drop_compressed()
-        self._array("reflectance")[pair] = values
+        reflectance = self._array("reflectance")
+        reflectance[pair] = values
+        coords = (pair, 0, 0, 0)
+        self._array("seal")[pair] = self._seal.chunk_on_disk(self.path, reflectance, coords)
         if corners_xy is not None:
             corners = np.asarray(corners_xy, dtype=np.float64)
             if corners.shape != (4, 2) or not np.all(np.isfinite(corners)):
@@ -684,17 +730,19 @@ class BTFStore:
             compressed form name no pair), whether the store has checksums, its material and
             source capture.
         """
-        checker = ChunkChecker(self.path, verify=verify)
+        checker = ChunkChecker(self.path, verify=verify, seal=self._seal)
         written = self._array("written")
         flags, problems = read_flags(checker, written, self._pair_name)
         reflectance = self._array("reflectance")
         corners = self._array("corners_xy") if "corners_xy" in self._group else None
-        for pair in np.flatnonzero(flags).tolist():
+        done = np.flatnonzero(flags)
+        seals = dict(zip(done.tolist(), self._seals(done).tolist(), strict=True))
+        for pair in done.tolist():
             for array, required in ((reflectance, True), (corners, False)):
                 if array is None:
                     continue
                 coords = (pair, *(0,) * (array.ndim - 1))
-                outcome = checker.check(array, coords)
+                outcome = checker.check(array, coords, seals[pair] if required else None)
                 if outcome is not None and (required or outcome[0] == "corrupt"):
                     key = chunk_key(array, coords)
                     problems.append(ChunkProblem(self._pair_name(pair), key, *outcome, (pair,)))
@@ -797,15 +845,31 @@ class BTFStore:
             ) from None
 
     def _require_chunks(self, pairs: Iterable[int]) -> None:
-        """Raise when a written pair's reflectance chunk is missing (it would read as NaN)."""
+        """Raise when a written pair's reflectance chunk is missing (it would read as NaN),
+        corrupt or sealed elsewhere (another pair's, or another store's)."""
         reflectance = self._array("reflectance")
-        for pair in pairs:
-            key = chunk_key(reflectance, (int(pair), 0, 0, 0))
-            if not (self.path / key).is_file():
-                raise DamagedDataError(
-                    f"{self.path}: damaged store: pair {pair}: {key} is missing",
-                    remedy=Remedy.reprocess_pairs,
+        checker = ChunkChecker(self.path, seal=self._seal)
+        chosen = np.asarray(list(pairs), np.int64)
+        for pair, sealed in zip(chosen.tolist(), self._seals(chosen).tolist(), strict=True):
+            coords = (pair, 0, 0, 0)
+            found = checker.check(reflectance, coords, sealed)
+            if found:
+                problem = ChunkProblem(
+                    self._pair_name(pair), chunk_key(reflectance, coords), *found
                 )
+                raise DamagedDataError(
+                    f"{self.path}: damaged store: {problem}", remedy=Remedy.reprocess_pairs
+                )
+
+    def _seals(self, pairs: np.ndarray) -> np.ndarray:
+        """The seals of the reflectance chunks of ``pairs``; 0 where none is recorded, and
+        everywhere when they cannot be read (:meth:`check` names the chunk)."""
+        if not pairs.size:
+            return np.zeros(0, np.uint64)
+        try:
+            return np.asarray(self._array("seal").get_orthogonal_selection(pairs), np.uint64)
+        except (ValueError, RuntimeError):
+            return np.zeros(pairs.size, np.uint64)
 
     def _decoded(self, pairs: int | slice) -> np.ndarray:
         """Reflectance of ``pairs``; a chunk that cannot be decoded is a damaged store."""
@@ -851,6 +915,22 @@ class BTFStore:
     def _drop_compressed(self) -> None:
         if COMPRESSED_GROUP in self._group:
             del self._group[COMPRESSED_GROUP]
+
+
+def _sealed_settings(
+    attrs: Mapping[str, Any],
+    light_dirs: np.ndarray,
+    view_dirs: np.ndarray,
+    wavelengths_nm: np.ndarray,
+) -> dict[str, object]:
+    """What defines a store's content, sealed at creation: its settings (``_SEALED_ATTRS``),
+    directions and bands."""
+    return {
+        **{name: attrs.get(name) for name in _SEALED_ATTRS},
+        "values of light_dirs": np.asarray(light_dirs, np.float64),
+        "values of view_dirs": np.asarray(view_dirs, np.float64),
+        "values of wavelengths": np.asarray(wavelengths_nm, np.float64),
+    }
 
 
 def _array_in(group: zarr.Group, name: str, path: Path) -> zarr.Array[Any]:
