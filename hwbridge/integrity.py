@@ -38,6 +38,7 @@ import hashlib
 import json
 import os
 import secrets
+import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -196,9 +197,12 @@ def array_layout(array: zarr.Array[Any]) -> dict[str, Any]:
 
 def stored_arrays(group: zarr.Group, skip: str | None = None) -> dict[str, zarr.Array[Any]]:
     """Every array of ``group`` and of its subgroups by path, but those under ``skip``."""
+    with warnings.catch_warnings():  # files of the store's own, such as its writer's lock
+        warnings.filterwarnings("ignore", "Object at .* is not recognized", UserWarning)
+        members = group.members(max_depth=None)
     return {
         path: node
-        for path, node in group.members(max_depth=None)
+        for path, node in members
         if isinstance(node, zarr.Array) and path.split("/")[0] != skip
     }
 
