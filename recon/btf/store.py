@@ -556,10 +556,9 @@ class BTFStore:
             written[pair] = False
             self._known_written[pair] = False
         self._drop_compressed()
-        reflectance = self._array("reflectance")
-        reflectance[pair] = values
-        coords = (pair, 0, 0, 0)
-        self._array("seal")[pair] = self._seal.chunk_on_disk(self.path, reflectance, coords)
+        textures = self._array("reflectance")
+        textures[pair] = values
+        self._array("seal")[pair] = self._seal.chunk_on_disk(self.path, textures, (pair, 0, 0, 0))
         if corners_xy is not None:
             corners = np.asarray(corners_xy, dtype=np.float64)
             if corners.shape != (4, 2) or not np.all(np.isfinite(corners)):

@@ -11,8 +11,10 @@ import pytest
 from hwbridge.errors import DamagedDataError
 from hwbridge.store import CaptureStore, FrameRecord
 
-PLAN = [{"camera": "k4", "kind": "sample", "exposure_s": 0.5, "band_nm": 400.0 + 10 * i}
-        for i in range(5)]
+PLAN = [
+    {"camera": "k4", "kind": "sample", "exposure_s": 0.5, "band_nm": 400.0 + 10 * i}
+    for i in range(5)
+]
 SHAPE = (16, 12)
 KEY, OTHER = "frames/k4/c/3/0/0", "frames/k4/c/1/0/0"
 
