@@ -2,14 +2,15 @@
 
 Layout of ``<name>.capture.zarr`` (ARCHITECTURE.md, "Stores"):
 
-- attributes (:class:`hwbridge.schema.CaptureAttrs`): ``schema_version``, ``rig`` (the rig and
-  the program that captured, a :class:`~hwbridge.schema.RigAttrs` of the rig's kind),
+- attributes (:class:`hwbridge.schema.CaptureAttrs`): ``schema_version``, ``store_id`` (the
+  store's random identity), ``sealed`` (digests of what defines its content), ``rig`` (the rig
+  and the program that captured, a :class:`~hwbridge.schema.RigAttrs` of the rig's kind),
   ``backend`` (``sim``, ``real``, ``replay``), ``seed``, ``software_version``, ``plan`` (one
   :class:`~hwbridge.schema.PlanStep` per step), ``complete``;
 - ``frames/<camera_id>``: uint16 ``(N, H, W)`` raw frames, one chunk per frame;
 - ``index/<camera_id>/<field>``: per frame ``kind``, ``light_id``, ``view_id``, ``band_nm``,
-  ``exposure_s``, ``timestamp``, ``status``, ``pose`` (6 numbers) and ``lamp_monitor``
-  (the monitor spectrum, when the rig has one);
+  ``exposure_s``, ``timestamp``, ``status``, ``pose`` (6 numbers), ``seal`` (the seal of the
+  frame's chunk) and ``lamp_monitor`` (the monitor spectrum, when the rig has one);
 - ``progress``: one flag per plan step, set only after the step's frame and index are written.
 
 A dome capture (thesis 10.2-10.4) uses the same layout with one group per camera (the RGB
@@ -41,7 +42,13 @@ slot: an interrupted session resumes without losing or duplicating a frame, and 
 turns true only when every step is done.
 
 Integrity (:mod:`hwbridge.integrity`): every array ends its codec chain with a CRC-32C checksum,
-so a chunk altered on disk raises on read. :meth:`CaptureStore.check` checks the progress record
+so a chunk altered on disk raises on read, and every frame's chunk is sealed to its place and
+the store (:class:`~hwbridge.integrity.Seal`; the index writer records the seal, so the workers
+of a distributed capture write only their frames): a frame chunk swapped, moved, copied from
+another store or of another shape is reported and refused like a corrupt one. The settings
+that define the store (``rig``, ``backend``, ``seed``, ``software_version``, ``plan``) and
+the shape, chunks and dtype of every array are sealed at creation: :meth:`CaptureStore.open`
+refuses a store where any differs, naming them. :meth:`CaptureStore.check` checks the progress record
 against the chunks: a step flagged done whose frame or index chunk is missing (Zarr would read
 the fill value) or corrupt is reported by camera, step and chunk key. :meth:`CaptureStore.open`
 refuses a store whose metadata (``zarr.json`` files) is missing or unreadable, naming the file,
@@ -49,7 +56,7 @@ and :meth:`CaptureStore.read_frames` refuses to return a missing or corrupt fram
 session resumes, :meth:`CaptureStore.prepare_resume` flags the damaged steps of a simulated
 capture pending again (they are taken again, identically) and refuses to resume a damaged real
 or replayed capture, which cannot take its frames again. Stores made before checksums open and
-are checked for missing and undecodable chunks.
+are refused by their schema version.
 """
 
 from __future__ import annotations

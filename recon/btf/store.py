@@ -9,7 +9,8 @@ written, and the store calls itself complete only when every pair is.
 Layout of ``<name>.btf.zarr`` (ARCHITECTURE.md, "Stores"):
 
 - attributes (:class:`recon.btf.schema.BTFAttrs`): ``format`` (``"spectwin.btf"``),
-  ``format_version`` (a store of another version is refused on opening), ``units``
+  ``format_version`` (a store of another version is refused on opening), ``store_id`` (its
+  random identity), ``sealed`` (digests of what defines its content), ``units``
   (``"1/sr"``), ``material``, ``rig`` (of the source capture), ``source_capture`` (path of the
   capture store it was calibrated from, or null), ``calibration`` (a JSON summary of the
   calibration), ``complete``, and what processing adds (:meth:`BTFStore.set_attribute`);
@@ -18,6 +19,8 @@ Layout of ``<name>.btf.zarr`` (ARCHITECTURE.md, "Stores"):
 - ``light_dirs``, ``view_dirs``: float64 ``(n_pairs, 3)`` unit vectors in the sample frame
   (z = surface normal);
 - ``wavelengths``: float64 ``(K,)`` band centres in nm;
+- ``seal``: uint64 ``(n_pairs,)``, one chunk per pair, the seal of the pair's reflectance chunk
+  (``hwbridge.integrity.Seal``), written after it;
 - ``written``: bool ``(n_pairs,)``, one chunk per pair, set only after the pair's texture is
   written;
 - ``pca/``: optional compressed form (thesis 4.1.2; written by :mod:`recon.btf.compression`),
@@ -31,13 +34,18 @@ chunk (a worker writes the pairs it owns, and the coordinator of a distributed r
 first clears its flag, so an interrupted rewrite leaves the pair pending, never silently corrupt.
 
 Integrity (``hwbridge.integrity``): every array ends its codec chain with a CRC-32C checksum, so a
-chunk altered on disk raises on read; :meth:`BTFStore.check` checks every pair flagged written
+chunk altered on disk raises on read, and every pair's reflectance chunk is sealed to its place
+and the store, so one swapped, moved, copied from another store or of another shape is found and
+refused like a corrupt one; the settings that define the store (material, rig, source capture,
+calibration), its directions, bands and the shape, chunks and dtype of every array but the
+compressed form's are sealed at creation, and :meth:`BTFStore.open` refuses a store where any
+differs, naming them; :meth:`BTFStore.check` checks every pair flagged written
 against its reflectance chunk (a missing chunk would read as NaN) and the compressed form's
 chunks, and names the damaged pairs and chunk keys; :meth:`BTFStore.open` refuses missing or
 unreadable metadata, naming the file; reading a pair whose chunk is missing or corrupt raises
 :class:`~recon.errors.DamagedDataError`. :meth:`BTFStore.prepare_resume` flags damaged pairs
 pending again, so a resumed processing writes them again. Stores made before
-checksums open and are checked for missing and undecodable chunks.
+seals are refused by their format version.
 
 References
 ----------
