@@ -48,15 +48,15 @@ of a distributed capture write only their frames): a frame chunk swapped, moved,
 another store or of another shape is reported and refused like a corrupt one. The settings
 that define the store (``rig``, ``backend``, ``seed``, ``software_version``, ``plan``) and
 the shape, chunks and dtype of every array are sealed at creation: :meth:`CaptureStore.open`
-refuses a store where any differs, naming them. :meth:`CaptureStore.check` checks the progress record
-against the chunks: a step flagged done whose frame or index chunk is missing (Zarr would read
-the fill value) or corrupt is reported by camera, step and chunk key. :meth:`CaptureStore.open`
+refuses a store where any differs, naming them. :meth:`CaptureStore.check` checks the progress
+record against the chunks: a step flagged done whose frame or index chunk is missing (Zarr would
+read the fill value) or corrupt is reported by camera, step and chunk key. :meth:`CaptureStore.open`
 refuses a store whose metadata (``zarr.json`` files) is missing or unreadable, naming the file,
 and :meth:`CaptureStore.read_frames` refuses to return a missing or corrupt frame. Before a
 session resumes, :meth:`CaptureStore.prepare_resume` flags the damaged steps of a simulated
 capture pending again (they are taken again, identically) and refuses to resume a damaged real
-or replayed capture, which cannot take its frames again. Stores made before checksums open and
-are refused by their schema version.
+or replayed capture, which cannot take its frames again. Stores made before seals (schema
+version 1) are refused, naming their version.
 """
 
 from __future__ import annotations

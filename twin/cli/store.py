@@ -88,8 +88,9 @@ def check(
 ) -> None:
     """Check a store: its settings and array shapes are those it was created with, every
     frame or pair flagged done has its chunks, each passes its checksum and is the chunk
-    written in its place of this store, the complete flag agrees with the progress flags. Exit 0: healthy (complete or
-    resumable); exit 1: damaged, with the first damaged frame or pair named.
+    written in its place of this store, the complete flag agrees with the progress flags.
+    Exit 0: healthy (complete or resumable); exit 1: damaged, with the first damaged frame or
+    pair named.
 
     Example: spectwin store check out/run.capture.zarr
     """
