@@ -54,11 +54,10 @@ from hwbridge.errors import DamagedDataError
 __all__ = [
     "ChunkChecker",
     "ChunkProblem",
-    "SEAL_DTYPE",
     "IntegrityReport",
+    "SEAL_DTYPE",
     "Seal",
     "array_at",
-    "array_layout",
     "checksum_state",
     "checksummed_compressors",
     "chunk_key",
@@ -172,7 +171,7 @@ class Seal:
 
     def settings(self, settings: Mapping[str, object]) -> dict[str, str]:
         """A digest (hex) per setting: JSON values, or arrays (by their dtype, shape and
-        bytes); :func:`array_layout` gives an array's layout as a setting."""
+        bytes); :func:`sealed_content` adds the layouts of a store's arrays."""
         sealed = {}
         for name, value in settings.items():
             if isinstance(value, np.ndarray):
@@ -190,11 +189,6 @@ class Seal:
         return sorted(name for name in {*sealed, *now} if sealed.get(name) != now.get(name))
 
 
-def array_layout(array: zarr.Array[Any]) -> dict[str, Any]:
-    """What a store seals of an array's metadata: its shape, chunk shape and dtype."""
-    return {"shape": list(array.shape), "chunks": list(array.chunks), "dtype": str(array.dtype)}
-
-
 def stored_arrays(group: zarr.Group, skip: str | None = None) -> dict[str, zarr.Array[Any]]:
     """Every array of ``group`` and of its subgroups by path, but those under ``skip``."""
     with warnings.catch_warnings():  # files of the store's own, such as its writer's lock
@@ -210,8 +204,17 @@ def stored_arrays(group: zarr.Group, skip: str | None = None) -> dict[str, zarr.
 def sealed_content(
     settings: Mapping[str, object], arrays: Iterable[zarr.Array[Any]]
 ) -> dict[str, object]:
-    """What a store seals: ``settings`` and the layout of every array (by its path)."""
-    return {**settings, **{array.path: array_layout(array) for array in arrays}}
+    """What a store seals: ``settings`` and, by its path, every array's shape, chunk shape and
+    dtype."""
+    layouts = {
+        array.path: {
+            "shape": list(array.shape),
+            "chunks": list(array.chunks),
+            "dtype": str(array.dtype),
+        }
+        for array in arrays
+    }
+    return {**settings, **layouts}
 
 
 def seal_problem(
