@@ -350,13 +350,14 @@ def _decoding_error(error: Exception) -> str:
 def read_flags(
     checker: ChunkChecker, array: zarr.Array[Any], name: Callable[[int], str]
 ) -> tuple[np.ndarray, list[ChunkProblem]]:
-    """The flags of a 1-D bool progress array, and the problems of its unreadable chunks (their
-    flags read as not set: the units are pending again). ``name(unit)`` describes a unit."""
+    """The values of a 1-D progress array as stored (bool flags, or the seals of a BTF store's
+    pairs, 0 while pending), and the problems of its unreadable chunks (their values read as
+    not set: the units are pending again). ``name(unit)`` describes a unit."""
     try:
-        return np.asarray(array[:], dtype=bool), []
+        return np.asarray(array[:]), []
     except Exception:  # a corrupt flag chunk: find it below
         pass
-    flags = np.zeros(array.shape[0], dtype=bool)
+    flags = np.zeros(array.shape[0], dtype=array.dtype)
     problems = []
     size = array.chunks[0]
     for chunk in range(-(-array.shape[0] // size)):

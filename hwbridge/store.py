@@ -536,7 +536,8 @@ class CaptureStore:
         """
         checker = ChunkChecker(self.path, verify=verify, seal=self._seal)
         progress = array_at(self._group, "progress")
-        flags, problems = read_flags(checker, progress, self._step_name)
+        values, problems = read_flags(checker, progress, self._step_name)
+        flags = values.astype(bool)
         arrays = {camera: self._unit_arrays(camera) for camera in self._steps}
         seals = {camera: self._seals(camera) for camera in self._steps}
         outcomes: dict[str, tuple[str, str] | None] = {}

@@ -19,10 +19,9 @@ Layout of ``<name>.btf.zarr`` (ARCHITECTURE.md, "Stores"):
 - ``light_dirs``, ``view_dirs``: float64 ``(n_pairs, 3)`` unit vectors in the sample frame
   (z = surface normal);
 - ``wavelengths``: float64 ``(K,)`` band centres in nm;
-- ``seal``: uint64 ``(n_pairs,)``, one chunk per pair, the seal of the pair's reflectance chunk
-  (``hwbridge.integrity.Seal``), written after it;
-- ``written``: bool ``(n_pairs,)``, one chunk per pair, set only after the pair's texture is
-  written;
+- ``written``: uint64 ``(n_pairs,)``, one chunk per pair: the seal of the pair's reflectance
+  chunk (``hwbridge.integrity.Seal``), set only after the pair's texture is written; 0 while
+  the pair is pending;
 - ``pca/``: optional compressed form (thesis 4.1.2; written by :mod:`recon.btf.compression`),
   with its own attributes (:class:`recon.btf.schema.CompressedAttrs`), ``complete`` set after
   all of its arrays.
@@ -104,7 +103,7 @@ COMPRESSED_GROUP = "pca"
 """Name of the group that holds the compressed form (ARCHITECTURE.md: ``pca/``)."""
 
 _UNIT_TOLERANCE = 1e-6
-_ARRAYS = ("reflectance", "light_dirs", "view_dirs", "wavelengths", "seal", "written")
+_ARRAYS = ("reflectance", "light_dirs", "view_dirs", "wavelengths", "written")
 # The attributes that define a store's content, sealed at creation with its directions and bands.
 _SEALED_ATTRS = (
     "format",
@@ -245,7 +244,8 @@ class BTFStore:
         # Flags known to be set (a cache, refreshed lazily: other processes may write pairs); an
         # unreadable flag counts as unset here, and check() reports it.
         written = self._array("written")
-        self._known_written, _ = read_flags(checker, written, self._pair_name)
+        seals, _ = read_flags(checker, written, self._pair_name)
+        self._known_written = seals.astype(bool)
         shape = self._array("reflectance").shape
         n_pairs = self.light_dirs.shape[0]
         if (
@@ -369,21 +369,14 @@ class BTFStore:
             attributes={"units": "px", "meaning": "registered image corners of the texture square"},
             compressors=checksummed_compressors(),
         )
-        group.create_array(
-            "seal",
-            shape=(n_pairs,),
-            chunks=(1,),
-            dtype=SEAL_DTYPE,
-            fill_value=0,
-            compressors=checksummed_compressors(),
-        )
-        # Created last: a store whose creation was interrupted lacks it and does not open.
+        # Created last: a store whose creation was interrupted lacks it and does not open. A
+        # pair's flag is the seal of its reflectance chunk (0: pending).
         group.create_array(
             "written",
             shape=(n_pairs,),
             chunks=(1,),
-            dtype="bool",
-            fill_value=False,
+            dtype=SEAL_DTYPE,
+            fill_value=0,
             compressors=checksummed_compressors(),
         )
         stored = attrs.model_dump(mode="json", exclude_unset=True)
@@ -566,7 +559,6 @@ class BTFStore:
         self._drop_compressed()
         textures = self._array("reflectance")
         textures[pair] = values
-        self._array("seal")[pair] = self._seal.chunk_on_disk(self.path, textures, (pair, 0, 0, 0))
         if corners_xy is not None:
             corners = np.asarray(corners_xy, dtype=np.float64)
             if corners.shape != (4, 2) or not np.all(np.isfinite(corners)):
@@ -574,7 +566,7 @@ class BTFStore:
                     f"corners_xy: expected finite (4, 2) image corners, got shape {corners.shape}"
                 )
             self._array("corners_xy")[pair] = corners
-        written[pair] = True
+        written[pair] = self._seal.chunk_on_disk(self.path, textures, (pair, 0, 0, 0))
         self._known_written[pair] = True
         if check_complete and self._all_written():
             self._set_complete(True)
@@ -739,17 +731,16 @@ class BTFStore:
         """
         checker = ChunkChecker(self.path, verify=verify, seal=self._seal)
         written = self._array("written")
-        flags, problems = read_flags(checker, written, self._pair_name)
+        seals, problems = read_flags(checker, written, self._pair_name)
+        flags = seals.astype(bool)
         reflectance = self._array("reflectance")
         corners = self._array("corners_xy") if "corners_xy" in self._group else None
-        done = np.flatnonzero(flags)
-        seals = dict(zip(done.tolist(), self._seals(done).tolist(), strict=True))
-        for pair in done.tolist():
+        for pair in np.flatnonzero(flags).tolist():
             for array, required in ((reflectance, True), (corners, False)):
                 if array is None:
                     continue
                 coords = (pair, *(0,) * (array.ndim - 1))
-                outcome = checker.check(array, coords, seals[pair] if required else None)
+                outcome = checker.check(array, coords, int(seals[pair]) if required else None)
                 if outcome is not None and (required or outcome[0] == "corrupt"):
                     key = chunk_key(array, coords)
                     problems.append(ChunkProblem(self._pair_name(pair), key, *outcome, (pair,)))
@@ -869,12 +860,13 @@ class BTFStore:
                 )
 
     def _seals(self, pairs: np.ndarray) -> np.ndarray:
-        """The seals of the reflectance chunks of ``pairs``; 0 where none is recorded, and
-        everywhere when they cannot be read (:meth:`check` names the chunk)."""
+        """The seals of the reflectance chunks of ``pairs`` (their written flags); 0 where
+        none is recorded, and everywhere when they cannot be read (:meth:`check` names the
+        chunk)."""
         if not pairs.size:
             return np.zeros(0, np.uint64)
         try:
-            return np.asarray(self._array("seal").get_orthogonal_selection(pairs), np.uint64)
+            return np.asarray(self._array("written").get_orthogonal_selection(pairs), np.uint64)
         except (ValueError, RuntimeError):
             return np.zeros(pairs.size, np.uint64)
 
