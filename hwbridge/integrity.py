@@ -156,18 +156,20 @@ class Seal:
             digest.update(part)
         return digest.digest()
 
-    def chunk(self, array: zarr.Array[Any], coords: Sequence[int], checksum: bytes) -> int:
-        """The seal (never 0) of the chunk at ``coords`` of ``array`` whose bytes end with
-        ``checksum`` (their CRC-32C, the crc32c codec's last four bytes)."""
-        place = f"{chunk_key(array, tuple(coords))} {list(array.chunks)}".encode()
+    def chunk(self, key: str, chunk_shape: Sequence[int], checksum: bytes) -> int:
+        """The seal (never 0) of the chunk at ``key`` (:func:`chunk_key`: the array's path and
+        the chunk's grid coordinates) of an array of chunks of ``chunk_shape``, whose bytes
+        end with ``checksum`` (their CRC-32C, the crc32c codec's last four bytes)."""
+        place = f"{key} {list(chunk_shape)}".encode()
         return max(1, int.from_bytes(self._digest(place, checksum), "little"))
 
-    def chunk_on_disk(self, root: Path, array: zarr.Array[Any], coords: Sequence[int]) -> int:
+    def chunk_on_disk(self, root: Path, array: zarr.Array[Any], coords: tuple[int, ...]) -> int:
         """The seal of the chunk of ``array`` at ``coords`` as now written under ``root``
         (the array must have checksums: :func:`has_checksums`)."""
-        with open(root / chunk_key(array, tuple(coords)), "rb") as handle:
+        key = chunk_key(array, coords)
+        with open(root / key, "rb") as handle:
             handle.seek(-4, os.SEEK_END)
-            return self.chunk(array, coords, handle.read(4))
+            return self.chunk(key, array.chunks, handle.read(4))
 
     def settings(self, settings: Mapping[str, object]) -> dict[str, str]:
         """A digest (hex) per setting: JSON values, or arrays (by their dtype, shape and
@@ -289,13 +291,14 @@ class ChunkChecker:
         self.root = Path(root)
         self.verify = verify
         self.seal = seal
-        self._arrays: dict[str, tuple[str, zarr.Array[Any], bool]] = {}
+        self._arrays: dict[str, tuple[str, zarr.Array[Any], bool, tuple[int, ...]]] = {}
 
-    def _array(self, array: zarr.Array[Any]) -> tuple[str, zarr.Array[Any], bool]:
-        """The array's folder, the array and whether it has checksums (looked up once)."""
+    def _array(self, array: zarr.Array[Any]) -> tuple[str, zarr.Array[Any], bool, tuple[int, ...]]:
+        """The array's path, the array, whether it has checksums and its chunk shape (looked
+        up once)."""
         path = array.path
         if path not in self._arrays:
-            self._arrays[path] = (os.path.join(self.root, path), array, has_checksums(array))
+            self._arrays[path] = (path, array, has_checksums(array), array.chunks)
         return self._arrays[path]
 
     def checksums(self, array: zarr.Array[Any]) -> bool:
@@ -307,8 +310,9 @@ class ChunkChecker:
         """``None`` for a sound chunk, else ``(problem, detail)``: ``("missing", "")`` or
         ``("corrupt", why)``; a chunk whose seal is not ``sealed`` (when given, verifying, and
         the checker has the store's :class:`Seal`) is corrupt too: it was written elsewhere."""
-        folder, array, checksums = self._array(array)
-        file = os.path.join(folder, array.metadata.encode_chunk_key(coords))
+        path, array, checksums, chunk_shape = self._array(array)
+        key = f"{path}/{array.metadata.encode_chunk_key(coords)}"
+        file = os.path.join(self.root, key)
         if not self.verify or not checksums:
             if not os.path.isfile(file):
                 return "missing", ""
@@ -326,7 +330,7 @@ class ChunkChecker:
             return None
         if not sealed:
             return "corrupt", "no seal recorded for it"
-        if self.seal.chunk(array, coords, data[-4:]) != sealed:
+        if self.seal.chunk(key, chunk_shape, data[-4:]) != sealed:
             return "corrupt", "sealed elsewhere: moved, swapped, from another store or reshaped"
         return None
 

@@ -540,23 +540,32 @@ class CaptureStore:
         flags = values.astype(bool)
         arrays = {camera: self._unit_arrays(camera) for camera in self._steps}
         seals = {camera: self._seals(camera) for camera in self._steps}
-        outcomes: dict[str, tuple[str, str] | None] = {}
-        units: dict[str, tuple[tuple[str, str], list[int]]] = {}
+        # Per camera and array: the array, whether a done step needs its chunk, frames per chunk
+        # and the chunk's coordinates after the first (looked up once: Zarr's are slow).
+        layout = {
+            camera: [
+                (array, array.path, required, array.chunks[0], (0,) * (array.ndim - 1))
+                for array, required in listed
+            ]
+            for camera, listed in arrays.items()
+        }
+        outcomes: dict[tuple[str, int], tuple[str, str] | None] = {}
+        units: dict[tuple[str, int], tuple[zarr.Array[Any], tuple[str, str], list[int]]] = {}
         for step in np.flatnonzero(flags).tolist():
             camera, slot = self._camera_and_slot(step)
-            for array, required in arrays[camera]:
-                coords = (slot // array.chunks[0], *(0,) * (array.ndim - 1))
-                key = chunk_key(array, coords)
-                if key not in outcomes:  # a chunk shared by frames (older stores) is read once
-                    frame = array.path == f"frames/{camera}"
-                    outcome = checker.check(array, coords, seals[camera][slot] if frame else None)
+            for position, (array, path, required, rows, rest) in enumerate(layout[camera]):
+                place = (path, slot // rows)
+                if place not in outcomes:  # a chunk shared by frames is read once
+                    sealed = int(seals[camera][slot]) if position == 0 else None  # the frame
+                    outcome = checker.check(array, (place[1], *rest), sealed)
                     if outcome is not None and outcome[0] == "missing" and not required:
                         outcome = None
-                    outcomes[key] = outcome
-                found = outcomes[key]
+                    outcomes[place] = outcome
+                found = outcomes[place]
                 if found is not None:
-                    units.setdefault(key, (found, []))[1].append(step)
-        for key, ((problem, detail), steps) in units.items():
+                    units.setdefault(place, (array, found, []))[2].append(step)
+        for (_, chunk), (array, (problem, detail), steps) in units.items():
+            key = chunk_key(array, (chunk, *(0,) * (array.ndim - 1)))
             problems.append(
                 ChunkProblem(self._step_name(steps[0]), key, problem, detail, tuple(steps))
             )
