@@ -495,16 +495,18 @@ class CaptureStore:
 
     def read_frames(self, camera: str, slots: Sequence[int] | np.ndarray) -> np.ndarray:
         """The frames ``(n, H, W)`` of ``camera`` at ``slots``; a frame whose chunk is missing
-        (it would read as zeros) or corrupt raises :class:`~hwbridge.errors.DamagedDataError`
-        naming camera, step and chunk key."""
+        (it would read as zeros), corrupt or sealed elsewhere (another frame's, another
+        store's) raises :class:`~hwbridge.errors.DamagedDataError` naming camera, step and
+        chunk key."""
         frames = self.frames(camera)
         stack = np.empty((len(slots), *frames.shape[1:]), dtype=frames.dtype)
         checker = ChunkChecker(self.path, seal=self._seal)
-        seals = self._seals(camera)
-        for position, slot in enumerate(slots):
-            coords = (int(slot), 0, 0)
-            name = self._step_name(self._steps[camera][int(slot)])
-            found = checker.check(frames, coords, int(seals[int(slot)]))
+        chosen = np.asarray(slots, np.int64).reshape(-1)
+        seals = self._seals(camera, chosen) if chosen.size else chosen
+        for position, slot in enumerate(chosen.tolist()):
+            coords = (slot, 0, 0)
+            name = self._step_name(self._steps[camera][slot])
+            found = checker.check(frames, coords, int(seals[position]))
             if found:
                 problem = ChunkProblem(name, chunk_key(frames, coords), *found)
                 raise DamagedDataError(f"{self.path}: damaged capture store: {problem}")
@@ -637,13 +639,15 @@ class CaptureStore:
             (array_at(index, name), name in _REQUIRED_FIELDS) for name in fields
         ]
 
-    def _seals(self, camera: str) -> np.ndarray:
-        """The seals of ``camera``'s frames; 0 where none is recorded, and everywhere when
-        they cannot be read (:meth:`check` names the chunk)."""
+    def _seals(self, camera: str, slots: np.ndarray | None = None) -> np.ndarray:
+        """The seals of ``camera``'s frames at ``slots`` (all: ``None``); 0 where none is
+        recorded, and everywhere when they cannot be read (:meth:`check` names the chunk)."""
+        seal = array_at(self._group, f"index/{camera}/seal")
         try:
-            return np.asarray(array_at(self._group, f"index/{camera}/seal")[:], np.uint64)
+            values = seal[:] if slots is None else seal.get_orthogonal_selection(slots)
+            return np.asarray(values, np.uint64)
         except (ValueError, RuntimeError):
-            return np.zeros(self.frames(camera).shape[0], np.uint64)
+            return np.zeros(seal.shape[0] if slots is None else slots.size, np.uint64)
 
     def _step_name(self, step: int) -> str:
         camera, slot = self._camera_and_slot(step)
