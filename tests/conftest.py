@@ -1,5 +1,6 @@
 """Shared test fixtures."""
 
+import json
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
@@ -180,3 +181,16 @@ class ChunkMisplacing:
 def misplace(request) -> ChunkMisplacing:
     """Each way a sound chunk is misplaced, in turn (parametrizes the test)."""
     return ChunkMisplacing(request.param)
+
+
+def _edit_metadata(file: Path, edit) -> None:
+    document = json.loads(file.read_text())
+    edit(document)
+    file.write_text(json.dumps(document))
+
+
+@pytest.fixture
+def edit_metadata():
+    """``edit_metadata(file, edit)``: a store's ``zarr.json`` edited by hand (``edit(document)``
+    changes the parsed document in place)."""
+    return _edit_metadata
