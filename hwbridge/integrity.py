@@ -17,15 +17,29 @@ bytes must be the CRC-32C of the rest. Arrays made before checksums are checked 
 their chunks, which finds missing and truncated chunks but not every altered byte; the report
 says "checksums: no".
 
+A checksum alone does not say where a chunk belongs: a chunk swapped with another of its array,
+copied over one, copied from another store or from an array of another chunk shape still
+matches its own checksum. So each store is made with a random identity (``store_id``) and
+seals its units' chunks (:class:`Seal`): when a unit's chunk is written, the store records a
+64-bit digest of its identity, the chunk's key (the array's path and the chunk's grid
+coordinates), the array's chunk shape and the chunk's CRC-32C; :class:`ChunkChecker` recomputes
+it from the chunk on disk. A chunk that is not the one written in its place ("sealed
+elsewhere") is reported and refused like a corrupt one. The settings that define a store's
+content and the layout of its arrays are sealed at creation in the same way
+(:meth:`Seal.settings`): :meth:`Seal.changed` names every setting or array edited since.
+
 The stores live in local folders; chunk files are named by Zarr's default chunk key encoding
 (``<array>/c/<i>/<j>/...``), which is what :func:`chunk_key` gives.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
-from collections.abc import Callable, Iterable
+import secrets
+import warnings
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -41,6 +55,8 @@ __all__ = [
     "ChunkChecker",
     "ChunkProblem",
     "IntegrityReport",
+    "SEAL_DTYPE",
+    "Seal",
     "array_at",
     "checksum_state",
     "checksummed_compressors",
@@ -49,8 +65,14 @@ __all__ = [
     "has_checksums",
     "metadata_problem",
     "read_flags",
+    "seal_problem",
+    "sealed_content",
+    "stored_arrays",
     "with_empty_chunks",
 ]
+
+SEAL_DTYPE = "uint64"
+"""The type of a chunk's seal as the stores record it; 0 (the fill value) is no seal."""
 
 
 def checksummed_compressors(level: int = 0) -> tuple[ZstdCodec, Crc32cCodec]:
@@ -109,6 +131,109 @@ def metadata_problem(root: Path, node: str) -> str | None:
     return None
 
 
+class Seal:
+    """The seals of one store: digests keyed by its identity that tie its chunks to their
+    places and its settings to their values at creation (see the module docstring).
+
+    Parameters
+    ----------
+    store_id
+        The store's identity (:meth:`new_id`), from its root attributes.
+    """
+
+    def __init__(self, store_id: str):
+        self.store_id = store_id
+
+    @staticmethod
+    def new_id() -> str:
+        """A new store's identity: 128 random bits, as hex."""
+        return secrets.token_hex(16)
+
+    def _digest(self, *parts: bytes) -> bytes:
+        digest = hashlib.blake2b(self.store_id.encode(), digest_size=8)
+        for part in parts:
+            digest.update(len(part).to_bytes(8, "little"))
+            digest.update(part)
+        return digest.digest()
+
+    def chunk(self, key: str, chunk_shape: Sequence[int], checksum: bytes) -> int:
+        """The seal (never 0) of the chunk at ``key`` (:func:`chunk_key`: the array's path and
+        the chunk's grid coordinates) of an array of chunks of ``chunk_shape``, whose bytes
+        end with ``checksum`` (their CRC-32C, the crc32c codec's last four bytes)."""
+        place = f"{key} {list(chunk_shape)}".encode()
+        return max(1, int.from_bytes(self._digest(place, checksum), "little"))
+
+    def chunk_on_disk(self, root: Path, array: zarr.Array[Any], coords: tuple[int, ...]) -> int:
+        """The seal of the chunk of ``array`` at ``coords`` as now written under ``root``
+        (the array must have checksums: :func:`has_checksums`)."""
+        key = chunk_key(array, coords)
+        with open(root / key, "rb") as handle:
+            handle.seek(-4, os.SEEK_END)
+            return self.chunk(key, array.chunks, handle.read(4))
+
+    def settings(self, settings: Mapping[str, object]) -> dict[str, str]:
+        """A digest (hex) per setting: JSON values, or arrays (by their dtype, shape and
+        bytes); :func:`sealed_content` adds the layouts of a store's arrays."""
+        sealed = {}
+        for name, value in settings.items():
+            if isinstance(value, np.ndarray):
+                described = f"{value.dtype.str} {list(value.shape)}".encode()
+                data = described + np.ascontiguousarray(value).tobytes()
+            else:
+                data = json.dumps(value, sort_keys=True, separators=(",", ":")).encode()
+            sealed[name] = self._digest(name.encode(), data).hex()
+        return sealed
+
+    def changed(self, sealed: Mapping[str, str], settings: Mapping[str, object]) -> list[str]:
+        """The names of the settings (and arrays) that differ from ``sealed``, those added or
+        gone included, sorted."""
+        now = self.settings(settings)
+        return sorted(name for name in {*sealed, *now} if sealed.get(name) != now.get(name))
+
+
+def stored_arrays(group: zarr.Group, skip: str | None = None) -> dict[str, zarr.Array[Any]]:
+    """Every array of ``group`` and of its subgroups by path, but those under ``skip``."""
+    with warnings.catch_warnings():  # files of the store's own, such as its writer's lock
+        warnings.filterwarnings("ignore", "Object at .* is not recognized", UserWarning)
+        members = group.members(max_depth=None)
+    return {
+        path: node
+        for path, node in members
+        if isinstance(node, zarr.Array) and path.split("/")[0] != skip
+    }
+
+
+def sealed_content(
+    settings: Mapping[str, object], arrays: Iterable[zarr.Array[Any]]
+) -> dict[str, object]:
+    """What a store seals: ``settings`` and, by its path, every array's shape, chunk shape and
+    dtype."""
+    layouts = {
+        array.path: {
+            "shape": list(array.shape),
+            "chunks": list(array.chunks),
+            "dtype": str(array.dtype),
+        }
+        for array in arrays
+    }
+    return {**settings, **layouts}
+
+
+def seal_problem(
+    seal: Seal,
+    sealed: Mapping[str, str],
+    settings: Mapping[str, object],
+    arrays: Iterable[zarr.Array[Any]],
+) -> str | None:
+    """What differs from the store's sealed ``settings`` and array layouts, in words, or
+    ``None``."""
+    changed = seal.changed(sealed, sealed_content(settings, arrays))
+    if not changed:
+        return None
+    verb = "differs" if len(changed) == 1 else "differ"
+    return f"{', '.join(changed)} {verb} from what the store was created with"
+
+
 @dataclass(frozen=True)
 class ChunkProblem:
     """A chunk of a unit of work that is missing or corrupt.
@@ -158,28 +283,36 @@ class ChunkChecker:
     verify
         Check the bytes (checksum, or decoding for arrays without checksums); ``False``: only
         that the chunk files exist.
+    seal
+        The store's seals: a chunk given its recorded seal is checked against it too.
     """
 
-    def __init__(self, root: Path, *, verify: bool = True):
+    def __init__(self, root: Path, *, verify: bool = True, seal: Seal | None = None):
         self.root = Path(root)
         self.verify = verify
-        self._arrays: dict[str, tuple[str, zarr.Array[Any], bool]] = {}
+        self.seal = seal
+        self._arrays: dict[str, tuple[str, zarr.Array[Any], bool, tuple[int, ...]]] = {}
 
-    def _array(self, array: zarr.Array[Any]) -> tuple[str, zarr.Array[Any], bool]:
-        """The array's folder, the array and whether it has checksums (looked up once)."""
+    def _array(self, array: zarr.Array[Any]) -> tuple[str, zarr.Array[Any], bool, tuple[int, ...]]:
+        """The array's path, the array, whether it has checksums and its chunk shape (looked
+        up once)."""
         path = array.path
         if path not in self._arrays:
-            self._arrays[path] = (os.path.join(self.root, path), array, has_checksums(array))
+            self._arrays[path] = (path, array, has_checksums(array), array.chunks)
         return self._arrays[path]
 
     def checksums(self, array: zarr.Array[Any]) -> bool:
         return self._array(array)[2]
 
-    def check(self, array: zarr.Array[Any], coords: tuple[int, ...]) -> tuple[str, str] | None:
+    def check(
+        self, array: zarr.Array[Any], coords: tuple[int, ...], sealed: int | None = None
+    ) -> tuple[str, str] | None:
         """``None`` for a sound chunk, else ``(problem, detail)``: ``("missing", "")`` or
-        ``("corrupt", why)``."""
-        folder, array, checksums = self._array(array)
-        file = os.path.join(folder, array.metadata.encode_chunk_key(coords))
+        ``("corrupt", why)``; a chunk whose seal is not ``sealed`` (when given, verifying, and
+        the checker has the store's :class:`Seal`) is corrupt too: it was written elsewhere."""
+        path, array, checksums, chunk_shape = self._array(array)
+        key = f"{path}/{array.metadata.encode_chunk_key(coords)}"
+        file = os.path.join(self.root, key)
         if not self.verify or not checksums:
             if not os.path.isfile(file):
                 return "missing", ""
@@ -193,6 +326,12 @@ class ChunkChecker:
             return "corrupt", f"{len(data)} bytes, shorter than its checksum"
         if google_crc32c.value(data[:-4]) != int.from_bytes(data[-4:], "little"):
             return "corrupt", "checksum mismatch"
+        if sealed is None or self.seal is None:
+            return None
+        if not sealed:
+            return "corrupt", "no seal recorded for it"
+        if self.seal.chunk(key, chunk_shape, data[-4:]) != sealed:
+            return "corrupt", "sealed elsewhere: moved, swapped, from another store or reshaped"
         return None
 
     @staticmethod
@@ -215,13 +354,14 @@ def _decoding_error(error: Exception) -> str:
 def read_flags(
     checker: ChunkChecker, array: zarr.Array[Any], name: Callable[[int], str]
 ) -> tuple[np.ndarray, list[ChunkProblem]]:
-    """The flags of a 1-D bool progress array, and the problems of its unreadable chunks (their
-    flags read as not set: the units are pending again). ``name(unit)`` describes a unit."""
+    """The values of a 1-D progress array as stored (bool flags, or the seals of a BTF store's
+    pairs, 0 while pending), and the problems of its unreadable chunks (their values read as
+    not set: the units are pending again). ``name(unit)`` describes a unit."""
     try:
-        return np.asarray(array[:], dtype=bool), []
+        return np.asarray(array[:]), []
     except Exception:  # a corrupt flag chunk: find it below
         pass
-    flags = np.zeros(array.shape[0], dtype=bool)
+    flags = np.zeros(array.shape[0], dtype=array.dtype)
     problems = []
     size = array.chunks[0]
     for chunk in range(-(-array.shape[0] // size)):

@@ -49,8 +49,9 @@ __all__ = [
     "refuse_other_version",
 ]
 
-SCHEMA_VERSION = 1
-"""The version of the capture store's attributes that this code writes and reads."""
+SCHEMA_VERSION = 2
+"""The version of the capture store's attributes that this code writes and reads (2: the store
+has an identity, seals its settings and frames, ``hwbridge.integrity.Seal``)."""
 
 NO_LIGHT = -1
 """``light_id`` of frames without light (dark frames)."""
@@ -213,6 +214,12 @@ class CaptureAttrs(StoreModel):
     """The attributes of a capture store's root group."""
 
     schema_version: int = Field(description="version of these attributes (`SCHEMA_VERSION`)")
+    store_id: str = Field(
+        min_length=1, description="the store's identity, random, made at creation"
+    )
+    sealed: dict[str, str] = Field(
+        description="digest per setting and array layout that defines the content, at creation"
+    )
     rig: dict[str, Any] = Field(
         description="the rig and the program that captured: a `RigAttrs` of the rig's kind"
     )

@@ -2,14 +2,15 @@
 
 Layout of ``<name>.capture.zarr`` (ARCHITECTURE.md, "Stores"):
 
-- attributes (:class:`hwbridge.schema.CaptureAttrs`): ``schema_version``, ``rig`` (the rig and
-  the program that captured, a :class:`~hwbridge.schema.RigAttrs` of the rig's kind),
+- attributes (:class:`hwbridge.schema.CaptureAttrs`): ``schema_version``, ``store_id`` (the
+  store's random identity), ``sealed`` (digests of what defines its content), ``rig`` (the rig
+  and the program that captured, a :class:`~hwbridge.schema.RigAttrs` of the rig's kind),
   ``backend`` (``sim``, ``real``, ``replay``), ``seed``, ``software_version``, ``plan`` (one
   :class:`~hwbridge.schema.PlanStep` per step), ``complete``;
 - ``frames/<camera_id>``: uint16 ``(N, H, W)`` raw frames, one chunk per frame;
 - ``index/<camera_id>/<field>``: per frame ``kind``, ``light_id``, ``view_id``, ``band_nm``,
-  ``exposure_s``, ``timestamp``, ``status``, ``pose`` (6 numbers) and ``lamp_monitor``
-  (the monitor spectrum, when the rig has one);
+  ``exposure_s``, ``timestamp``, ``status``, ``pose`` (6 numbers), ``seal`` (the seal of the
+  frame's chunk) and ``lamp_monitor`` (the monitor spectrum, when the rig has one);
 - ``progress``: one flag per plan step, set only after the step's frame and index are written.
 
 A dome capture (thesis 10.2-10.4) uses the same layout with one group per camera (the RGB
@@ -41,15 +42,21 @@ slot: an interrupted session resumes without losing or duplicating a frame, and 
 turns true only when every step is done.
 
 Integrity (:mod:`hwbridge.integrity`): every array ends its codec chain with a CRC-32C checksum,
-so a chunk altered on disk raises on read. :meth:`CaptureStore.check` checks the progress record
-against the chunks: a step flagged done whose frame or index chunk is missing (Zarr would read
-the fill value) or corrupt is reported by camera, step and chunk key. :meth:`CaptureStore.open`
+so a chunk altered on disk raises on read, and every frame's chunk is sealed to its place and
+the store (:class:`~hwbridge.integrity.Seal`; the index writer records the seal, so the workers
+of a distributed capture write only their frames): a frame chunk swapped, moved, copied from
+another store or of another shape is reported and refused like a corrupt one. The settings
+that define the store (``rig``, ``backend``, ``seed``, ``software_version``, ``plan``) and
+the shape, chunks and dtype of every array are sealed at creation: :meth:`CaptureStore.open`
+refuses a store where any differs, naming them. :meth:`CaptureStore.check` checks the progress
+record against the chunks: a step flagged done whose frame or index chunk is missing (Zarr would
+read the fill value) or corrupt is reported by camera, step and chunk key. :meth:`CaptureStore.open`
 refuses a store whose metadata (``zarr.json`` files) is missing or unreadable, naming the file,
 and :meth:`CaptureStore.read_frames` refuses to return a missing or corrupt frame. Before a
 session resumes, :meth:`CaptureStore.prepare_resume` flags the damaged steps of a simulated
 capture pending again (they are taken again, identically) and refuses to resume a damaged real
-or replayed capture, which cannot take its frames again. Stores made before checksums open and
-are checked for missing and undecodable chunks.
+or replayed capture, which cannot take its frames again. Stores made before seals (schema
+version 1) are refused, naming their version.
 """
 
 from __future__ import annotations
@@ -66,9 +73,11 @@ import zarr
 
 from hwbridge.errors import DamagedDataError, InputError, Remedy
 from hwbridge.integrity import (
+    SEAL_DTYPE,
     ChunkChecker,
     ChunkProblem,
     IntegrityReport,
+    Seal,
     array_at,
     checksum_state,
     checksummed_compressors,
@@ -76,6 +85,9 @@ from hwbridge.integrity import (
     group_at,
     metadata_problem,
     read_flags,
+    seal_problem,
+    sealed_content,
+    stored_arrays,
     with_empty_chunks,
 )
 from hwbridge.schema import (
@@ -107,8 +119,10 @@ _NUMERIC_FIELDS = {
 }
 # Index fields every frame writes with a value other than the fill value: a step flagged done
 # must have their chunks (the others hold the fill value legitimately, e.g. no light for a dark).
-_REQUIRED_FIELDS = ("kind", "status", "exposure_s")
-_INDEX_FIELDS = (*_STRING_FIELDS, *_NUMERIC_FIELDS, "pose")
+_REQUIRED_FIELDS = ("kind", "status", "exposure_s", "seal")
+_INDEX_FIELDS = (*_STRING_FIELDS, *_NUMERIC_FIELDS, "pose", "seal")
+# The attributes that define a store's content, sealed at creation (all but the progress).
+_SEALED_ATTRS = ("schema_version", "rig", "backend", "seed", "software_version", "plan")
 
 
 @dataclass(frozen=True)
@@ -148,6 +162,7 @@ class CaptureStore:
             self._slots.append(counts.get(camera, 0))
             counts[camera] = counts.get(camera, 0) + 1
             self._steps.setdefault(camera, []).append(step)
+        self._seal = Seal(str(group.attrs.get("store_id")))
         self.recaptured: list[ChunkProblem] = []
         """Damaged chunks of steps that :meth:`prepare_resume` flagged pending again."""
         # Steps this writer has not seen done. Reading the progress flags touches one chunk per
@@ -180,10 +195,13 @@ class CaptureStore:
             raise InputError(f"backend: expected 'sim', 'real' or 'replay', got {backend!r}")
         if not plan:
             raise InputError("plan: expected at least one step")
+        store_id = Seal.new_id()
         attrs = parse(
             CaptureAttrs,
             {
                 "schema_version": SCHEMA_VERSION,
+                "store_id": store_id,
+                "sealed": {},
                 "rig": rig.stored() if isinstance(rig, RigAttrs) else dict(rig),
                 "backend": backend,
                 "seed": seed,
@@ -236,6 +254,14 @@ class CaptureStore:
                     compressors=checksummed_compressors(),
                 )
             group.create_array(
+                f"{index}/seal",
+                shape=(count,),
+                chunks=(block,),
+                dtype=SEAL_DTYPE,
+                fill_value=0,
+                compressors=checksummed_compressors(),
+            )
+            group.create_array(
                 f"{index}/pose",
                 shape=(count, 6),
                 chunks=(block, 6),
@@ -262,8 +288,13 @@ class CaptureStore:
         )
         # The attributes last and in one write: the plan of a full campaign is tens of MB of
         # JSON, which Zarr writes out again for every attribute set. A plan step keeps the
-        # settings it was given, no others.
-        group.update_attributes(attrs.model_dump(mode="json", exclude_unset=True))
+        # settings it was given, no others. What defines the store's content is sealed.
+        stored = attrs.model_dump(mode="json", exclude_unset=True)
+        content = {name: stored[name] for name in _SEALED_ATTRS}
+        stored["sealed"] = Seal(store_id).settings(
+            sealed_content(content, stored_arrays(group).values())
+        )
+        group.update_attributes(stored)
         building.rename(path)
         return cls(zarr.open_group(str(path), mode="r+"), path)
 
@@ -304,6 +335,18 @@ class CaptureStore:
                     f"damaged capture store: {problem} (the metadata of {node}); restore the "
                     "store from a copy or capture again"
                 )
+        sealed = stored.get("sealed")
+        problem = seal_problem(
+            Seal(str(stored.get("store_id"))),
+            sealed if isinstance(sealed, dict) else {},
+            {name: stored.get(name) for name in _SEALED_ATTRS},
+            stored_arrays(group).values(),
+        )
+        if problem:
+            raise DamagedDataError(
+                f"{path}: damaged capture store: {problem}; restore the store from a copy or "
+                "capture again"
+            )
         return cls(group, path)
 
     # -- writing -------------------------------------------------------------------------------
@@ -338,6 +381,14 @@ class CaptureStore:
                 array_at(index, name)[slots] = values
             poses = np.array([record.pose for record in chosen], np.float64)
             array_at(index, "pose")[slots] = poses
+            frames = self.frames(camera)
+            array_at(index, "seal")[slots] = np.array(
+                [
+                    self._seal.chunk_on_disk(self.path, frames, (slot, 0, 0))
+                    for slot in range(slots.start, slots.stop)
+                ],
+                np.uint64,
+            )
             monitored = [i for i, record in enumerate(chosen) if record.lamp_monitor is not None]
             if not monitored:
                 continue
@@ -444,18 +495,21 @@ class CaptureStore:
 
     def read_frames(self, camera: str, slots: Sequence[int] | np.ndarray) -> np.ndarray:
         """The frames ``(n, H, W)`` of ``camera`` at ``slots``; a frame whose chunk is missing
-        (it would read as zeros) or corrupt raises :class:`~hwbridge.errors.DamagedDataError`
-        naming camera, step and chunk key."""
+        (it would read as zeros), corrupt or sealed elsewhere (another frame's, another
+        store's) raises :class:`~hwbridge.errors.DamagedDataError` naming camera, step and
+        chunk key."""
         frames = self.frames(camera)
         stack = np.empty((len(slots), *frames.shape[1:]), dtype=frames.dtype)
-        for position, slot in enumerate(slots):
-            coords = (int(slot), 0, 0)
-            name = self._step_name(self._steps[camera][int(slot)])
-            if not (self.path / chunk_key(frames, coords)).is_file():
-                raise DamagedDataError(
-                    f"{self.path}: damaged capture store: {name}: {chunk_key(frames, coords)} is "
-                    "missing"
-                )
+        checker = ChunkChecker(self.path, seal=self._seal)
+        chosen = np.asarray(slots, np.int64).reshape(-1)
+        seals = self._seals(camera, chosen) if chosen.size else chosen
+        for position, slot in enumerate(chosen.tolist()):
+            coords = (slot, 0, 0)
+            name = self._step_name(self._steps[camera][slot])
+            found = checker.check(frames, coords, int(seals[position]))
+            if found:
+                problem = ChunkProblem(name, chunk_key(frames, coords), *found)
+                raise DamagedDataError(f"{self.path}: damaged capture store: {problem}")
             try:
                 stack[position] = frames[int(slot)]
             except (ValueError, RuntimeError) as error:  # checksum or decompression
@@ -482,26 +536,38 @@ class CaptureStore:
             Pending steps, missing and corrupt chunks by camera, step and chunk key, whether
             the store has checksums, and its seed, program and backend.
         """
-        checker = ChunkChecker(self.path, verify=verify)
+        checker = ChunkChecker(self.path, verify=verify, seal=self._seal)
         progress = array_at(self._group, "progress")
-        flags, problems = read_flags(checker, progress, self._step_name)
+        values, problems = read_flags(checker, progress, self._step_name)
+        flags = values.astype(bool)
         arrays = {camera: self._unit_arrays(camera) for camera in self._steps}
-        outcomes: dict[str, tuple[str, str] | None] = {}
-        units: dict[str, tuple[tuple[str, str], list[int]]] = {}
+        seals = {camera: self._seals(camera) for camera in self._steps}
+        # Per camera and array: the array, whether a done step needs its chunk, frames per chunk
+        # and the chunk's coordinates after the first (looked up once: Zarr's are slow).
+        layout = {
+            camera: [
+                (array, array.path, required, array.chunks[0], (0,) * (array.ndim - 1))
+                for array, required in listed
+            ]
+            for camera, listed in arrays.items()
+        }
+        outcomes: dict[tuple[str, int], tuple[str, str] | None] = {}
+        units: dict[tuple[str, int], tuple[zarr.Array[Any], tuple[str, str], list[int]]] = {}
         for step in np.flatnonzero(flags).tolist():
             camera, slot = self._camera_and_slot(step)
-            for array, required in arrays[camera]:
-                coords = (slot // array.chunks[0], *(0,) * (array.ndim - 1))
-                key = chunk_key(array, coords)
-                if key not in outcomes:  # a chunk shared by frames (older stores) is read once
-                    outcome = checker.check(array, coords)
+            for position, (array, path, required, rows, rest) in enumerate(layout[camera]):
+                place = (path, slot // rows)
+                if place not in outcomes:  # a chunk shared by frames is read once
+                    sealed = int(seals[camera][slot]) if position == 0 else None  # the frame
+                    outcome = checker.check(array, (place[1], *rest), sealed)
                     if outcome is not None and outcome[0] == "missing" and not required:
                         outcome = None
-                    outcomes[key] = outcome
-                found = outcomes[key]
+                    outcomes[place] = outcome
+                found = outcomes[place]
                 if found is not None:
-                    units.setdefault(key, (found, []))[1].append(step)
-        for key, ((problem, detail), steps) in units.items():
+                    units.setdefault(place, (array, found, []))[2].append(step)
+        for (_, chunk), (array, (problem, detail), steps) in units.items():
+            key = chunk_key(array, (chunk, *(0,) * (array.ndim - 1)))
             problems.append(
                 ChunkProblem(self._step_name(steps[0]), key, problem, detail, tuple(steps))
             )
@@ -572,6 +638,16 @@ class CaptureStore:
         return [(self.frames(camera), True)] + [
             (array_at(index, name), name in _REQUIRED_FIELDS) for name in fields
         ]
+
+    def _seals(self, camera: str, slots: np.ndarray | None = None) -> np.ndarray:
+        """The seals of ``camera``'s frames at ``slots`` (all: ``None``); 0 where none is
+        recorded, and everywhere when they cannot be read (:meth:`check` names the chunk)."""
+        seal = array_at(self._group, f"index/{camera}/seal")
+        try:
+            values = seal[:] if slots is None else seal.get_orthogonal_selection(slots)
+            return np.asarray(values, np.uint64)
+        except (ValueError, RuntimeError):
+            return np.zeros(seal.shape[0] if slots is None else slots.size, np.uint64)
 
     def _step_name(self, step: int) -> str:
         camera, slot = self._camera_and_slot(step)

@@ -1,5 +1,7 @@
 """Shared test fixtures."""
 
+import json
+import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -136,3 +138,59 @@ def bonn_files():
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def _swap(store: Path, key: str, other: str, donors: dict[str, Path]) -> None:
+    first, second = store / key, store / other
+    data = first.read_bytes()
+    first.write_bytes(second.read_bytes())
+    second.write_bytes(data)
+
+
+def _move(store: Path, key: str, other: str, donors: dict[str, Path]) -> None:
+    shutil.copyfile(store / other, store / key)
+
+
+def _foreign(store: Path, key: str, other: str, donors: dict[str, Path]) -> None:
+    shutil.copyfile(donors["foreign"] / key, store / key)
+
+
+def _reshaped(store: Path, key: str, other: str, donors: dict[str, Path]) -> None:
+    shutil.copyfile(donors["reshaped"] / key, store / key)
+
+
+CHUNK_MISPLACING = {"swapped": _swap, "moved": _move, "foreign": _foreign, "reshaped": _reshaped}
+"""The ways a sound chunk file ends up where it does not belong: swapped with another chunk of
+its array, copied over another one, copied from another store of the same layout, or from a
+store whose chunks have another shape. Each leaves a chunk whose checksum matches its bytes."""
+
+
+@dataclass(frozen=True)
+class ChunkMisplacing:
+    """One way of putting a sound chunk where it does not belong: ``misplace(store, key, other,
+    donors)`` replaces ``key`` (``other``: a chunk of the same array; ``donors``: stores named
+    ``foreign`` and ``reshaped``); ``misplace.kind`` names it."""
+
+    kind: str
+
+    def __call__(self, store: Path, key: str, other: str, donors: dict[str, Path]) -> None:
+        CHUNK_MISPLACING[self.kind](store, key, other, donors)
+
+
+@pytest.fixture(params=sorted(CHUNK_MISPLACING))
+def misplace(request) -> ChunkMisplacing:
+    """Each way a sound chunk is misplaced, in turn (parametrizes the test)."""
+    return ChunkMisplacing(request.param)
+
+
+def _edit_metadata(file: Path, edit) -> None:
+    document = json.loads(file.read_text())
+    edit(document)
+    file.write_text(json.dumps(document))
+
+
+@pytest.fixture
+def edit_metadata():
+    """``edit_metadata(file, edit)``: a store's ``zarr.json`` edited by hand (``edit(document)``
+    changes the parsed document in place)."""
+    return _edit_metadata

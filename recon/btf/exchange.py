@@ -36,7 +36,8 @@ __all__ = ["EXCHANGE_FORMAT", "INDEX_NAME", "export_btf", "import_exr_slices"]
 EXCHANGE_FORMAT = "spectwin.btf-exr-slices"
 EXCHANGE_VERSION = 1
 INDEX_NAME = "directions.json"
-_STORE_ATTRIBUTES = ("format", "format_version", "complete", "units")
+# The store's own: a new store is made with its own format, progress, identity and seals.
+_STORE_ATTRIBUTES = ("format", "format_version", "complete", "units", "store_id", "sealed")
 
 
 def _slice_name(pair: int) -> str:

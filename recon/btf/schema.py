@@ -34,9 +34,10 @@ __all__ = [
 BTF_FORMAT = "spectwin.btf"
 """The ``format`` of every BTF store."""
 
-BTF_FORMAT_VERSION = 2
+BTF_FORMAT_VERSION = 3
 """The version of the BTF store's attributes that this code writes and reads (2: the store
-records the ``rig`` it was processed from)."""
+records the ``rig`` it was processed from; 3: it has an identity and seals its settings and
+pairs, ``hwbridge.integrity.Seal``)."""
 
 BTF_UNITS = "1/sr"
 """Units of every store's reflectance (a BRDF value per texel)."""
@@ -60,6 +61,12 @@ class BTFAttrs(StoreModel):
 
     format: Literal["spectwin.btf"] = Field(description="`spectwin.btf`")
     format_version: int = Field(description="version of these attributes (`BTF_FORMAT_VERSION`)")
+    store_id: str = Field(
+        min_length=1, description="the store's identity, random, made at creation"
+    )
+    sealed: dict[str, str] = Field(
+        description="digest per setting, direction, band and array layout, at creation"
+    )
     units: Literal["1/sr"] = Field(description="units of the reflectance, `1/sr`")
     material: str = Field(min_length=1, description="the material sample")
     rig: str | None = Field(

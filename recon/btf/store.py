@@ -9,7 +9,8 @@ written, and the store calls itself complete only when every pair is.
 Layout of ``<name>.btf.zarr`` (ARCHITECTURE.md, "Stores"):
 
 - attributes (:class:`recon.btf.schema.BTFAttrs`): ``format`` (``"spectwin.btf"``),
-  ``format_version`` (a store of another version is refused on opening), ``units``
+  ``format_version`` (a store of another version is refused on opening), ``store_id`` (its
+  random identity), ``sealed`` (digests of what defines its content), ``units``
   (``"1/sr"``), ``material``, ``rig`` (of the source capture), ``source_capture`` (path of the
   capture store it was calibrated from, or null), ``calibration`` (a JSON summary of the
   calibration), ``complete``, and what processing adds (:meth:`BTFStore.set_attribute`);
@@ -18,8 +19,9 @@ Layout of ``<name>.btf.zarr`` (ARCHITECTURE.md, "Stores"):
 - ``light_dirs``, ``view_dirs``: float64 ``(n_pairs, 3)`` unit vectors in the sample frame
   (z = surface normal);
 - ``wavelengths``: float64 ``(K,)`` band centres in nm;
-- ``written``: bool ``(n_pairs,)``, one chunk per pair, set only after the pair's texture is
-  written;
+- ``written``: uint64 ``(n_pairs,)``, one chunk per pair: the seal of the pair's reflectance
+  chunk (``hwbridge.integrity.Seal``), set only after the pair's texture is written; 0 while
+  the pair is pending;
 - ``pca/``: optional compressed form (thesis 4.1.2; written by :mod:`recon.btf.compression`),
   with its own attributes (:class:`recon.btf.schema.CompressedAttrs`), ``complete`` set after
   all of its arrays.
@@ -31,13 +33,18 @@ chunk (a worker writes the pairs it owns, and the coordinator of a distributed r
 first clears its flag, so an interrupted rewrite leaves the pair pending, never silently corrupt.
 
 Integrity (``hwbridge.integrity``): every array ends its codec chain with a CRC-32C checksum, so a
-chunk altered on disk raises on read; :meth:`BTFStore.check` checks every pair flagged written
+chunk altered on disk raises on read, and every pair's reflectance chunk is sealed to its place
+and the store, so one swapped, moved, copied from another store or of another shape is found and
+refused like a corrupt one; the settings that define the store (material, rig, source capture,
+calibration), its directions, bands and the shape, chunks and dtype of every array but the
+compressed form's are sealed at creation, and :meth:`BTFStore.open` refuses a store where any
+differs, naming them; :meth:`BTFStore.check` checks every pair flagged written
 against its reflectance chunk (a missing chunk would read as NaN) and the compressed form's
 chunks, and names the damaged pairs and chunk keys; :meth:`BTFStore.open` refuses missing or
 unreadable metadata, naming the file; reading a pair whose chunk is missing or corrupt raises
 :class:`~recon.errors.DamagedDataError`. :meth:`BTFStore.prepare_resume` flags damaged pairs
 pending again, so a resumed processing writes them again. Stores made before
-checksums open and are checked for missing and undecodable chunks.
+seals are refused by their format version.
 
 References
 ----------
@@ -56,15 +63,20 @@ import numpy as np
 import zarr
 
 from hwbridge.integrity import (
+    SEAL_DTYPE,
     ChunkChecker,
     ChunkProblem,
     IntegrityReport,
+    Seal,
     checksum_state,
     checksummed_compressors,
     chunk_key,
     has_checksums,
     metadata_problem,
     read_flags,
+    seal_problem,
+    sealed_content,
+    stored_arrays,
     with_empty_chunks,
 )
 from hwbridge.schema import parse, refuse_other_version
@@ -92,6 +104,16 @@ COMPRESSED_GROUP = "pca"
 
 _UNIT_TOLERANCE = 1e-6
 _ARRAYS = ("reflectance", "light_dirs", "view_dirs", "wavelengths", "written")
+# The attributes that define a store's content, sealed at creation with its directions and bands.
+_SEALED_ATTRS = (
+    "format",
+    "format_version",
+    "units",
+    "material",
+    "rig",
+    "source_capture",
+    "calibration",
+)
 
 
 def _check_directions(name: str, directions: np.ndarray, n_pairs: int | None) -> np.ndarray:
@@ -206,10 +228,24 @@ class BTFStore:
         self.view_dirs = self._read_small(self._array("view_dirs"))
         for directions in (self.light_dirs, self.view_dirs):
             directions.setflags(write=False)
+        self._seal = Seal(str(attrs.get("store_id")))
+        sealed = attrs.get("sealed")
+        problem = seal_problem(
+            self._seal,
+            sealed if isinstance(sealed, dict) else {},
+            _sealed_settings(attrs, self.light_dirs, self.view_dirs, self.grid.wavelengths_nm),
+            stored_arrays(group, skip=COMPRESSED_GROUP).values(),
+        )
+        if problem:
+            raise DamagedDataError(
+                f"{path}: damaged store: {problem}; process the capture again",
+                remedy=Remedy.process,
+            )
         # Flags known to be set (a cache, refreshed lazily: other processes may write pairs); an
         # unreadable flag counts as unset here, and check() reports it.
         written = self._array("written")
-        self._known_written, _ = read_flags(checker, written, self._pair_name)
+        seals, _ = read_flags(checker, written, self._pair_name)
+        self._known_written = seals.astype(bool)
         shape = self._array("reflectance").shape
         n_pairs = self.light_dirs.shape[0]
         if (
@@ -282,6 +318,8 @@ class BTFStore:
             {
                 "format": BTF_FORMAT,
                 "format_version": BTF_FORMAT_VERSION,
+                "store_id": Seal.new_id(),
+                "sealed": {},
                 "units": BTF_UNITS,
                 "material": material,
                 "rig": rig,
@@ -331,14 +369,20 @@ class BTFStore:
             attributes={"units": "px", "meaning": "registered image corners of the texture square"},
             compressors=checksummed_compressors(),
         )
-        # Created last: a store whose creation was interrupted lacks it and does not open.
+        # Created last: a store whose creation was interrupted lacks it and does not open. A
+        # pair's flag is the seal of its reflectance chunk (0: pending).
         group.create_array(
             "written",
             shape=(n_pairs,),
             chunks=(1,),
-            dtype="bool",
-            fill_value=False,
+            dtype=SEAL_DTYPE,
+            fill_value=0,
             compressors=checksummed_compressors(),
+        )
+        stored = attrs.model_dump(mode="json", exclude_unset=True)
+        settings = _sealed_settings(stored, light_dirs, view_dirs, grid.wavelengths_nm)
+        group.attrs["sealed"] = Seal(attrs.store_id).settings(
+            sealed_content(settings, stored_arrays(group).values())
         )
         return cls(group, path, writable=True)
 
@@ -513,7 +557,8 @@ class BTFStore:
             written[pair] = False
             self._known_written[pair] = False
         self._drop_compressed()
-        self._array("reflectance")[pair] = values
+        textures = self._array("reflectance")
+        textures[pair] = values
         if corners_xy is not None:
             corners = np.asarray(corners_xy, dtype=np.float64)
             if corners.shape != (4, 2) or not np.all(np.isfinite(corners)):
@@ -521,7 +566,7 @@ class BTFStore:
                     f"corners_xy: expected finite (4, 2) image corners, got shape {corners.shape}"
                 )
             self._array("corners_xy")[pair] = corners
-        written[pair] = True
+        written[pair] = self._seal.chunk_on_disk(self.path, textures, (pair, 0, 0, 0))
         self._known_written[pair] = True
         if check_complete and self._all_written():
             self._set_complete(True)
@@ -684,9 +729,10 @@ class BTFStore:
             compressed form name no pair), whether the store has checksums, its material and
             source capture.
         """
-        checker = ChunkChecker(self.path, verify=verify)
+        checker = ChunkChecker(self.path, verify=verify, seal=self._seal)
         written = self._array("written")
-        flags, problems = read_flags(checker, written, self._pair_name)
+        seals, problems = read_flags(checker, written, self._pair_name)
+        flags = seals.astype(bool)
         reflectance = self._array("reflectance")
         corners = self._array("corners_xy") if "corners_xy" in self._group else None
         for pair in np.flatnonzero(flags).tolist():
@@ -694,7 +740,7 @@ class BTFStore:
                 if array is None:
                     continue
                 coords = (pair, *(0,) * (array.ndim - 1))
-                outcome = checker.check(array, coords)
+                outcome = checker.check(array, coords, int(seals[pair]) if required else None)
                 if outcome is not None and (required or outcome[0] == "corrupt"):
                     key = chunk_key(array, coords)
                     problems.append(ChunkProblem(self._pair_name(pair), key, *outcome, (pair,)))
@@ -797,15 +843,32 @@ class BTFStore:
             ) from None
 
     def _require_chunks(self, pairs: Iterable[int]) -> None:
-        """Raise when a written pair's reflectance chunk is missing (it would read as NaN)."""
+        """Raise when a written pair's reflectance chunk is missing (it would read as NaN),
+        corrupt or sealed elsewhere (another pair's, or another store's)."""
         reflectance = self._array("reflectance")
-        for pair in pairs:
-            key = chunk_key(reflectance, (int(pair), 0, 0, 0))
-            if not (self.path / key).is_file():
-                raise DamagedDataError(
-                    f"{self.path}: damaged store: pair {pair}: {key} is missing",
-                    remedy=Remedy.reprocess_pairs,
+        checker = ChunkChecker(self.path, seal=self._seal)
+        chosen = np.asarray(list(pairs), np.int64)
+        for pair, sealed in zip(chosen.tolist(), self._seals(chosen).tolist(), strict=True):
+            coords = (pair, 0, 0, 0)
+            found = checker.check(reflectance, coords, sealed)
+            if found:
+                problem = ChunkProblem(
+                    self._pair_name(pair), chunk_key(reflectance, coords), *found
                 )
+                raise DamagedDataError(
+                    f"{self.path}: damaged store: {problem}", remedy=Remedy.reprocess_pairs
+                )
+
+    def _seals(self, pairs: np.ndarray) -> np.ndarray:
+        """The seals of the reflectance chunks of ``pairs`` (their written flags); 0 where
+        none is recorded, and everywhere when they cannot be read (:meth:`check` names the
+        chunk)."""
+        if not pairs.size:
+            return np.zeros(0, np.uint64)
+        try:
+            return np.asarray(self._array("written").get_orthogonal_selection(pairs), np.uint64)
+        except (ValueError, RuntimeError):
+            return np.zeros(pairs.size, np.uint64)
 
     def _decoded(self, pairs: int | slice) -> np.ndarray:
         """Reflectance of ``pairs``; a chunk that cannot be decoded is a damaged store."""
@@ -851,6 +914,22 @@ class BTFStore:
     def _drop_compressed(self) -> None:
         if COMPRESSED_GROUP in self._group:
             del self._group[COMPRESSED_GROUP]
+
+
+def _sealed_settings(
+    attrs: Mapping[str, Any],
+    light_dirs: np.ndarray,
+    view_dirs: np.ndarray,
+    wavelengths_nm: np.ndarray,
+) -> dict[str, object]:
+    """What defines a store's content, sealed at creation: its settings (``_SEALED_ATTRS``),
+    directions and bands."""
+    return {
+        **{name: attrs.get(name) for name in _SEALED_ATTRS},
+        "values of light_dirs": np.asarray(light_dirs, np.float64),
+        "values of view_dirs": np.asarray(view_dirs, np.float64),
+        "values of wavelengths": np.asarray(wavelengths_nm, np.float64),
+    }
 
 
 def _array_in(group: zarr.Group, name: str, path: Path) -> zarr.Array[Any]:

@@ -157,13 +157,13 @@ PROBES: list[tuple[list[str], int, str]] = [
     (
         ["process", "@OLD_CAPTURE", "--calibration", "@CAL", "--out", "@NEW_BTF"],
         2,
-        "old.capture.zarr: a capture store of schema version 0, expected 1 (written by another "
+        "old.capture.zarr: a capture store of schema version 0, expected 2 (written by another "
         "version of the software)",
     ),
     (
         ["process", "@UNVERSIONED_CAPTURE", "--calibration", "@CAL", "--out", "@NEW_BTF"],
         2,
-        "a capture store of schema version none recorded, expected 1",
+        "a capture store of schema version none recorded, expected 2",
     ),
     (
         ["process", "@EMPTY", "--calibration", "@CAL", "--out", "@NEW_BTF"],
@@ -224,7 +224,7 @@ PROBES: list[tuple[list[str], int, str]] = [
     (
         ["compress", "@OLD_BTF"],
         2,
-        "a BTF store of format version 1, expected 2 (written by another version of the "
+        "a BTF store of format version 1, expected 3 (written by another version of the "
         "software); spectwin process makes one",
     ),
     (["compress", "@DAMAGED_CHUNK_BTF"], 1, "pair 1: reflectance/c/1/0/0/0 is corrupt"),
@@ -253,8 +253,8 @@ PROBES: list[tuple[list[str], int, str]] = [
     (["store", "check", "@PLAIN"], 2, "is a file: expected a capture store or a BTF store"),
     (["store", "check", "@EMPTY"], 2, "is not a spectwin store"),
     (["store", "check", "@CAPTURE", "--bogus"], 2, "No such option: --bogus"),
-    (["store", "check", "@OLD_CAPTURE"], 2, "a capture store of schema version 0, expected 1"),
-    (["store", "check", "@UNVERSIONED_CAPTURE"], 2, "schema version none recorded, expected 1"),
+    (["store", "check", "@OLD_CAPTURE"], 2, "a capture store of schema version 0, expected 2"),
+    (["store", "check", "@UNVERSIONED_CAPTURE"], 2, "schema version none recorded, expected 2"),
     (["store", "check", "@OLD_BTF"], 2, "old.btf.zarr: a BTF store of format version 1, expected"),
     (["store", "nosuch"], 2, "No such command 'nosuch'"),
     # camchar

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import zarr
 
-from hwbridge.errors import DamagedDataError
+from hwbridge.errors import DamagedDataError, InputError
 from hwbridge.integrity import has_checksums
 from hwbridge.schema import SCHEMA_VERSION
 from hwbridge.session import SessionDevices, SessionSettings, run_session
@@ -240,14 +240,14 @@ def test_damaged_metadata_is_one_line_naming_the_file(store, node, what, damage)
 
 
 def _old_store(path):
-    """A store laid out as before checksums (with today's attributes): Zarr's default codecs,
+    """A store laid out as before checksums and seals (schema version 1): Zarr's default codecs,
     ``kind`` and ``status`` in one chunk per camera (the oldest layout), frames one chunk
     each."""
     group = zarr.open_group(str(path), mode="w-", zarr_format=3)
     plan = PLAN[:3]
     group.attrs.update(
         {
-            "schema_version": SCHEMA_VERSION,
+            "schema_version": 1,
             "rig": {},
             "backend": "sim",
             "seed": 1,
@@ -280,19 +280,12 @@ def _old_store(path):
     return path
 
 
-def test_a_store_made_before_checksums_opens_and_says_so(tmp_path, chunk_damage):
+def test_a_store_made_before_seals_is_refused_in_one_line(tmp_path):
     path = _old_store(tmp_path / "old.capture.zarr")
-    report = CaptureStore.open(path).check()
-    assert report.healthy and report.checksums == "no"
-    assert report.summary()["checksums"] == "no"
-    (path / "frames/k4/c/1/0/0").unlink()
-    chunk_damage["truncated"](path / "index/k4/kind/c/0")  # shared by every frame of the camera
-    report = CaptureStore.open(path).check()
-    assert [(p.key, p.problem, p.units) for p in report.problems] == [
-        ("index/k4/kind/c/0", "corrupt", (0, 1, 2)),
-        ("frames/k4/c/1/0/0", "missing", (1,)),
-    ]
-    assert "cannot be decoded" in report.problems[0].detail
+    with pytest.raises(InputError) as refused:
+        CaptureStore.open(path)
+    message = str(refused.value)
+    assert f"schema version 1, expected {SCHEMA_VERSION}" in message and "\n" not in message
 
 
 def test_the_report_serializes_for_json(store):

@@ -42,12 +42,14 @@ ARGS = [
 
 
 def _contents(store: CaptureStore) -> dict[str, dict[str, np.ndarray]]:
-    """Every camera's frames and index, but the wall-clock timestamps."""
+    """Every camera's frames and index, but the wall-clock timestamps and the seals (keyed by
+    each store's own identity)."""
     cameras = dict.fromkeys(step["camera"] for step in store.attrs["plan"])
     contents = {}
     for camera in cameras:
         index = store.index(camera)
         index.pop("timestamp")
+        index.pop("seal")
         contents[camera] = {"frames": store.frames(camera)[:], **index}
     return contents
 

@@ -42,7 +42,7 @@ def test_the_attributes_and_what_processing_adds_read_back_as_the_model(tmp_path
         store.set_attribute(name, value)
     metadata = BTFStore.open(store.path).metadata
     assert metadata == BTFAttrs.model_validate(store.attrs)
-    assert (metadata.format_version, metadata.rig, metadata.material) == (2, "dome", "lego")
+    assert (metadata.format_version, metadata.rig, metadata.material) == (3, "dome", "lego")
     assert metadata.dome_pairs == ((0, 12, "rgb00"), (0, 12, "rgb06"))
     assert metadata.band_shift_texels == {"0": (0.1, -0.2)} and metadata.rgb_source is None
     assert store.attrs["dome_pairs"] == added["dome_pairs"]  # stored as written (JSON)
