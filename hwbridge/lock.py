@@ -13,6 +13,10 @@ creates the store and then moves that very file into the store (:meth:`StoreLock
 hard link, refused if the store already has a lock file, so the lock is never free in between).
 Two creators of one store, or a creator and a resume, never run at once.
 
+A writer holds the same lock on the store folder itself, so that deleting the lock file (by hand,
+or by a tool that tidies hidden files) does not let a second writer in: the folder stays locked
+while its writer runs, and the refusal says that its lock file was deleted.
+
 Stale locks: the kernel drops a ``flock`` when the process holding it ends, however it ends, so a
 writer killed with SIGKILL leaves its lock file behind (still naming it) but not held. The next
 writer locks the file, notes the old owner (:attr:`StoreLock.stale_owner`: it ended without
@@ -132,7 +136,12 @@ def _busy(store: Path, lock_file: Path, creating: bool) -> StoreBusy:
             break
         time.sleep(0.01)
         owner = _read_owner(lock_file)
-    who = owner.describe() if owner else "another process (it has not written its name yet)"
+    if owner is not None:
+        who = owner.describe()
+    elif lock_file.exists():
+        who = "another process (it has not written its name yet)"
+    else:
+        who = f"another process (its lock file {lock_file.name} was deleted)"
     doing = "created" if creating else "written"
     return StoreBusy(
         f"{store} is being {doing} by {who}; one writer at a time: wait for it to end, or stop it"
@@ -148,6 +157,25 @@ def _same_file(fd: int, lock_file: Path) -> bool:
     return (on_disk.st_dev, on_disk.st_ino) == (held.st_dev, held.st_ino)
 
 
+def _locked(fd: int, folder: Path) -> bool:
+    """Whether the exclusive flock of ``fd`` (a lock file or store folder in ``folder``) was
+    taken; ``fd`` is closed when it was not (another open file holds it)."""
+    try:
+        _flock(fd)
+    except BlockingIOError:
+        os.close(fd)
+        return False
+    except OSError as error:
+        os.close(fd)
+        if error.errno in (errno.ENOLCK, errno.EOPNOTSUPP, errno.ENOSYS):
+            raise InputError(
+                f"{folder}: the filesystem does not support file locks (flock), so nothing can "
+                "make sure that only one process writes the store; use a local or NFSv4 folder"
+            ) from None
+        raise
+    return True
+
+
 def _try_lock(lock_file: Path) -> int | None:
     """An open descriptor of ``lock_file`` (created if missing) holding its exclusive flock, or
     ``None`` when another open file holds it."""
@@ -158,30 +186,26 @@ def _try_lock(lock_file: Path) -> int | None:
             raise InputError(
                 f"{lock_file}: cannot open the writer lock of the store ({error.strerror})"
             ) from None
-        try:
-            _flock(fd)
-        except BlockingIOError:
-            os.close(fd)
+        if not _locked(fd, lock_file.parent):
             return None
-        except OSError as error:
-            os.close(fd)
-            if error.errno in (errno.ENOLCK, errno.EOPNOTSUPP, errno.ENOSYS):
-                raise InputError(
-                    f"{lock_file.parent}: the filesystem does not support file locks (flock), "
-                    "so nothing can make sure that only one process writes the store; use a "
-                    "local or NFSv4 folder"
-                ) from None
-            raise
         if _same_file(fd, lock_file):
             return fd
         os.close(fd)  # its owner released and deleted it between our open and flock
     return None
 
 
+def _lock_folder(store: Path) -> int | None:
+    """An open descriptor of the store folder holding its exclusive flock, or ``None`` when
+    another open file holds it."""
+    fd = os.open(store, os.O_RDONLY | os.O_DIRECTORY)
+    return fd if _locked(fd, store) else None
+
+
 def _held_by_other(lock_file: Path) -> bool:
-    """Whether another open file holds ``lock_file``'s flock (without creating the file)."""
+    """Whether another open file holds the flock of ``lock_file`` (or of a store folder),
+    without creating the file."""
     try:
-        fd = os.open(lock_file, os.O_RDWR)
+        fd = os.open(lock_file, os.O_RDONLY)
     except FileNotFoundError:
         return False
     try:
@@ -226,6 +250,7 @@ class StoreLock:
         self.store = store
         self._file = lock_file
         self._fd: int | None = fd
+        self._folder_fd: int | None = None  # the store folder's flock, once the store exists
         self.stale_owner = _read_owner(lock_file)
         self.owner = LockOwner.current()
         os.ftruncate(fd, 0)
@@ -260,10 +285,15 @@ class StoreLock:
             what = "is a file" if store.exists() else "does not exist"
             raise InputError(f"{store} {what}: expected a store folder")
         lock_file = store / LOCK_NAME
-        fd = _try_lock(lock_file)
+        folder = _lock_folder(store)
+        fd = None if folder is None else _try_lock(lock_file)
         if fd is None:
+            if folder is not None:
+                os.close(folder)
             raise _busy(store, lock_file, creating=False)
-        return cls(store, lock_file, fd)
+        lock = cls(store, lock_file, fd)
+        lock._folder_fd = folder
+        return lock
 
     @classmethod
     def reserve(cls, store: str | Path) -> StoreLock:
@@ -296,24 +326,33 @@ class StoreLock:
 
         The file is hard-linked into the store, which is refused if the store has a lock file
         already (another writer took it meanwhile: :class:`StoreBusy`), then unlinked beside it;
-        the flock stays held throughout, the file being the same.
+        the flock stays held throughout, the file being the same. The store folder's own lock
+        is taken first.
         """
         inside = self.store / LOCK_NAME
         if self._file == inside:
             return
+        if self._folder_fd is None:
+            self._folder_fd = _lock_folder(self.store)
+            if self._folder_fd is None:
+                raise _busy(self.store, inside, creating=False)
         try:
             os.link(self._file, inside)
         except FileExistsError:
-            other = StoreLock._inside(self.store)  # a stale file is taken over, a held one refused
-            self._adopt(other)
+            fd = _try_lock(inside)  # a stale file is taken over, a held one refused
+            if fd is None:
+                raise _busy(self.store, inside, creating=False) from None
+            self._adopt(StoreLock(self.store, inside, fd))
             return
         os.unlink(self._file)
         self._file = inside
 
     def _adopt(self, other: StoreLock) -> None:
-        """Give up the reservation for ``other``, a lock of the store itself."""
+        """Give up the reservation for ``other``, a lock of the store's lock file (the folder's
+        lock stays held)."""
+        folder, self._folder_fd = self._folder_fd, None
         self.release()
-        self._file, self._fd = other._file, other._fd
+        self._file, self._fd, self._folder_fd = other._file, other._fd, folder
         self.stale_owner = other.stale_owner or self.stale_owner
         other._fd = None
 
@@ -328,12 +367,15 @@ class StoreLock:
         if self._fd is None:
             return
         fd, self._fd = self._fd, None
+        folder, self._folder_fd = self._folder_fd, None
         try:
             if _same_file(fd, self._file):
                 with contextlib.suppress(FileNotFoundError):
                     os.unlink(self._file)
         finally:
             os.close(fd)
+            if folder is not None:
+                os.close(folder)
 
     def __enter__(self) -> StoreLock:
         return self
@@ -361,14 +403,23 @@ def require_no_writer(store: str | Path) -> None:
     store = Path(store)
     if store.exists() and not store.is_dir():
         return
-    for lock_file in (store / LOCK_NAME, _reservation(store)):
-        if _held_by_other(lock_file):
-            raise _busy(store, lock_file, creating=lock_file != store / LOCK_NAME)
+    held = _held(store)
+    if held is not None:
+        raise _busy(store, held, creating=held != store / LOCK_NAME)
+
+
+def _held(store: Path) -> Path | None:
+    """The lock file of the writer that holds ``store`` (its folder or its lock file) or
+    reserves its name, ``None`` if none does."""
+    if _held_by_other(store) or _held_by_other(store / LOCK_NAME):
+        return store / LOCK_NAME
+    reservation = _reservation(store)
+    return reservation if _held_by_other(reservation) else None
 
 
 def _refuse_existing(store: Path) -> None:
     lock_file = store / LOCK_NAME
-    if _held_by_other(lock_file):
+    if _held_by_other(store) or _held_by_other(lock_file):
         raise _busy(store, lock_file, creating=False)
     raise InputError(
         f"{store} exists: expected a new store (nothing was overwritten)",
@@ -387,8 +438,5 @@ def _remove_stale(reservation: Path) -> None:
 
 def lock_owner(store: str | Path) -> LockOwner | None:
     """The writer holding ``store``'s lock (or reserving its name) now, ``None`` if none."""
-    store = Path(store)
-    for lock_file in (store / LOCK_NAME, _reservation(store)):
-        if _held_by_other(lock_file):
-            return _read_owner(lock_file) or LockOwner(-1, "?", "?")
-    return None
+    held = _held(Path(store))
+    return None if held is None else _read_owner(held) or LockOwner(-1, "?", "?")

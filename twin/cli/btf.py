@@ -92,7 +92,7 @@ def import_(
 
     if out.exists():
         fail(f"--out {out}: exists; expected a new BTF store path (nothing was overwritten)")
-    require_output_folder(out.parent)
+    require_output_folder(out)
     rgb = is_rgb_source(source) and not (source / INDEX_NAME).is_file()
     if rgb:
         btf = import_rgb_images(
