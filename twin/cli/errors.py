@@ -34,6 +34,7 @@ from __future__ import annotations
 import errno
 import inspect
 import os
+import shutil
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -57,7 +58,9 @@ __all__ = [
     "USAGE",
     "SpectwinGroup",
     "fail",
+    "interrupted",
     "one_line",
+    "remove_if_interrupted",
     "require_output_file",
     "require_output_folder",
     "run_failed",
@@ -113,6 +116,35 @@ def fail(message: object, code: int = USAGE) -> NoReturn:
 def run_failed(message: object) -> NoReturn:
     """A run that failed (exit code 1)."""
     fail(message, RUN_FAILED)
+
+
+def interrupted(message: object) -> NoReturn:
+    """A run stopped by Ctrl-C: print ``interrupted: message`` (what is left and how to
+    continue, one line) to stderr and exit with :data:`INTERRUPTED`."""
+    typer.echo(f"interrupted: {one_line(message)}", err=True)
+    raise typer.Exit(INTERRUPTED)
+
+
+def remove_if_interrupted(ctx: Any, out: Path) -> None:
+    """Have a Ctrl-C that stops the command delete the output ``out`` it writes and say that
+    nothing was written. ``out`` is new or an empty folder now, so that what is in it then is the
+    command's own; a folder the user filled is left alone (the command refuses it)."""
+    if out.is_dir() and any(out.iterdir()):
+        return
+    was_folder = out.is_dir()
+
+    def report() -> NoReturn:
+        if was_folder:
+            for path in out.iterdir():
+                if path.is_dir():
+                    shutil.rmtree(path)
+                else:
+                    path.unlink()
+        elif out.exists():
+            shutil.rmtree(out)
+        interrupted(f"nothing was written to {out}; run the same command again")
+
+    ctx.meta[INTERRUPT_REPORT] = report
 
 
 def require_output_folder(path: Path, option: str = "--out") -> None:
