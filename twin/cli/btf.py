@@ -93,9 +93,9 @@ def import_(
     from recon.btf.exchange import INDEX_NAME, import_exr_slices
     from recon.btf.rgb_import import DIRECTION_TABLE, import_rgb_images, is_rgb_source, rgb_source
 
+    require_output_folder(out)
     if out.exists():
         fail(f"--out {out}: exists; expected a new BTF store path (nothing was overwritten)")
-    require_output_folder(out)
     remove_if_interrupted(ctx, out)
     rgb = is_rgb_source(source) and not (source / INDEX_NAME).is_file()
     if rgb:

@@ -167,7 +167,7 @@ def require_output_file(path: Path, option: str = "--out") -> None:
     _require_writable(path, option)
 
 
-def _shown(path: Path) -> str:
+def _shown(path: object) -> str:
     """``path`` as a message shows it: a path of thousands of characters is shortened."""
     text = str(path)
     return text if len(text) <= 160 else f"{text[:80]}...{text[-60:]}"
@@ -252,7 +252,7 @@ _OS_RUN_ERRORS: dict[int, str] = {
 def _os_error_line(error: OSError) -> str:
     """``<path>: <the system's words>`` (or the words alone where no path is known)."""
     words = error.strerror or str(error)
-    return f"{error.filename}: {words}" if error.filename is not None else words
+    return f"{_shown(error.filename)}: {words}" if error.filename is not None else words
 
 
 def _advised(message: object, advice: str | None) -> str:
