@@ -32,7 +32,7 @@ from recon.btf.exchange import export_btf
 from recon.btf.store import BTFStore
 from tests.e2e.test_cli_bad_input import SCENES, make_inputs
 from twin.cli.app import app
-from twin.cli.errors import INTERRUPTED, SpectwinGroup
+from twin.cli.errors import INTERRUPTED, SpectwinGroup, require_output_file
 
 runner = CliRunner()
 ROOT = Path(__file__).resolve().parents[2]
@@ -383,3 +383,34 @@ def test_long_pair_lists_are_runs(pairs, text):
     from twin.output_format import format_pairs
 
     assert format_pairs(list(pairs)) == text
+
+
+def _writing(path: str) -> typer.Typer:
+    """A command group of one command that writes ``path``, with the errors of ``spectwin``."""
+    group = typer.Typer(cls=SpectwinGroup)
+
+    @group.command()
+    def write() -> None:
+        require_output_file(Path(path))
+        Path(path).write_text("x" * 65536)
+
+    @group.command()
+    def other() -> None:
+        """Keeps the group a group (a lone command would become the program itself)."""
+
+    return group
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="no /dev/full on this system")
+def test_a_full_disk_fails_the_run_in_one_line():
+    result = runner.invoke(_writing("/dev/full"), ["write"])
+    assert result.exit_code == 1
+    assert result.stderr.splitlines() == [
+        "error: No space left on device (writing --out /dev/full); free space on it"
+    ]
+
+
+def test_other_os_errors_keep_their_traceback(tmp_path):
+    """A path that is not there (the command did not check it): a bug, not hidden."""
+    result = runner.invoke(_writing(str(tmp_path / "absent" / "file")), ["write"])
+    assert isinstance(result.exception, FileNotFoundError)

@@ -35,6 +35,7 @@ import errno
 import inspect
 import os
 import shutil
+from contextvars import ContextVar
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -154,6 +155,7 @@ def require_output_folder(path: Path, option: str = "--out") -> None:
     if path.exists() and not path.is_dir():
         fail(f"{option} {path}: is a file; expected a folder (new or existing)")
     _require_writable(path, option)
+    _OUTPUT.set(f"{option} {path}")
 
 
 def require_output_file(path: Path, option: str = "--out") -> None:
@@ -165,6 +167,12 @@ def require_output_file(path: Path, option: str = "--out") -> None:
     if path.is_dir():
         fail(f"{option} {path}: is a folder; expected a file name")
     _require_writable(path, option)
+    _OUTPUT.set(f"{option} {path}")
+
+
+_OUTPUT: ContextVar[str | None] = ContextVar("spectwin_output", default=None)
+"""The output location the running command checked last (``--out PATH``): what a full disk
+is named by when the system's error names no file."""
 
 
 def _shown(path: object) -> str:
@@ -250,9 +258,13 @@ _OS_RUN_ERRORS: dict[int, str] = {
 
 
 def _os_error_line(error: OSError) -> str:
-    """``<path>: <the system's words>`` (or the words alone where no path is known)."""
+    """``<path>: <the system's words>``: the error's file, else the command's output (writing
+    to an open file names none), else the words alone."""
     words = error.strerror or str(error)
-    return f"{_shown(error.filename)}: {words}" if error.filename is not None else words
+    if error.filename is not None:
+        return f"{_shown(error.filename)}: {words}"
+    output = _OUTPUT.get()
+    return f"{words} (writing {_shown(output)})" if output is not None else words
 
 
 def _advised(message: object, advice: str | None) -> str:
@@ -302,6 +314,7 @@ class SpectwinGroup(TyperGroup):
             _usage_error(error)
 
     def invoke(self, ctx: Any) -> Any:
+        _OUTPUT.set(None)
         try:
             return super().invoke(ctx)
         except typer.TyperException as error:
