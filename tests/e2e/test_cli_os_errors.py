@@ -64,6 +64,7 @@ PROBES: list[tuple[list[str], int, str]] = [
         2,
         "expected at most 4095",
     ),
+    (["smoke", "--out", "@PLAIN/sub"], 2, "plain.txt is a file, not a folder"),
     # calibration files of the other rig, whole or truncated
     (
         ["process", "@CAPTURE", "--calibration", "@DOME_NPZ", "--out", "@RW/a.btf.zarr"],

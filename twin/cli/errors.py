@@ -126,7 +126,7 @@ def interrupted(message: object) -> NoReturn:
     raise typer.Exit(INTERRUPTED)
 
 
-def remove_if_interrupted(ctx: Any, out: Path) -> None:
+def remove_if_interrupted(ctx: typer.Context, out: Path) -> None:
     """Have a Ctrl-C that stops the command delete the output ``out`` it writes and say that
     nothing was written. ``out`` is new or an empty folder now, so that what is in it then is the
     command's own; a folder the user filled is left alone (the command refuses it)."""
@@ -182,12 +182,13 @@ def _shown(path: object) -> str:
 
 
 def _existing_above(path: Path) -> Path:
-    """The nearest folder above ``path`` that exists (``path`` made absolute)."""
-    for folder in path.parents:
+    """The nearest path above the absolute ``path`` that exists (a folder, unless the user
+    named a path below a file)."""
+    for above in path.parents:
         try:
-            if folder.exists():
-                return folder
-        except OSError:  # a folder whose own name is too long to look up
+            if above.exists():
+                return above
+        except OSError:  # a name too long to look up
             continue
     return Path(path.anchor)
 
@@ -223,12 +224,10 @@ def _require_short_names(path: Path, option: str) -> None:
 def _require_writable(path: Path, option: str) -> None:
     """Refuse ``path`` when the folders above it hold a file, or when ``path`` (if it exists)
     or the nearest folder above it that exists cannot be written."""
-    for parent in path.parents:
-        if parent.exists():
-            if not parent.is_dir():
-                fail(f"{option} {path}: {parent} is a file, not a folder")
-            break
-    target = path if path.exists() else _existing_above(Path(os.path.abspath(path)))
+    above = _existing_above(Path(os.path.abspath(path)))
+    if not above.is_dir():
+        fail(f"{option} {path}: {above} is a file, not a folder")
+    target = path if path.exists() else above
     access = os.W_OK | (os.X_OK if target.is_dir() else 0)
     if not os.access(target, access, effective_ids=os.access in os.supports_effective_ids):
         fail(
@@ -239,11 +238,13 @@ def _require_writable(path: Path, option: str) -> None:
 
 _RUN_ERRORS = (DataError, DeviceError, StoreBusy)
 
+_PERMITTED = "expected a file or folder this user may read (and, for an output, write)"
+
 _OS_INPUT_ERRORS: dict[int, str] = {
-    errno.EACCES: "expected a file or folder this user may read (and, for an output, write)",
-    errno.EPERM: "expected a file or folder this user may read (and, for an output, write)",
+    errno.EACCES: _PERMITTED,
+    errno.EPERM: _PERMITTED,
     errno.EROFS: "expected an output on a writable filesystem",
-    errno.ENAMETOOLONG: "expected shorter names (at most 255 bytes, 4095 for a path)",
+    errno.ENAMETOOLONG: "expected names and a path within the filesystem's limits",
     errno.ELOOP: "expected a path without a loop of symbolic links",
 }
 """Errors of the operating system that mean a wrong input or output location (exit 2), and
