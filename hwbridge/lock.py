@@ -157,25 +157,6 @@ def _same_file(fd: int, lock_file: Path) -> bool:
     return (on_disk.st_dev, on_disk.st_ino) == (held.st_dev, held.st_ino)
 
 
-def _locked(fd: int, folder: Path) -> bool:
-    """Whether the exclusive flock of ``fd`` (a lock file or store folder in ``folder``) was
-    taken; ``fd`` is closed when it was not (another open file holds it)."""
-    try:
-        _flock(fd)
-    except BlockingIOError:
-        os.close(fd)
-        return False
-    except OSError as error:
-        os.close(fd)
-        if error.errno in (errno.ENOLCK, errno.EOPNOTSUPP, errno.ENOSYS):
-            raise InputError(
-                f"{folder}: the filesystem does not support file locks (flock), so nothing can "
-                "make sure that only one process writes the store; use a local or NFSv4 folder"
-            ) from None
-        raise
-    return True
-
-
 def _try_lock(lock_file: Path) -> int | None:
     """An open descriptor of ``lock_file`` (created if missing) holding its exclusive flock, or
     ``None`` when another open file holds it."""
@@ -186,32 +167,73 @@ def _try_lock(lock_file: Path) -> int | None:
             raise InputError(
                 f"{lock_file}: cannot open the writer lock of the store ({error.strerror})"
             ) from None
-        if not _locked(fd, lock_file.parent):
+        try:
+            _flock(fd)
+        except BlockingIOError:
+            os.close(fd)
             return None
+        except OSError as error:
+            os.close(fd)
+            if error.errno in (errno.ENOLCK, errno.EOPNOTSUPP, errno.ENOSYS):
+                raise InputError(
+                    f"{lock_file.parent}: the filesystem does not support file locks (flock), "
+                    "so nothing can make sure that only one process writes the store; use a "
+                    "local or NFSv4 folder"
+                ) from None
+            raise
         if _same_file(fd, lock_file):
             return fd
         os.close(fd)  # its owner released and deleted it between our open and flock
     return None
 
 
+_NO_FOLDER_LOCKS = (errno.EBADF, errno.ENOLCK, errno.EOPNOTSUPP, errno.ENOSYS)
+"""A folder that cannot be locked (NFS turns flock into byte-range locks, which need a file open
+for writing): the lock file alone guards its store."""
+
+_UNLOCKED_FOLDER = -1
+"""What :func:`_lock_folder` returns for a folder that cannot be locked."""
+
+
 def _lock_folder(store: Path) -> int | None:
-    """An open descriptor of the store folder holding its exclusive flock, or ``None`` when
-    another open file holds it."""
+    """An open descriptor of the store folder holding its exclusive flock, ``None`` when another
+    open file holds it, :data:`_UNLOCKED_FOLDER` where the filesystem cannot lock folders."""
     fd = os.open(store, os.O_RDONLY | os.O_DIRECTORY)
-    return fd if _locked(fd, store) else None
+    try:
+        _flock(fd)
+    except BlockingIOError:
+        os.close(fd)
+        return None
+    except OSError as error:
+        os.close(fd)
+        if error.errno in _NO_FOLDER_LOCKS:
+            return _UNLOCKED_FOLDER
+        raise
+    return fd
+
+
+def _unlock_folder(fd: int | None) -> None:
+    """Drop the folder's lock taken by :func:`_lock_folder` (if any)."""
+    if fd is not None and fd != _UNLOCKED_FOLDER:
+        os.close(fd)
 
 
 def _held_by_other(lock_file: Path) -> bool:
     """Whether another open file holds the flock of ``lock_file`` (or of a store folder),
     without creating the file."""
+    folder = lock_file.is_dir()
     try:
-        fd = os.open(lock_file, os.O_RDONLY)
+        fd = os.open(lock_file, os.O_RDONLY if folder else os.O_RDWR)
     except FileNotFoundError:
         return False
     try:
         _flock(fd)
     except BlockingIOError:
         return True
+    except OSError as error:
+        if folder and error.errno in _NO_FOLDER_LOCKS:
+            return False  # the lock file alone guards the store
+        raise
     finally:
         os.close(fd)  # closing drops a flock we took
     return False
@@ -288,8 +310,7 @@ class StoreLock:
         folder = _lock_folder(store)
         fd = None if folder is None else _try_lock(lock_file)
         if fd is None:
-            if folder is not None:
-                os.close(folder)
+            _unlock_folder(folder)
             raise _busy(store, lock_file, creating=False)
         lock = cls(store, lock_file, fd)
         lock._folder_fd = folder
@@ -374,8 +395,7 @@ class StoreLock:
                     os.unlink(self._file)
         finally:
             os.close(fd)
-            if folder is not None:
-                os.close(folder)
+            _unlock_folder(folder)
 
     def __enter__(self) -> StoreLock:
         return self
