@@ -157,6 +157,23 @@ def _same_file(fd: int, lock_file: Path) -> bool:
     return (on_disk.st_dev, on_disk.st_ino) == (held.st_dev, held.st_ino)
 
 
+def _take(fd: int, unsupported: tuple[int, ...]) -> bool | None:
+    """Take the exclusive flock of the open ``fd``: ``True``; ``False`` when another open file
+    holds it; ``None`` where the filesystem cannot lock it (an errno in ``unsupported``). The
+    descriptor is closed unless the lock was taken."""
+    try:
+        _flock(fd)
+    except BlockingIOError:
+        os.close(fd)
+        return False
+    except OSError as error:
+        os.close(fd)
+        if error.errno in unsupported:
+            return None
+        raise
+    return True
+
+
 def _try_lock(lock_file: Path) -> int | None:
     """An open descriptor of ``lock_file`` (created if missing) holding its exclusive flock, or
     ``None`` when another open file holds it."""
@@ -167,20 +184,15 @@ def _try_lock(lock_file: Path) -> int | None:
             raise InputError(
                 f"{lock_file}: cannot open the writer lock of the store ({error.strerror})"
             ) from None
-        try:
-            _flock(fd)
-        except BlockingIOError:
-            os.close(fd)
+        taken = _take(fd, (errno.ENOLCK, errno.EOPNOTSUPP, errno.ENOSYS))
+        if taken is None:
+            raise InputError(
+                f"{lock_file.parent}: the filesystem does not support file locks (flock), so "
+                "nothing can make sure that only one process writes the store; use a local or "
+                "NFSv4 folder"
+            )
+        if not taken:
             return None
-        except OSError as error:
-            os.close(fd)
-            if error.errno in (errno.ENOLCK, errno.EOPNOTSUPP, errno.ENOSYS):
-                raise InputError(
-                    f"{lock_file.parent}: the filesystem does not support file locks (flock), "
-                    "so nothing can make sure that only one process writes the store; use a "
-                    "local or NFSv4 folder"
-                ) from None
-            raise
         if _same_file(fd, lock_file):
             return fd
         os.close(fd)  # its owner released and deleted it between our open and flock
@@ -199,17 +211,10 @@ def _lock_folder(store: Path) -> int | None:
     """An open descriptor of the store folder holding its exclusive flock, ``None`` when another
     open file holds it, :data:`_UNLOCKED_FOLDER` where the filesystem cannot lock folders."""
     fd = os.open(store, os.O_RDONLY | os.O_DIRECTORY)
-    try:
-        _flock(fd)
-    except BlockingIOError:
-        os.close(fd)
-        return None
-    except OSError as error:
-        os.close(fd)
-        if error.errno in _NO_FOLDER_LOCKS:
-            return _UNLOCKED_FOLDER
-        raise
-    return fd
+    taken = _take(fd, _NO_FOLDER_LOCKS)
+    if taken is None:
+        return _UNLOCKED_FOLDER
+    return fd if taken else None
 
 
 def _unlock_folder(fd: int | None) -> None:
