@@ -13,6 +13,10 @@ creates the store and then moves that very file into the store (:meth:`StoreLock
 hard link, refused if the store already has a lock file, so the lock is never free in between).
 Two creators of one store, or a creator and a resume, never run at once.
 
+A writer holds the same lock on the store folder itself, so that deleting the lock file (by hand,
+or by a tool that tidies hidden files) does not let a second writer in: the folder stays locked
+while its writer runs, and the refusal says that its lock file was deleted.
+
 Stale locks: the kernel drops a ``flock`` when the process holding it ends, however it ends, so a
 writer killed with SIGKILL leaves its lock file behind (still naming it) but not held. The next
 writer locks the file, notes the old owner (:attr:`StoreLock.stale_owner`: it ended without
@@ -132,7 +136,12 @@ def _busy(store: Path, lock_file: Path, creating: bool) -> StoreBusy:
             break
         time.sleep(0.01)
         owner = _read_owner(lock_file)
-    who = owner.describe() if owner else "another process (it has not written its name yet)"
+    if owner is not None:
+        who = owner.describe()
+    elif lock_file.exists():
+        who = "another process (it has not written its name yet)"
+    else:
+        who = f"another process (its lock file {lock_file.name} was deleted)"
     doing = "created" if creating else "written"
     return StoreBusy(
         f"{store} is being {doing} by {who}; one writer at a time: wait for it to end, or stop it"
@@ -148,6 +157,23 @@ def _same_file(fd: int, lock_file: Path) -> bool:
     return (on_disk.st_dev, on_disk.st_ino) == (held.st_dev, held.st_ino)
 
 
+def _take(fd: int, unsupported: tuple[int, ...]) -> bool | None:
+    """Take the exclusive flock of the open ``fd``: ``True``; ``False`` when another open file
+    holds it; ``None`` where the filesystem cannot lock it (an errno in ``unsupported``). The
+    descriptor is closed unless the lock was taken."""
+    try:
+        _flock(fd)
+    except BlockingIOError:
+        os.close(fd)
+        return False
+    except OSError as error:
+        os.close(fd)
+        if error.errno in unsupported:
+            return None
+        raise
+    return True
+
+
 def _try_lock(lock_file: Path) -> int | None:
     """An open descriptor of ``lock_file`` (created if missing) holding its exclusive flock, or
     ``None`` when another open file holds it."""
@@ -158,36 +184,61 @@ def _try_lock(lock_file: Path) -> int | None:
             raise InputError(
                 f"{lock_file}: cannot open the writer lock of the store ({error.strerror})"
             ) from None
-        try:
-            _flock(fd)
-        except BlockingIOError:
-            os.close(fd)
+        taken = _take(fd, (errno.ENOLCK, errno.EOPNOTSUPP, errno.ENOSYS))
+        if taken is None:
+            raise InputError(
+                f"{lock_file.parent}: the filesystem does not support file locks (flock), so "
+                "nothing can make sure that only one process writes the store; use a local or "
+                "NFSv4 folder"
+            )
+        if not taken:
             return None
-        except OSError as error:
-            os.close(fd)
-            if error.errno in (errno.ENOLCK, errno.EOPNOTSUPP, errno.ENOSYS):
-                raise InputError(
-                    f"{lock_file.parent}: the filesystem does not support file locks (flock), "
-                    "so nothing can make sure that only one process writes the store; use a "
-                    "local or NFSv4 folder"
-                ) from None
-            raise
         if _same_file(fd, lock_file):
             return fd
         os.close(fd)  # its owner released and deleted it between our open and flock
     return None
 
 
+_NO_FOLDER_LOCKS = (errno.EBADF, errno.ENOLCK, errno.EOPNOTSUPP, errno.ENOSYS)
+"""A folder that cannot be locked (NFS turns flock into byte-range locks, which need a file open
+for writing): the lock file alone guards its store."""
+
+_UNLOCKED_FOLDER = -1
+"""What :func:`_lock_folder` returns for a folder that cannot be locked."""
+
+
+def _lock_folder(store: Path) -> int | None:
+    """An open descriptor of the store folder holding its exclusive flock, ``None`` when another
+    open file holds it, :data:`_UNLOCKED_FOLDER` where the filesystem cannot lock folders."""
+    fd = os.open(store, os.O_RDONLY | os.O_DIRECTORY)
+    taken = _take(fd, _NO_FOLDER_LOCKS)
+    if taken is None:
+        return _UNLOCKED_FOLDER
+    return fd if taken else None
+
+
+def _unlock_folder(fd: int | None) -> None:
+    """Drop the folder's lock taken by :func:`_lock_folder` (if any)."""
+    if fd is not None and fd != _UNLOCKED_FOLDER:
+        os.close(fd)
+
+
 def _held_by_other(lock_file: Path) -> bool:
-    """Whether another open file holds ``lock_file``'s flock (without creating the file)."""
+    """Whether another open file holds the flock of ``lock_file`` (or of a store folder),
+    without creating the file."""
+    folder = lock_file.is_dir()
     try:
-        fd = os.open(lock_file, os.O_RDWR)
+        fd = os.open(lock_file, os.O_RDONLY if folder else os.O_RDWR)
     except FileNotFoundError:
         return False
     try:
         _flock(fd)
     except BlockingIOError:
         return True
+    except OSError as error:
+        if folder and error.errno in _NO_FOLDER_LOCKS:
+            return False  # the lock file alone guards the store
+        raise
     finally:
         os.close(fd)  # closing drops a flock we took
     return False
@@ -226,6 +277,7 @@ class StoreLock:
         self.store = store
         self._file = lock_file
         self._fd: int | None = fd
+        self._folder_fd: int | None = None  # the store folder's flock, once the store exists
         self.stale_owner = _read_owner(lock_file)
         self.owner = LockOwner.current()
         os.ftruncate(fd, 0)
@@ -260,10 +312,14 @@ class StoreLock:
             what = "is a file" if store.exists() else "does not exist"
             raise InputError(f"{store} {what}: expected a store folder")
         lock_file = store / LOCK_NAME
-        fd = _try_lock(lock_file)
+        folder = _lock_folder(store)
+        fd = None if folder is None else _try_lock(lock_file)
         if fd is None:
+            _unlock_folder(folder)
             raise _busy(store, lock_file, creating=False)
-        return cls(store, lock_file, fd)
+        lock = cls(store, lock_file, fd)
+        lock._folder_fd = folder
+        return lock
 
     @classmethod
     def reserve(cls, store: str | Path) -> StoreLock:
@@ -296,24 +352,33 @@ class StoreLock:
 
         The file is hard-linked into the store, which is refused if the store has a lock file
         already (another writer took it meanwhile: :class:`StoreBusy`), then unlinked beside it;
-        the flock stays held throughout, the file being the same.
+        the flock stays held throughout, the file being the same. The store folder's own lock
+        is taken first.
         """
         inside = self.store / LOCK_NAME
         if self._file == inside:
             return
+        if self._folder_fd is None:
+            self._folder_fd = _lock_folder(self.store)
+            if self._folder_fd is None:
+                raise _busy(self.store, inside, creating=False)
         try:
             os.link(self._file, inside)
         except FileExistsError:
-            other = StoreLock._inside(self.store)  # a stale file is taken over, a held one refused
-            self._adopt(other)
+            fd = _try_lock(inside)  # a stale file is taken over, a held one refused
+            if fd is None:
+                raise _busy(self.store, inside, creating=False) from None
+            self._adopt(StoreLock(self.store, inside, fd))
             return
         os.unlink(self._file)
         self._file = inside
 
     def _adopt(self, other: StoreLock) -> None:
-        """Give up the reservation for ``other``, a lock of the store itself."""
+        """Give up the reservation for ``other``, a lock of the store's lock file (the folder's
+        lock stays held)."""
+        folder, self._folder_fd = self._folder_fd, None
         self.release()
-        self._file, self._fd = other._file, other._fd
+        self._file, self._fd, self._folder_fd = other._file, other._fd, folder
         self.stale_owner = other.stale_owner or self.stale_owner
         other._fd = None
 
@@ -328,12 +393,14 @@ class StoreLock:
         if self._fd is None:
             return
         fd, self._fd = self._fd, None
+        folder, self._folder_fd = self._folder_fd, None
         try:
             if _same_file(fd, self._file):
                 with contextlib.suppress(FileNotFoundError):
                     os.unlink(self._file)
         finally:
             os.close(fd)
+            _unlock_folder(folder)
 
     def __enter__(self) -> StoreLock:
         return self
@@ -361,14 +428,23 @@ def require_no_writer(store: str | Path) -> None:
     store = Path(store)
     if store.exists() and not store.is_dir():
         return
-    for lock_file in (store / LOCK_NAME, _reservation(store)):
-        if _held_by_other(lock_file):
-            raise _busy(store, lock_file, creating=lock_file != store / LOCK_NAME)
+    held = _held(store)
+    if held is not None:
+        raise _busy(store, held, creating=held != store / LOCK_NAME)
+
+
+def _held(store: Path) -> Path | None:
+    """The lock file of the writer that holds ``store`` (its folder or its lock file) or
+    reserves its name, ``None`` if none does."""
+    if _held_by_other(store) or _held_by_other(store / LOCK_NAME):
+        return store / LOCK_NAME
+    reservation = _reservation(store)
+    return reservation if _held_by_other(reservation) else None
 
 
 def _refuse_existing(store: Path) -> None:
     lock_file = store / LOCK_NAME
-    if _held_by_other(lock_file):
+    if _held_by_other(store) or _held_by_other(lock_file):
         raise _busy(store, lock_file, creating=False)
     raise InputError(
         f"{store} exists: expected a new store (nothing was overwritten)",
@@ -387,8 +463,5 @@ def _remove_stale(reservation: Path) -> None:
 
 def lock_owner(store: str | Path) -> LockOwner | None:
     """The writer holding ``store``'s lock (or reserving its name) now, ``None`` if none."""
-    store = Path(store)
-    for lock_file in (store / LOCK_NAME, _reservation(store)):
-        if _held_by_other(lock_file):
-            return _read_owner(lock_file) or LockOwner(-1, "?", "?")
-    return None
+    held = _held(Path(store))
+    return None if held is None else _read_owner(held) or LockOwner(-1, "?", "?")

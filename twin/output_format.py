@@ -14,7 +14,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["SIGNIFICANT_DIGITS", "dumps", "format_value", "quantity"]
+__all__ = ["SIGNIFICANT_DIGITS", "dumps", "format_pairs", "format_value", "quantity"]
 
 
 def _plain(value):
@@ -86,6 +86,35 @@ def _number(value: float) -> str:
         # .4g writes 12345.6 as 1.235e+04: keep whole numbers whole.
         return f"{value:.0f}" if "e" in text else text
     return f"{value:.{SIGNIFICANT_DIGITS - 1}e}"
+
+
+def format_pairs(pairs: Sequence[int]) -> str:
+    """Direction pairs (or any indices) as runs of consecutive numbers.
+
+    Parameters
+    ----------
+    pairs
+        Indices, in any order; repeated ones count once.
+
+    Returns
+    -------
+    str
+        Their count and runs, ``"156 pairs: 0-155"``, ``"4 pairs: 1, 3-5"``, ``"1 pair: 7"``.
+
+    Examples
+    --------
+    >>> format_pairs([5, 3, 4, 1, 9, 10])
+    '6 pairs: 1, 3-5, 9-10'
+    """
+    runs: list[list[int]] = []
+    for pair in sorted(set(pairs)):
+        if runs and pair == runs[-1][1] + 1:
+            runs[-1][1] = pair
+        else:
+            runs.append([pair, pair])
+    count = sum(last - first + 1 for first, last in runs)
+    shown = ", ".join(str(first) if first == last else f"{first}-{last}" for first, last in runs)
+    return f"{count} pair{'' if count == 1 else 's'}: {shown}"
 
 
 def format_value(value: object) -> str:

@@ -204,6 +204,12 @@ class GonioCalibration:
         path = Path(path)
         try:
             document = json.loads(path.read_text())
+        except UnicodeDecodeError:
+            raise InputError(
+                f"{path}: not a readable calibration file (binary, not JSON text); expected the "
+                "JSON calibration of the gonioreflectometer",
+                remedy=Remedy.calibrate,
+            ) from None
         except (OSError, json.JSONDecodeError) as error:
             raise InputError(f"{path}: not a readable calibration file ({error})") from None
         if not isinstance(document, dict) or document.get("format") != _FORMAT:

@@ -12,7 +12,14 @@ from pathlib import Path
 import pytest
 
 from hwbridge.errors import InputError, Remedy, StoreBusy
-from hwbridge.lock import LOCK_NAME, LockOwner, StoreLock, lock_owner, require_new_store
+from hwbridge.lock import (
+    LOCK_NAME,
+    LockOwner,
+    StoreLock,
+    lock_owner,
+    require_new_store,
+    require_no_writer,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 HOLDER = """
@@ -172,13 +179,18 @@ def test_locking_a_file_or_a_missing_folder_is_refused(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["plain.txt"]
 
 
-def test_release_leaves_a_lock_file_that_is_not_its_own(tmp_path):
+def test_a_deleted_lock_file_keeps_the_second_writer_out(tmp_path):
+    """The writer holds the store folder's lock too: deleting its lock file lets no one in."""
     store = tmp_path / "g.zarr"
     store.mkdir()
     lock = StoreLock.acquire(store)
     (store / LOCK_NAME).unlink()  # someone deleted it by hand ...
-    successor = StoreLock.acquire(store)  # ... so another writer got in
+    with pytest.raises(StoreBusy, match=r"its lock file \.writer\.lock was deleted"):
+        StoreLock.acquire(store)  # ... and the next writer is still refused
+    with pytest.raises(StoreBusy):
+        require_no_writer(store)
+    assert lock_owner(store) is not None
     lock.release()
-    assert (store / LOCK_NAME).exists() and successor.held
+    successor = StoreLock.acquire(store)
     successor.release()
-    assert not (store / LOCK_NAME).exists()
+    assert not (store / LOCK_NAME).exists() and lock_owner(store) is None

@@ -17,7 +17,13 @@ from twin.cli.camera import register as register_camera
 from twin.cli.capture import register as register_capture
 from twin.cli.choices import Chart, Light, RGBCamera
 from twin.cli.dome import register as register_dome
-from twin.cli.errors import SpectwinGroup, require_output_folder, run_failed
+from twin.cli.errors import (
+    INTERRUPT_REPORT,
+    SpectwinGroup,
+    interrupted,
+    require_output_folder,
+    run_failed,
+)
 from twin.cli.frames import register as register_frames
 from twin.cli.lab import register as register_lab
 from twin.cli.material import register as register_material
@@ -233,6 +239,7 @@ def spectralize_study(
 
 @app.command()
 def demo(
+    ctx: typer.Context,
     out: Annotated[
         Path, typer.Option(help="Folder for stores, PNGs, metrics.json, report.html.")
     ] = Path("out/demo"),
@@ -248,8 +255,18 @@ def demo(
     from twin.studies.demo import run_demo
 
     require_output_folder(out)
+    stages = ["preparation"]
+    ctx.meta[INTERRUPT_REPORT] = lambda: interrupted(
+        f"in the demo's {stages[-1]}: {out} holds a part of the demo and no report; run the "
+        "same command again to start it over"
+    )
     with console.status("demo") as status:
-        metrics = run_demo(out, step=lambda name: status.update(f"demo: {name}"))
+
+        def step(name: str) -> None:
+            stages.append(name)
+            status.update(f"demo: {name}")
+
+        metrics = run_demo(out, step=step)
     print_summary(metrics["headline"], "spectwin demo", as_json)
     if not as_json:
         console.print(f"report: {out / 'report.html'}")

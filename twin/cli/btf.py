@@ -10,7 +10,7 @@ from typing import Annotated
 
 import typer
 
-from twin.cli.errors import SpectwinGroup, fail, require_output_folder
+from twin.cli.errors import SpectwinGroup, fail, remove_if_interrupted, require_output_folder
 from twin.cli.output import JsonFlag, print_summary
 from twin.cli.store import require_sound_btf
 
@@ -26,6 +26,7 @@ btf_app = typer.Typer(
 
 @btf_app.command("export")
 def export(
+    ctx: typer.Context,
     store: Annotated[Path, typer.Argument(help="A complete BTF store (.btf.zarr).")],
     out: Annotated[Path, typer.Option(help="New or empty folder for the slices.")],
     as_json: JsonFlag = False,
@@ -42,6 +43,7 @@ def export(
     require_output_folder(out)
     require_sound_btf(store, "export")
     btf = BTFStore.open(store)
+    remove_if_interrupted(ctx, out)
     index = export_btf(btf, out, progress=not as_json)
     summary = {
         "pairs": btf.n_pairs,
@@ -54,6 +56,7 @@ def export(
 
 @btf_app.command("import")
 def import_(
+    ctx: typer.Context,
     source: Annotated[
         Path,
         typer.Argument(
@@ -90,9 +93,10 @@ def import_(
     from recon.btf.exchange import INDEX_NAME, import_exr_slices
     from recon.btf.rgb_import import DIRECTION_TABLE, import_rgb_images, is_rgb_source, rgb_source
 
+    require_output_folder(out)
     if out.exists():
         fail(f"--out {out}: exists; expected a new BTF store path (nothing was overwritten)")
-    require_output_folder(out.parent)
+    remove_if_interrupted(ctx, out)
     rgb = is_rgb_source(source) and not (source / INDEX_NAME).is_file()
     if rgb:
         btf = import_rgb_images(

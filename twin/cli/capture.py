@@ -265,9 +265,9 @@ def _capture(
         summary |= built.dry_run() | notes | {"written": "nothing (dry run)"}
         print_summary(summary, "capture (dry run)", as_json)
         return
+    require_output_folder(store, "STORE")
     if not resume:
         require_new_store(store)
-    require_output_folder(store, "STORE")
     if "warning" in notes:
         typer.echo(f"warning: {notes['warning']}", err=True)
     from twin.devices.cluster import cluster_description, dask_client

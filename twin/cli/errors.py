@@ -14,6 +14,13 @@ run that failed) never shows a Python traceback: the command prints one line
   (:class:`~hwbridge.errors.SessionInterrupted`): one line ``interrupted ...``
   (``spectwin capture`` says how far it got and how to continue).
 
+The commands check their output locations before any work (:func:`require_output_folder`,
+:func:`require_output_file`: names and paths the filesystem allows, places this user may
+write). An error of the operating system that still reaches the group (an input this user may
+not read, a full disk) is one line naming its path: exit 2 for a location that cannot be read or
+written, 1 for a disk that filled or failed during the run; any other ``OSError`` is a bug and
+keeps its traceback.
+
 The libraries' messages say what is wrong; what to do is the exception's
 :class:`~hwbridge.errors.Remedy`, which :data:`ADVICE` words as commands and options of
 ``spectwin`` (advice to continue with ``--resume`` only where the command has that option).
@@ -24,7 +31,11 @@ bug and keeps its traceback.
 
 from __future__ import annotations
 
+import errno
 import inspect
+import os
+import shutil
+from contextvars import ContextVar
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -48,7 +59,9 @@ __all__ = [
     "USAGE",
     "SpectwinGroup",
     "fail",
+    "interrupted",
     "one_line",
+    "remove_if_interrupted",
     "require_output_file",
     "require_output_folder",
     "run_failed",
@@ -106,29 +119,153 @@ def run_failed(message: object) -> NoReturn:
     fail(message, RUN_FAILED)
 
 
+def interrupted(message: object) -> NoReturn:
+    """A run stopped by Ctrl-C: print ``interrupted: message`` (what is left and how to
+    continue, one line) to stderr and exit with :data:`INTERRUPTED`."""
+    typer.echo(f"interrupted: {one_line(message)}", err=True)
+    raise typer.Exit(INTERRUPTED)
+
+
+def remove_if_interrupted(ctx: typer.Context, out: Path) -> None:
+    """Have a Ctrl-C that stops the command delete the output ``out`` it writes and say that
+    nothing was written. ``out`` is new or an empty folder now, so that what is in it then is the
+    command's own; a folder the user filled is left alone (the command refuses it)."""
+    if out.is_dir() and any(out.iterdir()):
+        return
+    was_folder = out.is_dir()
+
+    def report() -> NoReturn:
+        if was_folder:
+            for path in out.iterdir():
+                if path.is_dir():
+                    shutil.rmtree(path)
+                else:
+                    path.unlink()
+        elif out.exists():
+            shutil.rmtree(out)
+        interrupted(f"nothing was written to {out}; run the same command again")
+
+    ctx.meta[INTERRUPT_REPORT] = report
+
+
 def require_output_folder(path: Path, option: str = "--out") -> None:
-    """Refuse an output folder that names an existing file."""
+    """Refuse an output folder that names an existing file, or that cannot be written (see
+    :func:`require_output_file`)."""
+    _require_short_names(path, option)
     if path.exists() and not path.is_dir():
         fail(f"{option} {path}: is a file; expected a folder (new or existing)")
-    _require_folder_above(path, option)
-
-
-def _require_folder_above(path: Path, option: str) -> None:
-    for parent in path.parents:
-        if parent.exists():
-            if not parent.is_dir():
-                fail(f"{option} {path}: {parent} is a file, not a folder")
-            return
+    _require_writable(path, option)
+    _OUTPUT.set(f"{option} {path}")
 
 
 def require_output_file(path: Path, option: str = "--out") -> None:
-    """Refuse an output file that names a folder or lies below a file."""
+    """Refuse an output file that names a folder or lies below a file, or that cannot be
+    written: a name or path longer than the filesystem allows (``NAME_MAX``, ``PATH_MAX``), or
+    a place this user may not write (permissions, a read-only filesystem). The commands call it
+    before any work, so that a run never fails on its output after the work is done."""
+    _require_short_names(path, option)
     if path.is_dir():
         fail(f"{option} {path}: is a folder; expected a file name")
-    _require_folder_above(path, option)
+    _require_writable(path, option)
+    _OUTPUT.set(f"{option} {path}")
+
+
+_OUTPUT: ContextVar[str | None] = ContextVar("spectwin_output", default=None)
+"""The output location the running command checked last (``--out PATH``): what a full disk
+is named by when the system's error names no file."""
+
+
+def _shown(path: object) -> str:
+    """``path`` as a message shows it: a path of thousands of characters is shortened."""
+    text = str(path)
+    return text if len(text) <= 160 else f"{text[:80]}...{text[-60:]}"
+
+
+def _existing_above(path: Path) -> Path:
+    """The nearest path above the absolute ``path`` that exists (a folder, unless the user
+    named a path below a file)."""
+    for above in path.parents:
+        try:
+            if above.exists():
+                return above
+        except OSError:  # a name too long to look up
+            continue
+    return Path(path.anchor)
+
+
+def _limit(folder: Path, name: str, default: int) -> int:
+    """The filesystem's ``pathconf`` limit ``name`` at ``folder`` (``default`` if unknown)."""
+    try:
+        return os.pathconf(folder, name)
+    except (OSError, ValueError):
+        return default
+
+
+def _require_short_names(path: Path, option: str) -> None:
+    """Refuse ``path`` when one of its names or the whole path is longer than the filesystem
+    allows (checked before anything looks the path up, which would fail)."""
+    absolute = Path(os.path.abspath(path))
+    existing = _existing_above(absolute)
+    name_max = _limit(existing, "PC_NAME_MAX", 255)
+    for name in absolute.parts[1:]:
+        if len(os.fsencode(name)) > name_max:
+            fail(
+                f"{option} {_shown(path)}: a name of {len(os.fsencode(name))} bytes "
+                f"({name[:24]}...); expected names of at most {name_max} bytes"
+            )
+    path_max = _limit(existing, "PC_PATH_MAX", 4096)
+    if len(os.fsencode(absolute)) >= path_max:
+        fail(
+            f"{option} {_shown(path)}: a path of {len(os.fsencode(absolute))} bytes; expected "
+            f"at most {path_max - 1}"
+        )
+
+
+def _require_writable(path: Path, option: str) -> None:
+    """Refuse ``path`` when the folders above it hold a file, or when ``path`` (if it exists)
+    or the nearest folder above it that exists cannot be written."""
+    above = _existing_above(Path(os.path.abspath(path)))
+    if not above.is_dir():
+        fail(f"{option} {path}: {above} is a file, not a folder")
+    target = path if path.exists() else above
+    access = os.W_OK | (os.X_OK if target.is_dir() else 0)
+    if not os.access(target, access, effective_ids=os.access in os.supports_effective_ids):
+        fail(
+            f"{option} {path}: {target} is not writable (permission denied or a read-only "
+            "filesystem); choose another place"
+        )
 
 
 _RUN_ERRORS = (DataError, DeviceError, StoreBusy)
+
+_PERMITTED = "expected a file or folder this user may read (and, for an output, write)"
+
+_OS_INPUT_ERRORS: dict[int, str] = {
+    errno.EACCES: _PERMITTED,
+    errno.EPERM: _PERMITTED,
+    errno.EROFS: "expected an output on a writable filesystem",
+    errno.ENAMETOOLONG: "expected names and a path within the filesystem's limits",
+    errno.ELOOP: "expected a path without a loop of symbolic links",
+}
+"""Errors of the operating system that mean a wrong input or output location (exit 2), and
+what was expected."""
+
+_OS_RUN_ERRORS: dict[int, str] = {
+    errno.ENOSPC: "free space on it",
+    errno.EDQUOT: "free space within the quota",
+    errno.EIO: "check the disk",
+}
+"""Errors of the operating system that stop a run (exit 1), and what to do."""
+
+
+def _os_error_line(error: OSError) -> str:
+    """``<path>: <the system's words>``: the error's file, else the command's output (writing
+    to an open file names none), else the words alone."""
+    words = error.strerror or str(error)
+    if error.filename is not None:
+        return f"{_shown(error.filename)}: {words}"
+    output = _OUTPUT.get()
+    return f"{words} (writing {_shown(output)})" if output is not None else words
 
 
 def _advised(message: object, advice: str | None) -> str:
@@ -178,6 +315,7 @@ class SpectwinGroup(TyperGroup):
             _usage_error(error)
 
     def invoke(self, ctx: Any) -> Any:
+        _OUTPUT.set(None)
         try:
             return super().invoke(ctx)
         except typer.TyperException as error:
@@ -193,6 +331,13 @@ class SpectwinGroup(TyperGroup):
             line = f"interrupted after {stop.done} of {stop.total} frames of {stop.store}"
             typer.echo(_advised(line, self.advice(ctx, stop.remedy)), err=True)
             raise typer.Exit(INTERRUPTED) from None
+        except OSError as error:  # a last resort: the commands check their paths first
+            if error.errno in _OS_INPUT_ERRORS:
+                fail(f"{_os_error_line(error)}; {_OS_INPUT_ERRORS[error.errno]}", USAGE)
+            if error.errno in _OS_RUN_ERRORS:
+                line = f"{_os_error_line(error)}; {_OS_RUN_ERRORS[error.errno]}"
+                fail(_advised(line, self.advice(ctx, Remedy.resume)), RUN_FAILED)
+            raise  # anything else is a bug
         except KeyboardInterrupt:
             report = ctx.meta.get(INTERRUPT_REPORT)
             if report is not None:

@@ -152,6 +152,7 @@ def process(
 
     # Everything that can be checked is, before the first frame is read: the options, the
     # calibration, the output, the store's integrity and progress, its kind and bands.
+    require_output_folder(out)
     if out.resolve() == store.resolve():
         fail(f"--out {out} is the capture store itself; choose another --out")
     require_no_writer(out)
@@ -167,7 +168,6 @@ def process(
         "workers": workers,
         "scheduler": scheduler,
     }
-    require_output_folder(out)
     require_sound_capture(capture, store)
     try:
         outcome = kind.process(capture, calibration, out, options, not as_json)
@@ -245,9 +245,9 @@ def evaluate(
     """
     from twin.kinds.registry import btf_rig_kind
 
-    require_sound_btf(btf, "evaluate", allow_unregistered=True)
     if figure is not None:
         require_output_file(figure, "--figure")
+    require_sound_btf(btf, "evaluate", allow_unregistered=True)
     kind = btf_rig_kind(btf)
     with console.status("rendering the truth and comparing"):
         outcome = kind.evaluate(btf, spp, figure)

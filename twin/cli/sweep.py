@@ -8,7 +8,7 @@ from typing import Annotated
 
 import typer
 
-from twin.cli.errors import INTERRUPTED, fail, require_output_folder
+from twin.cli.errors import fail, interrupted, require_output_folder
 from twin.cli.output import JsonFlag, SchedulerOption, WorkersOption, console, print_summary
 
 __all__ = ["register"]
@@ -69,12 +69,7 @@ def sweep(
         with dask_client(workers, scheduler) as client:
             outcome = run_sweep(loaded, out, kind.measure, client=client, progress=not as_json)
     except KeyboardInterrupt:
-        typer.echo(
-            f"interrupted: finished points are kept in {out}; run the same command again to "
-            "continue",
-            err=True,
-        )
-        raise typer.Exit(INTERRUPTED) from None
+        interrupted(f"finished points are kept in {out}; run the same command again to continue")
     print_summary(outcome.summary, f"sweep: {loaded.name}", as_json, skip=("outputs",))
     if not as_json:
         console.print(f"front and table: {out / 'index.html'}")

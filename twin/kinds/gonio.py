@@ -15,6 +15,7 @@ from hwbridge.schema import recorded
 from hwbridge.store import CaptureStore
 from recon.errors import InputError
 from twin.kinds.kind import Outcome, ProgramKind, ProgramSettings, RigKind
+from twin.output_format import format_pairs
 from twin.rigs.rig_config import GonioConfig
 from twin.studies.sweep_file import SweepKind
 from twin.studies.sweep_gonio import check_gonio_point, measure_gonio_point
@@ -188,10 +189,11 @@ def _process(
     failure = None
     if unregistered:
         failure = (
-            f"pairs {unregistered} were not registered: give their corners in a manual corner "
-            'file (keys "pair<i>")'
+            f"{format_pairs(unregistered)} were not registered: give their corners in a manual "
+            'corner file (keys "pair<i>")'
         )
-    return Outcome("gonio processing", summary, failure=failure)
+    shown = summary | {"unregistered_pairs": format_pairs(unregistered) if unregistered else "none"}
+    return Outcome("gonio processing", shown, as_json=summary, failure=failure)
 
 
 def _evaluate(btf: Path, spp: int, figure: Path | None) -> Outcome:

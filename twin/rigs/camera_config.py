@@ -39,6 +39,17 @@ __all__ = ["CAMERA_DIR", "CameraConfig", "available_cameras", "load_camera_confi
 
 CAMERA_DIR = scene_folder("cameras")
 
+MAX_SIDE_PX = 2**16
+"""The most pixels along a side of a sensor (the largest real sensors have about 15000)."""
+
+MAX_PIXELS = 2**28
+"""The most pixels of a sensor (268 MP, four times the largest real ones): one frame of float64
+values takes 2 GiB, and the twin holds several per capture."""
+
+MAX_SYSTEM_GAIN_DN_PER_E = 100.0
+"""The largest system gain K in DN per electron: at K = 100 a 16-bit ADC already saturates at
+655 electrons; real cameras have K between about 0.01 and 20 (EMVA 1288 data sheets)."""
+
 
 class OpticsConfig(StrictModel):
     """Lens in front of the sensor: :math:`E = \\pi \\tau L / (4 N^2)` (distant object)."""
@@ -169,8 +180,8 @@ class CameraConfig(StrictModel):
     name: str
     serial: str
     mosaic: Literal["none", "RGGB", "GBRG"]
-    width: Annotated[int, Field(gt=0)]
-    height: Annotated[int, Field(gt=0)]
+    width: Annotated[int, Field(gt=0, le=MAX_SIDE_PX)]
+    height: Annotated[int, Field(gt=0, le=MAX_SIDE_PX)]
     pixel_pitch_um: Positive
     bit_depth: Annotated[int, Field(ge=8, le=16)]
     sensor_temperature_c: float
@@ -179,7 +190,7 @@ class CameraConfig(StrictModel):
     quantum_efficiency: (
         CCDQuantumEfficiencyConfig | RGBQuantumEfficiencyConfig | RGBCSVQuantumEfficiencyConfig
     ) = Field(discriminator="model")
-    system_gain_dn_per_e: Positive
+    system_gain_dn_per_e: Annotated[float, Field(gt=0, le=MAX_SYSTEM_GAIN_DN_PER_E)]
     read_noise_dn: NonNegative
     full_well_e: Positive
     adc_offset_dn: NonNegative
@@ -190,6 +201,11 @@ class CameraConfig(StrictModel):
 
     @model_validator(mode="after")
     def _consistent(self) -> CameraConfig:
+        if self.width * self.height > MAX_PIXELS:
+            raise ValueError(
+                f"width x height: {self.width} x {self.height} pixels; expected at most "
+                f"{MAX_PIXELS} pixels (2^28: one float64 frame takes 2 GiB)"
+            )
         low, high = self.exposure_range_s
         if not low < high:
             raise ValueError(f"exposure_range_s: expected [shortest, longest], got {low}, {high}")

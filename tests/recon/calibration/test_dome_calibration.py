@@ -43,3 +43,17 @@ def test_curve_linearity_of_a_line_and_a_knee():
     assert curve_linearity(line, 10) == pytest.approx(0.0, abs=1e-12)
     knee = np.where(levels >= 10, (levels - 10) / (1 + 0.002 * (levels - 10)), np.nan)
     assert curve_linearity(knee, 10) > 0.02
+
+
+@pytest.mark.parametrize("kept", [0, 100, None], ids=["empty", "truncated", "no summary"])
+def test_a_damaged_calibration_file_is_refused_by_name(tmp_path, kept):
+    """An empty or truncated ``.npz`` (a damaged zip) and one without the calibration's arrays:
+    :class:`InputError` naming the file, not ``BadZipFile`` or ``EOFError``."""
+    from recon.calibration.dome_capture import DomeCalibration
+
+    path = tmp_path / "dome_cal.npz"
+    np.savez_compressed(path, other=np.zeros(3))
+    if kept is not None:
+        path.write_bytes(path.read_bytes()[:kept])
+    with pytest.raises(InputError, match="dome_cal.npz: not a dome calibration file"):
+        DomeCalibration.load(path)
