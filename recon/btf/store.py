@@ -73,6 +73,7 @@ from recon.btf.schema import (
     BTF_FORMAT_VERSION,
     BTF_UNITS,
     BTFAttrs,
+    BTFInputs,
     CompressedAttrs,
 )
 from recon.errors import DamagedDataError, InputError, Remedy
@@ -240,6 +241,7 @@ class BTFStore:
         source_capture: str | Path | None = None,
         calibration: Mapping[str, Any] | None = None,
         rig: str | None = None,
+        inputs: BTFInputs | None = None,
     ) -> BTFStore:
         """A new, empty store (no pair written); never overwrites an existing path.
 
@@ -263,6 +265,9 @@ class BTFStore:
         rig
             The kind of rig the source capture was made with (the ``rig`` of its rig attribute), or
             ``None`` for a BTF from elsewhere (imported).
+        inputs
+            What processing makes the store from (:mod:`recon.btf.inputs`), recorded so that a
+            resumed processing is refused other inputs; ``None`` records none.
         """
         path = Path(path)
         if path.exists():
@@ -288,6 +293,7 @@ class BTFStore:
                 "source_capture": None if source_capture is None else str(source_capture),
                 "calibration": _json_attr("calibration", dict(calibration or {})),
                 "complete": False,
+                **({} if inputs is None else {"inputs": inputs.model_dump(mode="json")}),
             },
             f"{path}: BTF store attributes",
         )
