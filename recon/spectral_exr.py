@@ -25,7 +25,7 @@ from typing import Literal
 import numpy as np
 import OpenEXR
 
-from recon.errors import InputError, MissingDataError
+from recon.errors import DamagedDataError, InputError, MissingDataError
 from recon.spectra import WavelengthGrid
 
 __all__ = [
@@ -151,10 +151,13 @@ def read_spectral_layout(path: str | Path) -> SpectralLayout:
         Its size, wavelengths and kind.
     """
     path = _existing(path)
-    with OpenEXR.File(str(path), header_only=True) as exr:
-        header = exr.header()
-        names = [channel.name for channel in header["channels"]]
-        low, high = (np.asarray(corner, np.int64) for corner in header["dataWindow"])
+    try:
+        with OpenEXR.File(str(path), header_only=True) as exr:
+            header = exr.header()
+            names = [channel.name for channel in header["channels"]]
+            low, high = (np.asarray(corner, np.int64) for corner in header["dataWindow"])
+    except (RuntimeError, ValueError) as error:
+        raise _unreadable(path, error) from None
     component, wavelengths = _spectral_channels(path, names)
     width, height = (high - low + 1).tolist()
     return SpectralLayout(
@@ -167,6 +170,10 @@ def _existing(path: str | Path) -> Path:
     if not path.is_file():
         raise MissingDataError(f"spectral EXR {path} does not exist")
     return path
+
+
+def _unreadable(path: Path, error: Exception) -> DamagedDataError:
+    return DamagedDataError(f"{path}: not a readable EXR ({' '.join(str(error).split())[:120]})")
 
 
 def _spectral_channels(path: Path, names: list[str]) -> tuple[ImageKind, dict[float, str]]:
@@ -194,18 +201,22 @@ def read_spectral_exr(path: str | Path) -> SpectralImage:
     emissive channels, sorted by wavelength; other channels (e.g. an RGB preview) are ignored.
     """
     path = _existing(path)
-    with OpenEXR.File(str(path)) as exr:
-        # The header and channel dicts are views into the open file: copy what is needed.
-        attributes = {
-            key: value
-            for key, value in exr.header().items()
-            if key not in ("channels", "dataWindow", "displayWindow")
-        }
-        channels = exr.channels()
-        kind, names = _spectral_channels(path, list(channels))
-        wavelengths = sorted(names)
-        cube = np.stack(
-            [np.array(channels[names[wavelength]].pixels, copy=True) for wavelength in wavelengths],
-            axis=-1,
-        )
+    try:
+        with OpenEXR.File(str(path)) as exr:
+            # The header and channel dicts are views into the open file: copy what is needed.
+            attributes = {
+                key: value
+                for key, value in exr.header().items()
+                if key not in ("channels", "dataWindow", "displayWindow")
+            }
+            channels = exr.channels()
+            kind, names = _spectral_channels(path, list(channels))
+            wavelengths = sorted(names)
+            cube = np.stack(
+                [np.array(channels[names[nm]].pixels, copy=True) for nm in wavelengths], axis=-1
+            )
+    except InputError:
+        raise
+    except (RuntimeError, ValueError) as error:
+        raise _unreadable(path, error) from None
     return SpectralImage(cube, WavelengthGrid(np.asarray(wavelengths)), kind, attributes)
