@@ -253,7 +253,12 @@ def _imported_attributes(given: object, where: str) -> dict[str, Any]:
             f"{where}: attributes {own} are the BTF store's own, set by the import; expected "
             "only the material, provenance and what processing found"
         )
-    defaults = {"material": "imported", "source_capture": None, "calibration": {}, "rig": None}
+    defaults: dict[str, Any] = {
+        "material": "imported",
+        "source_capture": None,
+        "calibration": {},
+        "rig": None,
+    }
     attributes = {**defaults, **given}
     own_values = {
         "format": BTF_FORMAT,
