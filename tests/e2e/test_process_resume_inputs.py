@@ -20,7 +20,6 @@ import zarr
 from typer.testing import CliRunner
 
 from hwbridge.store import CaptureStore
-from recon.btf.inputs import capture_sha256, file_sha256
 from recon.btf.store import BTFStore
 from recon.calibration.gonio import GonioCalibration
 from recon.spectra import DEFAULT_GRID
@@ -110,6 +109,8 @@ def interrupted(processed, tmp_path) -> tuple[Path, Path, dict]:
 
 
 def test_the_btf_store_records_the_hash_of_every_input(processed):
+    from recon.btf.inputs import capture_sha256, file_sha256
+
     root, rig = processed
     inputs = BTFStore.open(root / "run.btf.zarr").metadata.inputs
     assert inputs is not None
