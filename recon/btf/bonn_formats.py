@@ -34,7 +34,10 @@ The database publishes its BTFs in three layouts; each is read into an
   turned back (each chroma plus 1e-5) and converted by the YUV-to-RGB matrix below, clipped to
   [0, 1]. Values are linear.
 
-Pairs come in the order lights x views (UBO2014) or of the sorted angles (archives).
+Pairs come in the order lights x views (UBO2014) or of the sorted angles (archives). Every
+count and size a UBO2014 header gives is checked against the bytes left in the file before
+anything is read or decoded, and a channel has between 1 and ``min(L**2, W * H)`` components,
+so a header cannot make the reader decode an image larger than the file holds.
 
 References
 ----------

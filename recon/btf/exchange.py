@@ -7,7 +7,8 @@ view direction of every pair with its file, the wavelengths, the texture size, t
 store's attributes (material, provenance, calibration). The index is written last, by rename: a
 folder without it is an export that did not finish. :func:`import_exr_slices` reads such a folder
 into a new BTF store, which is then identical to the exported one (reflectance, directions,
-wavelengths, registered corners and attributes).
+wavelengths, registered corners and attributes); it checks the index and every slice's header
+before it writes, and builds the store under a temporary name (:mod:`recon.btf.staging`).
 
 References
 ----------

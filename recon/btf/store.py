@@ -12,7 +12,8 @@ Layout of ``<name>.btf.zarr`` (ARCHITECTURE.md, "Stores"):
   ``format_version`` (a store of another version is refused on opening), ``units``
   (``"1/sr"``), ``material``, ``rig`` (of the source capture), ``source_capture`` (path of the
   capture store it was calibrated from, or null), ``calibration`` (a JSON summary of the
-  calibration), ``complete``, and what processing adds (:meth:`BTFStore.set_attribute`);
+  calibration), ``complete``, ``inputs`` (the hashes of what processing read, which a resume must
+  match: :mod:`recon.btf.inputs`), and what processing adds (:meth:`BTFStore.set_attribute`);
 - ``reflectance``: float32 ``(n_pairs, H, W, K)``, one chunk per direction pair, band axis last,
   texel ``(y, x)`` row-major; unwritten pairs hold NaN;
 - ``light_dirs``, ``view_dirs``: float64 ``(n_pairs, 3)`` unit vectors in the sample frame
