@@ -138,6 +138,18 @@ def _truncated(folder: Path) -> Path:
     return folder
 
 
+def _slices_claiming_60000_texels(folder: Path) -> Path:
+    """The index and every slice's header (its data window) claim 60000 x 60000 texels; the
+    files keep their 6 x 6 pixels."""
+    _edit_index(lambda index: index.update(texels=[60000, 60000]))(folder)
+    window = b"dataWindow\x00box2i\x00" + struct.pack("<i", 16)
+    for path in folder.glob("pair_*.exr"):
+        data = path.read_bytes()
+        start = data.index(window) + len(window)
+        path.write_bytes(data[:start] + struct.pack("<4i", 0, 0, 59999, 59999) + data[start + 16 :])
+    return folder
+
+
 def _ubo2014_claiming_60000_texels(folder: Path) -> Path:
     """A 408-byte UBO2014 file: one direction, a 60000 x 60000 texture and factors of no
     component, which decode to 13.4 GiB per channel."""
@@ -206,6 +218,11 @@ DEFECTS = {
         "pair_00003.exr: (5, 6) px",
     ),
     "truncated slice": (_truncated, 1, "pair_00003.exr: not a readable EXR"),
+    "slice headers claiming 60000 x 60000 texels": (
+        _slices_claiming_60000_texels,
+        1,
+        "bytes cannot hold (60000, 60000) px x 5 channels",
+    ),
     "NaN in a slice": (_rewrite_slice(2, _with_nan), 2, "found NaN or infinity"),
     "UBO2014 header claiming 60000 x 60000 texels": (
         _ubo2014_claiming_60000_texels,
