@@ -25,10 +25,17 @@ from typing import Literal
 import numpy as np
 import OpenEXR
 
-from recon.errors import InputError, MissingDataError
+from recon.errors import DamagedDataError, InputError, MissingDataError
 from recon.spectra import WavelengthGrid
 
-__all__ = ["SpectralImage", "channel_name", "read_spectral_exr", "write_spectral_exr"]
+__all__ = [
+    "SpectralImage",
+    "SpectralLayout",
+    "channel_name",
+    "read_spectral_exr",
+    "read_spectral_layout",
+    "write_spectral_exr",
+]
 
 ImageKind = Literal["emissive", "reflective"]
 _COMPONENT = {"emissive": "S0", "reflective": "T"}
@@ -119,37 +126,97 @@ def write_spectral_exr(
     return path
 
 
+@dataclass(frozen=True)
+class SpectralLayout:
+    """What a spectral EXR's header says, read without its pixels: ``shape`` ``(H, W)``, the
+    wavelengths of the channels read and their kind."""
+
+    shape: tuple[int, int]
+    grid: WavelengthGrid
+    kind: ImageKind
+
+
+def read_spectral_layout(path: str | Path) -> SpectralLayout:
+    """The size, wavelengths and kind of a spectral EXR from its header alone (no pixel is
+    read), chosen as :func:`read_spectral_exr` chooses its channels.
+
+    Parameters
+    ----------
+    path
+        A spectral EXR in the Fichet et al. (2021) layout.
+
+    Returns
+    -------
+    SpectralLayout
+        Its size, wavelengths and kind.
+    """
+    path = _existing(path)
+    try:
+        with OpenEXR.File(str(path), header_only=True) as exr:
+            header = exr.header()
+            names = [channel.name for channel in header["channels"]]
+            low, high = (np.asarray(corner, np.int64) for corner in header["dataWindow"])
+    except (RuntimeError, ValueError) as error:
+        raise _unreadable(path, error) from None
+    component, wavelengths = _spectral_channels(path, names)
+    width, height = (high - low + 1).tolist()
+    return SpectralLayout(
+        (int(height), int(width)), WavelengthGrid(np.asarray(sorted(wavelengths))), component
+    )
+
+
+def _existing(path: str | Path) -> Path:
+    path = Path(path)
+    if not path.is_file():
+        raise MissingDataError(f"spectral EXR {path} does not exist")
+    return path
+
+
+def _unreadable(path: Path, error: Exception) -> DamagedDataError:
+    return DamagedDataError(f"{path}: not a readable EXR ({' '.join(str(error).split())[:120]})")
+
+
+def _spectral_channels(path: Path, names: list[str]) -> tuple[ImageKind, dict[float, str]]:
+    """The kind of the channels read (emissive ``S0`` where there are any, else reflective
+    ``T``) and their names by wavelength."""
+    found: dict[str, dict[float, str]] = {"S0": {}, "T": {}}
+    for name in names:
+        match = _CHANNEL_PATTERN.match(name)
+        if match:
+            found[match.group(1)][float(match.group(2).replace(",", "."))] = name
+    component = "S0" if found["S0"] else "T"
+    if not found[component]:
+        raise InputError(
+            f"{path}: expected spectral channels named like 'S0.550,0nm' or 'T.550,0nm' "
+            f"(Fichet et al. 2021), found {sorted(names)}"
+        )
+    kind: ImageKind = "emissive" if component == "S0" else "reflective"
+    return kind, found[component]
+
+
 def read_spectral_exr(path: str | Path) -> SpectralImage:
     """Read a spectral EXR written in the Fichet et al. (2021) layout.
 
     Returns the emissive (``S0``) channels, or the reflective (``T``) ones when there are no
     emissive channels, sorted by wavelength; other channels (e.g. an RGB preview) are ignored.
     """
-    path = Path(path)
-    if not path.is_file():
-        raise MissingDataError(f"spectral EXR {path} does not exist")
-    found: dict[str, dict[float, np.ndarray]] = {"S0": {}, "T": {}}
-    with OpenEXR.File(str(path)) as exr:
-        # The header and channel dicts are views into the open file: copy what is needed.
-        attributes = {
-            key: value
-            for key, value in exr.header().items()
-            if key not in ("channels", "dataWindow", "displayWindow")
-        }
-        channels = exr.channels()
-        channel_names = sorted(channels)
-        for name, channel in channels.items():
-            match = _CHANNEL_PATTERN.match(name)
-            if match:
-                pixels = np.array(channel.pixels, copy=True)
-                found[match.group(1)][float(match.group(2).replace(",", "."))] = pixels
-    component = "S0" if found["S0"] else "T"
-    if not found[component]:
-        raise InputError(
-            f"{path}: expected spectral channels named like 'S0.550,0nm' or 'T.550,0nm' "
-            f"(Fichet et al. 2021), found {channel_names}"
-        )
-    wavelengths = sorted(found[component])
-    cube = np.stack([found[component][wavelength] for wavelength in wavelengths], axis=-1)
-    kind: ImageKind = "emissive" if component == "S0" else "reflective"
+    path = _existing(path)
+    try:
+        with OpenEXR.File(str(path)) as exr:
+            # The header and channel dicts are views into the open file: copy what is needed.
+            attributes = {
+                key: value
+                for key, value in exr.header().items()
+                if key not in ("channels", "dataWindow", "displayWindow")
+            }
+            channels = exr.channels()
+            kind, names = _spectral_channels(path, list(channels))
+            wavelengths = sorted(names)
+            cube = np.stack(
+                [np.array(channels[names[nm]].pixels, copy=True) for nm in wavelengths], axis=-1
+            )
+    except InputError:
+        raise
+    except (RuntimeError, ValueError) as error:
+        raise _unreadable(path, error) from None
     return SpectralImage(cube, WavelengthGrid(np.asarray(wavelengths)), kind, attributes)

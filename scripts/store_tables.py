@@ -37,6 +37,7 @@ MODELS: tuple[type[BaseModel], ...] = (
     schema.Spectrum,
     schema.ReplayRigAttrs,
     btf_schema.BTFAttrs,
+    btf_schema.BTFInputs,
     btf_schema.RgbSource,
     btf_schema.CompressedAttrs,
 )

@@ -34,7 +34,10 @@ The database publishes its BTFs in three layouts; each is read into an
   turned back (each chroma plus 1e-5) and converted by the YUV-to-RGB matrix below, clipped to
   [0, 1]. Values are linear.
 
-Pairs come in the order lights x views (UBO2014) or of the sorted angles (archives).
+Pairs come in the order lights x views (UBO2014) or of the sorted angles (archives). Every
+count and size a UBO2014 header gives is checked against the bytes left in the file before
+anything is read or decoded, and a channel has between 1 and ``min(L**2, W * H)`` components,
+so a header cannot make the reader decode an image larger than the file holds.
 
 References
 ----------
@@ -152,13 +155,17 @@ class _Cursor:
     def __init__(self, data: mmap.mmap, path: Path, start: int) -> None:
         self.data, self.path, self.position = data, path, start
 
-    def take(self, dtype: str, count: int, what: str) -> np.ndarray:
-        size = np.dtype(dtype).itemsize * count
+    def require(self, size: int, what: str) -> None:
+        """Refuse a file with fewer than ``size`` bytes left for ``what``."""
         if self.position + size > len(self.data):
             raise InputError(
                 f"{self.path}: ends at byte {len(self.data)} inside {what}; expected a complete "
                 "UBO2014 file"
             )
+
+    def take(self, dtype: str, count: int, what: str) -> np.ndarray:
+        size = np.dtype(dtype).itemsize * count
+        self.require(size, what)
         values = np.frombuffer(self.data, dtype, count, self.position)
         self.position += size
         return values
@@ -249,6 +256,7 @@ def _read_header(cursor: _Cursor, rotations: bool) -> tuple[np.ndarray, np.ndarr
             "expected a UBO2014 header"
         )
     view_count = cursor.number("the directions")
+    cursor.require(view_count * 12, f"{view_count} views")  # two angles and a count each
     lights, views = None, []
     for view in range(view_count):
         views.append(cursor.take("<f4", 2, "the directions"))
@@ -267,6 +275,8 @@ def _read_header(cursor: _Cursor, rotations: bool) -> tuple[np.ndarray, np.ndarr
             "lights; expected the same, non-empty set of directions for both"
         )
     width, height = cursor.number("the texture size"), cursor.number("the texture size")
+    if width == 0 or height == 0:
+        raise InputError(f"{cursor.path}: a texture of {width} x {height} texels; expected texels")
     if rotations:
         cursor.skip(36 * cursor.number("the rotations"), "the rotations")
     degrees = np.degrees(np.concatenate([lights, np.stack(views)]).astype(np.float64))
@@ -300,6 +310,13 @@ def _read_factors(
                 f"{cursor.path}: {what} is {stored_rows} x {stored_columns}; expected {rows} "
                 f"direction pairs x {columns} texels"
             )
+        if not 1 <= components <= min(rows, columns):
+            raise InputError(
+                f"{cursor.path}: {what} has {components} components; expected 1 to "
+                f"{min(rows, columns)} (at most one per direction pair and per texel)"
+            )
+        # The factors must be in the file before an image of ``columns`` texels is decoded.
+        cursor.require(scalar * components * (1 + rows + columns), what)
         dtype = _SCALARS[scalar]
         cursor.take(dtype, components, what)
         u = cursor.take(dtype, rows * components, what).reshape(rows, components)

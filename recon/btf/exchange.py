@@ -7,7 +7,8 @@ view direction of every pair with its file, the wavelengths, the texture size, t
 store's attributes (material, provenance, calibration). The index is written last, by rename: a
 folder without it is an export that did not finish. :func:`import_exr_slices` reads such a folder
 into a new BTF store, which is then identical to the exported one (reflectance, directions,
-wavelengths, registered corners and attributes).
+wavelengths, registered corners and attributes); it checks the index and every slice's header
+before it writes, and builds the store under a temporary name (:mod:`recon.btf.staging`).
 
 References
 ----------
@@ -24,12 +25,16 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from pydantic import Field, PositiveInt
 
+from hwbridge.schema import StoreModel, parse
+from recon.btf.schema import BTF_FORMAT, BTF_FORMAT_VERSION, BTFAttrs
+from recon.btf.staging import staged
 from recon.btf.store import BTF_UNITS, BTFStore
 from recon.errors import DamagedDataError, InputError, Remedy
 from recon.progress import progress_steps
 from recon.spectra import WavelengthGrid
-from recon.spectral_exr import read_spectral_exr, write_spectral_exr
+from recon.spectral_exr import read_spectral_exr, read_spectral_layout, write_spectral_exr
 
 __all__ = ["EXCHANGE_FORMAT", "INDEX_NAME", "export_btf", "import_exr_slices"]
 
@@ -38,6 +43,27 @@ EXCHANGE_VERSION = 1
 INDEX_NAME = "directions.json"
 # The store's own: a new store is made with its own format, progress, identity and seals.
 _STORE_ATTRIBUTES = ("format", "format_version", "complete", "units", "store_id", "sealed")
+_SLICE_FIELDS = ("texels", "wavelengths_nm", "pairs")
+_MAX_COMPRESSION = 1032  # deflate's largest ratio: an EXR holds no more pixels than this allows
+
+
+class SliceEntry(StoreModel):
+    """One direction pair of ``directions.json``: its slice, a file in the index's folder."""
+
+    file: str = Field(pattern=r"^[^/\\]+\.exr$", description="the slice's file name")
+    light_dir: tuple[float, float, float] = Field(description="unit vector, sample frame")
+    view_dir: tuple[float, float, float] = Field(description="unit vector, sample frame")
+    corners_xy: tuple[tuple[float, float], ...] | None = Field(
+        None, min_length=4, max_length=4, description="registered image corners, or null"
+    )
+
+
+class SliceIndex(StoreModel):
+    """The texture size, wavelengths and pairs of ``directions.json``."""
+
+    texels: tuple[PositiveInt, PositiveInt] = Field(description="(H, W) of every slice")
+    wavelengths_nm: tuple[float, ...] = Field(min_length=1, description="the channels' nm")
+    pairs: tuple[SliceEntry, ...] = Field(min_length=1, description="one entry per pair")
 
 
 def _slice_name(pair: int) -> str:
@@ -148,11 +174,6 @@ def _read_index(folder: Path) -> dict[str, Any]:
     for field, kind in (("pairs", list), ("wavelengths_nm", list), ("texels", list)):
         if not isinstance(index.get(field), kind) or not index[field]:
             raise InputError(f"{path}: field {field!r} must be a non-empty list")
-    for number, entry in enumerate(index["pairs"]):
-        if not isinstance(entry, dict) or not {"file", "light_dir", "view_dir"} <= set(entry):
-            raise InputError(
-                f"{path}: pairs[{number}] must name 'file', 'light_dir' and 'view_dir'"
-            )
     return index
 
 
@@ -161,48 +182,113 @@ def import_exr_slices(
 ) -> BTFStore:
     """Read a folder written by :func:`export_btf` into a new BTF store at ``out_path``.
 
-    Every slice must hold the index's wavelengths at the index's texture size. The store is
-    complete only once every pair is written; an import cut short leaves an incomplete store.
+    Everything is checked before the store is made: the index (its fields, the attributes it
+    gives, which never include the store's own ``format``, ``format_version``, ``units`` and
+    ``complete``), and every slice's header (reflective ``T`` channels at the index's
+    wavelengths, the index's texture size; emissive ``S0`` channels hold radiance, not
+    reflectance, and are refused). The store is built under a temporary name beside
+    ``out_path`` and renamed to it once every pair is in (:func:`recon.btf.staging.staged`):
+    an import that fails leaves nothing behind.
+
+    Parameters
+    ----------
+    folder
+        The slices and their ``directions.json``.
+    out_path
+        The new store (must not exist).
+    progress
+        Show a progress bar over the pairs.
 
     Returns
     -------
     BTFStore
-        The new store, open for reading.
+        The new, complete store, open for reading.
     """
     folder = Path(folder)
     index = _read_index(folder)
-    grid = WavelengthGrid(np.asarray(index["wavelengths_nm"], np.float64))
-    texels = tuple(int(v) for v in index["texels"])
-    entries = index["pairs"]
-    attributes = dict(index.get("attributes") or {})
-    store = BTFStore.create(
-        out_path,
-        light_dirs=np.array([e["light_dir"] for e in entries], np.float64),
-        view_dirs=np.array([e["view_dir"] for e in entries], np.float64),
-        texels=texels,
-        grid=grid,
-        material=attributes.pop("material", "imported"),
-        source_capture=attributes.pop("source_capture", None),
-        calibration=attributes.pop("calibration", None),
-        rig=attributes.pop("rig", None),
-    )
-    for name, value in attributes.items():
-        store.set_attribute(name, value)
-    with progress_steps("import BTF slices", len(entries), enabled=progress) as advance:
-        for pair, entry in enumerate(entries):
-            image = read_spectral_exr(folder / str(entry["file"]))
-            if image.grid != grid or image.cube.shape[:2] != texels:
-                raise DamagedDataError(
-                    f"{folder / str(entry['file'])}: {image.cube.shape[:2]} px on "
-                    f"{image.grid.describe()}, expected {texels} px on {grid.describe()} as "
-                    f"{INDEX_NAME} says"
+    where = str(folder / INDEX_NAME)
+    slices = parse(SliceIndex, {key: index[key] for key in _SLICE_FIELDS}, where)
+    grid = WavelengthGrid(np.asarray(slices.wavelengths_nm, np.float64))
+    attributes = _imported_attributes(index.get("attributes"), where)
+    for entry in slices.pairs:
+        _check_slice(folder / entry.file, slices.texels, grid)
+    with staged(out_path) as building:
+        store = BTFStore.create(
+            building,
+            light_dirs=np.array([entry.light_dir for entry in slices.pairs], np.float64),
+            view_dirs=np.array([entry.view_dir for entry in slices.pairs], np.float64),
+            texels=slices.texels,
+            grid=grid,
+            material=attributes.pop("material"),
+            source_capture=attributes.pop("source_capture"),
+            calibration=attributes.pop("calibration"),
+            rig=attributes.pop("rig"),
+        )
+        for name, value in attributes.items():
+            store.set_attribute(name, value)
+        with progress_steps("import BTF slices", len(slices.pairs), enabled=progress) as advance:
+            for pair, entry in enumerate(slices.pairs):
+                image = read_spectral_exr(folder / entry.file)
+                if image.cube.dtype.kind != "f":
+                    raise DamagedDataError(
+                        f"{folder / entry.file}: {image.cube.dtype} pixels; expected float16 "
+                        "or float32 reflectance"
+                    )
+                store.write_pair(
+                    pair,
+                    image.cube,
+                    grid=grid,
+                    corners_xy=None if entry.corners_xy is None else np.asarray(entry.corners_xy),
                 )
-            corners = entry.get("corners_xy")
-            store.write_pair(
-                pair,
-                image.cube,
-                grid=grid,
-                corners_xy=None if corners is None else np.asarray(corners, np.float64),
-            )
-            advance()
+                advance()
     return BTFStore.open(out_path)
+
+
+def _imported_attributes(given: object, where: str) -> dict[str, Any]:
+    """The store attributes an index gives, checked as :class:`~recon.btf.schema.BTFAttrs`
+    with the store's own left to the store; each field the store needs, with its default."""
+    if not isinstance(given, dict):
+        raise InputError(f"{where}: attributes: expected an object of the store's attributes")
+    own = sorted(set(given) & set(_STORE_ATTRIBUTES))
+    if own:
+        raise InputError(
+            f"{where}: attributes {own} are the BTF store's own, set by the import; expected "
+            "only the material, provenance and what processing found"
+        )
+    defaults: dict[str, Any] = {
+        "material": "imported",
+        "source_capture": None,
+        "calibration": {},
+        "rig": None,
+    }
+    attributes = {**defaults, **given}
+    own_values = {
+        "format": BTF_FORMAT,
+        "format_version": BTF_FORMAT_VERSION,
+        "units": BTF_UNITS,
+        "complete": False,
+    }
+    parse(BTFAttrs, {**attributes, **own_values}, f"{where}: attributes")
+    return attributes
+
+
+def _check_slice(path: Path, texels: tuple[int, int], grid: WavelengthGrid) -> None:
+    """Refuse a slice whose header does not hold reflectance at ``texels`` on ``grid`` (no
+    pixel is read)."""
+    layout = read_spectral_layout(path)
+    if layout.kind != "reflective":
+        raise InputError(
+            f"{path}: emissive (S0) channels hold radiance; expected reflectance in reflective "
+            "(T) channels"
+        )
+    if layout.grid != grid or layout.shape != texels:
+        raise DamagedDataError(
+            f"{path}: {layout.shape} px on {layout.grid.describe()}, expected {texels} px on "
+            f"{grid.describe()} as {INDEX_NAME} says"
+        )
+    bytes_needed = texels[0] * texels[1] * grid.size * 2  # half floats at the least
+    if bytes_needed > _MAX_COMPRESSION * path.stat().st_size:
+        raise DamagedDataError(
+            f"{path}: {path.stat().st_size} bytes cannot hold {texels} px x {grid.size} "
+            "channels; expected a complete slice"
+        )

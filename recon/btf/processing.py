@@ -40,6 +40,7 @@ import numpy as np
 
 from hwbridge.schema import GonioRigAttrs, recorded
 from hwbridge.store import CaptureStore
+from recon.btf.inputs import InputDigests, require_same_inputs
 from recon.btf.store import BTFStore
 from recon.calibration.gonio import (
     DarkModel,
@@ -59,6 +60,7 @@ from recon.registration.border import (
 from recon.registration.corners import CornerRefinementError, texture_transform
 
 __all__ = [
+    "DEFAULT_TEXELS",
     "GonioRun",
     "PairOutcomes",
     "check_gonio_run",
@@ -71,6 +73,9 @@ __all__ = [
 ]
 
 _INDEX_FIELDS = ("kind", "view_id", "band_nm", "exposure_s", "lamp_monitor")
+
+DEFAULT_TEXELS = 128
+"""Texels per side of a new BTF store when none are asked for."""
 
 
 def inset_corners(corners_xy: np.ndarray, fraction: float) -> np.ndarray:
@@ -192,14 +197,42 @@ def prepare_gonio_run(
 
 
 def open_btf_store(
-    run: GonioRun, out: str | Path, *, texels: int = 128, resume: bool = False
+    run: GonioRun,
+    out: str | Path,
+    *,
+    texels: int | None = None,
+    resume: bool = False,
+    digests: InputDigests | None = None,
 ) -> BTFStore:
     """Create the BTF store of ``run`` at ``out``; with ``resume`` an existing one is reopened
-    (its pending pairs are still to process)."""
+    (its pending pairs are still to process).
+
+    Parameters
+    ----------
+    run
+        From :func:`prepare_gonio_run`.
+    out
+        The BTF store.
+    texels
+        Texels per side: ``None`` is :data:`DEFAULT_TEXELS` for a new store, the store's own
+        for a resumed one.
+    resume
+        Reopen an existing store.
+    digests
+        The hashes of the capture store and calibration file (:mod:`recon.btf.inputs`): a new
+        store records them, a resumed one must have been made from the same.
+
+    Raises
+    ------
+    InputError
+        A resumed store was made from other inputs (:func:`recon.btf.inputs.require_same_inputs`).
+    """
     if resume and Path(out).exists():
         btf = BTFStore.open(out, writable=True)
+        require_same_inputs(btf, digests, texels)
         btf.prepare_resume()  # damaged pairs are pending again
         return btf
+    texels = DEFAULT_TEXELS if texels is None else texels
     return BTFStore.create(
         out,
         light_dirs=np.asarray(run.rig.light_dirs, np.float64),
@@ -210,6 +243,7 @@ def open_btf_store(
         source_capture=run.capture_path,
         calibration={"run_factors": run.factors.tolist(), "source": run.calibration.source},
         rig=run.rig.rig,
+        inputs=None if digests is None else digests.recorded(texels),
     )
 
 
@@ -335,10 +369,11 @@ def process_gonio(
     calibration: GonioCalibration,
     out: str | Path,
     *,
-    texels: int = 128,
+    texels: int | None = None,
     manual_corners: dict[str, np.ndarray] | None = None,
     resume: bool = False,
     show_progress: bool = False,
+    digests: InputDigests | None = None,
 ) -> BTFStore:
     """Turn a measurement run into a BTF store (see the module docstring).
 
@@ -351,13 +386,16 @@ def process_gonio(
     out
         BTF store to create (``<name>.btf.zarr``); with ``resume`` an existing one is continued.
     texels
-        Texture resolution (texels per side of the sample).
+        Texture resolution (texels per side of the sample; ``None``: :data:`DEFAULT_TEXELS`,
+        or a resumed store's own).
     manual_corners
         Corner file contents (:func:`recon.registration.border.read_manual_corners`) keyed by
         ``"pair<i>"`` for frames where detection fails.
+    digests
+        The hashes of the capture store and calibration file (:func:`open_btf_store`).
     """
     run = prepare_gonio_run(capture, calibration)
-    btf = open_btf_store(run, out, texels=texels, resume=resume)
+    btf = open_btf_store(run, out, texels=texels, resume=resume, digests=digests)
     pending = btf.pending_pairs()
     with progress_steps("process", len(pending), enabled=show_progress) as advance:
         outcomes = process_pairs(run, btf, pending, manual_corners=manual_corners, advance=advance)

@@ -33,6 +33,7 @@ import numpy as np
 from recon.btf.bonn_formats import read_image_archive, read_ubo2014
 from recon.btf.rgb_images import RGBImageSet
 from recon.btf.schema import RgbSource
+from recon.btf.staging import staged
 from recon.btf.store import BTFStore
 from recon.errors import InputError
 from recon.progress import progress_steps
@@ -150,7 +151,9 @@ def import_rgb_images(
     Returns
     -------
     BTFStore
-        The new, complete store; an import cut short leaves an incomplete one.
+        The new, complete store. It is built under a temporary name beside ``out_path`` and
+        renamed to it once complete (:func:`recon.btf.staging.staged`): an import that fails
+        or is cut short leaves nothing behind.
     """
     if upsampling != "jakob2019":
         raise InputError(
@@ -163,38 +166,39 @@ def import_rgb_images(
         raise InputError(f"texels: expected a positive side in texels, got {texels}")
     images = open_rgb_images(source)
     first, factor = _reduced(images.read(0), texels)
-    store = BTFStore.create(
-        out_path,
-        light_dirs=images.light_dirs(),
-        view_dirs=images.view_dirs(),
-        texels=first.shape[:2],
-        grid=DEFAULT_GRID,
-        material=material or _name(Path(source)),
-    )
-    store.set_attribute(
-        "rgb_source",
-        {
-            "colour_space": "sRGB",
-            "layout": images.layout,
-            "encoding": images.encoding,
-            "upsampling": upsampling,
-            "scale": float(scale),
-            "texel_reduction": factor,
-            "images": str(images.source.resolve()),
-        },
-    )
-    with progress_steps(f"import {images.layout}", images.n_pairs, enabled=progress) as advance:
-        for pair in range(images.n_pairs):
-            linear = first if pair == 0 else _reduced(images.read(pair), texels)[0]
-            if linear.shape != first.shape:
-                raise InputError(
-                    f"{images.source}: {images.names[pair]} is {linear.shape[0]} x "
-                    f"{linear.shape[1]} px, expected {first.shape[0]} x {first.shape[1]} like "
-                    f"{images.names[0]}"
-                )
-            spectra = upsample_srgb(scale * linear, "jakob2019").values
-            store.write_pair(pair, (spectra / np.pi).astype(np.float32), grid=DEFAULT_GRID)
-            advance()
+    with staged(out_path) as building:
+        store = BTFStore.create(
+            building,
+            light_dirs=images.light_dirs(),
+            view_dirs=images.view_dirs(),
+            texels=first.shape[:2],
+            grid=DEFAULT_GRID,
+            material=material or _name(Path(source)),
+        )
+        store.set_attribute(
+            "rgb_source",
+            {
+                "colour_space": "sRGB",
+                "layout": images.layout,
+                "encoding": images.encoding,
+                "upsampling": upsampling,
+                "scale": float(scale),
+                "texel_reduction": factor,
+                "images": str(images.source.resolve()),
+            },
+        )
+        with progress_steps(f"import {images.layout}", images.n_pairs, enabled=progress) as advance:
+            for pair in range(images.n_pairs):
+                linear = first if pair == 0 else _reduced(images.read(pair), texels)[0]
+                if linear.shape != first.shape:
+                    raise InputError(
+                        f"{images.source}: {images.names[pair]} is {linear.shape[0]} x "
+                        f"{linear.shape[1]} px, expected {first.shape[0]} x {first.shape[1]} like "
+                        f"{images.names[0]}"
+                    )
+                spectra = upsample_srgb(scale * linear, "jakob2019").values
+                store.write_pair(pair, (spectra / np.pi).astype(np.float32), grid=DEFAULT_GRID)
+                advance()
     return BTFStore.open(out_path)
 
 

@@ -8,6 +8,8 @@ refuse unknown fields:
 - :class:`BTFAttrs`: the root attributes; ``format_version`` is the version of these models
   (:data:`BTF_FORMAT_VERSION`): a store of another version is refused on opening;
 - :class:`RgbSource`: where a BTF upsampled from RGB images came from;
+- :class:`BTFInputs`: what a processed BTF was made from, as content hashes, so that a resumed
+  processing is refused other inputs (:mod:`recon.btf.inputs`);
 - :class:`CompressedAttrs`: the attributes of the compressed form.
 
 ARCHITECTURE.md ("Stores") shows these models as tables, generated from the fields'
@@ -27,6 +29,7 @@ __all__ = [
     "BTF_FORMAT_VERSION",
     "BTF_UNITS",
     "BTFAttrs",
+    "BTFInputs",
     "CompressedAttrs",
     "RgbSource",
 ]
@@ -55,6 +58,17 @@ class RgbSource(StoreModel):
     images: str = Field(description="the source, as a path")
 
 
+class BTFInputs(StoreModel):
+    """What processing made a BTF store from (``recon.btf.inputs``): a resumed processing must
+    be given the same."""
+
+    capture_sha256: str = Field(
+        description="SHA-256 of the capture store's attributes (plan, rig, seed; `complete` aside)"
+    )
+    calibration_sha256: str = Field(description="SHA-256 of the calibration file's bytes")
+    texels: int = Field(ge=1, description="texels per side of the texture")
+
+
 class BTFAttrs(StoreModel):
     """The attributes of a BTF store's root group. Processing adds what it found; a dome
     run's processing (``recon.dome``) adds the fields from ``dome_pairs`` on."""
@@ -75,6 +89,9 @@ class BTFAttrs(StoreModel):
     source_capture: str | None = Field(description="path of the capture store, or null")
     calibration: dict[str, Any] = Field(description="summary of the calibration applied")
     complete: bool = Field(description="every pair is written")
+    inputs: BTFInputs | None = Field(
+        None, description="what processing read (`BTFInputs`); null: imported, or not recorded"
+    )
     coarse_corner_pairs: tuple[int, ...] | None = Field(
         None, description="pairs registered at the coarse corners (refinement failed)"
     )

@@ -13,7 +13,8 @@ Layout of ``<name>.btf.zarr`` (ARCHITECTURE.md, "Stores"):
   random identity), ``sealed`` (digests of what defines its content), ``units``
   (``"1/sr"``), ``material``, ``rig`` (of the source capture), ``source_capture`` (path of the
   capture store it was calibrated from, or null), ``calibration`` (a JSON summary of the
-  calibration), ``complete``, and what processing adds (:meth:`BTFStore.set_attribute`);
+  calibration), ``complete``, ``inputs`` (the hashes of what processing read, which a resume must
+  match: :mod:`recon.btf.inputs`), and what processing adds (:meth:`BTFStore.set_attribute`);
 - ``reflectance``: float32 ``(n_pairs, H, W, K)``, one chunk per direction pair, band axis last,
   texel ``(y, x)`` row-major; unwritten pairs hold NaN;
 - ``light_dirs``, ``view_dirs``: float64 ``(n_pairs, 3)`` unit vectors in the sample frame
@@ -85,6 +86,7 @@ from recon.btf.schema import (
     BTF_FORMAT_VERSION,
     BTF_UNITS,
     BTFAttrs,
+    BTFInputs,
     CompressedAttrs,
 )
 from recon.errors import DamagedDataError, InputError, Remedy
@@ -276,6 +278,7 @@ class BTFStore:
         source_capture: str | Path | None = None,
         calibration: Mapping[str, Any] | None = None,
         rig: str | None = None,
+        inputs: BTFInputs | None = None,
     ) -> BTFStore:
         """A new, empty store (no pair written); never overwrites an existing path.
 
@@ -299,6 +302,9 @@ class BTFStore:
         rig
             The kind of rig the source capture was made with (the ``rig`` of its rig attribute), or
             ``None`` for a BTF from elsewhere (imported).
+        inputs
+            What processing makes the store from (:mod:`recon.btf.inputs`), recorded so that a
+            resumed processing is refused other inputs; ``None`` records none.
         """
         path = Path(path)
         if path.exists():
@@ -326,6 +332,7 @@ class BTFStore:
                 "source_capture": None if source_capture is None else str(source_capture),
                 "calibration": _json_attr("calibration", dict(calibration or {})),
                 "complete": False,
+                **({} if inputs is None else {"inputs": inputs.model_dump(mode="json")}),
             },
             f"{path}: BTF store attributes",
         )

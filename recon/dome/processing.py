@@ -43,6 +43,7 @@ from skimage.registration import phase_cross_correlation
 
 from hwbridge.dome_layout import SPECTRAL_CAMERA
 from hwbridge.store import CaptureStore
+from recon.btf.inputs import InputDigests, require_same_inputs
 from recon.btf.store import BTFStore
 from recon.calibration.dome_capture import DomeCalibration
 from recon.calibration.dome_geometric import stage_rotation
@@ -284,16 +285,15 @@ class DomeProcessing:
         ]
 
 
-def _open_btf(work: DomeProcessing, out: Path, resume: bool) -> BTFStore:
-    """The BTF store: created, or with ``resume`` an existing one reopened (its damaged pairs
-    pending again), which must have the texels asked for."""
+def _open_btf(
+    work: DomeProcessing, out: Path, resume: bool, digests: InputDigests | None
+) -> BTFStore:
+    """The BTF store: created, recording ``digests``, or with ``resume`` an existing one
+    reopened (its damaged pairs pending again), which must have been made from the same inputs
+    at the texels asked for (:func:`recon.btf.inputs.require_same_inputs`)."""
     if resume and out.exists():
         btf = BTFStore.open(out, writable=True)
-        if btf.texels != (work.texels, work.texels):
-            raise InputError(
-                f"{out}: processed at {btf.texels[0]} texels, not {work.texels}; resume it with "
-                f"texels={btf.texels[0]} (or leave texels out)"
-            )
+        require_same_inputs(btf, digests, work.texels)
         btf.prepare_resume()
         return btf
     light_dirs, view_dirs = dome_directions(work.run, work.calibration)
@@ -312,6 +312,7 @@ def _open_btf(work: DomeProcessing, out: Path, resume: bool) -> BTFStore:
             "target_relative_noise": TARGET_RELATIVE_NOISE,
         },
         rig=work.run.rig.rig,
+        inputs=None if digests is None else digests.recorded(work.texels),
     )
 
 
@@ -363,6 +364,7 @@ def process_dome(
     band_partner: str | None = None,
     target_relative_noise: float = TARGET_RELATIVE_NOISE,
     created: Callable[[BTFStore], None] = lambda btf: None,
+    digests: InputDigests | None = None,
 ) -> BTFStore:
     """Turn a dome run into a spectral BTF store (module docstring).
 
@@ -398,6 +400,9 @@ def process_dome(
     created
         Called with the BTF store once it exists (before any pair is written): a writer lock
         moves into it.
+    digests
+        The hashes of the capture store and calibration file (:mod:`recon.btf.inputs`): a new
+        store records them, a resumed one must have been made from the same.
 
     Returns
     -------
@@ -425,7 +430,7 @@ def process_dome(
     work = DomeProcessing(
         run, calibration, int(texels), band_partner, manual_corners, target_relative_noise
     )
-    btf = _open_btf(work, out, resume)
+    btf = _open_btf(work, out, resume, digests)
     created(btf)
     work.register(store)
     pending = set(btf.pending_pairs())

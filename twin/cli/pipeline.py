@@ -123,14 +123,20 @@ def process(
             min=16,
             max=1024,
             help="Texture resolution per side (at least 16: evaluate and validate need texels "
-            "inside every chart field). Default: 128 (gonio), the capture's texels (dome).",
+            "inside every chart field). Default: 128 (gonio), the capture's texels (dome); "
+            "with --resume, the store's (another is refused).",
         ),
     ] = None,
     manual_corners: Annotated[
         Path | None, typer.Option(help="Manual corner file for frames detection misses.")
     ] = None,
     resume: Annotated[
-        bool, typer.Option("--resume", help="Continue an interrupted process.")
+        bool,
+        typer.Option(
+            "--resume",
+            help="Continue an interrupted process, from the capture store, calibration and "
+            "texels it began with.",
+        ),
     ] = False,
     workers: WorkersOption = 1,
     scheduler: SchedulerOption = None,

@@ -70,6 +70,7 @@ from hwbridge.session import (
     raise_if_interrupted,
 )
 from hwbridge.store import CaptureStore, FrameRecord
+from recon.btf.inputs import InputDigests
 from recon.btf.processing import (
     GonioRun,
     PairOutcomes,
@@ -440,11 +441,12 @@ def run_process(
     calibration: GonioCalibration,
     out: str | Path,
     *,
-    texels: int = 128,
+    texels: int | None = None,
     manual_corners: dict[str, np.ndarray] | None = None,
     resume: bool = False,
     show_progress: bool = False,
     client: Client | None = None,
+    digests: InputDigests | None = None,
 ) -> BTFStore:
     """Turn a measurement run into a BTF store in this process (as
     :func:`recon.btf.processing.process_gonio`) or over ``client``'s cluster, one task per
@@ -464,7 +466,7 @@ def run_process(
     with _btf_lock(Path(out), resume) as lock:
         store = capture if isinstance(capture, CaptureStore) else CaptureStore.open(capture)
         run = prepare_gonio_run(store, calibration)
-        btf = open_btf_store(run, out, texels=texels, resume=resume)
+        btf = open_btf_store(run, out, texels=texels, resume=resume, digests=digests)
         lock.move_into()
         pending = btf.pending_pairs()
         if client is None:

@@ -129,12 +129,14 @@ def _process(
     show_progress: bool,
 ) -> Outcome:
     from hwbridge.lock import StoreLock
+    from recon.btf.inputs import input_digests
     from recon.calibration.dome_capture import DomeCalibration
     from recon.dome.processing import check_dome_run, process_dome
     from recon.dome.run import open_dome_run
 
     dome_calibration = DomeCalibration.load(calibration)
     check_dome_run(open_dome_run(capture), dome_calibration)
+    digests = input_digests(capture, calibration)
     resume = options.get("resume", False)
     lock = StoreLock.acquire(out) if resume and out.exists() else StoreLock.reserve(out)
     with lock:
@@ -147,6 +149,7 @@ def _process(
             resume=resume,
             show_progress=show_progress,
             created=lambda _: lock.move_into(),
+            digests=digests,
         )
     found = btf.metadata
     summary = {

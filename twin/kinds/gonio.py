@@ -155,24 +155,26 @@ def _process(
     options: dict[str, Any],
     show_progress: bool,
 ) -> Outcome:
+    from recon.btf.inputs import input_digests
     from recon.btf.processing import check_gonio_run
     from recon.calibration.gonio import GonioCalibration
     from twin.devices.cluster import cluster_description, dask_client, run_process
 
     gonio_calibration = GonioCalibration.load(calibration)
     check_gonio_run(capture, gonio_calibration)
-    texels = options.get("texels") or 128
+    digests = input_digests(capture, calibration)
     with dask_client(options.get("workers", 1), options.get("scheduler")) as client:
         cluster = cluster_description(client)
         btf = run_process(
             capture,
             gonio_calibration,
             out,
-            texels=texels,
+            texels=options.get("texels"),
             manual_corners=options.get("manual_corners"),
             resume=options.get("resume", False),
             show_progress=show_progress,
             client=client,
+            digests=digests,
         )
     found = btf.metadata
     unregistered = list(recorded(found.unregistered_pairs, f"{out}: unregistered_pairs"))
