@@ -267,6 +267,8 @@ def _imported_attributes(given: object, where: str) -> dict[str, Any]:
         "format_version": BTF_FORMAT_VERSION,
         "units": BTF_UNITS,
         "complete": False,
+        "store_id": "made by the import",
+        "sealed": {},
     }
     parse(BTFAttrs, {**attributes, **own_values}, f"{where}: attributes")
     return attributes
