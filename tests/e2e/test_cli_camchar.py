@@ -225,3 +225,10 @@ def test_bad_input_is_one_line_exit_2_and_nothing_written(inputs, arguments, phr
     assert len(lines) == 1 and lines[0].startswith("error: "), result.stderr
     assert phrase in lines[0]
     assert not inputs["OUT"].exists()
+
+
+def test_the_option_choices_are_those_of_the_reader():
+    from recon.chart_photos.images import BAYER_PATTERNS, ENCODINGS
+    from twin.cli.camchar import Bayer, Encoding
+
+    assert tuple(Bayer) == BAYER_PATTERNS and tuple(Encoding) == ENCODINGS

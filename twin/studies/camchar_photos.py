@@ -137,7 +137,7 @@ def write_characterization(
         },
         "residual_rms_pct": float(np.sqrt(np.mean(residual_pct**2))),
         "residual_max_pct": float(residual_pct.max()),
-        "residual_max_at": f"{result.lights[worst[0]]}, patch {worst[1] + 1} "
+        "residual_max_at": f"{_short(result.lights[worst[0]])}, patch {worst[1] + 1} "
         f"({result.chart.patch_names[worst[1]]}), {'RGB'[worst[2]]}",
     }
     if truth is not None:
