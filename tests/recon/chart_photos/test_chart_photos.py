@@ -89,6 +89,17 @@ def test_colour_checker_detection_finds_the_chart(tmp_path):
     np.testing.assert_allclose(found, synthetic.patch_rgb("D65", 40000.0), atol=15.0)
 
 
+def test_colour_checker_detection_finds_the_chart_in_a_portrait_mosaic(tmp_path):
+    """The detector turns portrait images; the corners come back in the photograph's frame (the
+    chart turned with it: its first patch at the top right)."""
+    turned = np.ascontiguousarray(np.rot90(synthetic.rgb_image(), -1))  # clockwise
+    path = synthetic.write_tiff(tmp_path / "portrait.tif", synthetic.mosaic(turned))
+    corners = detect_colorchecker(read_photo(path, bayer="rggb"))
+    height = synthetic.SHAPE[0]
+    expected = np.column_stack([height - 1 - synthetic.CORNERS[:, 1], synthetic.CORNERS[:, 0]])
+    assert np.abs(corners - expected).max() < 16  # measured 12.8 px on the RGB image
+
+
 @pytest.fixture(scope="module")
 def two_lights(tmp_path_factory):
     """The Nikon D100 (not among the prior's cameras) under D65 and under A, one photo each."""
