@@ -203,6 +203,7 @@ PROBES: list[tuple[list[str], str]] = [
     (["@MOSAIC", "--light", "D65", *CORNERS], "expected its Bayer pattern"),
     (["@CLIPPED", "--light", "D65", *CORNERS], "clipped in R in every exposure"),
     (["@TIFF", "--light", "D65", "--exposure-s", "-1", *CORNERS], "one positive time"),
+    (["@TIFF", "--light", "D65", "--exposure-s", "0", *CORNERS], "one positive time"),
     (["@TIFF", "--light", "D65", "--encoding", "gamma", *CORNERS], "'gamma' is not one of"),
     (["nosuch.tif", "--light", "D65", *CORNERS], "nosuch.tif: no such file"),
     (["@TIFF", "--light", "D65", *CORNERS, "--out", "@PLAIN"], "is a file; expected a folder"),

@@ -218,7 +218,9 @@ def characterize(
         for path, spec, seconds, text in zip(photos, lights, times, given_corners, strict=True):
             photo = _read(path, bayer, encoding, black_level, white_level)
             found = _corners(text) if text else _detect(photo)
-            photographs.append(ChartPhotograph(photo, spec, seconds or 1.0, found))
+            photographs.append(
+                ChartPhotograph(photo, spec, 1.0 if seconds is None else seconds, found)
+            )
     with console.status("estimating the response"):
         result = characterize_photographs(
             photographs, chart_model, spectra, prior="measured" if prior else None
