@@ -123,7 +123,7 @@ def error(scenario: Scenario, **weights: float) -> float:
     """The worst channel's peak-relative RMSE of the extended estimate."""
     rgb, chart, light, positions, response = scenario.photo()
     estimate = estimate_response(
-        rgb, chart, light, WAVELENGTHS, field_positions=positions, **weights
+        rgb, chart, light, WAVELENGTHS, field_positions=positions, prior=None, **weights
     )
     return float(peak_relative_rmse(estimate, response).max())
 

@@ -21,6 +21,10 @@ if [ ! -f "$STAMP" ] || [ pyproject.toml -nt "$STAMP" ]; then
     echo "bootstrap: installing spectwin[dev] into $VENV"
     "$VENV/bin/python" -m pip install --quiet --upgrade pip
     "$VENV/bin/python" -m pip install --quiet -e ".[dev]"
+    # colour-checker-detection pulls in opencv-python, whose cv2 (which needs libGL) may
+    # overwrite opencv-python-headless's in the same folder: remove it, restore the headless one.
+    "$VENV/bin/python" -m pip uninstall --quiet --yes opencv-python
+    "$VENV/bin/python" -m pip install --quiet --force-reinstall --no-deps opencv-python-headless
     touch "$STAMP"
 fi
 

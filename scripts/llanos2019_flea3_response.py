@@ -1,7 +1,9 @@
-"""Write the Flea3's relative RGB response of the llanos2019 bench as a CSV camera file.
+"""Write the Flea3's relative RGB response of the llanos2019 bench as a CSV camera file, and as
+the white balance per filter that ``spectwin camchar --truth`` compares with.
 
     python scripts/llanos2019_flea3_response.py   # writes recon/data/real/llanos2019/
-                                                  # flea3_filter_band_response.csv
+                                                  # flea3_filter_band_response.csv and
+                                                  # flea3_filter_white_balance.csv
 
 Source: ``multispectral_images/sensor.mat`` of the llanos2019 data (B. Llanos, University of
 Alberta, 2019, Boost Software License 1.0): ``sensor_map_relative``, the camera's Red and Blue
@@ -12,7 +14,8 @@ ratios from midway to its neighbour's centroid (the centroids of the filters' ma
 spectrometer measured them in ``spectral_data/spectra_averaged.csv``), the outer steps held to
 380 and 780 nm. Green's own spectral shape is not in the data (it is flat here): only the light
 inside the filters' passbands is meaningful, and the bench's lamp power per filter absorbs the
-Green response there.
+Green response there. The white balance is the same ratios as measured, one row per filter
+(``light,R,G,B``, the filters named as the columns of ``spectra_averaged.csv``).
 """
 
 from __future__ import annotations
@@ -62,6 +65,18 @@ def main() -> None:
     )
     path = FOLDER / "flea3_filter_band_response.csv"
     path.write_text(header + "wavelength_nm,R,G,B\n" + table + "\n")
+    print(path)
+    balance = (
+        "# Flea3 FL3-GE-50S5C of the llanos2019 bench: its RGB of a white surface under each\n"
+        "# band-pass filter, relative to G (sensor.mat sensor_map_relative, B. Llanos 2019, Boost\n"
+        "# Software License 1.0), the filters named as in spectral_data/spectra_averaged.csv;\n"
+        "# written by scripts/llanos2019_flea3_response.py.\nlight,R,G,B\n"
+    ) + "\n".join(
+        f"{name},{r:.6g},{g:.6g},{b:.6g}"
+        for name, (r, g, b) in zip(FILTER_COLUMNS, ratios.T, strict=True)
+    )
+    path = FOLDER / "flea3_filter_white_balance.csv"
+    path.write_text(balance + "\n")
     print(path)
 
 

@@ -257,12 +257,12 @@ PROBES: list[tuple[list[str], int, str]] = [
     (["store", "check", "@UNVERSIONED_CAPTURE"], 2, "schema version none recorded, expected 2"),
     (["store", "check", "@OLD_BTF"], 2, "old.btf.zarr: a BTF store of format version 1, expected"),
     (["store", "nosuch"], 2, "No such command 'nosuch'"),
-    # camchar
-    (["camchar", "--camera", "nosuch"], 2, "'Nikon D70'"),
-    (["camchar", "--light", "candle"], 2, "'daylight'"),
-    (["camchar", "--chart", "nosuch"], 2, "'esser'"),
-    (["camchar", "--bend", "0.5"], 2, "'--bend'"),
-    (["camchar", "--out", "@PLAIN"], 2, "is a file; expected a folder"),
+    # camchar-study
+    (["camchar-study", "--camera", "nosuch"], 2, "'Nikon D70'"),
+    (["camchar-study", "--light", "candle"], 2, "'daylight'"),
+    (["camchar-study", "--chart", "nosuch"], 2, "'esser'"),
+    (["camchar-study", "--bend", "0.5"], 2, "'--bend'"),
+    (["camchar-study", "--out", "@PLAIN"], 2, "is a file; expected a folder"),
     # camchar-cameras
     (["camchar-cameras", "--camera", "Nikon D85"], 2, "closest: Nikon D850"),
     (["camchar-cameras", "--seed", "-1"], 2, "'--seed'"),

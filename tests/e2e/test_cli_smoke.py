@@ -108,8 +108,8 @@ def test_gallery_writes_a_frame_of_every_material_in_every_rig(tmp_path):
         assert (tmp_path / name).stat().st_size > 0
 
 
-def test_camchar_recovers_the_camera_from_a_glossy_chart_under_a_spot(tmp_path):
-    result = runner.invoke(app, ["camchar", "--out", str(tmp_path), "--json"])
+def test_camchar_study_recovers_the_camera_from_a_glossy_chart_under_a_spot(tmp_path):
+    result = runner.invoke(app, ["camchar-study", "--out", str(tmp_path), "--json"])
     assert result.exit_code == 0, result.output
     summary = json.loads(result.output)
     assert summary["fields"] == 113
@@ -120,8 +120,8 @@ def test_camchar_recovers_the_camera_from_a_glossy_chart_under_a_spot(tmp_path):
         assert (tmp_path / name).stat().st_size > 0
 
 
-def test_camchar_names_bad_scenarios(tmp_path):
-    result = runner.invoke(app, ["camchar", "--out", str(tmp_path), "--light", "candle"])
+def test_camchar_study_names_bad_scenarios(tmp_path):
+    result = runner.invoke(app, ["camchar-study", "--out", str(tmp_path), "--light", "candle"])
     assert result.exit_code == 2
     assert "daylight" in result.stderr and "Traceback" not in result.output
 

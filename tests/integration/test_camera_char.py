@@ -110,6 +110,7 @@ def disturbance_sweep():
                 light,
                 WAVELENGTHS,
                 field_positions=BIG_POSITIONS,
+                prior=None,
                 return_details=True,
             )
             errors.append(_rmse(result.response, response).max())
@@ -156,10 +157,10 @@ def test_halogen_is_worse_in_the_blue_and_adding_daylight_repairs_it():
         rgb_halogen = _disturbed(response, halogen, 10 + seed, noise=0.005)[0]
         rgb_daylight = _disturbed(response, daylight, 20 + seed, noise=0.005)[0]
         only_halogen = estimate_response(
-            rgb_halogen, CHART, halogen, WAVELENGTHS, field_positions=POSITIONS
+            rgb_halogen, CHART, halogen, WAVELENGTHS, field_positions=POSITIONS, prior=None
         )
         only_daylight = estimate_response(
-            rgb_daylight, CHART, daylight, WAVELENGTHS, field_positions=POSITIONS
+            rgb_daylight, CHART, daylight, WAVELENGTHS, field_positions=POSITIONS, prior=None
         )
         both = estimate_response(
             np.stack([rgb_halogen, rgb_daylight]),
@@ -167,6 +168,7 @@ def test_halogen_is_worse_in_the_blue_and_adding_daylight_repairs_it():
             np.stack([halogen, daylight]),
             WAVELENGTHS,
             field_positions=POSITIONS,
+            prior=None,
         )
         errors.append(
             [_rmse(e, response, BLUE).mean() for e in (only_halogen, only_daylight, both)]
@@ -182,7 +184,12 @@ def test_eq_9_18_profile_beats_a_fixed_3x3_profile_under_a_new_illuminant():
         from_colour(colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]), DEFAULT_GRID
     ).values.T
     estimate = estimate_response(
-        _disturbed(response, capture, 5)[0], CHART, capture, WAVELENGTHS, field_positions=POSITIONS
+        _disturbed(response, capture, 5)[0],
+        CHART,
+        capture,
+        WAVELENGTHS,
+        field_positions=POSITIONS,
+        prior=None,
     )
     # Fixed colorimetric profile fitted under the capture light, white-balanced (CAT02) after.
     fixed = np.linalg.lstsq((CHART * capture) @ response, (CHART * capture) @ observer, rcond=None)[

@@ -5,7 +5,7 @@ import colour
 import numpy as np
 import pytest
 
-from recon.camera_char import estimate_response
+from recon.camera_char import estimate_response, measured_response_prior
 from recon.camera_jiang2013 import jiang2013_response
 from recon.camera_prior import learn_response_prior
 from recon.errors import InputError
@@ -120,6 +120,28 @@ def test_the_prior_helps_where_a_small_chart_says_little():
         for prior in (None, learn_response_prior(others, WAVELENGTHS))
     ]
     assert errors[1] < 0.7 * errors[0] and errors[1] < 0.06
+
+
+def test_the_prior_of_all_51_cameras_is_the_default():
+    """``estimate_response`` takes the prior learned from every shipped camera unless told
+    otherwise; ``prior=None`` is the thesis's method and the basic method ignores the default."""
+    prior = measured_response_prior(WAVELENGTHS)
+    learned = learn_response_prior(RESPONSES, WAVELENGTHS)
+    np.testing.assert_allclose(prior.precision, learned.precision, rtol=1e-9)
+    assert prior.cameras == 51 and measured_response_prior(WAVELENGTHS) is prior  # learned once
+    truth = RESPONSES[NAMES.index("Nikon D850")]
+    rgb = (COLORCHECKER * DAYLIGHT) @ truth
+    positions = np.array([[j % 6, j // 6] for j in range(24)], dtype=float)
+
+    def estimate(**options):
+        return estimate_response(
+            rgb, COLORCHECKER, DAYLIGHT, WAVELENGTHS, field_positions=positions, **options
+        )
+
+    np.testing.assert_array_equal(estimate(), estimate(prior=prior))
+    assert not np.allclose(estimate(), estimate(prior=None))
+    basic = estimate_response(rgb, COLORCHECKER, DAYLIGHT, WAVELENGTHS, method="basic")
+    assert basic.shape == (41, 3)
 
 
 @pytest.mark.parametrize(

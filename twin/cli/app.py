@@ -13,9 +13,9 @@ import typer
 
 from twin.cli.bench import register as register_bench
 from twin.cli.btf import register as register_btf
+from twin.cli.camchar import register as register_camchar
 from twin.cli.camera import register as register_camera
 from twin.cli.capture import register as register_capture
-from twin.cli.choices import Chart, Light, RGBCamera
 from twin.cli.dome import register as register_dome
 from twin.cli.errors import (
     INTERRUPT_REPORT,
@@ -125,87 +125,6 @@ def gallery(
     console.print(f"wrote {len(summary['outputs'])} frames to {out}")
 
 
-@app.command()
-def camchar(
-    out: Annotated[
-        Path, typer.Option(help="Folder for the photo, the curves and summary.json.")
-    ] = Path("out/camchar"),
-    chart: Annotated[Chart, typer.Option(help="esser: 113 fields; colorchecker: 24.")] = (
-        Chart.esser
-    ),
-    light: Annotated[Light, typer.Option(help="The light of the photograph.")] = Light.daylight,
-    camera: Annotated[RGBCamera, typer.Option(help="The camera to characterize.")] = (
-        RGBCamera.nikon_d70
-    ),
-    glossy: Annotated[bool, typer.Option(help="Glossy coating on the fields.")] = True,
-    spot: Annotated[bool, typer.Option(help="Spot light (else a large area light).")] = True,
-    occluder: Annotated[bool, typer.Option(help="An occluder casting a soft shadow.")] = False,
-    bend: Annotated[
-        float, typer.Option(min=0.0, max=0.2, help="Bend of the chart, in chart widths.")
-    ] = 0.0,
-    as_json: JsonFlag = False,
-) -> None:
-    """Characterize a camera from a rendered chart photograph (thesis chapter 9)."""
-    from twin.studies.camchar import run_camchar
-    from twin.studies.camchar_scenes import ChartScenario
-
-    require_output_folder(out)
-    scenario = ChartScenario(
-        chart=chart.value,
-        light=light.value,
-        camera=camera.value,
-        glossy=glossy,
-        spot=spot,
-        occluder=occluder,
-        bend=bend,
-    )
-    with console.status("rendering the chart photograph and estimating the response"):
-        summary = run_camchar(scenario, out)
-    print_summary(
-        summary,
-        f"camera characterization: {camera.value}",
-        as_json,
-        skip=("scenario", "outputs"),
-    )
-    if not as_json:
-        console.print(f"wrote {out / 'responses.png'} and {out / 'chart_photo.png'}")
-
-
-@app.command(name="camchar-cameras")
-def camchar_cameras(
-    out: Annotated[
-        Path, typer.Option(help="Folder for table.csv, errors.png, worst_camera.png, summary.json.")
-    ] = Path("out/camchar-cameras"),
-    camera: Annotated[
-        list[str] | None,
-        typer.Option(
-            help="A measured camera to characterize, e.g. 'Nikon D850' (repeat for several; "
-            "default: all 51). Its prior is always learned from all the others."
-        ),
-    ] = None,
-    seed: Annotated[
-        int, typer.Option(min=0, help="Seed of the specularity, shading and noise.")
-    ] = 0,
-    as_json: JsonFlag = False,
-) -> None:
-    """Chapter 9 on 51 measured cameras, each left out: the extended estimator with a prior
-    learned from the other cameras, without it, and Jiang et al. 2013 on the same photographs."""
-    from twin.studies.camchar_cameras import run_camchar_cameras
-
-    require_output_folder(out)
-    summary = run_camchar_cameras(out, cameras=camera, seed=seed, progress=not as_json)
-    if as_json:
-        print_summary(summary, "camera characterization across cameras", as_json)
-        return
-    rows = {}
-    for method, statistics in summary["methods"].items():
-        rows[f"{method}_mean_pct"] = statistics["mean_pct"]
-        rows[f"{method}_max_pct"] = statistics["max_pct"]
-        rows[f"{method}_hardest"] = ", ".join(statistics["hardest"])
-    print_summary(rows, f"worst channel's RMSE over {summary['cameras']} cameras (seed {seed})")
-    console.print(f"wrote {out / 'table.csv'}, {out / 'errors.png'} and {out / 'worst_camera.png'}")
-
-
 @app.command(name="spectralize-study")
 def spectralize_study(
     out: Annotated[Path, typer.Option(help="Folder for study.json and the PNGs.")] = Path(
@@ -274,6 +193,7 @@ def demo(
 
 register_bench(app)
 register_btf(app)
+register_camchar(app)
 register_camera(app)
 register_capture(app)
 register_pipeline(app)

@@ -16,6 +16,7 @@ from __future__ import annotations
 import colour
 import numpy as np
 
+from recon.chart_photos.charts import colorchecker_reflectances as measured_colorchecker
 from recon.errors import InputError
 from recon.measured_data import read_spectra_csv
 from recon.spectra import OutOfRangePolicy, SampledSpectra, WavelengthGrid, from_colour, resample
@@ -67,11 +68,7 @@ def colorchecker_reflectances(
         raise InputError(f"source: expected one of {COLORCHECKER_SOURCES}, got {source!r}")
     names = tuple(colour.SDS_COLOURCHECKERS["ColorChecker N Ohta"])
     if source == "isetbio":
-        measured = read_spectra_csv("spectra/reflectances/macbeth_colorchecker.csv")
-        # isetbio stores the 4 x 6 chart column by column (its gray series is every 4th patch):
-        # reorder to the row-major patch order of colour.
-        row_major = [(index % 6) * 4 + index // 6 for index in range(24)]
-        measured = SampledSpectra(measured.grid, measured.values[row_major], names)
+        measured = measured_colorchecker()
     else:
         patches = colour.SDS_COLOURCHECKERS[source]
         measured = from_colour(colour.MultiSpectralDistributions(list(patches.values())))

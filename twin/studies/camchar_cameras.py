@@ -39,6 +39,7 @@ from scipy import stats
 from recon.camera_char import estimate_response
 from recon.camera_jiang2013 import jiang2013_response
 from recon.camera_prior import PRIOR_COMPONENTS, PRIOR_WEIGHT, learn_response_prior
+from recon.chart_photos.charts import colorchecker_reflectances
 from recon.errors import InputError
 from recon.measured_data import camera_name, camera_names, read_camera_sensitivities
 from recon.metrics import peak_relative_rmse
@@ -50,6 +51,7 @@ from twin.studies.camchar_figures import errors_figure, response_curves_figure
 
 __all__ = [
     "BOUNDS_PCT",
+    "CHARTS",
     "ESTIMATION_GRID",
     "METHODS",
     "CameraCharacterization",
@@ -59,7 +61,9 @@ __all__ = [
 
 ESTIMATION_GRID = WavelengthGrid.regular(380.0, 780.0, 10.0)
 PHOTO_GRID = WavelengthGrid.regular(380.0, 780.0, 5.0)
-CHART_COLUMNS = 20
+CHARTS = {"240": 20, "colorchecker": 6}
+"""The charts (columns of their layout): the 240 measured fields, 20 x 12, and the ColorChecker
+Classic (isetbio's measurement, ``recon.chart_photos.charts``), 6 x 4."""
 SPECULARITY_MAX = 0.1
 SHADING_AMPLITUDE = 0.2
 NOISE = 0.005
@@ -94,10 +98,17 @@ def _light(name: str, grid: WavelengthGrid) -> np.ndarray:
     return resample(spectrum, grid, method="box").values
 
 
-def _chart(seed: int, light: str) -> _Chart:
-    fine = camera_chart_reflectances(PHOTO_GRID).values
+def _reflectances(chart: str, grid: WavelengthGrid) -> np.ndarray:
+    if chart == "colorchecker":
+        return resample(colorchecker_reflectances(), grid, method="box").values
+    return camera_chart_reflectances(grid).values
+
+
+def _chart(seed: int, light: str, chart: str = "240") -> _Chart:
+    fine = _reflectances(chart, PHOTO_GRID)
     fields = len(fine)
-    positions = np.array([[j % CHART_COLUMNS, j // CHART_COLUMNS] for j in range(fields)], float)
+    columns = CHARTS[chart]
+    positions = np.array([[j % columns, j // columns] for j in range(fields)], float)
     rng = np.random.default_rng(seed)
     specularity = rng.uniform(0.0, SPECULARITY_MAX, fields)
     phase = rng.uniform(0.0, 3.0, 2)
@@ -106,7 +117,7 @@ def _chart(seed: int, light: str) -> _Chart:
     image = shading[:, None] * (fine + specularity[:, None]) * _light(light, PHOTO_GRID)
     return _Chart(
         image=image,
-        reflectances=camera_chart_reflectances(ESTIMATION_GRID).values,
+        reflectances=_reflectances(chart, ESTIMATION_GRID),
         illuminant=_light(light, ESTIMATION_GRID),
         positions=positions,
     )
@@ -149,6 +160,7 @@ def characterize_cameras(
     *,
     seed: int = 0,
     light: str = LIGHT,
+    chart: str = "240",
     methods: Sequence[str] = METHODS,
     components: int = PRIOR_COMPONENTS,
     prior_weight: float = PRIOR_WEIGHT,
@@ -165,6 +177,8 @@ def characterize_cameras(
         Draws the specularity and shading of the chart and, with each camera's name, its noise.
     light
         A CIE illuminant of ``colour.SDS_ILLUMINANTS`` (the study's is D65).
+    chart
+        One of :data:`CHARTS` (the study's is the 240-field chart).
     methods
         A subset of :data:`METHODS`.
     components, prior_weight
@@ -179,6 +193,8 @@ def characterize_cameras(
         raise InputError("cameras: expected at least one measured camera")
     if not methods or set(methods) - set(METHODS):
         raise InputError(f"methods: expected some of {METHODS}, got {tuple(methods)}")
+    if chart not in CHARTS:
+        raise InputError(f"chart: expected one of {sorted(CHARTS)}, got {chart!r}")
     if light not in colour.SDS_ILLUMINANTS:
         raise InputError(f"light: expected a CIE illuminant such as 'D65', got {light!r}")
     measured = {name: read_camera_sensitivities(name) for name in everyone}
@@ -187,7 +203,7 @@ def characterize_cameras(
         name: resample(s, ESTIMATION_GRID, method="box", out_of_range="clamp").values.T
         for name, s in measured.items()
     }
-    chart = _chart(seed, light)
+    photographed = _chart(seed, light, chart)
     results = []
     with progress_steps("characterizing cameras", len(cameras), enabled=progress) as advance:
         for camera in cameras:
@@ -195,8 +211,10 @@ def characterize_cameras(
             prior = learn_response_prior(
                 others, ESTIMATION_GRID.wavelengths_nm, components=components
             )
-            rgb = _photograph(chart, fine[camera], camera, seed)
-            estimates = {m: _estimate(m, rgb, chart, others, prior, prior_weight) for m in methods}
+            rgb = _photograph(photographed, fine[camera], camera, seed)
+            estimates = {
+                m: _estimate(m, rgb, photographed, others, prior, prior_weight) for m in methods
+            }
             truth = responses[camera]
             results.append(
                 CameraCharacterization(
