@@ -47,7 +47,7 @@ _SPAN_SIGMAS = 7.0  # the pixel population's normal, integrated over +-7 standar
 _NOISE_SIGMAS = 8.0  # digital values further than this from a pixel's signal do not occur
 _MIN_NOISE_DN = 1e-3  # a temporal noise below this is a step function on any grid
 _MAX_NODES = 200_001
-_DITHERED_DN = 1.0  # above this temporal noise, quantization adds 1/12 DN^2 (to 3e-9 of it)
+_DITHERED_DN = 1.0  # from this temporal noise on, quantization adds 1/12 DN^2 (to 3e-9 of it)
 
 
 @dataclass(frozen=True)
@@ -71,6 +71,13 @@ def _population(
     t = np.linspace(-_SPAN_SIGMAS, _SPAN_SIGMAS, nodes)
     weights = np.exp(-0.5 * t * t)
     return mean_dn + spatial_sigma_dn * t, weights / weights.sum()
+
+
+def _dithered(mean_dn: float, spatial_sigma_dn: float, noise_dn: float, max_dn: int) -> bool:
+    """Noise that dithers the quantizer, on pixels clear of the ADC's ends: there EMVA 1288's
+    linear model holds (:math:`\\mu`, :math:`s^2`, :math:`\\sigma^2 + 1/12`) to 3e-9 of 1/12."""
+    reach = _SPAN_SIGMAS * spatial_sigma_dn + _NOISE_SIGMAS * noise_dn
+    return noise_dn >= _DITHERED_DN and 0 <= mean_dn - reach and mean_dn + reach <= max_dn
 
 
 def quantized_moments(
@@ -104,6 +111,8 @@ def quantized_moments(
     0.071
     """
     noise = max(temporal_sigma_dn, _MIN_NOISE_DN)
+    if _dithered(mean_dn, spatial_sigma_dn, noise, max_dn):
+        return QuantizedMoments(float(mean_dn), float(spatial_sigma_dn) ** 2, noise**2 + 1 / 12)
     signal, weights = _population(mean_dn, spatial_sigma_dn, noise)
     # A digital value y is the count of the levels j below it: y = sum_j [y > j], so
     # E[y] = sum_j P(y > j) and E[y^2] = sum_j (2j + 1) P(y > j), over the few levels j
@@ -129,10 +138,8 @@ def quantized_temporal_variance(
     *,
     max_dn: int,
 ) -> np.ndarray:
-    r"""The mean temporal variance of quantized pixels, element by element (DN^2).
-
-    EMVA 1288's :math:`\sigma^2 + 1/12` where the noise dithers the quantizer (from 1 DN), the
-    ``temporal_variance_dn2`` of :func:`quantized_moments` below.
+    """The mean temporal variance of quantized pixels, element by element (DN^2): the
+    ``temporal_variance_dn2`` of :func:`quantized_moments`.
 
     Examples
     --------
@@ -142,10 +149,12 @@ def quantized_temporal_variance(
     [0.0648, 4.0833]
     """
     arrays = np.broadcast_arrays(
-        np.asarray(mean_dn, float), np.asarray(spatial_sigma_dn, float), temporal_sigma_dn
+        np.asarray(mean_dn, float),
+        np.asarray(spatial_sigma_dn, float),
+        np.asarray(temporal_sigma_dn, float),
     )
-    variance = np.asarray(arrays[2], float) ** 2 + 1 / 12
-    for index in zip(*np.nonzero(arrays[2] < _DITHERED_DN), strict=True):
+    variance = np.empty(arrays[0].shape)
+    for index in np.ndindex(variance.shape):
         moments = quantized_moments(*(float(array[index]) for array in arrays), max_dn=max_dn)
         variance[index] = moments.temporal_variance_dn2
     return variance
