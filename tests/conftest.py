@@ -91,6 +91,37 @@ def make_emva_measurement(synthetic_camera):
     return make
 
 
+def _load_script(name: str):
+    """A module of ``scripts/`` (not a package: loaded from its file)."""
+    import importlib.util
+
+    path = Path(__file__).parents[1] / "scripts" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="session")
+def emva_reference_sets():
+    """``scripts/emva1288_reference_sets.py``: measurements shaped like the official EMVA 1288
+    reference sets 002 and 003, written from known parameters."""
+    return _load_script("emva1288_reference_sets")
+
+
+@pytest.fixture(scope="session")
+def cmos8_measurement(tmp_path_factory, emva_reference_sets):
+    """Reference set 002's plan (exposure-0 steps, 100 spatial frames) taken by a twin 8-bit
+    camera with quantization-limited dark frames, 128 x 128 px."""
+    return emva_reference_sets.write_cmos8(tmp_path_factory.mktemp("cmos8"))
+
+
+@pytest.fixture(scope="session")
+def heidelberg_measurement(tmp_path_factory, emva_reference_sets):
+    """Reference set 003's simulated 12-bit camera and plan (one exposure time), 128 x 128 px."""
+    return emva_reference_sets.write_heidelberg(tmp_path_factory.mktemp("heidelberg"))
+
+
 def _truncate(file: Path) -> None:
     file.write_bytes(file.read_bytes()[:7])
 
@@ -131,13 +162,7 @@ def chunk_damage() -> dict[str, ChunkDamage]:
 def bonn_files():
     """``scripts/bonn_btf_files.py``: writers of the Bonn BTF layouts (UBO2003 and ATRIUM
     archives, UBO2014 files) as recon.btf.bonn_formats documents them."""
-    import importlib.util
-
-    path = Path(__file__).parents[1] / "scripts" / "bonn_btf_files.py"
-    spec = importlib.util.spec_from_file_location("bonn_btf_files", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return _load_script("bonn_btf_files")
 
 
 def _swap(store: Path, key: str, other: str, donors: dict[str, Path]) -> None:

@@ -1,5 +1,6 @@
 """EMVA 1288 measurements of real cameras: the descriptor and its images, their analysis with
-the ``emva1288`` package, and the fit of the camera model's parameters to it.
+the ``emva1288`` package, what its estimators see in quantized frames, and the fit of the camera
+model's parameters to it.
 """
 
 import lazy_loader
@@ -11,5 +12,6 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "descriptor": ["EMVADescriptor", "EMVAStep", "read_descriptor", "write_descriptor"],
         "fit": ["FittedSensor", "fit_sensor"],
         "linear_model": ["knee_oecf", "predicted_saturation_e"],
+        "quantization": ["QuantizedMoments", "quantized_moments", "unquantized_spread"],
     },
 )

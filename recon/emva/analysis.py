@@ -37,9 +37,16 @@ from emva1288.process import Data1288, LoadImageData, ParseEmvaDescriptorFile, R
 
 from recon.emva._numpy2 import patch_emva1288
 from recon.emva.descriptor import EMVADescriptor, read_descriptor, read_frame
+from recon.emva.quantization import QuantizedMoments
 from recon.errors import InputError
 
-__all__ = ["EMVAAnalysis", "PhotonTransfer", "analyse_measurement", "run_results1288"]
+__all__ = [
+    "EMVAAnalysis",
+    "PhotonTransfer",
+    "analyse_measurement",
+    "dark_at_zero_exposure",
+    "run_results1288",
+]
 
 _QUIET = logging.WARNING
 
@@ -72,7 +79,14 @@ class PhotonTransfer:
 
 @dataclass(frozen=True, eq=False)
 class EMVAAnalysis:
-    """The figures of an EMVA 1288 measurement, as the ``emva1288`` package computes them."""
+    """The figures of an EMVA 1288 measurement, as the ``emva1288`` package computes them.
+
+    Beside the figures, what a model of the camera must reproduce: the photon transfer data,
+    the spatial steps' mean, spatial variance (the temporal part removed, the package's
+    Eq. (36)) and mean temporal variance of their stacks of frames, and the temporal dark
+    variance at zero exposure time before the package's floor of 0.24 DN^2
+    (``dark_noise_dn`` is its square root after the floor).
+    """
 
     descriptor: EMVADescriptor
     system_gain_dn_per_e: float
@@ -96,6 +110,9 @@ class EMVAAnalysis:
     linearity_error_max_percent: float
     spatial_photons: float
     spatial_signal_dn: float
+    spatial_bright: QuantizedMoments
+    spatial_dark: QuantizedMoments
+    dark_temporal_variance_dn2: float
     transfer: PhotonTransfer
 
     def figures(self) -> dict[str, float]:
@@ -143,6 +160,24 @@ def _run_package(descriptor: EMVADescriptor) -> tuple[Data1288, Results1288]:
     # for a camera clipped at its full well is the noise of the read-noise plateau beyond it.
     saturation = int(np.argmax(data.data["temporal"]["s2_y"]))
     return data, run_results1288(data.data, saturation_index=saturation)
+
+
+def dark_at_zero_exposure(exposure_ns: np.ndarray, values: np.ndarray) -> float:
+    """A dark figure extrapolated to zero exposure time on a straight line (EMVA 1288's dark
+    offset and temporal dark noise); with a single exposure time, its mean."""
+    if np.unique(exposure_ns).size < 2:
+        return float(np.mean(values))
+    return float(np.polynomial.polynomial.polyfit(exposure_ns, values, 1)[0])
+
+
+def _spatial_moments(spatial: dict[str, Any], variance: float, suffix: str) -> QuantizedMoments:
+    """The spatial step's mean, spatial variance (the temporal part removed) and mean
+    temporal variance of its stack of frames (EMVA 1288 section 8.1)."""
+    return QuantizedMoments(
+        mean_dn=float(spatial["avg_mean" + suffix]),
+        spatial_variance_dn2=float(variance),
+        temporal_variance_dn2=float(spatial["var_mean" + suffix]),
+    )
 
 
 def _finite(value: SupportsFloat) -> float:
@@ -204,7 +239,7 @@ def _analysis(descriptor: EMVADescriptor) -> EMVAAnalysis:
     bright_error_dn2 = spatial["var_mean"] / spatial["L"] * math.sqrt(2 / (pixels - 1))
     spatial_signal = spatial["avg_mean"] - spatial["avg_mean_dark"]
     prnu_dn = math.sqrt(max(results.s_2_y - results.s_2_y_dark, 0.0))
-    offset = np.polynomial.polynomial.polyfit(temporal["texp"], temporal["u_ydark"], 1)[0]
+    offset = dark_at_zero_exposure(temporal["texp"], temporal["u_ydark"])
     transfer = PhotonTransfer(
         exposure_s=np.asarray(temporal["texp"], float) / 1e9,
         photons=np.asarray(temporal["u_p"], float),
@@ -242,5 +277,8 @@ def _analysis(descriptor: EMVADescriptor) -> EMVAAnalysis:
         linearity_error_max_percent=float(linearity["linearity_error_max"]),
         spatial_photons=float(spatial["u_p"]),
         spatial_signal_dn=float(spatial_signal),
+        spatial_bright=_spatial_moments(spatial, results.s_2_y, ""),
+        spatial_dark=_spatial_moments(spatial, results.s_2_y_dark, "_dark"),
+        dark_temporal_variance_dn2=dark_at_zero_exposure(temporal["texp"], temporal["s2_ydark"]),
         transfer=transfer,
     )

@@ -12,7 +12,10 @@ lists. After ``#`` comments, the descriptor holds::
 
 Steps with two images make the temporal measurement (photon transfer, sensitivity, linearity,
 dark current); one illuminated and one dark step with more than two images, at one exposure
-time, make the spatial measurement (DSNU, PRNU). This is the format that the ``emva1288``
+time, make the spatial measurement (DSNU, PRNU). An exposure time may be 0: the official
+reference set 002 starts both series there (``b 000.00 000.35``), a camera's shortest exposure
+with the light it lets through. A measurement may also vary the photons at one exposure time
+(reference set 003: one dark step for all bright ones). This is the format that the ``emva1288``
 package reads; :func:`read_descriptor` checks a file completely, naming the line and what was
 expected, before any analysis starts.
 
@@ -22,6 +25,8 @@ References
   (temporal, spatial and dark-current measurements).
 - The ``emva1288`` package (EMVA1288/emva1288 on GitHub): the descriptor format
   (``emva1288.process.parser``).
+- EMVA1288/datasets on GitHub: the reference sets 001 (Basler CCD), 002 (STEMMER IMAGING CMOS)
+  and 003 (HCI Heidelberg simulation).
 """
 
 from __future__ import annotations
@@ -103,7 +108,12 @@ class EMVADescriptor:
 
     @property
     def exposure_range_s(self) -> tuple[float, float]:
-        times = [step.exposure_s for step in self.steps]
+        """Shortest and longest exposure time a camera needs to repeat the measurement, s.
+
+        A step at 0 ns (the official reference set 002 starts its series with one) is not an
+        exposure a camera can make: it is the camera's shortest, so it does not count here.
+        """
+        times = [step.exposure_s for step in self.steps if step.exposure_ns > 0]
         return min(times), max(times)
 
     @property
@@ -167,8 +177,8 @@ def _check_size(path: Path, line: int, bits: int, width: int, height: int) -> No
 
 
 def _check_step(path: Path, step: EMVAStep) -> None:
-    if not np.isfinite(step.exposure_ns) or step.exposure_ns <= 0:
-        raise _fail(path, step.line, f"exposure time {step.exposure_ns} ns: expected > 0")
+    if not np.isfinite(step.exposure_ns) or step.exposure_ns < 0:
+        raise _fail(path, step.line, f"exposure time {step.exposure_ns} ns: expected >= 0")
     if step.kind == "bright" and not (np.isfinite(step.photons) and step.photons > 0):
         raise _fail(path, step.line, f"photon count {step.photons}: expected > 0")
     if len(step.images) < 2:
@@ -179,6 +189,11 @@ def _check_step(path: Path, step: EMVAStep) -> None:
 
 def _check_structure(path: Path, steps: list[EMVAStep]) -> None:
     """The rules of the emva1288 analysis, checked here to name the offending line."""
+    if all(step.exposure_ns == 0 for step in steps):
+        raise InputError(
+            f"{path}: every step at exposure time 0 ns; expected at least one step with a "
+            "positive exposure time"
+        )
     sets = Counter((step.spatial, step.exposure_ns, step.photons) for step in steps)
     for step in steps:
         if sets[(step.spatial, step.exposure_ns, step.photons)] > 1:
@@ -231,8 +246,9 @@ def read_descriptor(path: str | Path) -> EMVADescriptor:
     Raises
     ------
     InputError
-        A malformed or unknown line, a missing ``n`` line, a step with fewer than two images,
-        a bright step without a dark one, no spatial measurement, a missing image: one line
+        A malformed or unknown line, a missing ``n`` line, a negative exposure time or every one
+        0, a step with fewer than two images, a bright step without a dark one, no spatial
+        measurement, a missing image: one line
         naming the file, the line and what was expected. The images' contents are checked when
         they are read (:func:`read_frame`).
     """

@@ -1,53 +1,66 @@
-"""The camera model's parameters fitted to an EMVA 1288 measurement.
+r"""The camera model's parameters fitted to an EMVA 1288 measurement.
 
 The ``emva1288`` package's figures (:mod:`recon.emva.analysis`) describe a camera in EMVA 1288's
 terms; the twin simulates a camera from physical parameters (:mod:`recon.emva.linear_model`,
 ``twin.sensor.model``). :func:`fit_sensor` finds the parameters whose simulated measurement,
-analysed by the same package, gives the measured figures:
+analysed by the same estimators, gives the measured figures. The frames are quantized; where the
+temporal noise is below about a DN the quantizer does not average out, and the estimators see
+what :mod:`recon.emva.quantization` predicts rather than the signals themselves (an 8-bit camera
+with little dark noise is the common case). So:
 
-- offset :math:`\\mu_{offset}`: the dark mean extrapolated to zero exposure time;
-- OECF knee :math:`s` and responsivity :math:`A = K \\eta` (DN per photon): least squares of the
-  model's mean signal :math:`top\\,[g((A \\mu_p + c t)/top) - g(c t / top)]` against the measured
-  :math:`\\mu_y - \\mu_{y.dark}` over the linearity range (5-95 % of saturation), relative
-  residuals, :math:`s \\ge 0` (a linear camera gives :math:`s = 0`), with the dark signal rate
-  :math:`c = K \\mu_I` from the slope of the dark mean divided by :math:`g'(0) = 1 + s`;
+- offset spread (DSNU) and offset :math:`\mu_{offset}`: the dark pixels' spread and mean before
+  quantization whose quantized spatial dark step gives the measured mean, spatial variance and
+  temporal variance (:func:`recon.emva.quantization.unquantized_spread`); the offset is the dark
+  mean extrapolated to zero exposure time less the bias quantization gives it. One spatial
+  exposure time cannot separate offset and dark-current non-uniformity: the spread is all offset;
+- OECF knee :math:`s` and responsivity :math:`A = K \eta` (DN per photon): least squares of the
+  model's mean signal :math:`top\,[g((A \mu_p + c t)/top) - g(c t / top)]` against the measured
+  :math:`\mu_y - \mu_{y.dark}` over the linearity range (5-95 % of saturation), relative
+  residuals, :math:`s \ge 0` (a linear camera gives :math:`s = 0`), with the dark signal rate
+  :math:`c = K \mu_I` from the slope of the dark mean divided by :math:`g'(0) = 1 + s`;
+- read noise :math:`\sigma_r`: the one whose quantized dark steps, extrapolated to zero exposure
+  time as EMVA 1288 does, give the measured temporal dark variance before the package's floor of
+  0.24 DN^2 (:math:`\sqrt{\sigma^2_{y.dark} - 1/12} / (1 + s)` where the noise dithers);
+- PRNU: the bright pixels' spread before quantization at the spatial step, less the offsets',
+  relative to the signal: EMVA 1288's :math:`PRNU_{1288}` of unquantized spatial variances,
+  times :math:`1 + s u` at the step's normalized signal :math:`u` (the knee compresses relative
+  differences by :math:`u g'(u) / g(u)`); 0 where the measurement resolves none;
 - system gain :math:`K`: the knee bends the photon transfer (noise passes through
-  :math:`g'`), so the gain is the one for which the package, run on the model's predicted means
-  and variances, finds the measured :math:`K` (fixed-point iteration; without a knee it is the
-  measured :math:`K`); then :math:`\\eta = A / K` and the dark current :math:`\\mu_I = c / K`;
-- read noise :math:`\\sigma_r = \\sqrt{\\sigma^2_{y.dark} - 1/12} / (1 + s)`;
-- PRNU :math:`\\sigma_{PRNU} = PRNU_{1288} (1 + s u)` at the spatial step's normalized signal
-  :math:`u` (the knee compresses relative differences by :math:`u g'(u) / g(u)`);
-- DSNU: the package's :math:`DSNU_{1288}` in DN as a per-pixel offset spread (one spatial
-  exposure time cannot separate offset and dark-current non-uniformity; a DSNU the package
-  cannot compute, a negative variance, is 0);
-- saturation: when the brightest steps reach the ADC's top, the ADC clips first and the full well
-  is hidden; it is placed five shot-noise widths above the ADC's top, the least that leaves every
-  measured frame unchanged. Otherwise the full well is the clip whose variance peak
-  (:func:`recon.emva.linear_model.predicted_saturation_e`) lies at the measured saturation.
+  :math:`g'`) and quantization changes the variances of the darkest steps, so the gain is the one
+  for which the package, run on the model's predicted means and quantized variances, finds the
+  measured :math:`K` (fixed-point iteration); then :math:`\eta = A / K` and the dark current
+  :math:`\mu_I = c / K`;
+- saturation: EMVA 1288 places it at the maximum of the temporal variance. The full well is the
+  clip whose predicted variance peak (:func:`recon.emva.linear_model.predicted_saturation_e`)
+  lies at the measured saturation step; where the ADC's top alone puts the peak there or later,
+  the ADC clips first and the full well, hidden, is placed five shot-noise widths above it, the
+  least that leaves every measured frame unchanged.
 
 References
 ----------
-- EMVA Standard 1288, Release 3.0 (2010): the linear model and its figures.
+- EMVA Standard 1288, Release 3.1 (2016) and Release 4.0 Linear (2021): the linear model and
+  its figures; section 2.5 (saturation: the maximum of the variance), section 4.1 (spatial
+  variances, DSNU, PRNU), Appendix C.4 (quantization noise and the limit of the temporal noise).
 - The thesis, Eq. 3.1 (the OECF :math:`f` of :math:`p = f(tI) + d`).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 import numpy as np
 from scipy import optimize
 
-from recon.emva.analysis import EMVAAnalysis, PhotonTransfer, run_results1288
-from recon.emva.linear_model import (
-    QUANTIZATION_VARIANCE_DN2,
-    knee_oecf,
-    knee_oecf_slope,
-    predicted_saturation_e,
+from recon.emva.analysis import (
+    EMVAAnalysis,
+    PhotonTransfer,
+    dark_at_zero_exposure,
+    run_results1288,
 )
+from recon.emva.linear_model import knee_oecf, knee_oecf_slope, predicted_saturation_e
+from recon.emva.quantization import quantized_temporal_variance, unquantized_spread
 from recon.errors import InputError
 
 __all__ = ["FittedSensor", "fit_sensor"]
@@ -117,33 +130,48 @@ def _mean_above_dark(
     return knee_oecf(responsivity * photons + dark_dn, top, knee) - knee_oecf(dark_dn, top, knee)
 
 
-def _predicted_temporal(
-    transfer: PhotonTransfer,
-    *,
-    gain: float,
-    responsivity: float,
-    knee: float,
-    dark_rate: float,
-    read_dn: float,
-    offset: float,
-    top: float,
-) -> dict[str, Any]:
-    """Means and variances the model predicts for every step, in the package's layout."""
-    dark_dn = dark_rate / (1 + knee) * transfer.exposure_s
-    bright_dn = responsivity * transfer.photons + dark_dn
+@dataclass(frozen=True)
+class _Model:
+    """The camera model as the fit builds it up: DN per electron and per photon, the knee, the
+    linear dark signal rate (DN/s at :math:`g'(0) = 1`), read noise, offset and its spread (DN),
+    the ADC's range above the offset (DN), the relative PRNU and the ADC's largest value."""
 
-    def variance(linear_dn: np.ndarray) -> np.ndarray:
-        slope = knee_oecf_slope(linear_dn, top, knee)
-        return slope**2 * (gain * linear_dn + read_dn**2) + QUANTIZATION_VARIANCE_DN2
+    gain: float
+    responsivity: float
+    knee: float
+    dark_rate: float
+    read_dn: float
+    offset: float
+    top: float
+    offset_sigma: float
+    prnu: float
+    max_dn: int
 
-    return {
-        "texp": transfer.exposure_s * 1e9,
-        "u_p": transfer.photons,
-        "u_y": offset + knee_oecf(bright_dn, top, knee),
-        "s2_y": variance(bright_dn),
-        "u_ydark": offset + knee_oecf(dark_dn, top, knee),
-        "s2_ydark": variance(dark_dn),
-    }
+    def temporal(self, transfer: PhotonTransfer) -> dict[str, Any]:
+        """Means and temporal variances of the digital values at every step of ``transfer``,
+        quantized (:mod:`recon.emva.quantization`), in the package's ``Data1288`` layout."""
+        dark_dn = self.dark_rate / (1 + self.knee) * transfer.exposure_s
+        bright_mean, bright_variance = self._digital(self.responsivity * transfer.photons + dark_dn)
+        dark_mean, dark_variance = self._digital(dark_dn)
+        return {
+            "texp": transfer.exposure_s * 1e9,
+            "u_p": transfer.photons,
+            "u_y": bright_mean,
+            "s2_y": bright_variance,
+            "u_ydark": dark_mean,
+            "s2_ydark": dark_variance,
+        }
+
+    def _digital(self, linear_dn: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Mean and temporal variance of the digital value of a linear signal above the offset:
+        shot and read noise through the knee's slope (EMVA 1288's linear model), quantized."""
+        signal = knee_oecf(linear_dn, self.top, self.knee)
+        noise = knee_oecf_slope(linear_dn, self.top, self.knee) * np.sqrt(
+            self.gain * linear_dn + self.read_dn**2
+        )
+        spread = np.hypot(self.offset_sigma, self.prnu * signal)
+        mean = self.offset + signal
+        return mean, quantized_temporal_variance(mean, spread, noise, max_dn=self.max_dn)
 
 
 def _fit_knee(
@@ -175,13 +203,46 @@ def _fit_knee(
     )
 
 
-def _gain(analysis: EMVAAnalysis, **model: float) -> float:
+def _dark_spread(analysis: EMVAAnalysis, max_dn: int) -> tuple[float, float]:
+    """The bias quantization gives the dark mean and the offsets' spread before quantization
+    (DN), from the spatial dark step: its mean, spatial and temporal variance."""
+    mean, spread, _ = unquantized_spread(analysis.spatial_dark, max_dn=max_dn)
+    return analysis.spatial_dark.mean_dn - mean, spread
+
+
+def _read_noise(analysis: EMVAAnalysis, model: _Model) -> float:
+    """The read noise whose quantized dark steps, extrapolated to zero exposure time, give the
+    measured temporal dark variance (before the package's floor)."""
+    transfer, measured = analysis.transfer, analysis.dark_temporal_variance_dn2
+
+    def residual(read_dn: np.ndarray) -> np.ndarray:
+        predicted = replace(model, read_dn=float(read_dn[0])).temporal(transfer)
+        return np.array(
+            [dark_at_zero_exposure(predicted["texp"], predicted["s2_ydark"]) - measured]
+        )
+
+    start = math.sqrt(max(measured - 1 / 12, 1e-6)) / (1 + model.knee)
+    return float(optimize.least_squares(residual, [start], bounds=(0.0, np.inf)).x[0])
+
+
+def _prnu(analysis: EMVAAnalysis, model: _Model, spatial_u: float) -> float:
+    """The relative spread of the photo response: the bright pixels' spread before quantization
+    at the spatial step less the offsets', relative to the signal and widened by the knee's
+    compression :math:`1 + s u` (0 where the measurement resolves none)."""
+    _, bright_spread, _ = unquantized_spread(analysis.spatial_bright, max_dn=model.max_dn)
+    photo_response_dn2 = bright_spread**2 - model.offset_sigma**2
+    if photo_response_dn2 <= 0 or not analysis.spatial_signal_dn > 0:
+        return 0.0
+    return math.sqrt(photo_response_dn2) / analysis.spatial_signal_dn * (1 + model.knee * spatial_u)
+
+
+def _gain(analysis: EMVAAnalysis, model: _Model) -> float:
     """The system gain for which the package finds the measured K in the model's predicted
-    photon transfer (fixed-point iteration; the measured K itself without a knee)."""
+    photon transfer (fixed-point iteration)."""
     transfer = analysis.transfer
     gain = analysis.system_gain_dn_per_e
     for _ in range(20):
-        predicted = _predicted_temporal(transfer, gain=gain, **model)
+        predicted = replace(model, gain=gain).temporal(transfer)
         results = run_results1288(
             {"temporal": predicted, "spatial": {}}, saturation_index=transfer.saturation_index
         )
@@ -192,25 +253,50 @@ def _gain(analysis: EMVAAnalysis, **model: float) -> float:
     return gain
 
 
-def _full_well(
-    saturation_e: float, *, gain: float, read_dn: float, prnu: float, top: float, source: object
-) -> float:
-    """The full well whose variance peak lies at the measured saturation (charge, e-)."""
+def _seen_until(step_e: np.ndarray, saturation_e: float) -> float:
+    """The charge halfway to the step above the saturation step (infinite at the last step):
+    a variance peak below it is seen at the saturation step or earlier."""
+    above = step_e[step_e > saturation_e]
+    return (saturation_e + above.min()) / 2 if above.size else math.inf
 
-    def peak_offset(full_well_e: float) -> float:
-        peak = predicted_saturation_e(
-            full_well_e, gain_dn_per_e=gain, read_noise_dn=read_dn, prnu=prnu, adc_top_dn=top
+
+def _saturation(
+    model: _Model, step_e: np.ndarray, saturation_e: float, source: object
+) -> tuple[float, Literal["ADC", "full well"]]:
+    """The full well that puts the model's variance peak (EMVA 1288's saturation) at the
+    measured saturation step, and what clips first.
+
+    With a full well beyond the ADC's top the peak lies at
+    :func:`recon.emva.linear_model.predicted_saturation_e` of an unlimited full well. Where that
+    is seen at the measured step or later, the ADC clips first: the full well is hidden and
+    placed five shot-noise widths above the ADC's top. Where the measured peak comes earlier,
+    the full well clips first, at the charge whose peak lies at the measured saturation (whether
+    the mean reaches the ADC's top does not decide it: a plan may end at saturation).
+    """
+
+    def peak_e(full_well_e: float) -> float:
+        return predicted_saturation_e(
+            full_well_e,
+            gain_dn_per_e=model.gain,
+            read_noise_dn=model.read_dn,
+            prnu=model.prnu,
+            adc_top_dn=model.top,
         )
-        return peak - saturation_e
 
+    top_e = model.top / model.gain
+    if saturation_e >= top_e or peak_e(math.inf) <= _seen_until(step_e, saturation_e):
+        return top_e + _FULL_WELL_MARGIN_SIGMAS * math.sqrt(top_e), "ADC"
     try:
-        return optimize.brentq(peak_offset, saturation_e, 1.5 * saturation_e, xtol=1e-3)
+        full_well = optimize.brentq(
+            lambda full_well_e: peak_e(full_well_e) - saturation_e, saturation_e, top_e, xtol=1e-3
+        )
     except ValueError as error:
         raise InputError(
             f"{source}: no full well puts the variance peak at the measured saturation "
             f"({saturation_e:.0f} e-); expected a measurement that saturates at its full well "
             "or at the ADC's top"
         ) from error
+    return full_well, "full well"
 
 
 def fit_sensor(analysis: EMVAAnalysis, *, wavelength_nm: float) -> FittedSensor:
@@ -240,7 +326,8 @@ def fit_sensor(analysis: EMVAAnalysis, *, wavelength_nm: float) -> FittedSensor:
         raise InputError(f"wavelength_nm: expected a positive value, got {wavelength_nm}")
     descriptor, transfer = analysis.descriptor, analysis.transfer
     max_dn = 2**descriptor.bit_depth - 1
-    offset = analysis.dark_offset_dn
+    bias, offset_sigma = _dark_spread(analysis, max_dn)
+    offset = analysis.dark_offset_dn - bias
     top = max_dn - offset
     if top <= 0:
         raise InputError(
@@ -251,53 +338,40 @@ def fit_sensor(analysis: EMVAAnalysis, *, wavelength_nm: float) -> FittedSensor:
     if not math.isfinite(dark_rate):
         dark_rate = 0.0  # a single exposure time: no dark current measured
     (responsivity, knee), knee_rms, straight_rms = _fit_knee(analysis, dark_rate, top)
-    read_dn = math.sqrt(max(analysis.dark_noise_dn**2 - QUANTIZATION_VARIANCE_DN2, 0.0)) / (
-        1 + knee
-    )
-    gain = _gain(
-        analysis,
+    model = _Model(
+        gain=analysis.system_gain_dn_per_e,
         responsivity=responsivity,
         knee=knee,
         dark_rate=dark_rate,
-        read_dn=read_dn,
+        read_dn=0.0,
         offset=offset,
         top=top,
+        offset_sigma=offset_sigma,
+        prnu=0.0,
+        max_dn=max_dn,
     )
-    eta = responsivity / gain
-    dark_current = dark_rate / (1 + knee) / gain
-    spatial_u = (responsivity * analysis.spatial_photons) / top
-    prnu = analysis.prnu_percent / 100 * (1 + knee * spatial_u)
-    if not math.isfinite(prnu):
-        prnu = 0.0
-    offset_sigma = analysis.dsnu_dn if math.isfinite(analysis.dsnu_dn) else 0.0
-    saturated_by: Literal["ADC", "full well"]
-    if transfer.mean_dn.max() >= max_dn - 0.5:
-        saturated_by = "ADC"
-        top_e = top / gain
-        full_well = top_e + _FULL_WELL_MARGIN_SIGMAS * math.sqrt(top_e)
-    else:
-        saturated_by = "full well"
-        index = transfer.saturation_index
-        full_well = _full_well(
-            eta * transfer.photons[index] + dark_current * transfer.exposure_s[index],
-            gain=gain,
-            read_dn=read_dn,
-            prnu=prnu,
-            top=top,
-            source=descriptor.path,
-        )
+    model = replace(model, read_dn=_read_noise(analysis, model))
+    spatial_u = responsivity * analysis.spatial_photons / top
+    model = replace(model, prnu=_prnu(analysis, model, spatial_u))
+    model = replace(model, gain=_gain(analysis, model))
+    eta = responsivity / model.gain
+    dark_current = dark_rate / (1 + knee) / model.gain
+    step_e = eta * transfer.photons + dark_current * transfer.exposure_s
+    full_well, saturated_by = _saturation(
+        model, step_e, float(step_e[transfer.saturation_index]), descriptor.path
+    )
     return FittedSensor(
         analysis=analysis,
         wavelength_nm=float(wavelength_nm),
-        system_gain_dn_per_e=float(gain),
+        system_gain_dn_per_e=float(model.gain),
         quantum_efficiency=float(eta),
-        read_noise_dn=float(read_dn),
+        read_noise_dn=float(model.read_dn),
         adc_offset_dn=float(offset),
         full_well_e=float(full_well),
         saturated_by=saturated_by,
         dark_current_e_per_s=float(dark_current),
         offset_sigma_dn=float(offset_sigma),
-        prnu=float(prnu),
+        prnu=float(model.prnu),
         knee_strength=float(knee),
         knee_rms_percent=knee_rms,
         straight_line_rms_percent=straight_rms,

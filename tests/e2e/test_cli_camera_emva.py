@@ -106,6 +106,24 @@ def test_camera_fit_writes_a_camera_that_the_twin_loads(tmp_path):
     assert "Spectral QE: measured only at 550 nm" in header and f" {BASLER} " in header
 
 
+@pytest.mark.parametrize(
+    ("measurement", "bit_depth"), [("cmos8_measurement", 8), ("heidelberg_measurement", 12)]
+)
+def test_camera_fit_takes_the_reference_sets_plans(request, tmp_path, measurement, bit_depth):
+    """Reference set 002's plan (steps at exposure time 0) and set 003's (one exposure time):
+    both fit, and the camera written reloads."""
+    from twin.rigs.camera_config import load_camera_config
+
+    descriptor = request.getfixturevalue(measurement).path
+    out = tmp_path / "fitted.yaml"
+    result = runner.invoke(app, ["camera", "fit", str(descriptor), "--out", str(out), "--json"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    assert summary["bit_depth"] == bit_depth
+    low, high = load_camera_config(out).exposure_range_s
+    assert 0 < low <= high
+
+
 @pytest.fixture(scope="module")
 def small_measurement(tmp_path_factory, make_emva_measurement):
     """A 16 x 16 px measurement of the synthetic camera (tests/conftest.py)."""
@@ -145,6 +163,15 @@ def _image(name: str, content):
     return change
 
 
+def _every_exposure_zero(descriptor: Path) -> None:
+    lines = descriptor.read_text().splitlines()
+    for number, line in enumerate(lines):
+        entry, *values = line.split()
+        if entry in ("b", "d"):
+            lines[number] = " ".join([entry, "0", *values[1:]])
+    descriptor.write_text("\n".join(lines) + "\n")
+
+
 BAD_MEASUREMENTS = {
     "missing image": (_image("b_000_1.png", None), "image images/b_000_1.png does not exist"),
     "unreadable image": (_image("b_001_2.png", b"not a PNG"), "unreadable image"),
@@ -167,6 +194,14 @@ BAD_MEASUREMENTS = {
     "a single image": (
         _replace_line("i images/b_000_2.png\n", ""),
         "1 image line(s) after it; expected at least two",
+    ),
+    "a negative exposure time": (
+        _replace_line("b 870000.0 ", "b -870000.0 "),
+        "exposure time -870000.0 ns: expected >= 0",
+    ),
+    "every step at exposure time 0": (
+        _every_exposure_zero,
+        "every step at exposure time 0 ns; expected at least one step with a positive",
     ),
     "a bright step without its dark step": (
         _replace_line("d 870000.0\ni images/d_000_1.png\ni images/d_000_2.png\n", ""),

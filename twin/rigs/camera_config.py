@@ -207,7 +207,7 @@ class CameraConfig(StrictModel):
                 f"{MAX_PIXELS} pixels (2^28: one float64 frame takes 2 GiB)"
             )
         low, high = self.exposure_range_s
-        if not low < high:
+        if low > high:  # equal: a camera measured at one exposure time (EMVA 1288 set 003)
             raise ValueError(f"exposure_range_s: expected [shortest, longest], got {low}, {high}")
         if self.adc_offset_dn >= 2**self.bit_depth - 1:
             raise ValueError("adc_offset_dn: expected an offset below the ADC's largest value")

@@ -4,8 +4,10 @@ Given the plan of a measurement (a descriptor: bit depth, size, exposure times, 
 and the images of every step), :func:`simulate_measurement` takes the same frames with a twin
 camera under uniform monochromatic light: :math:`\\mu_e = \\eta(\\lambda) \\mu_p` photo-electrons
 per pixel for a bright step, the shutter closed for a dark one, each frame with fresh temporal
-noise and the camera's fixed patterns. It writes the frames and a descriptor in the same format,
-so the ``emva1288`` package analyses the twin's measurement exactly as it analyses the real one.
+noise and the camera's fixed patterns. A step at exposure time 0 (the official reference set 002
+has them) is taken at the camera's shortest exposure, with the plan's photons. It writes the
+frames and a descriptor in the same format, so the ``emva1288`` package analyses the twin's
+measurement exactly as it analyses the real one.
 
 References
 ----------
@@ -104,11 +106,13 @@ def simulate_measurement(
     )
     rng = np.random.default_rng(seed)
     shape = (plan.height, plan.width)
+    shortest_s = config.exposure_range_s[0]
     done = 0
     for measurement_step in written.steps:
         electrons = np.full(shape, eta * measurement_step.photons, np.float32)
+        exposure_s = measurement_step.exposure_s or shortest_s  # 0 ns: the shortest it makes
         for name in measurement_step.images:
-            frame = sensor.capture(electrons, measurement_step.exposure_s, rng)
+            frame = sensor.capture(electrons, exposure_s, rng)
             write_frame(written, name, frame)
             done += 1
             if step is not None:

@@ -33,3 +33,23 @@ def test_a_written_measurement_reads_back_step_by_step(tmp_path, make_emva_measu
     assert sum(step.spatial for step in read.steps) == 2 and read.frame_count == 36 * 4 + 8
     frame = read_frame(read.image_path(read.steps[0].images[0]), bit_depth=14, shape=(16, 16))
     assert frame.dtype == np.uint16 and 100 < frame.mean() < 2**14 - 1
+
+
+def test_the_official_set_002_descriptor_reads_with_its_exposure_0_steps(
+    tmp_path, emva_reference_sets
+):
+    """EMVA1288/datasets ReferenceSet_002 (8-bit CMOS) starts both series at exposure time 0
+    (``b 000.00 000.35``, ``d 000.00``), as the emva1288 package reads it."""
+    read = emva_reference_sets.read_plan_002(tmp_path)
+    assert (read.bit_depth, read.width, read.height, read.version) == (8, 2048, 512, "3.0")
+    bright = [step for step in read.steps if step.kind == "bright" and not step.spatial]
+    dark = [step for step in read.steps if step.kind == "dark" and not step.spatial]
+    assert len(bright) == len(dark) == 100
+    assert (bright[0].exposure_ns, bright[0].photons) == (0.0, 0.35) and dark[0].exposure_ns == 0
+    spatial = [step for step in read.steps if step.spatial]
+    assert [(s.kind, s.exposure_ns, len(s.images)) for s in spatial] == [
+        ("bright", 140.0, 100),
+        ("dark", 140.0, 100),
+    ]
+    # A camera makes the 0 ns steps at its shortest exposure: they leave the range it needs.
+    assert read.exposure_range_s == pytest.approx((40e-9, 3960e-9))
