@@ -11,7 +11,9 @@ under office fluorescent tubes drops from several percent to well below one).
 
 A scene with several lamp types (halogen spots and fluorescent tubes) is rendered once per
 :class:`LightGroup` (the emitters that share one spectrum), the other groups' lamps present as
-dark shapes, and the renders are summed. Each
+dark shapes, and the renders are summed. Group ``i`` is rendered with its own seed,
+:func:`group_seed` of the render's seed and ``i``, so that the groups' noise is independent and
+each group's image is fixed by the seed and its place in the list alone. Each
 channel is normalized to unit area for the render and scaled back, so that every channel gets an
 equal share of the wavelength samples.
 """
@@ -28,7 +30,7 @@ from recon.errors import InputError
 from recon.spectra import SampledSpectra
 from twin.render.render import render_scene
 
-__all__ = ["LightGroup", "lamp_weighted_channels", "render_lit"]
+__all__ = ["LightGroup", "group_seed", "lamp_weighted_channels", "render_lit"]
 
 
 @dataclass(frozen=True)
@@ -42,6 +44,25 @@ class LightGroup:
     name: str
     entries: dict[str, Any]
     spectrum: SampledSpectra
+
+
+def group_seed(seed: int, index: int) -> int:
+    """The seed of light group ``index`` in a render seeded with ``seed``.
+
+    Parameters
+    ----------
+    seed : int
+        The render's seed (non-negative).
+    index : int
+        The group's place in the list of groups.
+
+    Returns
+    -------
+    int
+        A 32-bit seed drawn from ``numpy.random.SeedSequence([seed, index])``: the same for the
+        same pair, independent streams for different groups.
+    """
+    return int(np.random.SeedSequence([int(seed), int(index)]).generate_state(1, np.uint32)[0])
 
 
 def lamp_weighted_channels(
@@ -73,10 +94,12 @@ def render_lit(
     """Render ``entries`` with ``camera`` (anything with ``mitsuba_sensor(channels, spp)``) lit
     by ``groups``, one render per group (the others' lamps dark) summed; ``(H, W, n_channels)``.
 
-    Without groups, ``entries`` must hold their own emitters, and are rendered once as they are.
+    Without groups, ``entries`` must hold their own emitters, and are rendered once as they are,
+    with ``seed``; group ``i`` is rendered with :func:`group_seed` ``(seed, i)``. The same
+    arguments give the same image bit for bit (:mod:`twin.render.render`).
     """
 
-    def render(group_entries: dict[str, Any], film: SampledSpectra) -> np.ndarray:
+    def render(group_entries: dict[str, Any], film: SampledSpectra, seed: int) -> np.ndarray:
         scene = {
             "type": "scene",
             "integrator": {"type": "path", "max_depth": max_depth},
@@ -87,9 +110,9 @@ def render_lit(
         return render_scene(scene, seed)
 
     if not groups:
-        return render({}, channels)
+        return render({}, channels, seed)
     total: np.ndarray | float = 0.0
-    for group in groups:
+    for index, group in enumerate(groups):
         film, areas = lamp_weighted_channels(channels, group.spectrum)
         dark = {
             name: {key: value for key, value in entry.items() if key != "emitter"}
@@ -97,5 +120,5 @@ def render_lit(
             if other is not group
             for name, entry in other.entries.items()
         }
-        total = total + render({**dark, **group.entries}, film) * areas
+        total = total + render({**dark, **group.entries}, film, group_seed(seed, index)) * areas
     return np.asarray(total)

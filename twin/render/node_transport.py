@@ -61,6 +61,7 @@ from recon.errors import InputError
 from recon.spectra import SampledSpectra, resample
 from twin.materials.builders import MATERIAL_GRID
 from twin.materials.surfaces import SurfacePart
+from twin.render.render import load_scene
 from twin.render.shapes import mitsuba_shape, part_bsdf
 from twin.render.spectra import rendered_spp
 from twin.render.variant import activate
@@ -220,7 +221,7 @@ def _texel_index(uv, part, texels: dict, active):
 
 def _conductor_index(part: SurfacePart) -> tuple[np.ndarray, np.ndarray]:
     """Real and imaginary index ``(n_nodes,)`` of a part's metal (Mitsuba's tabulated data)."""
-    parameters = mi.traverse(mi.load_dict(part_bsdf(part)))
+    parameters = mi.traverse(load_scene(part_bsdf(part)))
     return tuple(
         np.interp(
             NODES_NM,
@@ -315,9 +316,9 @@ class NodeScene:
             unit = part_bsdf(part, unit=True)
             key = json.dumps(unit, sort_keys=True)
             if key not in unit_bsdfs:
-                unit_bsdfs[key] = mi.load_dict(unit)
+                unit_bsdfs[key] = load_scene(unit)
             entries[part.name] = mitsuba_shape(part, bsdf=unit_bsdfs[key])
-        self._scene = mi.load_dict(entries)
+        self._scene = load_scene(entries)
         names = [part.name for part in parts]
         registry = np.asarray(dr.reinterpret_array(mi.UInt32, self._scene.shapes_dr()))
         part_of = np.zeros(int(registry.max()) + 1, np.uint32)

@@ -1,6 +1,17 @@
-"""Render a Mitsuba scene to a float64 NumPy image (twin's one call of ``mi.render``)."""
+"""Load Mitsuba scenes and render them to float64 NumPy images (twin's one call of ``mi.render``).
+
+Scenes are loaded with Mitsuba's scene optimization off (``mi.load_dict(..., optimize=False)``):
+with it on, Mitsuba 3.9 merges objects of identical definitions, and the order in which lamps of
+one definition (the room's tubes, a rig's alike lamps) end up in the scene changed from one load
+to the next, and with it which lamp drew which random numbers: the same scene and seed gave
+different images (10 loads of four alike rectangle lamps gave 5 different images). Loaded without
+it, the same scene and seed give the same image bit for bit, whatever Dr.Jit's thread count
+(``tests/twin/render/test_render_determinism.py``).
+"""
 
 from __future__ import annotations
+
+from typing import Any
 
 import mitsuba as mi
 import numpy as np
@@ -8,7 +19,24 @@ import numpy as np
 from recon.errors import InputError
 from twin.render.variant import activate
 
-__all__ = ["render_scene"]
+__all__ = ["load_scene", "render_scene"]
+
+
+def load_scene(entries: dict) -> Any:
+    """Load a scene dict (or any Mitsuba object's dict) the same way every time.
+
+    Parameters
+    ----------
+    entries : dict
+        The dict that ``mi.load_dict`` takes.
+
+    Returns
+    -------
+    mitsuba.Scene or mitsuba.Object
+        The loaded scene (or BSDF, ...), Mitsuba's scene optimization off (module docstring).
+    """
+    activate()
+    return mi.load_dict(entries, optimize=False)
 
 
 def render_scene(scene: dict | mi.Scene, seed: int = 0, spp: int | None = None) -> np.ndarray:
@@ -17,7 +45,7 @@ def render_scene(scene: dict | mi.Scene, seed: int = 0, spp: int | None = None) 
     Parameters
     ----------
     scene : dict or mitsuba.Scene
-        A scene dict (loaded with ``mi.load_dict``) or an already loaded scene.
+        A scene dict (loaded with :func:`load_scene`) or an already loaded scene.
     seed : int, optional
         Seed of the render's random numbers; the same seed gives the same image.
     spp : int, optional
@@ -37,8 +65,7 @@ def render_scene(scene: dict | mi.Scene, seed: int = 0, spp: int | None = None) 
         raise InputError(f"spp: expected at least 1 sample per pixel, got {spp}")
     activate()
     if isinstance(scene, dict):
-        scene = mi.load_dict(scene)
-    # Mitsuba's stubs type load_dict's result as dict | Scene and the seed as UInt32 (an int is
-    # taken)
+        scene = load_scene(scene)
+    # Mitsuba's stubs type the seed as UInt32 (an int is taken)
     image = mi.render(scene, seed=seed, spp=0 if spp is None else int(spp))  # type: ignore[arg-type]
     return np.array(image, np.float64)

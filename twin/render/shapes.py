@@ -11,6 +11,7 @@ import numpy as np
 from recon.btf.specular_lobe import COATING_IOR
 from recon.errors import InputError
 from twin.materials.surfaces import SurfacePart, texture_coordinates
+from twin.render.render import load_scene
 from twin.render.spectra import irregular_spectrum
 from twin.render.variant import activate
 
@@ -64,7 +65,7 @@ def mitsuba_shape(part: SurfacePart, bsdf=None):
     import mitsuba as mi
 
     properties = mi.Properties()
-    properties["bsdf"] = bsdf if bsdf is not None else mi.load_dict(part_bsdf(part))
+    properties["bsdf"] = bsdf if bsdf is not None else load_scene(part_bsdf(part))
     textured = part.texture is not None
     mesh = mi.Mesh(
         part.name,

@@ -14,6 +14,11 @@ metrics say whether the BTF was measured spectrally or in RGB (:mod:`recon.btf.r
 how its RGB became the rendered spectra. The raw form is rendered with a specular lobe fitted
 per texel (:mod:`recon.btf.specular_lobe`), which holds the highlights of glossy fields that the
 direction sampling only touches; the compressed form without.
+
+The same store and settings give the same figures and metrics to the last digit, whatever
+Dr.Jit's thread count: every render has a fixed seed (a light group its own,
+:func:`twin.render.light_groups.group_seed`) and scenes load the same way every time
+(:mod:`twin.render.render`; ``tests/twin/validate/test_validate_reproducible.py``).
 """
 
 from __future__ import annotations
