@@ -60,6 +60,7 @@ from twin.devices.programs import (
 )
 from twin.devices.sim_devices import SimGonioDevices, VirtualRig
 from twin.gonio.capture_time import estimate_plan_s
+from twin.gonio.mark_width import RegistrationOutlook, registration_outlook
 from twin.gonio.render import GONIO_SPP, gonio_camera, gonio_lamp, pose_matrix
 from twin.gonio.signals import RenderedGonioSignal, WhiteReferenceSignal
 from twin.materials import load_material
@@ -302,18 +303,38 @@ class CaptureProgram(ProgramCapture):
             storage += count * (2 * height * width + _INDEX_BYTES + 4 * samples)
         duration_s = estimate_plan_s(self.config or load_rig("gonio"), self.plan, self.poses)
         height, width = self.devices.sensor.height, self.devices.sensor.width
-        return {
-            "program": self.name,
-            "steps": len(self.plan),
-            "frames": dict(frames),
-            "kinds": dict(Counter(step["kind"] for step in self.plan)),
-            "views": len({step.get("view_id", NO_VIEW) for step in self.plan} - {NO_VIEW}),
-            "frame_size": f"{height} x {width} px",
-            **({"spp": self.rig.spp} if self.rig.spp is not None else {}),
-            "estimated_duration_s": duration_s,
-            "estimated_duration_h": duration_s / 3600,
-            "storage_mb": storage / 1e6,
-        } | self.marks_outside_window()
+        return (
+            {
+                "program": self.name,
+                "steps": len(self.plan),
+                "frames": dict(frames),
+                "kinds": dict(Counter(step["kind"] for step in self.plan)),
+                "views": len({step.get("view_id", NO_VIEW) for step in self.plan} - {NO_VIEW}),
+                "frame_size": f"{height} x {width} px",
+                **({"spp": self.rig.spp} if self.rig.spp is not None else {}),
+                "estimated_duration_s": duration_s,
+                "estimated_duration_h": duration_s / 3600,
+                "storage_mb": storage / 1e6,
+            }
+            | self.marks_outside_window()
+            | self._registration_summary()
+        )
+
+    def _registration_summary(self) -> dict[str, object]:
+        outlook = self.registration_outlook()
+        return {} if outlook is None else outlook.summary()
+
+    def registration_outlook(self) -> RegistrationOutlook | None:
+        """For a measurement run: the pairs whose registration marks are predicted too narrow to
+        register at the run's pixels across the field, and the pixels that register every
+        pair (:func:`twin.gonio.mark_width.registration_outlook`); ``None`` for other
+        programs."""
+        if self.name != "gonio-run":
+            return None
+        pixels = int(recorded(self.rig.sensor_px, "rig.sensor_px"))
+        config = self.config or load_rig("gonio")
+        camera = Sensor(config.camera.definition).config
+        return registration_outlook(config, self.poses, pixels, min(camera.width, camera.height))
 
     def marks_outside_window(self) -> dict[str, int]:
         """For a measurement run: ``pairs_with_marks_outside_window``, the pairs in which the

@@ -6,7 +6,7 @@ BTF (Eq. 3.6, 4.1.2), evaluation against the twin's truth and capture-time estim
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from pydantic import Field
@@ -20,6 +20,9 @@ from twin.rigs.rig_config import GonioConfig
 from twin.studies.sweep_file import SweepKind
 from twin.studies.sweep_gonio import check_gonio_point, measure_gonio_point
 from twin.studies.sweep_plans import GONIO_MEASURES, GonioPlan
+
+if TYPE_CHECKING:
+    from twin.gonio.capture import CaptureProgram
 
 __all__ = ["GONIO", "GonioCalibrationSettings", "GonioRunSettings"]
 
@@ -91,15 +94,43 @@ def _run(settings: GonioRunSettings, fault_rate: float, dry_run: bool):
         spp=GONIO_SPP if settings.spp is None else settings.spp,
         seed=settings.seed,
     )
+    if not dry_run:
+        warnings = _registration_warnings(built, settings)
+        if warnings:
+            notes["warning"] = "; ".join(warnings)
+    return built, notes
+
+
+def _registration_warnings(built: CaptureProgram, settings: GonioRunSettings) -> list[str]:
+    """What a run at ``settings`` is predicted to leave unregistered: pairs whose marks the
+    window cuts into, pairs whose marks are too narrow at ``--pixels``
+    (:mod:`twin.gonio.mark_width`)."""
+    from twin.gonio.mark_width import UNLIKELY_BELOW_PX
+
+    warnings = []
     marks = built.marks_outside_window()
-    if not dry_run and marks.get("pairs_with_marks_outside_window"):
-        notes["warning"] = (
+    if marks.get("pairs_with_marks_outside_window"):
+        warnings.append(
             f"in {marks['pairs_with_marks_outside_window']} of {len(built.poses)} pairs the "
             f"{settings.window} px window cuts into the holder's registration marks, so they may "
             f"not register; a window of {marks['window_px_holding_marks']} px holds them in "
             "every pair"
         )
-    return built, notes
+    outlook = built.registration_outlook()
+    if outlook is not None and outlook.unlikely:
+        enough = outlook.pixels_registering_every_pair
+        remedy = (
+            f"--pixels {enough} or more registers every pair"
+            if enough is not None
+            else "no --pixels the camera takes registers every pair"
+        )
+        warnings.append(
+            f"{len(outlook.unlikely)} of {len(built.poses)} pairs are unlikely to register at "
+            f"--pixels {settings.pixels}: their registration marks are under "
+            f"{UNLIKELY_BELOW_PX} px wide (narrowest {outlook.narrowest_mark_px:.2f} px); "
+            f"{remedy}"
+        )
+    return warnings
 
 
 def _stored(capture: CaptureStore) -> dict[str, Any]:

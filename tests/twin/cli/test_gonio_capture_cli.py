@@ -220,3 +220,44 @@ def test_the_capture_renders_at_the_rigs_sample_count_unless_told(tmp_path):
         )
         assert result.exit_code == 0, result.output
         assert json.loads(result.stdout)["spp"] == spp, arguments
+
+
+def test_the_dry_run_names_the_pairs_that_will_not_register_and_the_pixels_that_do(tmp_path):
+    store = tmp_path / "run.capture.zarr"
+    result = runner.invoke(
+        app, ["capture", "gonio-run", str(store), "--dry-run", "--pixels", "64", "--json"]
+    )
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.output)
+    assert summary["pairs_unlikely_to_register"] == "156 pairs: 0-155"
+    assert summary["pairs_that_may_not_register"] == "none"
+    assert summary["pixels_registering_every_pair"] == 215
+    table = runner.invoke(app, ["capture", "gonio-run", str(store), "--dry-run", "--pixels", "128"])
+    assert "pairs unlikely to register" in table.stdout and "215" in table.stdout
+    assert not store.exists()
+
+
+def test_a_capture_whose_pairs_will_not_register_says_so_in_one_line(
+    tmp_path, calibration, monkeypatch
+):
+    from twin.gonio.capture import CaptureProgram
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(CaptureProgram, "run", interrupted)  # the warning comes before it runs
+    arguments = ["capture", "gonio-run", str(tmp_path / "run.capture.zarr")]
+    arguments += ["--calibration", str(calibration), "--pixels", "64"]
+    result = runner.invoke(app, arguments)
+    warnings = [line for line in result.stderr.splitlines() if line.startswith("warning:")]
+    assert warnings == [
+        "warning: 156 of 156 pairs are unlikely to register at --pixels 64: their registration "
+        "marks are under 1.3 px wide (narrowest 0.63 px); --pixels 215 or more registers every "
+        "pair"
+    ]
+    settled = runner.invoke(
+        app,
+        ["capture", "gonio-run", str(tmp_path / "other.capture.zarr")]
+        + ["--calibration", str(calibration), "--pixels", "256"],
+    )
+    assert "warning:" not in settled.stderr
