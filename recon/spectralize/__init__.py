@@ -11,6 +11,12 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "joint": ["reconstruct_priors"],
         "kronecker": ["solve_kronecker_sum"],
         "prior_choice": ["PriorChoice", "choose_prior"],
-        "solve": ["EnergyWeights", "build_problem", "neighbour_graph", "reconstruct", "spectralize"],
+        "solve": [
+            "EnergyWeights",
+            "build_problem",
+            "neighbour_graph",
+            "reconstruct",
+            "spectralize",
+        ],
     },
 )

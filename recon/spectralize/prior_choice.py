@@ -39,6 +39,7 @@ from scipy import ndimage
 
 from recon.errors import InputError
 from recon.metrics import relative_error
+from recon.progress import progress_steps
 from recon.spectralize.joint import reconstruct_priors
 from recon.spectralize.solve import PRIORS, PointSpectra, neighbour_graph
 
@@ -95,6 +96,7 @@ def choose_prior(
     known_spectra: np.ndarray,
     *,
     folds: int = FOLDS,
+    progress: bool = False,
     **options: Any,
 ) -> PriorChoice:
     """Pick the appearance prior (``"spectra"`` or ``"regression"``) by held-out spots.
@@ -111,10 +113,13 @@ def choose_prior(
     folds
         Folds of the cross-validation (at least 2): fold ``f`` holds out the spots whose number
         (row-major order of their first pixel) is ``f`` modulo ``folds``.
+    progress
+        Show a progress bar over the folds.
     **options
         The other energy and solver options of :func:`~recon.spectralize.solve.reconstruct`
         (``appearance``, ``neighbours``, ``weights``, ``p_dyn``, ``tol``, ...), used for every
-        trial solve; ``prior`` and ``graph`` are the options it sets itself.
+        trial solve, among them ``graph`` (:func:`~recon.spectralize.solve.neighbour_graph` of
+        these options, found here if not given); ``prior`` is the one option it sets itself.
 
     Returns
     -------
@@ -131,10 +136,8 @@ def choose_prior(
     >>> choice.prior, choice.spots
     ('regression', 21)
     """
-    if "prior" in options or "graph" in options:
-        raise InputError(
-            "prior, graph: choose_prior tries every prior on the graph it finds; do not pass one"
-        )
+    if "prior" in options:
+        raise InputError("prior: choose_prior tries every prior; do not pass one")
     if not (isinstance(folds, (int, np.integer)) and folds >= 2):
         raise InputError(f"folds: expected an integer >= 2, got {folds!r}")
     images = np.asarray(rgb, dtype=np.float64)
@@ -167,19 +170,24 @@ def choose_prior(
         for key in ("appearance", "appearance_options", "neighbours", "p_dyn")
         if key in options
     }
-    graph = neighbour_graph(images, **graph_options)
+    graph = options.pop("graph", None)
+    if graph is None:
+        graph = neighbour_graph(images, **graph_options)
     predicted = {prior: np.empty_like(spectra) for prior in PRIORS}
-    for fold in range(folds):
-        held_out = spots % folds == fold
-        estimates = reconstruct_priors(
-            images,
-            response,
-            point_spectra=PointSpectra(pixels[~held_out], spectra[~held_out]),
-            graph=graph,
-            **options,
-        )
-        for prior, estimate in estimates.items():
-            predicted[prior][held_out] = estimate.reshape(-1, spectra.shape[1])[pixels[held_out]]
+    with progress_steps("choosing the prior: folds", folds, enabled=progress) as advance:
+        for fold in range(folds):
+            held_out = spots % folds == fold
+            estimates = reconstruct_priors(
+                images,
+                response,
+                point_spectra=PointSpectra(pixels[~held_out], spectra[~held_out]),
+                graph=graph,
+                **options,
+            )
+            for prior, estimate in estimates.items():
+                known = estimate.reshape(-1, spectra.shape[1])[pixels[held_out]]
+                predicted[prior][held_out] = known
+            advance()
     pixel_errors = {prior: relative_error(predicted[prior], spectra) for prior in PRIORS}
     errors = {prior: float(np.mean(values)) for prior, values in pixel_errors.items()}
     return PriorChoice(min(errors, key=errors.__getitem__), errors, count, pixel_errors, spots)
