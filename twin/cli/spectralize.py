@@ -16,7 +16,7 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from twin.cli.errors import fail, require_output_folder
+from twin.cli.errors import fail, remove_if_interrupted, require_output_folder
 from twin.cli.output import JsonFlag, console, print_summary
 
 __all__ = ["register"]
@@ -49,6 +49,7 @@ def _spot_table(xy: np.ndarray, errors: np.ndarray) -> Table:
 
 
 def spectralize(
+    ctx: typer.Context,
     image: Annotated[
         Path,
         typer.Argument(
@@ -129,6 +130,7 @@ def spectralize(
             f"--out {out}: already holds {', '.join(present)}; expected a new folder or one "
             "without them (nothing was overwritten)"
         )
+    remove_if_interrupted(ctx, out)
     rgb = read_linear_rgb(image, encoding=None if encoding is None else encoding.value)
     spots = read_spots_csv(spectra)
     curves = camera_response(response)
