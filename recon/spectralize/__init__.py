@@ -8,8 +8,15 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
         "appearance": ["appearance_neighbours"],
+        "joint": ["reconstruct_priors"],
         "kronecker": ["solve_kronecker_sum"],
         "prior_choice": ["PriorChoice", "choose_prior"],
-        "solve": ["EnergyWeights", "build_problem", "reconstruct", "spectralize"],
+        "solve": [
+            "EnergyWeights",
+            "build_problem",
+            "neighbour_graph",
+            "reconstruct",
+            "spectralize",
+        ],
     },
 )

@@ -128,15 +128,19 @@ def _equal_shifts(shifts: np.ndarray, columns: list[int]) -> list[tuple[float, l
     return runs
 
 
-def _compressed(gram: np.ndarray, rtol: float) -> np.ndarray:
+def _compressed(gram: np.ndarray, rtol: float, floor: float = 0.0) -> np.ndarray:
     """Orthonormal directions ``W`` (c, r) that keep of right-hand sides with Gram matrix
     ``gram`` (c, c) of one matrix the part whose singular value exceeds ``rtol`` times the
-    largest. The dropped part is below the solver tolerance, so solving ``r`` systems instead
-    of ``c`` changes nothing measurable; with point spectra the ``K - 3`` metameric-black
-    columns share one matrix and their data has the (often low) rank of the measured spectra."""
+    largest, and ``floor``. The dropped part is below the solver tolerance, so solving ``r``
+    systems instead of ``c`` changes nothing measurable; with point spectra the ``K - 3``
+    metameric-black columns share one matrix and their data has the (often low) rank of the
+    measured spectra. ``floor`` drops right-hand sides that the Gram matrix of the whole of
+    :math:`C` cannot tell from zero (the camera directions of the regression prior on
+    noise-free camera values), of which no relative residual could be asked."""
     energies, directions = np.linalg.eigh(gram)
     singular = np.sqrt(np.clip(energies, 0.0, None))
-    return directions[:, singular > rtol * max(float(singular.max()), np.finfo(float).tiny)]
+    threshold = max(rtol * float(singular.max()), floor, np.finfo(float).tiny)
+    return directions[:, singular > threshold]
 
 
 def _column_norms(block: np.ndarray) -> np.ndarray:
@@ -290,12 +294,15 @@ def solve_kronecker_sum(
     gram = rhs.gram() if isinstance(rhs, FactoredRhs) else rhs.T @ rhs
     rotated_gram = basis.T @ gram @ basis
     mean_diagonal = float(np.mean(spatial.diagonal()))
+    # What the Gram matrix cannot tell from zero: its entries carry rounding errors of about
+    # eps |C|_F^2, so singular values below about sqrt(eps) |C|_F are noise.
+    rounding_floor = 10 * np.sqrt(np.finfo(float).eps * max(float(np.trace(gram)), 0.0))
     groups = []
     for group_shift, members in _shift_groups(shifts, mean_diagonal):
         # One block per group: each run of equal shifts compressed to its numerical rank.
         runs = []
         for _, run in _equal_shifts(shifts, members):
-            weights = _compressed(rotated_gram[np.ix_(run, run)], rtol)
+            weights = _compressed(rotated_gram[np.ix_(run, run)], rtol, rounding_floor)
             runs.append((run, weights.shape[1], basis[:, run] @ weights))
         projection = np.hstack([projection for _, _, projection in runs])
         if projection.shape[1] == 0:  # no right-hand side in this group: its columns are zero

@@ -6,14 +6,20 @@ thesis) or their difference from a linear regression on the camera values (``pri
 image better depends on the image: the plain prior wins where neighbours share a material and the
 RGB noise is what separates them (mosaics of materials), the regression prior where brightness and
 colour change smoothly within a material (shading, blends). :func:`choose_prior` decides from the
-data at hand by five-fold cross-validation over the spectral spots: it leaves every fifth spot out
-in turn, reconstructs the image with each prior from the other spots and keeps the prior with the
-smaller mean relative error (Eq. 6.8) over all spots, each predicted while it was left out
-(push-broom lines are cut into segments first). It costs ``FOLDS`` solves per prior, on 80 % of
-the known spectra. On the 21 mosaic and real-image cases of ``benchmarks/spectralize_real.py`` a
-single held-out fold chose the worse prior 8 times (once losing the 30 % margin over the best
-peer), five folds 6 times (never losing it): where the two priors are close, the left-out spots
-of a mosaic often sit in cells that no other spot reaches.
+data at hand by cross-validation over the spectral spots (five folds unless told otherwise): it
+leaves every fifth spot out in turn, reconstructs the image with each prior from the other spots
+and keeps the prior with the smaller mean relative error (Eq. 6.8) over all spots, each predicted
+while it was left out (push-broom lines are cut into segments first). It costs ``folds``
+solves, each of both priors together (:func:`recon.spectralize.joint.reconstruct_priors`: one
+Kronecker solve with twice the columns), on the appearance graph found once for the image
+(:func:`recon.spectralize.solve.neighbour_graph`). ``folds=3`` is the cheap setting of
+``spectwin spectralize``; BENCHMARKS.md, "Spectralizing a user's image", measures its cost
+against a single solve.
+
+On the 21 mosaic and real-image cases of ``benchmarks/spectralize_real.py`` a single held-out
+fold chose the worse prior 8 times (once losing the 30 % margin over the best peer), five folds
+6 times (never losing it): where the two priors are close, the left-out spots of a mosaic often
+sit in cells that no other spot reaches.
 
 References
 ----------
@@ -25,7 +31,7 @@ References
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -33,7 +39,9 @@ from scipy import ndimage
 
 from recon.errors import InputError
 from recon.metrics import relative_error
-from recon.spectralize.solve import PRIORS, PointSpectra, reconstruct
+from recon.progress import progress_steps
+from recon.spectralize.joint import reconstruct_priors
+from recon.spectralize.solve import PRIORS, PointSpectra, neighbour_graph
 
 __all__ = ["PriorChoice", "choose_prior"]
 
@@ -46,24 +54,30 @@ their first pixel) is ``f`` modulo ``FOLDS``."""
 class PriorChoice:
     """The chosen ``prior``, the mean relative error (Eq. 6.8, %) per prior over the known
     pixels, each predicted from the other folds, and the number of ``spots`` (or line
-    segments)."""
+    segments). ``pixel_errors``: per prior, the error (Eq. 6.8, %) of every known pixel
+    predicted while its fold was held out, in the order of ``known_pixels``; ``spot_of_pixel``:
+    the spot (or segment) number of every known pixel."""
 
     prior: str
     held_out_errors: dict[str, float]
     spots: int
+    pixel_errors: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
+    spot_of_pixel: np.ndarray = field(default_factory=lambda: np.empty(0, int), repr=False)
 
 
-def _spot_labels(pixels: np.ndarray, image_shape: tuple[int, int, int]) -> np.ndarray:
+def _spot_labels(
+    pixels: np.ndarray, image_shape: tuple[int, int, int], folds: int = FOLDS
+) -> np.ndarray:
     """Spot number of every known pixel: 4-connected groups of known pixels within one image;
-    where there are fewer than ``FOLDS`` groups (push-broom lines), each is cut into
-    ``2 FOLDS`` segments along its longer side."""
+    where there are fewer than ``folds`` groups (push-broom lines), each is cut into
+    ``2 folds`` segments along its longer side."""
     mask = np.zeros(int(np.prod(image_shape)), dtype=bool)
     mask[pixels] = True
     within_image = np.zeros((3, 3, 3), dtype=bool)
     within_image[1] = ndimage.generate_binary_structure(2, 1)
     labels, count = ndimage.label(mask.reshape(image_shape), structure=within_image)
     spots = labels.ravel()[pixels] - 1
-    if count >= FOLDS:
+    if count >= folds:
         return spots
     _, rows, cols = np.unravel_index(pixels, image_shape)
     segments = np.empty_like(spots)
@@ -71,7 +85,7 @@ def _spot_labels(pixels: np.ndarray, image_shape: tuple[int, int, int]) -> np.nd
         members = np.flatnonzero(spots == spot)
         along = rows[members] if np.ptp(rows[members]) >= np.ptp(cols[members]) else cols[members]
         rank = np.argsort(np.argsort(along, kind="stable"), kind="stable")
-        segments[members] = spot * 2 * FOLDS + rank * 2 * FOLDS // members.size
+        segments[members] = spot * 2 * folds + rank * 2 * folds // members.size
     return np.unique(segments, return_inverse=True)[1]
 
 
@@ -80,6 +94,9 @@ def choose_prior(
     response: np.ndarray,
     known_pixels: np.ndarray,
     known_spectra: np.ndarray,
+    *,
+    folds: int = FOLDS,
+    progress: bool = False,
     **options: Any,
 ) -> PriorChoice:
     """Pick the appearance prior (``"spectra"`` or ``"regression"``) by held-out spots.
@@ -93,10 +110,16 @@ def choose_prior(
         Flat pixel indices and their ``(m, K)`` spectra (Eq. 6.10), in spots of one or more
         adjacent pixels (at least ``FOLDS``) or in lines (push-broom), which are cut into
         segments.
+    folds
+        Folds of the cross-validation (at least 2): fold ``f`` holds out the spots whose number
+        (row-major order of their first pixel) is ``f`` modulo ``folds``.
+    progress
+        Show a progress bar over the folds.
     **options
         The other energy and solver options of :func:`~recon.spectralize.solve.reconstruct`
         (``appearance``, ``neighbours``, ``weights``, ``p_dyn``, ``tol``, ...), used for every
-        trial solve; ``prior`` is the one option it sets itself.
+        trial solve, among them ``graph`` (:func:`~recon.spectralize.solve.neighbour_graph` of
+        these options, found here if not given); ``prior`` is the one option it sets itself.
 
     Returns
     -------
@@ -115,6 +138,8 @@ def choose_prior(
     """
     if "prior" in options:
         raise InputError("prior: choose_prior tries every prior; do not pass one")
+    if not (isinstance(folds, (int, np.integer)) and folds >= 2):
+        raise InputError(f"folds: expected an integer >= 2, got {folds!r}")
     images = np.asarray(rgb, dtype=np.float64)
     pixels = np.asarray(known_pixels)
     spectra = np.asarray(known_spectra, dtype=np.float64)
@@ -133,25 +158,36 @@ def choose_prior(
             f"known_pixels: expected indices in [0, {np.prod(pixel_grid)}), got "
             f"[{pixels.min()}, {pixels.max()}]"
         )
-    spots = _spot_labels(pixels, pixel_grid)
+    spots = _spot_labels(pixels, pixel_grid, folds)
     count = int(spots.max()) + 1 if spots.size else 0
-    if count < FOLDS:
+    if count < folds:
         raise InputError(
-            f"known_pixels: choose_prior needs at least {FOLDS} separate spots (or lines long "
-            f"enough to cut into {2 * FOLDS} segments) to hold one in {FOLDS} out, got {count}"
+            f"known_pixels: choose_prior needs at least {folds} separate spots (or lines long "
+            f"enough to cut into {2 * folds} segments) to hold one in {folds} out, got {count}"
         )
-    errors = {}
-    for prior in PRIORS:
-        predicted = np.empty_like(spectra)
-        for fold in range(FOLDS):
-            held_out = spots % FOLDS == fold
-            estimate = reconstruct(
+    graph_options = {
+        key: options[key]
+        for key in ("appearance", "appearance_options", "neighbours", "p_dyn")
+        if key in options
+    }
+    graph = options.pop("graph", None)
+    if graph is None:
+        graph = neighbour_graph(images, **graph_options)
+    predicted = {prior: np.empty_like(spectra) for prior in PRIORS}
+    with progress_steps("choosing the prior: folds", folds, enabled=progress) as advance:
+        for fold in range(folds):
+            held_out = spots % folds == fold
+            estimates = reconstruct_priors(
                 images,
                 response,
                 point_spectra=PointSpectra(pixels[~held_out], spectra[~held_out]),
-                prior=prior,
+                graph=graph,
                 **options,
-            ).spectra.reshape(-1, spectra.shape[1])
-            predicted[held_out] = estimate[pixels[held_out]]
-        errors[prior] = float(np.mean(relative_error(predicted, spectra)))
-    return PriorChoice(min(errors, key=errors.__getitem__), errors, count)
+            )
+            for prior, estimate in estimates.items():
+                known = estimate.reshape(-1, spectra.shape[1])[pixels[held_out]]
+                predicted[prior][held_out] = known
+            advance()
+    pixel_errors = {prior: relative_error(predicted[prior], spectra) for prior in PRIORS}
+    errors = {prior: float(np.mean(values)) for prior, values in pixel_errors.items()}
+    return PriorChoice(min(errors, key=errors.__getitem__), errors, count, pixel_errors, spots)

@@ -54,6 +54,7 @@ from recon.errors import InputError
 from recon.progress import progress_steps
 from recon.spectra import SampledSpectra, WavelengthGrid
 from recon.spectralize.appearance import (
+    NeighbourGraph,
     appearance_neighbours,
     appearance_points,
     connect_components,
@@ -80,6 +81,7 @@ __all__ = [
     "SpectralizationResult",
     "build_problem",
     "dynamic_scale",
+    "neighbour_graph",
     "reconstruct",
     "spectralize",
 ]
@@ -422,6 +424,36 @@ def _regression_matrix(scaled_rgb: np.ndarray, data_terms: list[Any]) -> np.ndar
     return np.linalg.lstsq(scaled_rgb[pixels], spectra, rcond=None)[0]
 
 
+def neighbour_graph(
+    rgb: np.ndarray,
+    *,
+    appearance: str = "rgb",
+    appearance_options: dict[str, Any] | None = None,
+    neighbours: int = 3,
+    p_dyn: float = 0.0,
+) -> NeighbourGraph:
+    """The appearance links :math:`N_i` of Eq. 6.3 that :func:`build_problem` finds for these
+    camera values and options, before components without data are linked: found once, they
+    serve every solve over the same image (``graph=``), whatever spectra are known.
+
+    Parameters
+    ----------
+    rgb
+        ``(H, W, C)`` or ``(N, H, W, C)`` camera values.
+    appearance, appearance_options, neighbours, p_dyn
+        As in :func:`build_problem`.
+
+    Returns
+    -------
+    NeighbourGraph
+    """
+    images = _as_images(rgb)
+    scale = dynamic_scale(images, p_dyn)
+    scaled = images * scale.reshape(*images.shape[:3], 1)
+    points = appearance_points(scaled, appearance, **(appearance_options or {}))
+    return appearance_neighbours(points, k=neighbours)
+
+
 def build_problem(
     rgb: np.ndarray,
     response: np.ndarray,
@@ -435,6 +467,7 @@ def build_problem(
     neighbours: int = 3,
     p_dyn: float = 0.0,
     prior: str = "spectra",
+    graph: NeighbourGraph | None = None,
 ) -> SpectralizationProblem:
     """Assemble the energy of the module docstring.
 
@@ -465,6 +498,11 @@ def build_problem(
         the known spectra say they should (shading, smooth colour gradients); but the noise of
         :math:`V_i` reaches the spectra through :math:`W`. :func:`recon.spectralize.choose_prior`
         picks one from held-out known spectra.
+    graph
+        The appearance links of these pixels found before by :func:`neighbour_graph` with the
+        same ``appearance``, ``appearance_options``, ``neighbours`` and ``p_dyn`` (e.g. once
+        for all the solves of a cross-validation); None finds them. Components without data are
+        linked here either way.
 
     Returns
     -------
@@ -507,7 +545,13 @@ def build_problem(
     points = appearance_points(
         scaled_rgb.reshape(*image_shape, channels), appearance, **(appearance_options or {})
     )
-    graph = appearance_neighbours(points, k=neighbours)
+    if graph is None:
+        graph = appearance_neighbours(points, k=neighbours)
+    elif graph.n_pixels != scale.size:
+        raise InputError(
+            f"graph: links of {graph.n_pixels} pixels for an image of {scale.size}; expected the "
+            "appearance links of these pixels"
+        )
     graph_s = time.perf_counter() - started
     graph = connect_components(graph, points, has_data)
     connect_s = time.perf_counter() - started - graph_s

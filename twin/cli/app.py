@@ -29,6 +29,7 @@ from twin.cli.lab import register as register_lab
 from twin.cli.material import register as register_material
 from twin.cli.output import JsonFlag, SeedOption, console, print_summary
 from twin.cli.pipeline import register as register_pipeline
+from twin.cli.spectralize import register as register_spectralize
 from twin.cli.store import register as register_store
 from twin.cli.sweep import register as register_sweep
 
@@ -203,6 +204,7 @@ register_frames(app)
 register_store(app)
 register_lab(app)
 register_sweep(app)
+register_spectralize(app)
 
 
 if __name__ == "__main__":

@@ -9,8 +9,14 @@ from recon.errors import InputError
 from recon.experiments.real_images import holder_bar_case, real_test_image
 from recon.experiments.sampling import known_spectra_from_mask, push_broom_mask, whisk_broom_mask
 from recon.metrics import relative_error
-from recon.spectralize import choose_prior
-from recon.spectralize.solve import BandImage, EnergyWeights, reconstruct, spectralize
+from recon.spectralize import choose_prior, reconstruct_priors
+from recon.spectralize.solve import (
+    BandImage,
+    EnergyWeights,
+    PointSpectra,
+    reconstruct,
+    spectralize,
+)
 
 OPTIONS = {"appearance": "rgbxy", "weights": EnergyWeights(delta=0.0), "tol": 1e-10}
 
@@ -121,3 +127,31 @@ def test_choose_prior_counts_spots_per_image_of_a_joint_reconstruction(span_of_t
         stack @ response, response, both, np.concatenate([spectra, 0.5 * spectra]), **OPTIONS
     )
     assert choice.spots == 50 and choice.prior == "regression"
+
+
+def test_three_folds_give_every_known_pixel_its_held_out_error(span_of_three):
+    truth, response, pixels, spectra = span_of_three
+    choice = choose_prior(truth @ response, response, pixels, spectra, folds=3, **OPTIONS)
+    assert choice.prior == "regression"
+    for prior, errors in choice.pixel_errors.items():
+        assert errors.shape == pixels.shape
+        assert np.mean(errors) == pytest.approx(choice.held_out_errors[prior])
+    assert choice.spot_of_pixel.shape == pixels.shape
+    with pytest.raises(InputError, match="folds: expected an integer >= 2"):
+        choose_prior(truth @ response, response, pixels, spectra, folds=1)
+
+
+def test_both_priors_solved_jointly_match_each_solved_alone(span_of_three):
+    """The joint Kronecker solve of both priors gives what each prior's own solve gives, on
+    noise-free camera values too (where the regression leaves the camera directions no data)."""
+    truth, response, pixels, spectra = span_of_three
+    rgb = truth @ response
+    jointly = reconstruct_priors(
+        rgb, response, point_spectra=PointSpectra(pixels, spectra), **OPTIONS
+    )
+    for prior in ("spectra", "regression"):
+        alone = reconstruct(
+            rgb, response, point_spectra=PointSpectra(pixels, spectra), prior=prior, **OPTIONS
+        ).spectra
+        assert np.all(np.isfinite(alone))
+        np.testing.assert_allclose(jointly[prior], alone, rtol=0, atol=1e-6 * truth.max())

@@ -1,0 +1,276 @@
+"""A user's RGB image spectralized from spot spectra (thesis Eq. 6.10), with the error of every
+spot predicted while it was held out (Eq. 6.8).
+
+Steps:
+
+1. The grid: the spots' wavelengths within the response's range (a grid finer than
+   :data:`FINEST_STEP_NM` with more than :data:`MAX_BANDS` bands is averaged onto a regular
+   grid of that step). The spots must cover at least :data:`MIN_COVERAGE` of every channel's
+   response: what the camera sees where no spot was measured would be left to guesswork.
+2. The camera term :math:`R_{cam}` (Eq. 6.2, ``(K, 3)``): the response's band integrals on the
+   grid, times a gain per channel fitted to the spots by least squares
+   (:math:`g_c = \\sum_s v_{s,c} p_{s,c} / \\sum_s p_{s,c}^2` with :math:`p = S R`), since the
+   exposure, the light's colour over the spots and the response's units are unknown. The
+   relative residual of that fit says how well the spots and the image agree.
+3. The prior (Eq. 6.3): chosen by :func:`recon.spectralize.choose_prior` with
+   :data:`FOLDS` folds (both priors of each fold in one Kronecker solve, one appearance graph
+   for all solves), or with ``fast=True`` the thesis's prior (``"spectra"``) without
+   cross-validation.
+4. The solve of Eq. 6.10 (RGBXY appearance space, three neighbours, equal primed weights of
+   Eq. 6.11, no smoothness term: the settings of the chapter 7 experiments,
+   :mod:`recon.experiments.sparse`) on the same graph. Negative values are clipped to zero.
+
+References
+----------
+- The thesis, Eq. 6.2, 6.3, 6.8, 6.10 and 6.11; chapter 7 (the settings).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from recon.errors import InputError
+from recon.image_spectralization.spots import SpotSpectra
+from recon.spectra import SampledSpectra, WavelengthGrid, resample
+from recon.spectralize import choose_prior
+from recon.spectralize.solve import EnergyWeights, PointSpectra, neighbour_graph, reconstruct
+
+__all__ = [
+    "FOLDS",
+    "MIN_COVERAGE",
+    "ImageSpectralization",
+    "camera_term",
+    "solve_grid",
+    "spectralize_image",
+]
+
+FOLDS = 3
+"""Folds of the cross-validation that chooses the prior and measures every spot's error."""
+MIN_SPOTS = 2 * FOLDS
+"""Fewest spots: two per fold."""
+MIN_COVERAGE = 0.95
+"""Share of every channel's response (its integral over wavelength) that the spots' range must
+hold."""
+MAX_BANDS = 81
+FINEST_STEP_NM = 5.0
+FAST_PRIOR = "spectra"
+"""The prior of ``fast=True``: the thesis's, the spectra themselves held alike (Eq. 6.3)."""
+_ENERGY: dict[str, Any] = {
+    "appearance": "rgbxy",
+    "weights": EnergyWeights(delta=0.0),
+    "neighbours": 3,
+}
+
+
+@dataclass(frozen=True, eq=False)
+class ImageSpectralization:
+    """The spectral image and how it was made.
+
+    Attributes
+    ----------
+    cube
+        ``(H, W, K)`` float32 spectra in the spots' unit, non-negative.
+    grid
+        Their wavelengths.
+    prior
+        The prior used (``"spectra"`` or ``"regression"``).
+    cross_validated
+        Whether the prior was chosen by cross-validation (False: ``fast``).
+    held_out_errors
+        Per prior, the mean error (Eq. 6.8, %) of the spots predicted while held out; empty
+        without cross-validation.
+    spot_errors
+        ``(m,)`` the held-out error (Eq. 6.8, %) of every spot with the prior used, in the
+        order of the spots; None without cross-validation.
+    gains
+        ``(3,)`` the gain per channel fitted to the spots.
+    fit_residual_pct
+        ``(3,)`` relative RMS residual of that fit per channel, %.
+    timings_s
+        Seconds of the appearance graph, the cross-validation and the solve.
+    notes
+        What was done to the inputs beyond reading them.
+    """
+
+    cube: np.ndarray
+    grid: WavelengthGrid
+    prior: str
+    cross_validated: bool
+    held_out_errors: dict[str, float]
+    spot_errors: np.ndarray | None
+    gains: np.ndarray
+    fit_residual_pct: np.ndarray
+    timings_s: dict[str, float]
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+
+def _channel_integrals(response: SampledSpectra, low: float, high: float) -> np.ndarray:
+    """Per channel, the share of the response's integral between ``low`` and ``high`` nm."""
+    fine = WavelengthGrid(
+        np.linspace(response.grid.wavelengths_nm[0], response.grid.wavelengths_nm[-1], 2001)
+    )
+    values = resample(response, fine).values
+    weights = fine.quadrature_weights()
+    inside = (fine.wavelengths_nm >= low) & (fine.wavelengths_nm <= high)
+    total = values @ weights
+    return np.asarray((values[:, inside] @ weights[inside]) / total)
+
+
+def solve_grid(spots: SampledSpectra, response: SampledSpectra) -> tuple[WavelengthGrid, list[str]]:
+    """The wavelengths to reconstruct on (module description, step 1) and notes on them.
+
+    Raises
+    ------
+    InputError
+        When the spots cover less than :data:`MIN_COVERAGE` of a channel's response.
+    """
+    wavelengths = spots.grid.wavelengths_nm
+    low, high = response.grid.wavelengths_nm[[0, -1]]
+    shares = _channel_integrals(response, wavelengths[0], wavelengths[-1])
+    if np.any(shares < MIN_COVERAGE):
+        worst = int(np.argmin(shares))
+        raise InputError(
+            f"spots: measured over {wavelengths[0]:g}-{wavelengths[-1]:g} nm, which holds "
+            f"{100 * shares[worst]:.0f} % of the camera's {'RGB'[worst]} response "
+            f"({low:g}-{high:g} nm); expected spectra covering at least "
+            f"{100 * MIN_COVERAGE:.0f} % of every channel"
+        )
+    kept = wavelengths[(wavelengths >= low) & (wavelengths <= high)]
+    notes = []
+    if kept.size < 2:
+        raise InputError(
+            f"spots: fewer than 2 of their wavelengths lie within the response's {low:g}-"
+            f"{high:g} nm"
+        )
+    if kept.size > MAX_BANDS and np.mean(np.diff(kept)) < FINEST_STEP_NM:
+        start = FINEST_STEP_NM * np.ceil(kept[0] / FINEST_STEP_NM)
+        stop = FINEST_STEP_NM * np.floor(kept[-1] / FINEST_STEP_NM)
+        grid = WavelengthGrid.regular(start, stop, FINEST_STEP_NM)
+        notes.append(f"spot spectra averaged from {kept.size} wavelengths onto {grid.describe()}")
+        return grid, notes
+    return WavelengthGrid(kept), notes
+
+
+def camera_term(
+    response: SampledSpectra, grid: WavelengthGrid, rgb_at_spots: np.ndarray, spectra: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:math:`R_{cam}` ``(K, 3)`` on ``grid`` with the gains fitted to the spots (module
+    description, step 2), the gains and the fit's relative residual per channel (%)."""
+    on_grid = resample(response, grid, out_of_range="zero").values.T
+    integrals = on_grid * grid.quadrature_weights()[:, None]
+    predicted = spectra @ integrals
+    power = np.sum(predicted**2, axis=0)
+    if np.any(power <= 0):
+        channel = "RGB"[int(np.argmin(power))]
+        raise InputError(
+            f"spots: their spectra give no {channel} signal through the camera's response; "
+            "expected spectra where the camera is sensitive"
+        )
+    gains = np.sum(rgb_at_spots * predicted, axis=0) / power
+    if not np.all(gains > 0):
+        channel = "RGB"[int(np.argmin(gains))]
+        raise InputError(
+            f"image, spots: the image's {channel} values at the spots do not grow with the "
+            "spectra's signal (gain <= 0); expected the spots' coordinates on the image"
+        )
+    residual = rgb_at_spots - gains * predicted
+    scale = np.sqrt(np.mean(rgb_at_spots**2, axis=0))
+    fit = 100 * np.sqrt(np.mean(residual**2, axis=0)) / np.maximum(scale, np.finfo(float).tiny)
+    return integrals * gains, gains, fit
+
+
+def spectralize_image(
+    rgb: np.ndarray,
+    spots: SpotSpectra,
+    response: SampledSpectra,
+    *,
+    fast: bool = False,
+    tol: float = 1e-6,
+    progress: bool = False,
+) -> ImageSpectralization:
+    """Spectralize ``rgb`` from the spot spectra (module description).
+
+    Parameters
+    ----------
+    rgb
+        ``(H, W, 3)`` linear camera values.
+    spots
+        Spot spectra at pixels of the image.
+    response
+        ``(3, K')`` the camera's spectral response, rows R, G, B, any scale.
+    fast
+        The thesis's prior without cross-validation (no spot errors).
+    tol
+        Relative residual of the solves (:func:`recon.spectralize.solve.reconstruct`).
+    progress
+        Show progress bars.
+
+    Returns
+    -------
+    ImageSpectralization
+    """
+    rgb = np.asarray(rgb, dtype=np.float64)
+    if rgb.ndim != 3 or rgb.shape[2] != 3:
+        raise InputError(f"rgb: expected (H, W, 3) camera values, got shape {rgb.shape}")
+    if response.values.ndim != 2 or response.values.shape[0] != 3:
+        raise InputError(
+            f"response: expected three channels R, G, B, got {response.values.shape[0]}"
+        )
+    pixels = spots.flat_pixels(rgb.shape[:2])
+    if pixels.size < MIN_SPOTS:
+        raise InputError(
+            f"spots {spots.source}: {pixels.size} spot(s); expected at least {MIN_SPOTS} "
+            f"(two per fold of the {FOLDS}-fold cross-validation)"
+        )
+    grid, notes = solve_grid(spots.spectra, response)
+    spectra = resample(spots.spectra, grid, method="box" if notes else "linear").values
+    flat = rgb.reshape(-1, 3)
+    r_cam, gains, fit = camera_term(response, grid, flat[pixels], spectra)
+    started = time.perf_counter()
+    graph = neighbour_graph(rgb, appearance="rgbxy", neighbours=3)
+    timings = {"graph": time.perf_counter() - started}
+    choice = None
+    if not fast:
+        started = time.perf_counter()
+        choice = choose_prior(
+            rgb,
+            r_cam,
+            pixels,
+            spectra,
+            folds=FOLDS,
+            graph=graph,
+            tol=tol,
+            progress=progress,
+            **_ENERGY,
+        )
+        timings["cross_validation"] = time.perf_counter() - started
+    prior = FAST_PRIOR if choice is None else choice.prior
+    started = time.perf_counter()
+    result = reconstruct(
+        rgb,
+        r_cam,
+        point_spectra=PointSpectra(pixels, spectra),
+        prior=prior,
+        graph=graph,
+        tol=tol,
+        progress=progress,
+        **_ENERGY,
+    )
+    timings["solve"] = time.perf_counter() - started
+    cube = np.clip(result.spectra, 0.0, None).astype(np.float32)
+    return ImageSpectralization(
+        cube=cube,
+        grid=grid,
+        prior=prior,
+        cross_validated=choice is not None,
+        held_out_errors={} if choice is None else dict(choice.held_out_errors),
+        spot_errors=None if choice is None else choice.pixel_errors[prior],
+        gains=gains,
+        fit_residual_pct=fit,
+        timings_s=timings,
+        notes=tuple(notes),
+    )

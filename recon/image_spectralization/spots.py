@@ -1,0 +1,129 @@
+"""Spot spectra at pixel coordinates, from a CSV file.
+
+The layout: a header ``x,y,<wavelength>,<wavelength>,...`` (wavelengths in nm, increasing),
+then one row per spot: its pixel's column ``x`` and row ``y`` (from 0 at the image's top-left
+pixel) and its spectrum, one value per wavelength, in whatever unit the spectrometer gave
+(reflectance factor or radiance; the reconstruction is in the same unit). Lines starting with
+``#`` are comments. Each spot is one pixel; a spot measured over several pixels is given as
+several rows.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from recon.errors import InputError
+from recon.spectra import SampledSpectra, WavelengthGrid
+
+__all__ = ["SpotSpectra", "read_spots_csv"]
+
+
+@dataclass(frozen=True, eq=False)
+class SpotSpectra:
+    """``xy`` ``(m, 2)`` int pixel coordinates (column, row) and their ``spectra`` (``m``
+    rows), read from ``source``."""
+
+    xy: np.ndarray
+    spectra: SampledSpectra
+    source: str
+
+    def flat_pixels(self, shape: tuple[int, int]) -> np.ndarray:
+        """Row-major indices of the spots in an image of ``shape`` ``(H, W)``, refusing spots
+        outside it."""
+        height, width = shape
+        x, y = self.xy[:, 0], self.xy[:, 1]
+        outside = (x < 0) | (y < 0) | (x >= width) | (y >= height)
+        if outside.any():
+            first = int(np.argmax(outside))
+            raise InputError(
+                f"spots {self.source}: {int(outside.sum())} spot(s) outside the {width} x "
+                f"{height} image, the first at x={x[first]}, y={y[first]} (row {first + 2}); "
+                f"expected 0 <= x < {width} and 0 <= y < {height}"
+            )
+        return y * width + x
+
+
+def _number(text: str, path: Path, line: int, column: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise InputError(
+            f"spots {path}: line {line}, column {column}: {text.strip()!r} is not a number"
+        ) from None
+    if not np.isfinite(value):
+        raise InputError(
+            f"spots {path}: line {line}, column {column}: {text.strip()}; expected a finite "
+            "number (NaN marks no measurement; leave such spots out)"
+        )
+    return value
+
+
+def read_spots_csv(path: str | Path) -> SpotSpectra:
+    """Read spot spectra (module description).
+
+    Returns
+    -------
+    SpotSpectra
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> path = Path(tempfile.mkdtemp()) / "spots.csv"
+    >>> _ = path.write_text("x,y,400,500,600\\n3,4,0.1,0.2,0.3\\n")
+    >>> spots = read_spots_csv(path)
+    >>> spots.xy.tolist(), spots.spectra.grid.wavelengths_nm.tolist()
+    ([[3, 4]], [400.0, 500.0, 600.0])
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"spots {path}: no such file; expected a CSV of x,y and spectra")
+    try:
+        text = path.read_text()
+    except UnicodeDecodeError:
+        raise InputError(f"spots {path}: not a text file; expected a CSV") from None
+    lines = [
+        (number, line)
+        for number, line in enumerate(text.splitlines(), start=1)
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
+    if not lines:
+        raise InputError(f"spots {path}: empty; expected a header x,y,<wavelength nm>,...")
+    header = [cell.strip() for cell in lines[0][1].split(",")]
+    if header[:2] != ["x", "y"] or len(header) < 4:
+        raise InputError(
+            f"spots {path}: header {lines[0][1]!r}; expected x,y then at least two wavelengths "
+            "in nm, e.g. x,y,400,410,420"
+        )
+    wavelengths = [_number(cell, path, lines[0][0], "header") for cell in header[2:]]
+    try:
+        grid = WavelengthGrid(np.array(wavelengths))
+    except InputError as error:
+        raise InputError(f"spots {path}: header wavelengths: {error}") from None
+    rows = []
+    for number, line in lines[1:]:
+        cells = line.split(",")
+        if len(cells) != len(header):
+            raise InputError(
+                f"spots {path}: line {number} has {len(cells)} values; expected {len(header)} "
+                "(x, y and one per wavelength)"
+            )
+        rows.append([_number(c, path, number, h) for c, h in zip(cells, header, strict=True)])
+    if not rows:
+        raise InputError(f"spots {path}: no spots below the header")
+    table = np.array(rows)
+    xy = table[:, :2]
+    if np.any(xy != np.round(xy)):
+        raise InputError(f"spots {path}: x and y must be whole pixel coordinates")
+    pixels = xy.astype(int)
+    _, first, counts = np.unique(pixels, axis=0, return_index=True, return_counts=True)
+    if np.any(counts > 1):
+        twice = pixels[first[counts > 1][0]]
+        raise InputError(
+            f"spots {path}: pixel x={twice[0]}, y={twice[1]} is given {counts.max()} times; "
+            "expected one spectrum per pixel"
+        )
+    return SpotSpectra(pixels, SampledSpectra(grid, table[:, 2:]), str(path))

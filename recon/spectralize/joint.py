@@ -1,0 +1,134 @@
+"""Both appearance priors of Eq. 6.3 reconstructed together, in one Kronecker solve.
+
+The plain prior and the regression prior (``prior="regression"`` of
+:func:`recon.spectralize.solve.build_problem`) give the same normal matrices of Eq. 6.10:
+:math:`A = \\alpha P + \\gamma L` over the pixels and :math:`B = \\beta R_{cam} R_{cam}^T` over
+the bands; they differ only in the right-hand side :math:`C` (the regression prior solves for
+:math:`X - B_{reg}`). Side by side, :math:`A [X_1\\, X_2] + [X_1\\, X_2]\\,
+\\mathrm{diag}(B, B) = [C_1\\, C_2]` is one Kronecker sum with ``2 K`` columns: one set of
+multigrid hierarchies and one run of block conjugate gradients serve both priors
+(:mod:`recon.spectralize.kronecker`), which is what makes the cross-validation of
+:func:`recon.spectralize.choose_prior` cheap. Energies that do not split as a Kronecker sum
+are solved one prior at a time.
+
+References
+----------
+- The thesis, Eq. 6.3, 6.10 and 6.12.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from scipy import linalg as dense_linalg
+from scipy import sparse
+
+from recon.errors import InputError
+from recon.spectralize.kronecker import FactoredRhs, solve_kronecker_sum
+from recon.spectralize.solve import PRIORS, SpectralizationProblem, build_problem, reconstruct
+
+__all__ = ["reconstruct_priors"]
+
+
+def _same_matrices(
+    parts: list[tuple[sparse.csr_matrix, np.ndarray, FactoredRhs]],
+) -> bool:
+    spatial, spectral, _ = parts[0]
+    return all(
+        other_spectral.shape == spectral.shape
+        and np.array_equal(other_spectral, spectral)
+        and abs(other_spatial - spatial).max() == 0
+        for other_spatial, other_spectral, _ in parts[1:]
+    )
+
+
+def _spectra(
+    problem: SpectralizationProblem, scaled: np.ndarray, shape: tuple[int, ...]
+) -> np.ndarray:
+    """The spectra of a solution for the scaled unknowns :math:`X` (Eq. 10.2 undone)."""
+    if problem.base is not None:
+        scaled = scaled + problem.base
+    if np.any(problem.scale != 1.0):
+        scaled = scaled / problem.scale[:, None]
+    return scaled.reshape(*shape, problem.n_bands)
+
+
+def reconstruct_priors(
+    rgb: np.ndarray,
+    response: np.ndarray,
+    *,
+    priors: Sequence[str] = PRIORS,
+    tol: float = 1e-6,
+    max_iterations: int = 500,
+    **energy: Any,
+) -> dict[str, np.ndarray]:
+    """Reconstruct the spectral image once with each prior, solving them jointly.
+
+    Parameters
+    ----------
+    rgb, response
+        As in :func:`recon.spectralize.solve.reconstruct`.
+    priors
+        The priors to reconstruct with (distinct names of
+        :data:`recon.spectralize.solve.PRIORS`).
+    tol, max_iterations
+        As in :func:`~recon.spectralize.solve.reconstruct` (the joint solve's tolerance holds
+        for the columns of both priors together).
+    **energy
+        The energy of :func:`~recon.spectralize.solve.build_problem` (``point_spectra``,
+        ``weights``, ``appearance``, ``graph``, ...) except ``prior``.
+
+    Returns
+    -------
+    dict
+        Per prior, the spectra with the leading shape of ``rgb`` and ``K`` bands.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from recon.spectralize.solve import PointSpectra
+    >>> rng = np.random.default_rng(0)
+    >>> response, truth = rng.random((8, 3)), rng.random((10, 10, 8))
+    >>> known = PointSpectra(np.arange(0, 100, 9), truth.reshape(100, 8)[::9])
+    >>> jointly = reconstruct_priors(truth @ response, response, point_spectra=known, tol=1e-10)
+    >>> alone = reconstruct(truth @ response, response, point_spectra=known, prior="regression",
+    ...                     tol=1e-10)
+    >>> bool(np.allclose(jointly["regression"], alone.spectra, atol=1e-6))
+    True
+    """
+    if "prior" in energy:
+        raise InputError("prior: reconstruct_priors takes the priors as priors=[...]")
+    unknown = [prior for prior in priors if prior not in PRIORS]
+    if unknown or len(set(priors)) != len(priors) or not priors:
+        raise InputError(f"priors: expected distinct names among {PRIORS}, got {list(priors)}")
+    shape = tuple(np.shape(rgb)[:-1])
+    problems = [build_problem(rgb, response, prior=prior, **energy) for prior in priors]
+    parts = [problem.kronecker_parts() for problem in problems]
+    if any(part is None for part in parts) or not _same_matrices(parts):  # type: ignore[arg-type]
+        return {
+            prior: reconstruct(
+                rgb, response, prior=prior, tol=tol, max_iterations=max_iterations, **energy
+            ).spectra
+            for prior in priors
+        }
+    solved = [part for part in parts if part is not None]
+    spatial, spectral, _ = solved[0]
+    rhs = FactoredRhs(
+        np.hstack([part[2].left for part in solved]),
+        dense_linalg.block_diag(*(part[2].right for part in solved)),
+        sparse.hstack([part[2].rows for part in solved], format="csr"),
+    )
+    joint, _ = solve_kronecker_sum(
+        spatial,
+        dense_linalg.block_diag(*(spectral for _ in solved)),
+        rhs,
+        rtol=tol,
+        max_iterations=max_iterations,
+    )
+    bands = problems[0].n_bands
+    return {
+        prior: _spectra(problem, joint[:, index * bands : (index + 1) * bands], shape)
+        for index, (prior, problem) in enumerate(zip(priors, problems, strict=True))
+    }

@@ -1,0 +1,163 @@
+"""``spectwin spectralize`` on a crop of a real seven-band image (Llanos 2019, its own Flea3
+response), read back from the EXR and the ENVI files it writes, and its refusals of bad input:
+one line ``error: ...``, exit 2, nothing written."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from recon.envi import read_envi
+from recon.measured_data import read_llanos2019_multispectral
+from recon.metrics import relative_error
+from recon.spectral_exr import read_spectral_exr
+from twin.cli.app import app
+
+runner = CliRunner()
+CROP = (slice(40, 160), slice(60, 220))  # rows, columns: nine chart patches and the board
+SPOT_STEP = 7  # a spot every 7th pixel in both directions: about 2 % of the pixels
+ERROR_BOUND_PCT = 2.5  # measured 1.74 % (mean Eq. 6.8 over the crop; --fast: 6.06 %)
+
+
+def _write_spots(path: Path, xy: np.ndarray, spectra: np.ndarray, wavelengths) -> None:
+    lines = ["x,y," + ",".join(f"{w:g}" for w in wavelengths)]
+    lines += [
+        f"{x},{y}," + ",".join(f"{v:.6g}" for v in row)
+        for (x, y), row in zip(xy, spectra, strict=True)
+    ]
+    path.write_text("\n".join(lines) + "\n")
+
+
+@pytest.fixture(scope="module")
+def crop(tmp_path_factory):
+    """The crop as a 16-bit PNG, its spots, the Flea3 response as CSV and the truth."""
+    folder = tmp_path_factory.mktemp("spectralize")
+    real = read_llanos2019_multispectral()
+    truth = real.image[CROP]
+    rgb = truth @ real.response
+    cv2.imwrite(
+        str(folder / "crop.png"), np.round(rgb / rgb.max() * 65535).astype(np.uint16)[..., ::-1]
+    )
+    rows, cols = np.mgrid[3 : truth.shape[0] : SPOT_STEP, 3 : truth.shape[1] : SPOT_STEP]
+    xy = np.stack([cols.ravel(), rows.ravel()], axis=1)
+    _write_spots(folder / "spots.csv", xy, truth[xy[:, 1], xy[:, 0]], real.wavelengths_nm)
+    response = ["wavelength_nm,R,G,B"] + [
+        f"{w:g}," + ",".join(f"{v:.6g}" for v in row)
+        for w, row in zip(real.wavelengths_nm, real.sensor_map, strict=True)
+    ]
+    (folder / "flea3.csv").write_text("\n".join(response) + "\n")
+    return folder, truth, xy
+
+
+def test_spectralize_a_real_crop_and_read_it_back(crop, tmp_path):
+    folder, truth, xy = crop
+    out = tmp_path / "out"
+    result = runner.invoke(
+        app,
+        ["spectralize", str(folder / "crop.png"), "--spectra", str(folder / "spots.csv")]
+        + ["--response", str(folder / "flea3.csv"), "--out", str(out), "--interleave", "bil"],
+    )
+    assert result.exit_code == 0, result.output
+    assert "held-out error per spot" in result.output or "worst five spots" in result.output
+    exr = read_spectral_exr(out / "spectra.exr")
+    envi = read_envi(out / "spectra.hdr")
+    assert exr.kind == "reflective"
+    np.testing.assert_array_equal(exr.grid.wavelengths_nm, [400, 450, 500, 550, 600, 650, 700])
+    np.testing.assert_array_equal(envi.grid.wavelengths_nm, exr.grid.wavelengths_nm)
+    np.testing.assert_array_equal(np.asarray(envi.cube), exr.cube)
+    assert envi.fields["interleave"] == "bil"
+    assert envi.fields["wavelength units"] == "Nanometers"
+    # The raster as any ENVI reader maps it from the header: bil is (lines, bands, samples).
+    raw = np.memmap(out / "spectra.raw", dtype="<f4", mode="r", shape=(120, 7, 160))
+    np.testing.assert_array_equal(raw.transpose(0, 2, 1), exr.cube)
+    # Scaled to the spots by the channel gains: the reconstruction is in the spots' unit.
+    error = float(np.mean(relative_error(exr.cube, truth)))
+    assert error < ERROR_BOUND_PCT
+    spots = json.loads((out / "spots.json").read_text())
+    assert len(spots["spots"]) == len(xy)
+    assert spots["summary"]["prior_chosen_by"] == "cross-validation"
+    assert all(spot["cross_validated_error_pct"] >= 0 for spot in spots["spots"])
+    preview = cv2.imread(str(out / "preview.png"))
+    assert preview.shape == (120, 160, 3)
+    again = runner.invoke(
+        app,
+        ["spectralize", str(folder / "crop.png"), "--spectra", str(folder / "spots.csv")]
+        + ["--response", str(folder / "flea3.csv"), "--out", str(out)],
+    )
+    assert again.exit_code == 2
+    assert "already holds spectra.exr" in again.output
+
+
+@pytest.fixture(scope="module")
+def bad(crop):
+    """Bad inputs beside the good ones of ``crop``."""
+    folder, truth, xy = crop
+    real = read_llanos2019_multispectral()
+    (folder / "text.png").write_text("not an image\n")
+    (folder / "photo.jpg").write_bytes(b"\xff\xd8\xff")
+    rgb8 = cv2.imread(str(folder / "crop.png"), cv2.IMREAD_UNCHANGED) // 257
+    cv2.imwrite(str(folder / "eight_bit.png"), rgb8.astype(np.uint8))
+    cv2.imwrite(str(folder / "gray.png"), np.zeros((120, 160), np.uint16))
+    spectra = truth[xy[:, 1], xy[:, 0]]
+    _write_spots(folder / "outside.csv", xy + [200, 0], spectra, real.wavelengths_nm)
+    with_nan = spectra.copy()
+    with_nan[3, 2] = np.nan
+    _write_spots(folder / "nan.csv", xy, with_nan, real.wavelengths_nm)
+    _write_spots(folder / "narrow.csv", xy, spectra[:, 2:5], real.wavelengths_nm[2:5])
+    _write_spots(folder / "few.csv", xy[:3], spectra[:3], real.wavelengths_nm)
+    (folder / "malformed_response.csv").write_text("nm;R;G;B\n400;1;2;3\n")
+    (folder / "broken_response.csv").write_text("wavelength_nm,R,G,B\n400,1,2\n500,1,2,3\n")
+    return folder
+
+
+PROBES = [
+    (["@missing.png"], "image @missing.png: no such file"),
+    (["@text.png"], "not a readable PNG image"),
+    (["@photo.jpg"], "JPEG is lossy and gamma-encoded"),
+    (["@eight_bit.png"], "an 8-bit image, most likely gamma-encoded"),
+    (["@gray.png"], "expected an RGB image of three channels"),
+    (["@crop.png", "--spectra", "@outside.csv"], "outside the 160 x 120 image"),
+    (["@crop.png", "--spectra", "@nan.csv"], "expected a finite number"),
+    (["@crop.png", "--spectra", "@narrow.csv"], "expected spectra covering at least 95 %"),
+    (["@crop.png", "--spectra", "@few.csv"], "3 spot(s); expected at least 6"),
+    (["@crop.png", "--spectra", "@missing.csv"], "no such file; expected a CSV of x,y"),
+    (["@crop.png", "--response", "Nikon D9999"], "expected one of the 51 measured cameras"),
+    (["@crop.png", "--response", "@malformed_response.csv"], "expected wavelength_nm,R,G,B"),
+    (["@crop.png", "--response", "@broken_response.csv"], "expected four finite numbers"),
+    (["@crop.png", "--interleave", "bip"], "'--interleave'"),
+    (["@crop.png", "--encoding", "gamma"], "'--encoding'"),
+]
+
+
+@pytest.mark.parametrize(("arguments", "phrase"), PROBES, ids=[p[1][:40] for p in PROBES])
+def test_spectralize_refuses_bad_input_in_one_line(bad, tmp_path, arguments, phrase):
+    given = dict(zip(arguments[1::2], arguments[2::2], strict=True))
+    options = {"--spectra": "@spots.csv", "--response": "@flea3.csv", **given}
+    words = [arguments[0]] + [word for pair in options.items() for word in pair]
+    words = [str(bad / word[1:]) if word.startswith("@") else word for word in words]
+    phrase = phrase.replace("@", f"{bad}/")
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["spectralize", *words, "--out", str(out)])
+    assert result.exit_code == 2, result.output
+    assert "Traceback" not in result.output
+    assert phrase in " ".join(result.output.split()), result.output
+    assert not out.exists() or not any(out.iterdir())
+    if not phrase.startswith("'--"):  # the option parser's own errors come in its box
+        assert result.output.startswith("error: ") and result.output.count("\n") == 1
+
+
+def test_an_8_bit_image_is_decoded_from_srgb_when_asked_and_says_so(bad, tmp_path):
+    result = runner.invoke(
+        app,
+        ["spectralize", str(bad / "eight_bit.png"), "--spectra", str(bad / "spots.csv")]
+        + ["--response", str(bad / "flea3.csv"), "--out", str(tmp_path / "o"), "--fast"]
+        + ["--encoding", "srgb"],
+    )
+    assert result.exit_code == 0, result.output
+    assert "note: decoded from sRGB" in " ".join(result.output.split())
+    assert "which --fast skips" in result.output

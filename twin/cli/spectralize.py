@@ -1,0 +1,169 @@
+"""``spectwin spectralize``: a user's linear RGB image and spot spectra to a spectral image
+(thesis Eq. 6.10), with the cross-validated error of every spot (Eq. 6.8).
+
+The reconstruction is ``recon.image_spectralization``; the files are written by
+``twin.studies.spectralized_image``.
+"""
+
+from __future__ import annotations
+
+import time
+from enum import StrEnum
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+from rich.table import Table
+
+from twin.cli.errors import fail, remove_if_interrupted, require_output_folder
+from twin.cli.output import JsonFlag, console, print_summary
+
+__all__ = ["register"]
+
+_SHOWN_SPOTS = 24  # more spots: the summary and the worst five
+
+
+class Encoding(StrEnum):
+    """Encodings of ``recon.image_spectralization.rgb_image.ENCODINGS``."""
+
+    linear = "linear"
+    srgb = "srgb"
+
+
+class Interleave(StrEnum):
+    """Layouts of ``recon.envi.ENVI_INTERLEAVES``."""
+
+    bsq = "bsq"
+    bil = "bil"
+
+
+def _spot_table(xy: np.ndarray, errors: np.ndarray) -> Table:
+    """The spots' held-out errors, one decimal: all of them, or the worst five."""
+    order = np.arange(errors.size) if errors.size <= _SHOWN_SPOTS else np.argsort(errors)[-5:][::-1]
+    title = "held-out error per spot" if errors.size <= _SHOWN_SPOTS else "worst five spots"
+    table = Table("x", "y", "error (%)", title=f"{title} (Eq. 6.8, cross-validated)")
+    for index in order:
+        table.add_row(str(xy[index, 0]), str(xy[index, 1]), f"{errors[index]:.1f}")
+    return table
+
+
+def spectralize(
+    ctx: typer.Context,
+    image: Annotated[
+        Path,
+        typer.Argument(
+            help="The RGB image: linear 16-bit PNG or TIFF, floating-point TIFF or OpenEXR "
+            "(R, G, B channels).",
+            show_default=False,
+        ),
+    ],
+    spectra: Annotated[
+        Path,
+        typer.Option(
+            help="Spot spectra: a CSV with the header x,y,<nm>,<nm>,... and one row per spot "
+            "(its pixel's column x and row y from 0 at the top left, then its spectrum).",
+            show_default=False,
+        ),
+    ],
+    response: Annotated[
+        str,
+        typer.Option(
+            help="The camera's spectral response: one of the 51 measured cameras shipped with "
+            "spectwin by name (e.g. 'Nikon D850') or a CSV wavelength_nm,R,G,B (as spectwin "
+            "camchar writes).",
+            show_default=False,
+        ),
+    ],
+    out: Annotated[
+        Path,
+        typer.Option(
+            help="Folder for spectra.exr, spectra.hdr/.raw (ENVI), preview.png and spots.json; "
+            "never overwritten."
+        ),
+    ] = Path("out/spectralized"),
+    fast: Annotated[
+        bool,
+        typer.Option(
+            help="The thesis's prior without cross-validation: one solve, no per-spot errors "
+            "(by default the prior is chosen by three-fold cross-validation over the spots)."
+        ),
+    ] = False,
+    encoding: Annotated[
+        Encoding | None,
+        typer.Option(
+            help="Of 8-bit images, which are refused without it: srgb decodes the sRGB curve, "
+            "linear takes the values as they are."
+        ),
+    ] = None,
+    radiance: Annotated[
+        bool,
+        typer.Option(
+            help="The spots are radiance (emissive EXR, preview as it is), not reflectance "
+            "(reflective EXR, preview under D65)."
+        ),
+    ] = False,
+    interleave: Annotated[
+        Interleave, typer.Option(help="Layout of the ENVI raster.")
+    ] = Interleave.bsq,
+    as_json: JsonFlag = False,
+) -> None:
+    """Spectralize an RGB image from spectra measured at a few of its pixels (thesis chapter
+    6, Eq. 6.10): a spectral OpenEXR and ENVI image, an sRGB preview and every spot's error
+    predicted while it was held out (Eq. 6.8).
+
+    Example: spectwin spectralize photo.tif --spectra spots.csv --response Nikon_D850 --out out/p
+    """
+    from recon.image_spectralization import (
+        camera_response,
+        read_linear_rgb,
+        read_spots_csv,
+        spectralize_image,
+    )
+    from twin.studies.spectralized_image import OUTPUTS, write_spectralized_image
+
+    started = time.perf_counter()
+    require_output_folder(out)
+    present = [name for name in OUTPUTS if (out / name).exists()]
+    if present:
+        fail(
+            f"--out {out}: already holds {', '.join(present)}; expected a new folder or one "
+            "without them (nothing was overwritten)"
+        )
+    remove_if_interrupted(ctx, out)
+    rgb = read_linear_rgb(image, encoding=None if encoding is None else encoding.value)
+    spots = read_spots_csv(spectra)
+    curves = camera_response(response)
+    result = spectralize_image(rgb.values, spots, curves, fast=fast, progress=not as_json)
+    inputs = {
+        "image": str(image),
+        "image_note": rgb.note,
+        "spectra": str(spectra),
+        "response": response,
+    }
+    summary = write_spectralized_image(
+        result, spots, out, inputs=inputs, radiance=radiance, interleave=interleave.value
+    )
+    summary["seconds"]["total"] = time.perf_counter() - started
+    if as_json:
+        print_summary(summary, "spectralization", as_json)
+        return
+    shown = ["spots", "bands", "prior", "prior_chosen_by", "cross_validated_error_pct"]
+    shown += [key for key in summary if key.startswith("spot_error_")]
+    shown += ["spot_fit_residual_pct"]
+    print_summary(
+        {key: summary[key] for key in shown} | {"total_s": summary["seconds"]["total"]},
+        f"spectralization of {image.name}: {summary['image_px'][1]} x {summary['image_px'][0]} px",
+    )
+    if result.spot_errors is not None:
+        console.print(_spot_table(spots.xy, result.spot_errors))
+    else:
+        console.print("per-spot errors need the cross-validation, which --fast skips")
+    for note in ([rgb.note] if rgb.note else []) + list(result.notes):
+        console.print(f"note: {note}")
+    console.print(f"wrote {', '.join(str(out / name) for name in OUTPUTS)}")
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``spectralize`` to ``app``."""
+    app.command(name="spectralize")(spectralize)
