@@ -21,12 +21,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
 
 import colour
 import numpy as np
 
 from recon.errors import InputError
+from recon.image_files import ENCODINGS, Encoding, read_png_or_tiff
 
 __all__ = [
     "BAYER_PATTERNS",
@@ -40,8 +40,6 @@ __all__ = [
 RAW_SUFFIXES = (".dng", ".cr2", ".cr3", ".nef", ".arw", ".raf", ".orf", ".rw2", ".pef", ".srw")
 _IMAGE_SUFFIXES = (".tif", ".tiff", ".png")
 BAYER_PATTERNS = ("rggb", "bggr", "grbg", "gbrg")
-Encoding = Literal["linear", "srgb"]
-ENCODINGS: tuple[Encoding, ...] = ("linear", "srgb")
 
 
 @dataclass(frozen=True, eq=False)
@@ -130,27 +128,9 @@ def read_photo(
             f"({', '.join(s[1:].upper() for s in RAW_SUFFIXES[:4])}, ...) or a linear 16-bit "
             "TIFF or PNG (JPEG is lossy and gamma-encoded)"
         )
-    return _linear_image(path, _read_image(path), bayer, encoding, black_level, white_level)
-
-
-def _read_image(path: Path) -> np.ndarray:
-    """The pixels of a TIFF (tifffile) or PNG (OpenCV, which keeps 16 bits) as stored."""
-    if path.suffix.lower() == ".png":
-        import cv2
-
-        image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
-        if image is None:
-            raise InputError(f"photo {path}: not a readable PNG image")
-        return image[:, :, 2::-1] if image.ndim == 3 and image.shape[2] >= 3 else image
-    import tifffile
-
-    try:
-        image = np.asarray(tifffile.imread(path, key=0))
-    except (tifffile.TiffFileError, ValueError, OSError) as error:
-        raise InputError(f"photo {path}: not a readable TIFF image ({error})") from None
-    if image.ndim == 3 and image.shape[0] in (3, 4) and image.shape[2] not in (3, 4):
-        image = np.moveaxis(image, 0, -1)  # planar configuration: channels first
-    return image
+    return _linear_image(
+        path, read_png_or_tiff(path, "photo"), bayer, encoding, black_level, white_level
+    )
 
 
 def _linear_image(

@@ -17,17 +17,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
 
 import colour
 import numpy as np
 
 from recon.errors import InputError
+from recon.image_files import ENCODINGS, Encoding, read_png_or_tiff
 
 __all__ = ["ENCODINGS", "IMAGE_SUFFIXES", "LinearRGB", "read_linear_rgb"]
 
-Encoding = Literal["linear", "srgb"]
-ENCODINGS: tuple[Encoding, ...] = ("linear", "srgb")
 IMAGE_SUFFIXES = (".png", ".tif", ".tiff", ".exr")
 
 
@@ -52,25 +50,6 @@ def _read_exr(path: Path) -> np.ndarray:
     if not {"R", "G", "B"} <= set(channels):
         raise InputError(f"image {path}: OpenEXR channels {sorted(channels)}; expected R, G and B")
     return np.stack([channels[name] for name in "RGB"], axis=-1)
-
-
-def _read_png_or_tiff(path: Path) -> np.ndarray:
-    if path.suffix.lower() == ".png":
-        import cv2
-
-        image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
-        if image is None:
-            raise InputError(f"image {path}: not a readable PNG image")
-        return image[:, :, 2::-1] if image.ndim == 3 and image.shape[2] >= 3 else image
-    import tifffile
-
-    try:
-        image = np.asarray(tifffile.imread(path, key=0))
-    except (tifffile.TiffFileError, ValueError, OSError) as error:
-        raise InputError(f"image {path}: not a readable TIFF image ({error})") from None
-    if image.ndim == 3 and image.shape[0] in (3, 4) and image.shape[2] not in (3, 4):
-        image = np.moveaxis(image, 0, -1)  # planar configuration: channels first
-    return image
 
 
 def read_linear_rgb(path: str | Path, *, encoding: Encoding | None = None) -> LinearRGB:
@@ -100,7 +79,7 @@ def read_linear_rgb(path: str | Path, *, encoding: Encoding | None = None) -> Li
         )
     if encoding is not None and encoding not in ENCODINGS:
         raise InputError(f"encoding {encoding!r}: expected one of {ENCODINGS}")
-    image = _read_exr(path) if suffix == ".exr" else _read_png_or_tiff(path)
+    image = _read_exr(path) if suffix == ".exr" else read_png_or_tiff(path, "image")
     channels = 1 if image.ndim == 2 else image.shape[2] if image.ndim == 3 else 0
     if channels != 3:
         raise InputError(

@@ -229,7 +229,9 @@ def test_bad_input_is_one_line_exit_2_and_nothing_written(inputs, arguments, phr
 
 
 def test_the_option_choices_are_those_of_the_reader():
-    from recon.chart_photos.images import BAYER_PATTERNS, ENCODINGS
-    from twin.cli.camchar import Bayer, Encoding
+    from recon.chart_photos.images import BAYER_PATTERNS
+    from recon.image_files import ENCODINGS
+    from twin.cli.camchar import Bayer
+    from twin.cli.choices import Encoding
 
     assert tuple(Bayer) == BAYER_PATTERNS and tuple(Encoding) == ENCODINGS

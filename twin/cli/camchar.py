@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Annotated
 import numpy as np
 import typer
 
-from twin.cli.choices import Chart, Light, RGBCamera
+from twin.cli.choices import Chart, Encoding, EncodingOption, Light, RGBCamera
 from twin.cli.errors import fail, require_output_folder
 from twin.cli.output import JsonFlag, console, print_summary
 
@@ -36,13 +36,6 @@ class Bayer(StrEnum):
     bggr = "bggr"
     grbg = "grbg"
     gbrg = "gbrg"
-
-
-class Encoding(StrEnum):
-    """Encodings of ``recon.chart_photos.images.ENCODINGS``."""
-
-    linear = "linear"
-    srgb = "srgb"
 
 
 def _corners(text: str) -> np.ndarray:
@@ -141,13 +134,7 @@ def characterize(
     bayer: Annotated[
         Bayer | None, typer.Option(help="Bayer pattern of single-channel TIFF/PNG mosaics.")
     ] = None,
-    encoding: Annotated[
-        Encoding | None,
-        typer.Option(
-            help="Of 8-bit images, which are refused without it: srgb decodes the sRGB curve, "
-            "linear takes the values as they are."
-        ),
-    ] = None,
+    encoding: EncodingOption = None,
     black_level: Annotated[
         float | None,
         typer.Option(min=0.0, help="Black level of TIFF/PNG values (default 0; raw: the file's)."),

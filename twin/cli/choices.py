@@ -9,8 +9,11 @@ the spectral data; ``tests/e2e/test_cli_bad_input.py`` checks that they agree.
 from __future__ import annotations
 
 from enum import StrEnum
+from typing import Annotated
 
-__all__ = ["Chart", "DomeMaterial", "Light", "RGBCamera"]
+import typer
+
+__all__ = ["Chart", "DomeMaterial", "Encoding", "EncodingOption", "Light", "RGBCamera"]
 
 
 class RGBCamera(StrEnum):
@@ -46,3 +49,19 @@ class DomeMaterial(StrEnum):
     wallpaper = "wallpaper"
     colorchecker16 = "colorchecker16"
     red_fabric = "red_fabric"
+
+
+class Encoding(StrEnum):
+    """Encodings of 8-bit images, ``recon.image_files.ENCODINGS``."""
+
+    linear = "linear"
+    srgb = "srgb"
+
+
+EncodingOption = Annotated[
+    Encoding | None,
+    typer.Option(
+        help="Of 8-bit images, which are refused without it: srgb decodes the sRGB curve, "
+        "linear takes the values as they are."
+    ),
+]

@@ -16,19 +16,13 @@ import numpy as np
 import typer
 from rich.table import Table
 
+from twin.cli.choices import EncodingOption
 from twin.cli.errors import fail, remove_if_interrupted, require_output_folder
 from twin.cli.output import JsonFlag, console, print_summary
 
 __all__ = ["register"]
 
 _SHOWN_SPOTS = 24  # more spots: the summary and the worst five
-
-
-class Encoding(StrEnum):
-    """Encodings of ``recon.image_spectralization.rgb_image.ENCODINGS``."""
-
-    linear = "linear"
-    srgb = "srgb"
 
 
 class Interleave(StrEnum):
@@ -89,13 +83,7 @@ def spectralize(
             "(by default the prior is chosen by three-fold cross-validation over the spots)."
         ),
     ] = False,
-    encoding: Annotated[
-        Encoding | None,
-        typer.Option(
-            help="Of 8-bit images, which are refused without it: srgb decodes the sRGB curve, "
-            "linear takes the values as they are."
-        ),
-    ] = None,
+    encoding: EncodingOption = None,
     radiance: Annotated[
         bool,
         typer.Option(
