@@ -38,6 +38,7 @@ from recon.btf.rgb_spectralization import (
     PRIOR,
     BTFSpots,
     SpectralizedBTF,
+    check_spots,
     read_btf_spots,
     spectralize_rgb_btf,
 )
@@ -201,6 +202,8 @@ def import_rgb_images(
     curves = None if response is None else camera_response(response)
     images = open_rgb_images(source)
     first, factor = _reduced(images.read(0), texels)
+    if spots is not None and curves is not None:
+        check_spots(spots, curves, (images.n_pairs, *first.shape[:2]))
     source_attrs: dict[str, Any] = {
         "colour_space": "sRGB" if spots is None else "camera RGB",
         "layout": images.layout,

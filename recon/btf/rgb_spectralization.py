@@ -51,6 +51,7 @@ __all__ = [
     "BTFSpots",
     "SpectralizedBTF",
     "read_btf_spots",
+    "check_spots",
     "spectralize_rgb_btf",
 ]
 
@@ -163,6 +164,23 @@ def _carried_spots(
     return pair * height * width + texels, spectra[chosen] * ratio[:, None]
 
 
+def check_spots(
+    spots: BTFSpots, response: SampledSpectra, shape: tuple[int, int, int]
+) -> tuple[np.ndarray, WavelengthGrid, list[str]]:
+    """The spots' flat texel indices in a BTF of ``shape`` ``(n_pairs, H, W)``, the grid to
+    reconstruct on and notes on it (:func:`recon.image_spectralization.run.solve_grid`),
+    refusing spots outside the BTF, fewer than :data:`MIN_SPOTS` or spectra that do not cover
+    the response: what can be checked before the images are read."""
+    pixels = spots.flat_texels(shape)
+    if pixels.size < MIN_SPOTS:
+        raise InputError(
+            f"spots {spots.source}: {pixels.size} spot(s); expected at least {MIN_SPOTS} (a gain "
+            "per channel is fitted to them)"
+        )
+    grid, notes = solve_grid(spots.spectra, response)
+    return pixels, grid, notes
+
+
 def _pair_brightness(rgb: np.ndarray) -> np.ndarray:
     """``(n_pairs, 1)`` the mean camera sum of each pair (1 for a black pair). ``"joint"``
     divides each pair by it, spots included, and multiplies the result back: Eq. 10.2 at
@@ -210,13 +228,7 @@ def spectralize_rgb_btf(
             f"rgb: {rgb.shape[0]} pairs of {rgb.shape[2]} x {rgb.shape[1]} texels; expected at "
             f"most {MAX_TEXELS} texels over all pairs: reduce the texture (--texels)"
         )
-    pixels = spots.flat_texels(rgb.shape[:3])
-    if pixels.size < MIN_SPOTS:
-        raise InputError(
-            f"spots {spots.source}: {pixels.size} spot(s); expected at least {MIN_SPOTS} (a gain "
-            "per channel is fitted to them)"
-        )
-    grid, notes = solve_grid(spots.spectra, response)
+    pixels, grid, notes = check_spots(spots, response, rgb.shape[:3])
     spectra = resample(spots.spectra, grid, method="box" if notes else "linear").values
     r_cam, gains, fit = camera_term(response, grid, rgb.reshape(-1, 3)[pixels], spectra)
     options: dict[str, Any] = {
