@@ -39,6 +39,7 @@ MODELS: tuple[type[BaseModel], ...] = (
     btf_schema.BTFAttrs,
     btf_schema.BTFInputs,
     btf_schema.RgbSource,
+    btf_schema.SpotSource,
     btf_schema.CompressedAttrs,
 )
 """The models shown, in the order of the section."""

@@ -26,25 +26,37 @@ metamer among many.
 from __future__ import annotations
 
 import csv
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from recon.btf.bonn_formats import read_image_archive, read_ubo2014
 from recon.btf.rgb_images import RGBImageSet
+from recon.btf.rgb_spectralization import (
+    PRIOR,
+    BTFSpots,
+    SpectralizedBTF,
+    check_spots,
+    read_btf_spots,
+    spectralize_rgb_btf,
+)
 from recon.btf.schema import RgbSource
 from recon.btf.staging import staged
 from recon.btf.store import BTFStore
 from recon.errors import InputError
+from recon.image_spectralization import camera_response
 from recon.progress import progress_steps
 from recon.rgb_upsampling import read_srgb_image, reduce_image, upsample_srgb
-from recon.spectra import DEFAULT_GRID
+from recon.spectra import DEFAULT_GRID, WavelengthGrid
 
 __all__ = [
     "DIRECTION_TABLE",
     "RGB_COLUMNS",
     "import_rgb_images",
     "is_rgb_source",
+    "is_spectralized",
     "open_rgb_images",
     "rgb_source",
 ]
@@ -59,6 +71,12 @@ _READERS = {".zip": read_image_archive, ".btf": read_ubo2014}
 def rgb_source(store: BTFStore) -> RgbSource | None:
     """The store's ``rgb_source`` attribute (module docstring), ``None`` for a spectral BTF."""
     return store.metadata.rgb_source
+
+
+def is_spectralized(store: BTFStore) -> bool:
+    """Whether the store was spectralized from an RGB BTF and spot spectra (not upsampled)."""
+    source = store.metadata.rgb_source
+    return source is not None and source.spectralized is not None
 
 
 def is_rgb_source(path: Path) -> bool:
@@ -126,9 +144,12 @@ def import_rgb_images(
     scale: float = 1.0,
     material: str | None = None,
     texels: int | None = None,
+    spectra: str | Path | None = None,
+    response: str | None = None,
     progress: bool = False,
 ) -> BTFStore:
-    """Read an RGB BTF into a new spectral BTF store.
+    """Read an RGB BTF into a new spectral BTF store, upsampled or, given spot spectra,
+    spectralized (:mod:`recon.btf.rgb_spectralization`; thesis section 10.1, Eq. 6.10).
 
     Parameters
     ----------
@@ -147,6 +168,13 @@ def import_rgb_images(
     texels
         Largest side of the stored texture: images are reduced by area averaging
         (:func:`recon.rgb_upsampling.reduce_image`); ``None`` keeps them whole.
+    spectra
+        A spots CSV ``pair,x,y,<nm>,...`` (:func:`recon.btf.rgb_spectralization.read_btf_spots`;
+        texels of the stored texture): the BTF is spectralized from them instead of upsampled,
+        its images' linear values taken as the camera's, and ``rgb_source.spectralized`` says so.
+    response
+        With ``spectra``: the camera's response, a shipped camera's name or a CSV
+        ``wavelength_nm,R,G,B`` (:func:`recon.image_spectralization.camera_response`).
 
     Returns
     -------
@@ -164,42 +192,83 @@ def import_rgb_images(
         raise InputError(f"scale: expected a positive number, got {scale}")
     if texels is not None and texels < 1:
         raise InputError(f"texels: expected a positive side in texels, got {texels}")
+    if (spectra is None) != (response is None):
+        raise InputError(
+            "spectra, response: expected both (spot spectra and the camera's response) or neither"
+        )
+    if spectra is not None and scale != 1.0:
+        raise InputError(f"scale: {scale}; a spectralized import takes its scale from the spots")
+    spots = None if spectra is None else read_btf_spots(spectra)
+    curves = None if response is None else camera_response(response)
     images = open_rgb_images(source)
     first, factor = _reduced(images.read(0), texels)
+    if spots is not None and curves is not None:
+        check_spots(spots, curves, (images.n_pairs, *first.shape[:2]))
+    source_attrs: dict[str, Any] = {
+        "colour_space": "sRGB" if spots is None else "camera RGB",
+        "layout": images.layout,
+        "encoding": images.encoding,
+        "upsampling": upsampling if spots is None else "spectralization",
+        "scale": float(scale),
+        "texel_reduction": factor,
+        "images": str(images.source.resolve()),
+    }
     with staged(out_path) as building:
+        if spots is None or curves is None:
+            pairs: Iterator[tuple[np.ndarray, WavelengthGrid]] = (
+                ((upsample_srgb(scale * linear, "jakob2019").values / np.pi), DEFAULT_GRID)
+                for linear in _linear_pairs(images, first, texels, progress)
+            )
+            grid = DEFAULT_GRID
+        else:
+            stack = np.stack(list(_linear_pairs(images, first, texels, progress)))
+            result = spectralize_rgb_btf(stack, spots, curves)
+            source_attrs["spectralized"] = _spot_source(spots, response or "", result)
+            pairs = ((cube / np.pi, result.grid) for cube in result.cube)
+            grid = result.grid
         store = BTFStore.create(
             building,
             light_dirs=images.light_dirs(),
             view_dirs=images.view_dirs(),
             texels=first.shape[:2],
-            grid=DEFAULT_GRID,
+            grid=grid,
             material=material or _name(Path(source)),
         )
-        store.set_attribute(
-            "rgb_source",
-            {
-                "colour_space": "sRGB",
-                "layout": images.layout,
-                "encoding": images.encoding,
-                "upsampling": upsampling,
-                "scale": float(scale),
-                "texel_reduction": factor,
-                "images": str(images.source.resolve()),
-            },
-        )
-        with progress_steps(f"import {images.layout}", images.n_pairs, enabled=progress) as advance:
-            for pair in range(images.n_pairs):
-                linear = first if pair == 0 else _reduced(images.read(pair), texels)[0]
-                if linear.shape != first.shape:
-                    raise InputError(
-                        f"{images.source}: {images.names[pair]} is {linear.shape[0]} x "
-                        f"{linear.shape[1]} px, expected {first.shape[0]} x {first.shape[1]} like "
-                        f"{images.names[0]}"
-                    )
-                spectra = upsample_srgb(scale * linear, "jakob2019").values
-                store.write_pair(pair, (spectra / np.pi).astype(np.float32), grid=DEFAULT_GRID)
-                advance()
+        store.set_attribute("rgb_source", source_attrs)
+        for pair, (values, on_grid) in enumerate(pairs):
+            store.write_pair(pair, values.astype(np.float32), grid=on_grid)
     return BTFStore.open(out_path)
+
+
+def _linear_pairs(
+    images: RGBImageSet, first: np.ndarray, texels: int | None, progress: bool
+) -> Iterator[np.ndarray]:
+    """Each pair's linear image (reduced to ``texels``), refusing one of another size."""
+    with progress_steps(f"import {images.layout}", images.n_pairs, enabled=progress) as advance:
+        for pair in range(images.n_pairs):
+            linear = first if pair == 0 else _reduced(images.read(pair), texels)[0]
+            if linear.shape != first.shape:
+                raise InputError(
+                    f"{images.source}: {images.names[pair]} is {linear.shape[0]} x "
+                    f"{linear.shape[1]} px, expected {first.shape[0]} x {first.shape[1]} like "
+                    f"{images.names[0]}"
+                )
+            yield linear
+            advance()
+
+
+def _spot_source(spots: BTFSpots, response: str, result: SpectralizedBTF) -> dict[str, Any]:
+    """The ``rgb_source.spectralized`` attribute (``recon.btf.schema.SpotSource``)."""
+    return {
+        "spots": str(Path(spots.source).resolve()),
+        "n_spots": len(spots.where),
+        "spot_pairs": sorted({int(pair) for pair in spots.where[:, 0]}),
+        "response": response,
+        "design": result.design,
+        "prior": PRIOR,
+        "gains": [float(gain) for gain in result.gains],
+        "fit_residual_pct": [float(value) for value in result.fit_residual_pct],
+    }
 
 
 def _name(source: Path) -> str:

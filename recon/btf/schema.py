@@ -7,7 +7,8 @@ refuse unknown fields:
 
 - :class:`BTFAttrs`: the root attributes; ``format_version`` is the version of these models
   (:data:`BTF_FORMAT_VERSION`): a store of another version is refused on opening;
-- :class:`RgbSource`: where a BTF upsampled from RGB images came from;
+- :class:`RgbSource`: where a BTF made from RGB images came from, and :class:`SpotSource`:
+  the spot spectra it was spectralized from;
 - :class:`BTFInputs`: what a processed BTF was made from, as content hashes, so that a resumed
   processing is refused other inputs (:mod:`recon.btf.inputs`);
 - :class:`CompressedAttrs`: the attributes of the compressed form.
@@ -32,6 +33,7 @@ __all__ = [
     "BTFInputs",
     "CompressedAttrs",
     "RgbSource",
+    "SpotSource",
 ]
 
 BTF_FORMAT = "spectwin.btf"
@@ -46,16 +48,35 @@ BTF_UNITS = "1/sr"
 """Units of every store's reflectance (a BRDF value per texel)."""
 
 
-class RgbSource(StoreModel):
-    """Where a BTF upsampled from an RGB BTF came from (``recon.btf.rgb_import``)."""
+class SpotSource(StoreModel):
+    """The spot spectra an RGB BTF was spectralized from, not upsampled
+    (``recon.btf.rgb_spectralization``; thesis Eq. 6.10, 10.2, section 10.1)."""
 
-    colour_space: Literal["sRGB"] = Field(description="the images' colour space")
+    spots: str = Field(description="the spots CSV, as a path")
+    n_spots: int = Field(ge=1, description="spot spectra, each at one texel of one pair")
+    spot_pairs: list[int] = Field(description="the pairs that hold spots")
+    response: str = Field(description="the camera's response: a shipped camera's name or a CSV")
+    design: str = Field(description="how the spots were spread over the pairs")
+    prior: str = Field(description="the appearance prior (Eq. 6.3)")
+    gains: list[float] = Field(description="gain per channel R, G, B fitted to the spots")
+    fit_residual_pct: list[float] = Field(description="relative RMS residual of that fit, %")
+
+
+class RgbSource(StoreModel):
+    """Where a BTF made from an RGB BTF came from (``recon.btf.rgb_import``)."""
+
+    colour_space: Literal["sRGB", "camera RGB"] = Field(
+        description="the images' colour space: sRGB, or a camera's (spectralized)"
+    )
     layout: str = Field(description="the source's format")
     encoding: str = Field(description="the images' encoding")
     upsampling: str = Field(description="the method of spectral upsampling")
     scale: float = Field(gt=0, description="factor on the upsampled reflectance")
     texel_reduction: int = Field(ge=1, description="source texels per stored texel, per side")
     images: str = Field(description="the source, as a path")
+    spectralized: SpotSource | None = Field(
+        None, description="of a spectralized import, its spots (`SpotSource`); null: upsampled"
+    )
 
 
 class BTFInputs(StoreModel):

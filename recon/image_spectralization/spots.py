@@ -18,7 +18,7 @@ import numpy as np
 from recon.errors import InputError
 from recon.spectra import SampledSpectra, WavelengthGrid
 
-__all__ = ["SpotSpectra", "read_spots_csv"]
+__all__ = ["SpotSpectra", "read_spot_table", "read_spots_csv"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,6 +61,72 @@ def _number(text: str, path: Path, line: int, column: str) -> float:
     return value
 
 
+def read_spot_table(
+    path: str | Path, keys: tuple[str, ...], what: str
+) -> tuple[np.ndarray, SampledSpectra]:
+    """Read a spot table: a header of the whole-number ``keys`` (e.g. ``x,y``) then wavelengths
+    in nm, one row per spot (module description); ``what`` names the keys' meaning in errors
+    ("pixel", "texel").
+
+    Returns
+    -------
+    tuple
+        ``(m, len(keys))`` int keys, distinct per row, and the ``m`` spectra.
+    """
+    path = Path(path)
+    names = ",".join(keys)
+    if not path.is_file():
+        raise InputError(f"spots {path}: no such file; expected a CSV of {names} and spectra")
+    try:
+        text = path.read_text()
+    except UnicodeDecodeError:
+        raise InputError(f"spots {path}: not a text file; expected a CSV") from None
+    lines = [
+        (number, line)
+        for number, line in enumerate(text.splitlines(), start=1)
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
+    if not lines:
+        raise InputError(f"spots {path}: empty; expected a header {names},<wavelength nm>,...")
+    header = [cell.strip() for cell in lines[0][1].split(",")]
+    if header[: len(keys)] != list(keys) or len(header) < len(keys) + 2:
+        raise InputError(
+            f"spots {path}: header {lines[0][1]!r}; expected {names} then at least two "
+            f"wavelengths in nm, e.g. {names},400,410,420"
+        )
+    wavelengths = [_number(cell, path, lines[0][0], "header") for cell in header[len(keys) :]]
+    try:
+        grid = WavelengthGrid(np.array(wavelengths))
+    except InputError as error:
+        raise InputError(f"spots {path}: header wavelengths: {error}") from None
+    rows = []
+    for number, line in lines[1:]:
+        cells = line.split(",")
+        if len(cells) != len(header):
+            raise InputError(
+                f"spots {path}: line {number} has {len(cells)} values; expected {len(header)} "
+                f"({', '.join(keys)} and one per wavelength)"
+            )
+        rows.append([_number(c, path, number, h) for c, h in zip(cells, header, strict=True)])
+    if not rows:
+        raise InputError(f"spots {path}: no spots below the header")
+    table = np.array(rows)
+    where = table[:, : len(keys)]
+    if np.any(where != np.round(where)):
+        raise InputError(f"spots {path}: {', '.join(keys)} must be whole {what} coordinates")
+    places = where.astype(int)
+    _, first, counts = np.unique(places, axis=0, return_index=True, return_counts=True)
+    if np.any(counts > 1):
+        twice = ", ".join(
+            f"{key}={value}" for key, value in zip(keys, places[first[counts > 1][0]], strict=True)
+        )
+        raise InputError(
+            f"spots {path}: {what} {twice} is given {counts.max()} times; expected one spectrum "
+            f"per {what}"
+        )
+    return places, SampledSpectra(grid, table[:, len(keys) :])
+
+
 def read_spots_csv(path: str | Path) -> SpotSpectra:
     """Read spot spectra (module description).
 
@@ -78,52 +144,5 @@ def read_spots_csv(path: str | Path) -> SpotSpectra:
     >>> spots.xy.tolist(), spots.spectra.grid.wavelengths_nm.tolist()
     ([[3, 4]], [400.0, 500.0, 600.0])
     """
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"spots {path}: no such file; expected a CSV of x,y and spectra")
-    try:
-        text = path.read_text()
-    except UnicodeDecodeError:
-        raise InputError(f"spots {path}: not a text file; expected a CSV") from None
-    lines = [
-        (number, line)
-        for number, line in enumerate(text.splitlines(), start=1)
-        if line.strip() and not line.lstrip().startswith("#")
-    ]
-    if not lines:
-        raise InputError(f"spots {path}: empty; expected a header x,y,<wavelength nm>,...")
-    header = [cell.strip() for cell in lines[0][1].split(",")]
-    if header[:2] != ["x", "y"] or len(header) < 4:
-        raise InputError(
-            f"spots {path}: header {lines[0][1]!r}; expected x,y then at least two wavelengths "
-            "in nm, e.g. x,y,400,410,420"
-        )
-    wavelengths = [_number(cell, path, lines[0][0], "header") for cell in header[2:]]
-    try:
-        grid = WavelengthGrid(np.array(wavelengths))
-    except InputError as error:
-        raise InputError(f"spots {path}: header wavelengths: {error}") from None
-    rows = []
-    for number, line in lines[1:]:
-        cells = line.split(",")
-        if len(cells) != len(header):
-            raise InputError(
-                f"spots {path}: line {number} has {len(cells)} values; expected {len(header)} "
-                "(x, y and one per wavelength)"
-            )
-        rows.append([_number(c, path, number, h) for c, h in zip(cells, header, strict=True)])
-    if not rows:
-        raise InputError(f"spots {path}: no spots below the header")
-    table = np.array(rows)
-    xy = table[:, :2]
-    if np.any(xy != np.round(xy)):
-        raise InputError(f"spots {path}: x and y must be whole pixel coordinates")
-    pixels = xy.astype(int)
-    _, first, counts = np.unique(pixels, axis=0, return_index=True, return_counts=True)
-    if np.any(counts > 1):
-        twice = pixels[first[counts > 1][0]]
-        raise InputError(
-            f"spots {path}: pixel x={twice[0]}, y={twice[1]} is given {counts.max()} times; "
-            "expected one spectrum per pixel"
-        )
-    return SpotSpectra(pixels, SampledSpectra(grid, table[:, 2:]), str(path))
+    pixels, spectra = read_spot_table(path, ("x", "y"), "pixel")
+    return SpotSpectra(pixels, spectra, str(path))

@@ -79,16 +79,35 @@ def import_(
         int | None,
         typer.Option(min=1, help="RGB images: largest side of the stored texture (area average)."),
     ] = None,
+    spectra: Annotated[
+        Path | None,
+        typer.Option(
+            help="RGB images: spot spectra, a CSV pair,x,y,<nm>,... (pair index in the "
+            "directions' order, texel column and row of the stored texture, then the spectrum "
+            "as a reflectance factor): the BTF is spectralized from them, not upsampled.",
+            show_default=False,
+        ),
+    ] = None,
+    response: Annotated[
+        str | None,
+        typer.Option(
+            help="With --spectra: the camera's response, a shipped camera by name (e.g. "
+            "'Nikon D850') or a CSV wavelength_nm,R,G,B.",
+            show_default=False,
+        ),
+    ] = None,
     as_json: JsonFlag = False,
 ) -> None:
     """Read spectral EXR slices and their direction index (as spectwin btf export writes them),
     or an RGB BTF (sRGB images, one per direction pair, with directions.csv: file,
     light_theta_deg, light_phi_deg, view_theta_deg, view_phi_deg; or a Bonn database UBO2003 or
     ATRIUM archive or UBO2014 file), upsampled to spectra and flagged as RGB, into a new BTF
-    store; the store is complete once every image is in.
+    store; the store is complete once every image is in. With --spectra and --response the
+    RGB BTF is spectralized from spot spectra (thesis section 10.1, Eq. 6.10) and flagged so.
 
     Example: spectwin btf import out/slices --out out/copy.btf.zarr
     Example: spectwin btf import UBO_CORDUROY256.zip --out corduroy.btf.zarr --texels 64
+    Example: spectwin btf import images --spectra spots.csv --response 'Nikon D850' --out s.btf.zarr
     """
     from recon.btf.exchange import INDEX_NAME, import_exr_slices
     from recon.btf.rgb_import import DIRECTION_TABLE, import_rgb_images, is_rgb_source, rgb_source
@@ -98,6 +117,10 @@ def import_(
         fail(f"--out {out}: exists; expected a new BTF store path (nothing was overwritten)")
     remove_if_interrupted(ctx, out)
     rgb = is_rgb_source(source) and not (source / INDEX_NAME).is_file()
+    if (spectra is None) != (response is None):
+        fail("--spectra, --response: expected both (spot spectra and the camera) or neither")
+    if spectra is not None and scale != 1.0:
+        fail("--scale: not with --spectra (a spectralized import takes its scale from the spots)")
     if rgb:
         btf = import_rgb_images(
             source,
@@ -106,6 +129,8 @@ def import_(
             scale=scale,
             material=material,
             texels=texels,
+            spectra=spectra,
+            response=response,
             progress=not as_json,
         )
     else:
@@ -115,6 +140,7 @@ def import_(
                 ("--material", material),
                 ("--scale", scale != 1.0),
                 ("--texels", texels),
+                ("--spectra", spectra),
             )
             if value
         ]
@@ -133,8 +159,13 @@ def import_(
         "complete": btf.complete,
     }
     if rgb:
-        summary["from_rgb"] = f"sRGB, upsampled by {upsampling}"
         recorded = rgb_source(btf)
+        spots = recorded.spectralized if recorded is not None else None
+        summary["from_rgb"] = (
+            f"sRGB, upsampled by {upsampling}"
+            if spots is None
+            else f"camera RGB, spectralized from {spots.n_spots} spot spectra ({spots.design})"
+        )
         summary["format"] = recorded.layout if recorded is not None else None
     print_summary(summary, "imported BTF", as_json)
 

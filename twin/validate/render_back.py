@@ -45,12 +45,16 @@ the Delta E94 of every field is a number); larger sizes all do."""
 
 
 def _measured_as(btf: BTFStore) -> str:
-    """How the rendered spectra were measured: spectral, or RGB upsampled (by which method)."""
+    """How the rendered spectra were measured: spectral, RGB upsampled (by which method), or
+    RGB spectralized from spot spectra."""
     source = rgb_source(btf)
     if source is None:
         return "spectral"
     layout = source.layout
     described = source.colour_space + ("" if layout == "image folder" else f", {layout}")
+    if source.spectralized is not None:
+        spots = source.spectralized
+        return f"RGB ({described}) spectralized from {spots.n_spots} spot spectra (Eq. 6.10)"
     return f"RGB ({described}), rendered spectrally after {source.upsampling}"
 
 

@@ -55,6 +55,7 @@ def test_imported_rgb_btf_has_the_tables_directions_and_the_images_colours(tmp_p
         "texel_reduction": 1,
         "scale": 1.0,
         "images": str((tmp_path / "rgb").resolve()),
+        "spectralized": None,
     }
     factors = np.pi * np.stack([store.read_pair(pair) for pair in range(3)]).astype(np.float64)
     # Back to linear sRGB: the images' colours within the table's interpolation.
