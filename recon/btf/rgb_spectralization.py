@@ -226,7 +226,7 @@ def spectralize_rgb_btf(
     if rgb.shape[0] * rgb.shape[1] * rgb.shape[2] > MAX_TEXELS:
         raise InputError(
             f"rgb: {rgb.shape[0]} pairs of {rgb.shape[2]} x {rgb.shape[1]} texels; expected at "
-            f"most {MAX_TEXELS} texels over all pairs: reduce the texture (--texels)"
+            f"most {MAX_TEXELS} texels over all pairs: resample the texture to fewer texels"
         )
     pixels, grid, notes = check_spots(spots, response, rgb.shape[:3])
     spectra = resample(spots.spectra, grid, method="box" if notes else "linear").values
