@@ -1,7 +1,8 @@
 """``spectwin btf export`` and ``spectwin btf import``: a BTF store as spectral OpenEXR slices
 (one per direction pair, Fichet et al. 2021 layout) with a JSON direction index, and back
 (:mod:`recon.btf.exchange`); RGB BTFs from images with a direction table
-(:mod:`recon.btf.rgb_import`)."""
+(:mod:`recon.btf.rgb_import`); ``spectwin btf render``: a preview of any BTF store in a standard
+scene (:mod:`twin.validate.btf_preview`)."""
 
 from __future__ import annotations
 
@@ -19,7 +20,7 @@ __all__ = ["register"]
 btf_app = typer.Typer(
     cls=SpectwinGroup,
     help="Exchange BTF stores as spectral OpenEXR slices with a JSON direction index; import "
-    "RGB BTFs from images.",
+    "RGB BTFs from images; render a preview of a BTF store.",
     no_args_is_help=True,
 )
 
@@ -168,6 +169,85 @@ def import_(
         )
         summary["format"] = recorded.layout if recorded is not None else None
     print_summary(summary, "imported BTF", as_json)
+
+
+@btf_app.command("render")
+def render(
+    ctx: typer.Context,
+    store: Annotated[Path, typer.Argument(help="A complete BTF store (.btf.zarr).")],
+    out: Annotated[
+        Path, typer.Option(help="New or empty folder for render.exr, render.png, render.json.")
+    ],
+    preset: Annotated[
+        str | None,
+        typer.Option(help="The light: studio (halogen area lights) or daylight (D65 sky, sun)."),
+    ] = None,
+    environment: Annotated[
+        Path | None,
+        typer.Option(
+            help="The light: a lat-long OpenEXR map (2:1), spectral or RGB (upsampled).",
+            show_default=False,
+        ),
+    ] = None,
+    shape: Annotated[
+        str, typer.Option(help="plane (tilted towards the camera) or sphere (UV-mapped).")
+    ] = "plane",
+    pixels: Annotated[int, typer.Option(help="Image size (square).")] = 256,
+    spp: Annotated[
+        int, typer.Option(help="Samples per pixel (rendered: the next power of 4).")
+    ] = 64,
+    as_json: JsonFlag = False,
+) -> None:
+    """Render a preview of the BTF (its PCA form where the store has one) on a plane or a
+    sphere, spectrally where the BTF is, lit by a preset (studio by default) or an environment
+    map: render.exr (spectral OpenEXR, one channel per band), render.png (sRGB) and render.json
+    (settings, time, the BTF's form, the light and view directions beyond those the BTF sampled).
+    A BTF on a sphere is a preview: the sample's square is stretched round it.
+
+    Example: spectwin btf render out/lego.btf.zarr --out out/lego_preview --preset daylight
+    Example: spectwin btf render corduroy.btf.zarr --out prev --environment room.exr --shape sphere
+    """
+    from twin.validate.btf_preview import SHAPES, render_btf_preview
+    from twin.validate.preview_lighting import PRESETS, environment_lighting
+
+    require_output_folder(out)
+    if out.is_dir() and any(out.iterdir()):
+        fail(f"--out {out}: not empty; expected a new or empty folder (nothing was overwritten)")
+    if preset is not None and environment is not None:
+        fail("--preset, --environment: expected one light, a preset or an environment map")
+    if preset is not None and preset not in PRESETS:
+        fail(f"--preset: expected one of {', '.join(PRESETS)}, got {preset!r}")
+    if shape not in SHAPES:
+        fail(f"--shape: expected one of {', '.join(SHAPES)}, got {shape!r}")
+    for name, value in (("--pixels", pixels), ("--spp", spp)):
+        if value < 1:
+            fail(f"{name}: expected a positive integer, got {value}")
+    require_sound_btf(store, "render", allow_unregistered=True, compressed=True)
+    lighting = (
+        environment_lighting(environment)
+        if environment is not None
+        else PRESETS[preset or "studio"]()
+    )
+    remove_if_interrupted(ctx, out)
+    summary = render_btf_preview(
+        store,
+        out,
+        lighting,
+        shape=shape,  # checked against SHAPES above
+        pixels=pixels,
+        spp=spp,
+        progress=not as_json,
+    )
+    if as_json:
+        print_summary(summary, "", as_json)
+        return
+    extrapolated = "; ".join(summary["extrapolated"]) or "none"
+    note = f" ({summary['environment_note']})" if summary["environment_note"] else ""
+    typer.echo(
+        f"rendered {summary['material']} ({summary['form']}, {summary['measured_as']}) on a "
+        f"{shape} in {summary['lighting']}{note}: {pixels} x {pixels} px, {spp} spp, "
+        f"{summary['render_s']:.1f} s; extrapolated: {extrapolated}; written to {out}"
+    )
 
 
 def register(app: typer.Typer) -> None:

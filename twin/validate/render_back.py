@@ -37,16 +37,26 @@ from twin.render.plugins.btf_bsdf import store_table
 from twin.validate.figure46 import field_interiors, render_figure46, write_figure46
 from twin.validate.spectrophotometer import compare_45_0, field_spots, write_45_0_figure
 
-__all__ = ["MIN_PIXELS", "validate_btf"]
+__all__ = ["MIN_PIXELS", "measured_as", "validate_btf"]
 
 MIN_PIXELS = 23
 """Smallest image size at which every field of the colour checker keeps an interior pixel (and
 the Delta E94 of every field is a number); larger sizes all do."""
 
 
-def _measured_as(btf: BTFStore) -> str:
-    """How the rendered spectra were measured: spectral, RGB upsampled (by which method), or
-    RGB spectralized from spot spectra."""
+def measured_as(btf: BTFStore) -> str:
+    """How a BTF store's spectra were measured, in words.
+
+    Parameters
+    ----------
+    btf
+        A BTF store.
+
+    Returns
+    -------
+    str
+        ``"spectral"``, RGB upsampled (by which method), or RGB spectralized from spot spectra.
+    """
     source = rgb_source(btf)
     if source is None:
         return "spectral"
@@ -154,7 +164,7 @@ def validate_btf(
         "btf": str(btf_path),
         "material": btf.material,
         "form": "pca" if compressed else "raw",
-        "measured_as": _measured_as(btf),
+        "measured_as": measured_as(btf),
         "bytes_rendered_from": int(table.nbytes),
         "specular_lobe_texels_fraction": round(
             table.lobes.glossy_fraction if table.lobes is not None else 0.0, 4
