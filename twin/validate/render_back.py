@@ -94,9 +94,10 @@ def validate_btf(
         of the photograph and the renderings dominates per-pixel Delta E94. On the twin's true
         BTF of the colour checker at 13 x 13 directions (rings 0, 30, 60 degrees as lights and
         views, the 156 pairs the rig reaches, 64 texels, band-weighted like the instrument),
-        ``benchmarks/figure46.py`` prints for the matte fields' interiors: per pixel 2.32
-        (spectral) vs 3.24 (RGB) at 128 px and 64 spp, 1.17 vs 2.73 at 96 px and 256 spp; per
-        field mean 0.74 vs 2.76 and 0.53 vs 2.66.
+        ``benchmarks/figure46.py`` prints for the matte fields' interiors: per pixel 2.43
+        (spectral) vs 3.21 (RGB) at 128 px and 64 spp, 1.23 vs 2.77 at 96 px and 256 spp; per
+        field mean 0.85 vs 2.77 and 0.61 vs 2.71 (with specular lobes; the same to the last
+        digit on every run).
     map_height
         Rows of the captured lat-long map (twice as many columns).
     passbands
