@@ -63,10 +63,12 @@ def _side_points(half_m: float) -> np.ndarray:
     )
 
 
-def _narrowest_side_px(config: GonioConfig, pose: GonioPose, pixels: int) -> float:
-    """The narrowest width in pixels, across the side, of the print seen at ``pose``."""
+def _narrowest_side_px(
+    config: GonioConfig, pose: GonioPose, pixels: int, sides: np.ndarray
+) -> float:
+    """The narrowest width in pixels, across the side, of the print seen at ``pose``; ``sides``:
+    the inner and then the outer sides' points (:func:`_side_points`)."""
     matrix = pose_matrix(pose)
-    sides = np.concatenate([_side_points(PRINT_INNER_HALF_M), _side_points(PRINT_OUTER_HALF_M)])
     world = sides.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3]
     xy = gonio_camera(config, pose.rail_deg, pixels).project(world).reshape(2, 4, _ALONG.size, 2)
     inner_xy, outer_xy = xy
@@ -93,7 +95,8 @@ def mark_widths_px(config: GonioConfig, poses: Iterable[GonioPose], pixels: int)
         ``(n_pairs,)``: the width across the print's narrowest side (its four sides sampled at
         five points each), pixels at the image's scale; a frontal view at 256 px gives about 5.
     """
-    return np.array([_narrowest_side_px(config, pose, pixels) for pose in poses], np.float64)
+    sides = np.concatenate([_side_points(PRINT_INNER_HALF_M), _side_points(PRINT_OUTER_HALF_M)])
+    return np.array([_narrowest_side_px(config, pose, pixels, sides) for pose in poses], np.float64)
 
 
 @dataclass(frozen=True)
