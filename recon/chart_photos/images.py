@@ -81,6 +81,27 @@ class LinearPhoto:
             return values, np.ones(values.shape, bool)
         return self.values[window], self.channel_index[window] == channel
 
+    def rgb(self) -> tuple[np.ndarray, int]:
+        """``(rgb, factor)``: the photograph as ``(H', W', 3)`` RGB and its size's divisor.
+        RGB as it is (factor 1); a mosaic by superpixels (factor 2): every 2 x 2 block of sites
+        one pixel, the mean of its sites of each colour (no interpolation)."""
+        if self.channel_index is None:
+            return self.values, 1
+        height, width = (size // 2 * 2 for size in self.shape)
+
+        def blocks(values: np.ndarray) -> np.ndarray:
+            return values[:height, :width].reshape(height // 2, 2, width // 2, 2).sum(axis=(1, 3))
+
+        rgb = np.stack(
+            [
+                blocks(np.where(self.channel_index == c, self.values, 0.0))
+                / np.maximum(blocks((self.channel_index == c).astype(float)), 1)
+                for c in range(3)
+            ],
+            axis=-1,
+        )
+        return rgb, 2
+
 
 def read_photo(
     path: str | Path,

@@ -10,7 +10,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
         "responses": ["camera_response", "read_response_csv"],
-        "rgb_image": ["LinearRGB", "read_linear_rgb"],
+        "rgb_image": ["LinearRGB", "read_linear_rgb", "write_rgb_exr"],
         "run": ["ImageSpectralization", "spectralize_image"],
         "spots": ["SpotSpectra", "read_spots_csv"],
     },

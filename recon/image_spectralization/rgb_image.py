@@ -24,7 +24,7 @@ import numpy as np
 from recon.errors import InputError
 from recon.image_files import ENCODINGS, Encoding, read_png_or_tiff
 
-__all__ = ["ENCODINGS", "IMAGE_SUFFIXES", "LinearRGB", "read_linear_rgb"]
+__all__ = ["ENCODINGS", "IMAGE_SUFFIXES", "LinearRGB", "read_linear_rgb", "write_rgb_exr"]
 
 IMAGE_SUFFIXES = (".png", ".tif", ".tiff", ".exr")
 
@@ -50,6 +50,19 @@ def _read_exr(path: Path) -> np.ndarray:
     if not {"R", "G", "B"} <= set(channels):
         raise InputError(f"image {path}: OpenEXR channels {sorted(channels)}; expected R, G and B")
     return np.stack([channels[name] for name in "RGB"], axis=-1)
+
+
+def write_rgb_exr(path: str | Path, image: np.ndarray) -> Path:
+    """Write ``image`` ``(H, W, 3)`` as a float32 OpenEXR file of channels R, G, B (ZIP
+    compressed), as :func:`read_linear_rgb` reads it back."""
+    import OpenEXR
+
+    pixels = np.asarray(image, np.float32)
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    channels = {name: np.ascontiguousarray(pixels[..., i]) for i, name in enumerate("RGB")}
+    with OpenEXR.File(header, channels) as exr:
+        exr.write(str(path))
+    return Path(path)
 
 
 def read_linear_rgb(path: str | Path, *, encoding: Encoding | None = None) -> LinearRGB:

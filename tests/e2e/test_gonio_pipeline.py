@@ -193,14 +193,14 @@ def test_figure46_rendering_of_the_measured_btf_matches_the_rendered_truth(pipel
         btf.grid,
     )
     figure = render_figure46(material, measured, pixels=48, spp=16, map_size=(16, 32))
-    matte = ~figure.glossy
+    matte = ~figure.panels.glossy
 
     def error(table):
         panel = render_spectral_panel(material, table, figure.environment, pixels=48, spp=16)
-        return figure.field_delta_e_between(panel, truth_panel)[matte]
+        return figure.panels.field_delta_e_between(panel, truth_panel)[matte]
 
     truth_panel = render_spectral_panel(material, truth, figure.environment, pixels=48, spp=16)
-    measured_error = figure.field_delta_e_between(figure.spectral, truth_panel)[matte]
+    measured_error = figure.panels.field_delta_e_between(figure.panels.spectral, truth_panel)[matte]
     # Measured over the 12 matte fields: mean 1.28, max 5.15 (the black field; the others 0.24
     # to 2.24), where spectwin evaluate finds 0.4-1.6 % (Eq. 6.8) per field. 64 spp instead of
     # 16 gives 1.27 and 4.98: the renderings' noise cancels, the BTFs' difference remains.

@@ -21,6 +21,7 @@ import typer
 from twin.cli.choices import Chart, Encoding, EncodingOption, Light, RGBCamera
 from twin.cli.errors import fail, require_output_folder
 from twin.cli.output import JsonFlag, console, print_summary
+from twin.cli.points import parse_corners
 
 if TYPE_CHECKING:
     from recon.chart_photos.charts import Chart as ChartModel
@@ -36,19 +37,6 @@ class Bayer(StrEnum):
     bggr = "bggr"
     grbg = "grbg"
     gbrg = "gbrg"
-
-
-def _corners(text: str) -> np.ndarray:
-    """``x,y;x,y;x,y;x,y`` as ``(4, 2)`` pixels."""
-    try:
-        points = np.array(
-            [[float(value) for value in point.split(",")] for point in text.split(";")]
-        )
-    except ValueError:
-        points = np.empty(0)
-    if points.shape != (4, 2) or not np.all(np.isfinite(points)):
-        fail(f"--corners {text!r}: expected four points 'x,y;x,y;x,y;x,y' in pixels")
-    return points
 
 
 def _per_photo(values: list, count: int, option: str, *, optional: bool) -> list:
@@ -204,7 +192,7 @@ def characterize(
     with console.status("reading the photographs"):
         for path, spec, seconds, text in zip(photos, lights, times, given_corners, strict=True):
             photo = _read(path, bayer, encoding, black_level, white_level)
-            found = _corners(text) if text else _detect(photo)
+            found = parse_corners(text, "--corners") if text else _detect(photo)
             photographs.append(
                 ChartPhotograph(photo, spec, 1.0 if seconds is None else seconds, found)
             )

@@ -31,6 +31,7 @@ from typing import Annotated
 
 import typer
 
+from twin.cli.choices import EncodingOption
 from twin.cli.errors import (
     INTERRUPTED,
     fail,
@@ -40,6 +41,7 @@ from twin.cli.errors import (
 )
 from twin.cli.given import given, option_name
 from twin.cli.output import JsonFlag, SchedulerOption, WorkersOption, console, print_summary
+from twin.cli.points import parse_corners
 from twin.cli.store import require_sound_btf, require_sound_capture
 
 __all__ = ["register"]
@@ -261,10 +263,55 @@ def evaluate(
 
 
 def validate(
-    btf: Annotated[Path, typer.Argument(help="A BTF store of the twin's colour checker.")],
-    out: Annotated[Path, typer.Option(help="Folder for the PNGs and metrics.json.")] = Path(
+    ctx: typer.Context,
+    btf: Annotated[Path, typer.Argument(help="A BTF store.")],
+    out: Annotated[Path, typer.Option(help="Folder for the figures and metrics.json.")] = Path(
         "validation"
     ),
+    photo: Annotated[
+        Path | None,
+        typer.Option(
+            help="Your photograph of the sample: a camera raw file, or a linear TIFF, PNG or "
+            "OpenEXR image (without it: the twin's photograph of its material in its room)."
+        ),
+    ] = None,
+    environment: Annotated[
+        Path | None,
+        typer.Option(
+            help="With --photo: the light at the sample, a lat-long OpenEXR map (2:1), spectral "
+            "or RGB (upsampled), +z the sample's normal."
+        ),
+    ] = None,
+    sample_corners: Annotated[
+        str | None,
+        typer.Option(
+            help="With --photo: the sample's corners 'x,y;x,y;x,y;x,y' in the photograph's "
+            "pixels, in the order of the BTF's texture: top left, top right, bottom right, "
+            "bottom left."
+        ),
+    ] = None,
+    fov_deg: Annotated[
+        float | None,
+        typer.Option(
+            help="With --photo: its horizontal field of view in degrees (default: from the "
+            "file's 35 mm equivalent focal length)."
+        ),
+    ] = None,
+    camera: Annotated[
+        str,
+        typer.Option(
+            help="With --photo: the camera's response, a measured camera by name (e.g. 'Nikon "
+            "D850'), a CSV wavelength_nm,R,G,B (spectwin camchar writes one), or srgb-linear."
+        ),
+    ] = "srgb-linear",
+    exposure: Annotated[
+        float | None,
+        typer.Option(
+            help="With --photo: the photograph's value of a unit of the map's radiance "
+            "(default: fitted over the sample)."
+        ),
+    ] = None,
+    encoding: EncodingOption = None,
     compressed: Annotated[
         bool, typer.Option("--compressed", help="Render the store's PCA form (spectwin compress).")
     ] = False,
@@ -273,8 +320,8 @@ def validate(
         typer.Option(
             min=23,
             max=2048,
-            help="Image size of the three panels (at least 23: every chart field keeps an "
-            "interior pixel).",
+            help="Image size of the panels (the twin's: square, at least 23 so that every chart "
+            "field keeps an interior pixel; with --photo: its longer side, reduced to it).",
         ),
     ] = 96,
     spp: Annotated[
@@ -291,17 +338,76 @@ def validate(
     ] = 64,
     as_json: JsonFlag = False,
 ) -> None:
-    """Render the BTF back (thesis 4.2): Figure 4.6 (photograph, spectral and RGB renderings,
-    Delta E94 maps) and the 45/0 spectrophotometer comparison, with a metrics JSON.
+    """Render the BTF back (thesis 4.2, Figure 4.6): a photograph of the sample, the BTF
+    rendered spectrally and in RGB where it was taken, Delta E94 maps and a metrics JSON. With
+    --photo, your photograph, the light where you took it and the sample's corners in it;
+    without, the twin's photograph of its material in its room (written as photograph.exr and
+    environment.exr, with the corners, for --photo), and for a chart the 45/0
+    spectrophotometer comparison.
 
-    Example: spectwin validate out/cc.btf.zarr --out out/validation --compressed
+    Example: spectwin validate s.btf.zarr --photo IMG.tif --environment room.exr
+    --sample-corners '810,420;1630,440;1650,1210;790,1190' --fov-deg 40
     """
+    require_output_folder(out)
+    require_sound_btf(btf, "validate", allow_unregistered=True, compressed=compressed)
+    photo_only = [
+        option_name(ctx, name)
+        for name in ("environment", "sample_corners", "fov_deg", "camera", "exposure", "encoding")
+        if given(ctx, name)
+    ]
+    if photo is None:
+        if photo_only:
+            fail(f"{', '.join(photo_only)}: only with --photo (your photograph)")
+        _validate_twin(btf, out, compressed, pixels, spp, map_height, as_json)
+        return
+    if environment is None or sample_corners is None:
+        fail("--photo: expected --environment and --sample-corners with it")
+    from twin.validate.photo_validation import read_photo_inputs, validate_photo
+
+    with console.status("reading the photograph and the light") as status:
+        inputs = read_photo_inputs(
+            photo,
+            environment,
+            parse_corners(sample_corners, "--sample-corners"),
+            camera=camera,
+            fov_deg=fov_deg,
+            pixels=pixels,
+            encoding=encoding.value if encoding is not None else None,
+        )
+        metrics = validate_photo(
+            btf,
+            inputs,
+            out,
+            compressed=compressed,
+            spp=spp,
+            exposure=exposure,
+            step=lambda name: status.update(name),
+        )
+    if as_json:
+        print_summary(metrics, "", as_json)
+        return
+    found = metrics["validation"]
+    summary = {
+        "out": str(out),
+        "measured_as": metrics["measured_as"],
+        "exposure": metrics["exposure"],
+        "corners_reprojection_px": metrics["corners_reprojection_px"],
+        "mean_delta_e94_spectral": found["mean_delta_e94_spectral"],
+        "mean_delta_e94_rgb": found["mean_delta_e94_rgb"],
+        "median_delta_e94_spectral": found["median_delta_e94_spectral"],
+        "median_delta_e94_rgb": found["median_delta_e94_rgb"],
+    }
+    print_summary(summary, "BTF rendered where the photograph was taken")
+
+
+def _validate_twin(
+    btf: Path, out: Path, compressed: bool, pixels: int, spp: int, map_height: int, as_json: bool
+) -> None:
+    """``spectwin validate`` without --photo: the twin's photograph of the store's material."""
     from recon.btf.store import BTFStore
     from twin.kinds.registry import rig_kind
     from twin.validate.render_back import validate_btf
 
-    require_output_folder(out)
-    require_sound_btf(btf, "validate", allow_unregistered=True, compressed=compressed)
     rig = BTFStore.open(btf).metadata.rig  # None: imported, narrow bands
     with console.status("validating") as status:
         metrics = validate_btf(
@@ -317,20 +423,28 @@ def validate(
     if as_json:
         print_summary(metrics, "", as_json)
         return
-    figure46, forty_five = metrics["figure46"], metrics["spectrophotometer_45_0"]
+    figure46, replay = metrics["figure46"], metrics["photo_inputs"]
     summary = {
         "out": str(out),
         "form": metrics["form"],
         "measured_as": metrics["measured_as"],
-        "field_mean_delta_e94_spectral": figure46["field_mean_delta_e94_spectral"],
-        "field_mean_delta_e94_rgb": figure46["field_mean_delta_e94_rgb"],
-        "field_ratio_rgb_over_spectral": figure46["field_ratio_rgb_over_spectral"],
-        "mean_delta_e94_spectral": figure46["mean_delta_e94_spectral"],
-        "mean_delta_e94_rgb": figure46["mean_delta_e94_rgb"],
-        "45/0_mean_error_matte_fields_pct": forty_five["mean_error_matte_fields_pct"],
-        "45/0_max_error_matte_fields_pct": forty_five["max_error_matte_fields_pct"],
+        **{
+            key: value
+            for key, value in figure46.items()
+            if key.startswith(("field_mean", "field_ratio", "mean_delta"))
+        },
     }
-    print_summary(summary, "BTF rendered back (Figure 4.6, 45/0)")
+    if "spectrophotometer_45_0" in metrics:
+        forty_five = metrics["spectrophotometer_45_0"]
+        summary["45/0_mean_error_matte_fields_pct"] = forty_five["mean_error_matte_fields_pct"]
+        summary["45/0_max_error_matte_fields_pct"] = forty_five["max_error_matte_fields_pct"]
+    summary["replay with files"] = (
+        f"spectwin validate {shlex.quote(str(btf))} --photo {shlex.quote(replay['photo'])} "
+        f"--environment {shlex.quote(replay['environment'])} "
+        f"--sample-corners '{replay['sample_corners']}' "
+        f"--fov-deg {replay['fov_deg']:g} --exposure 1"
+    )
+    print_summary(summary, "BTF rendered back (Figure 4.6)")
 
 
 def register(app: typer.Typer) -> None:

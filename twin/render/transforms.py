@@ -15,7 +15,7 @@ import mitsuba as mi
 
 from twin.render.variant import activate
 
-__all__ = ["look_at", "rotate", "scale", "translate"]
+__all__ = ["look_at", "matrix", "rotate", "scale", "translate"]
 
 
 def look_at(
@@ -43,3 +43,9 @@ def scale(factor: float | Sequence[float]) -> mi.ScalarTransform4f:
     """A scaling by ``factor``, one for all axes or ``(x, y, z)``."""
     activate()
     return mi.ScalarTransform4f.scale(factor)
+
+
+def matrix(to_world: Sequence[Sequence[float]]) -> mi.ScalarTransform4f:
+    """The transform of a 4 x 4 matrix ``to_world`` (rows; its last column the position, m)."""
+    activate()
+    return mi.ScalarTransform4f([list(map(float, row)) for row in to_world])

@@ -28,13 +28,25 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import colour
+import numpy as np
+
 from recon.btf.rgb_import import rgb_source
 from recon.btf.store import BTFStore
 from recon.errors import InputError
+from recon.image_spectralization import write_rgb_exr
+from recon.spectral_exr import write_spectral_exr
 from twin.materials import load_material
 from twin.output_format import dumps
 from twin.render.plugins.btf_bsdf import store_table
-from twin.validate.figure46 import field_interiors, render_figure46, write_figure46
+from twin.validate.figure46 import (
+    Figure46,
+    field_interiors,
+    photograph_camera,
+    render_figure46,
+)
+from twin.validate.panels import write_panels
+from twin.validate.photo_camera import square_corners
 from twin.validate.spectrophotometer import compare_45_0, field_spots, write_45_0_figure
 
 __all__ = ["MIN_PIXELS", "measured_as", "validate_btf"]
@@ -116,11 +128,14 @@ def validate_btf(
         if isinstance(value, bool) or not isinstance(value, int) or value < 4:
             raise InputError(f"{name}: expected an integer of at least 4, got {value!r}")
     btf = BTFStore.open(btf_path)
-    material = load_material(btf.material)
-    if not any(part.name.startswith("field_") for part in material.parts):
+    try:
+        material = load_material(btf.material)
+    except InputError:
         raise InputError(
-            f"{btf_path}: material {btf.material!r} has no chart fields (field_*) to compare"
-        )
+            f"{btf_path}: material {btf.material!r} is not one of the twin's; expected --photo "
+            "and --environment: your photograph of the sample and the light where it was taken"
+        ) from None
+    chart = any(part.name.startswith("field_") for part in material.parts)
     if compressed and not btf.has_compressed:
         raise InputError(f"{btf_path}: no compressed form stored; run spectwin compress first")
     if not compressed and not btf.written().any():
@@ -128,13 +143,13 @@ def validate_btf(
             f"{btf_path}: no direction pair is written yet; finish the BTF with spectwin "
             "process --resume"
         )
-    if not field_spots(material, btf.texels[0]).any(axis=(1, 2)).all():
+    if chart and not field_spots(material, btf.texels[0]).any(axis=(1, 2)).all():
         raise InputError(
             f"{btf_path}: its {btf.texels[0]} texels leave chart fields without a texel in the "
             "45/0 measuring spot; process the capture with --texels 16 or more"
         )
     field_pixels = field_interiors(material, pixels).reshape(-1, pixels * pixels).sum(axis=1)
-    if not field_pixels.all():
+    if chart and not field_pixels.all():
         raise InputError(
             f"pixels: {pixels} px leave chart fields of {btf.material!r} without an interior "
             f"pixel to compare; expected at least {MIN_PIXELS}"
@@ -142,26 +157,18 @@ def validate_btf(
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     table = store_table(btf, compressed=compressed, lobes=not compressed)
-    timings = {}
+    timings: dict[str, float] = {}
+    figures = {"figure46": str(out / "figure46.png")}
 
     step("Figure 4.6: map capture and three renderings")
     start = time.perf_counter()
     figure = render_figure46(
         material, table, pixels=pixels, spp=spp, map_size=(map_height, 2 * map_height)
     )
-    write_figure46(figure, out / "figure46.png")
+    write_panels(figure.panels, out / "figure46.png")
+    photo_inputs = write_photo_inputs(figure, material.size_m, pixels, out)
     timings["figure46_s"] = round(time.perf_counter() - start, 1)
-    field_spectral, field_rgb = figure.field_delta_e()
-
-    step("45/0 spectrophotometer comparison")
-    start = time.perf_counter()
-    bands = None if passbands is None else passbands(btf.grid.wavelengths_nm)
-    forty_five = compare_45_0(table, material, spp=spp, passbands=bands)
-    write_45_0_figure(forty_five, btf.grid.wavelengths_nm, out / "spectrophotometer_45_0.png")
-    timings["spectrophotometer_s"] = round(time.perf_counter() - start, 1)
-
-    fields = [part.name for part in material.parts if part.name.startswith("field_")]
-    metrics = {
+    metrics: dict[str, Any] = {
         "btf": str(btf_path),
         "material": btf.material,
         "form": "pca" if compressed else "raw",
@@ -171,17 +178,46 @@ def validate_btf(
             table.lobes.glossy_fraction if table.lobes is not None else 0.0, 4
         ),
         "settings": {"pixels": pixels, "spp": spp, "map_size": [map_height, 2 * map_height]},
-        "figure46": figure.summary(),
-        "figure46_per_field_delta_e94": {
+        "figure46": figure.panels.summary(),
+        "photo_inputs": photo_inputs,
+        "figures": figures,
+    }
+    if chart:
+        fields = [part.name for part in material.parts if part.name.startswith("field_")]
+        field_spectral, field_rgb = figure.panels.field_delta_e()
+        metrics["figure46_per_field_delta_e94"] = {
             name: {"spectral": round(float(s), 3), "rgb": round(float(r), 3)}
             for name, s, r in zip(fields, field_spectral, field_rgb, strict=True)
-        },
-        "spectrophotometer_45_0": forty_five.summary(),
-        "timings": timings,
-        "figures": {
-            "figure46": str(out / "figure46.png"),
-            "spectrophotometer_45_0": str(out / "spectrophotometer_45_0.png"),
-        },
-    }
+        }
+        step("45/0 spectrophotometer comparison")
+        start = time.perf_counter()
+        bands = None if passbands is None else passbands(btf.grid.wavelengths_nm)
+        forty_five = compare_45_0(table, material, spp=spp, passbands=bands)
+        write_45_0_figure(forty_five, btf.grid.wavelengths_nm, out / "spectrophotometer_45_0.png")
+        timings["spectrophotometer_s"] = round(time.perf_counter() - start, 1)
+        metrics["spectrophotometer_45_0"] = forty_five.summary()
+        figures["spectrophotometer_45_0"] = str(out / "spectrophotometer_45_0.png")
+    metrics["timings"] = timings
     (out / "metrics.json").write_text(dumps(metrics))
     return metrics
+
+
+def write_photo_inputs(figure: Figure46, size_m: float, pixels: int, out: Path) -> dict[str, Any]:
+    """Write the photograph (linear sRGB OpenEXR) and the captured map (spectral OpenEXR) into
+    ``out`` with what ``spectwin validate --photo`` needs besides: the sample's corners in the
+    photograph and its field of view. Returns those, with the two files."""
+    camera = photograph_camera(pixels)
+    srgb = colour.RGB_COLOURSPACES["sRGB"].matrix_XYZ_to_RGB
+    write_rgb_exr(out / "photograph.exr", figure.panels.photograph @ srgb.T)
+    environment = figure.environment
+    write_spectral_exr(
+        out / "environment.exr", environment.radiance.astype(np.float32), environment.grid
+    )
+    corners = camera.project(square_corners(size_m))
+    return {
+        "photo": str(out / "photograph.exr"),
+        "environment": str(out / "environment.exr"),
+        "sample_corners": ";".join(f"{x:.3f},{y:.3f}" for x, y in corners),
+        "fov_deg": round(camera.fov_deg, 4),
+        "camera": "srgb-linear",
+    }
