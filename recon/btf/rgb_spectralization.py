@@ -7,7 +7,9 @@ in the BTF's direction order, the texel's column ``x`` and row ``y`` of the stor
 any ``texels`` reduction of the import) and its spectrum (a reflectance factor: a white
 Lambertian reads 1). The camera's response: by name among the shipped cameras or a CSV
 (:func:`recon.image_spectralization.camera_response`); the images' decoded, linear values are
-taken as that camera's linear values, up to a gain per channel fitted to the spots.
+taken as that camera's linear values, up to a smooth factor per channel (the light's shape and
+level in it, the exposure) fitted to the spots
+(:func:`recon.image_spectralization.camera_fit.camera_term`).
 
 Design (:data:`DESIGNS`). The reflectance of a texel changes little in shape between pairs but
 much in scale (shading, foreshortening, the specular lobe); a spot measured at one pair says
@@ -38,7 +40,8 @@ from typing import Any
 import numpy as np
 
 from recon.errors import InputError
-from recon.image_spectralization.run import camera_term, solve_grid
+from recon.image_spectralization.camera_fit import camera_term
+from recon.image_spectralization.run import solve_grid
 from recon.image_spectralization.spots import read_spot_table
 from recon.spectra import SampledSpectra, WavelengthGrid, resample
 from recon.spectralize.solve import DYNAMIC_FLOOR, EnergyWeights, PointSpectra, reconstruct
@@ -131,7 +134,8 @@ class SpectralizedBTF:
     design
         One of :data:`DESIGNS`.
     gains
-        ``(3,)`` the gain per channel fitted to the spots.
+        ``(3,)`` the gain per channel fitted to the spots (the mean of the fitted factor,
+        :class:`recon.image_spectralization.camera_fit.CameraTerm`).
     fit_residual_pct
         ``(3,)`` relative RMS residual of that fit per channel, %.
     notes
@@ -230,7 +234,8 @@ def spectralize_rgb_btf(
         )
     pixels, grid, notes = check_spots(spots, response, rgb.shape[:3])
     spectra = resample(spots.spectra, grid, method="box" if notes else "linear").values
-    r_cam, gains, fit = camera_term(response, grid, rgb.reshape(-1, 3)[pixels], spectra)
+    camera = camera_term(response, grid, rgb.reshape(-1, 3)[pixels], spectra)
+    r_cam = camera.matrix
     options: dict[str, Any] = {
         "appearance": "rgbxy",
         "neighbours": 3,
@@ -259,4 +264,4 @@ def spectralize_rgb_btf(
                 rgb[pair], r_cam, point_spectra=points, p_dyn=_P_DYN[design], **options
             ).spectra
     cube = np.clip(values, 0.0, None).astype(np.float32)
-    return SpectralizedBTF(cube, grid, design, gains, fit, tuple(notes))
+    return SpectralizedBTF(cube, grid, design, camera.gains, camera.fit_residual_pct, tuple(notes))
