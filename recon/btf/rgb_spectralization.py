@@ -71,8 +71,8 @@ PRIOR = "regression"
 """The prior of Eq. 6.3 in every design: the spectra minus the regression from camera values
 fitted to the spots (with the flat spectrum of the neutral interface reflection held, unless
 ``neutral=False``). On the twin's lego (3 x 3 pairs, 32 texels, spots at 1 % of every pair's
-texels) ``"joint"`` reached 2.9 % (Eq. 6.8) with it and 7.6 % with the plain prior; with all spots
-at one pair 15 % and 144 %."""
+texels, a gain per channel, free base) ``"joint"`` reached 2.9 % (Eq. 6.8) with it and 7.6 % with
+the plain prior; with all spots at one pair 15 % and 144 %."""
 
 
 @dataclass(frozen=True, eq=False)
