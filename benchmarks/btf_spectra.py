@@ -15,7 +15,8 @@ and mean Delta E94 (thesis illuminants), per method:
   (divided by a white's) and read as linear sRGB; ``jakob2019_srgb``: on the truth's exact
   linear sRGB under D65 (its best case, which no camera gives);
 - ``a_plus``: Spectral A+ (``recon.baselines``) trained on every spot, on all pairs at once;
-- ``murakami``: Murakami 2007 per pair from that pair's spots (``every_pair`` only).
+- ``murakami``: Murakami 2007 per pair from that pair's spots (``every_pair`` only), given the
+  exact camera term (response times D65), where the spectralization fits its own to the spots.
 
 Run: PYTHONPATH=. .venv/bin/python -m benchmarks.btf_spectra [--materials lego wallpaper ...]
 """

@@ -7,7 +7,9 @@ in the BTF's direction order, the texel's column ``x`` and row ``y`` of the stor
 any ``texels`` reduction of the import) and its spectrum (a reflectance factor: a white
 Lambertian reads 1). The camera's response: by name among the shipped cameras or a CSV
 (:func:`recon.image_spectralization.camera_response`); the images' decoded, linear values are
-taken as that camera's linear values, up to a gain per channel fitted to the spots.
+taken as that camera's linear values, up to a smooth factor per channel (the light's shape and
+level in it, the exposure) fitted to the spots
+(:func:`recon.image_spectralization.camera_fit.camera_term`).
 
 Design (:data:`DESIGNS`). The reflectance of a texel changes little in shape between pairs but
 much in scale (shading, foreshortening, the specular lobe); a spot measured at one pair says
@@ -38,7 +40,8 @@ from typing import Any
 import numpy as np
 
 from recon.errors import InputError
-from recon.image_spectralization.run import camera_term, solve_grid
+from recon.image_spectralization.camera_fit import MAX_DEGREE, camera_term
+from recon.image_spectralization.run import solve_grid
 from recon.image_spectralization.spots import read_spot_table
 from recon.spectra import SampledSpectra, WavelengthGrid, resample
 from recon.spectralize.solve import DYNAMIC_FLOOR, EnergyWeights, PointSpectra, reconstruct
@@ -66,9 +69,10 @@ _P_DYN = {"joint": 1.0, "per_pair": 0.0}
 _WEIGHTS = EnergyWeights(delta=0.0)
 PRIOR = "regression"
 """The prior of Eq. 6.3 in every design: the spectra minus the regression from camera values
-fitted to the spots. On the twin's lego (3 x 3 pairs, 32 texels, spots at 1 % of every pair's
-texels) ``"joint"`` reached 2.9 % (Eq. 6.8) with it and 7.6 % with the plain prior; with all spots
-at one pair 15 % and 144 %."""
+fitted to the spots (with the flat spectrum of the neutral interface reflection held, unless
+``neutral=False``). On the twin's lego (3 x 3 pairs, 32 texels, spots at 1 % of every pair's
+texels, a gain per channel, free base) ``"joint"`` reached 2.9 % (Eq. 6.8) with it and 7.6 % with
+the plain prior; with all spots at one pair 15 % and 144 %."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -131,7 +135,8 @@ class SpectralizedBTF:
     design
         One of :data:`DESIGNS`.
     gains
-        ``(3,)`` the gain per channel fitted to the spots.
+        ``(3,)`` the gain per channel fitted to the spots (the mean of the fitted factor,
+        :class:`recon.image_spectralization.camera_fit.CameraTerm`).
     fit_residual_pct
         ``(3,)`` relative RMS residual of that fit per channel, %.
     notes
@@ -181,6 +186,22 @@ def check_spots(
     return pixels, grid, notes
 
 
+def _with_unlit_texels(
+    rgb: np.ndarray, pixels: np.ndarray, spectra: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The spots and, as spots of zero reflectance, the texels whose camera values are all
+    zero (shadowed, occluded; ``"joint"``): a non-negative spectrum the camera does not see at
+    all is zero on the bands it is sensitive to. Left to the solve, such a texel takes the
+    metameric black of its neighbours scaled by the floor of Eq. 10.2 (on the twin's lego, with
+    spots at one pair, 44 % Eq. 6.8 over the 14 % of texels in shadow)."""
+    unlit = np.flatnonzero(np.all(rgb.reshape(-1, 3) <= 0, axis=1))
+    unlit = np.setdiff1d(unlit, pixels)
+    return (
+        np.concatenate([pixels, unlit]),
+        np.concatenate([spectra, np.zeros((unlit.size, spectra.shape[1]))]),
+    )
+
+
 def _pair_brightness(rgb: np.ndarray) -> np.ndarray:
     """``(n_pairs, 1)`` the mean camera sum of each pair (1 for a black pair). ``"joint"``
     divides each pair by it, spots included, and multiplies the result back: Eq. 10.2 at
@@ -197,6 +218,8 @@ def spectralize_rgb_btf(
     response: SampledSpectra,
     *,
     design: str = "joint",
+    neutral: bool = True,
+    camera_degree: int = MAX_DEGREE,
     tol: float = 1e-6,
 ) -> SpectralizedBTF:
     """Spectralize an RGB BTF from spot spectra (module description; Eq. 6.10, 10.2).
@@ -211,6 +234,13 @@ def spectralize_rgb_btf(
         ``(3, K')`` the camera's spectral response, rows R, G, B, any scale.
     design
         One of :data:`DESIGNS`.
+    neutral
+        Hold the regression prior's base to the dichromatic model: the flat reflectance factor
+        of a dielectric's interface reflection maps to itself (``neutral`` of
+        :func:`recon.spectralize.solve.build_problem`); False fits the base freely.
+    camera_degree
+        Highest degree of the camera term's smooth factor per channel
+        (:func:`recon.image_spectralization.camera_fit.camera_term`); 0: a gain per channel.
     tol
         Relative residual of the solves (:func:`recon.spectralize.solve.reconstruct`).
 
@@ -230,16 +260,21 @@ def spectralize_rgb_btf(
         )
     pixels, grid, notes = check_spots(spots, response, rgb.shape[:3])
     spectra = resample(spots.spectra, grid, method="box" if notes else "linear").values
-    r_cam, gains, fit = camera_term(response, grid, rgb.reshape(-1, 3)[pixels], spectra)
+    camera = camera_term(
+        response, grid, rgb.reshape(-1, 3)[pixels], spectra, max_degree=camera_degree
+    )
+    r_cam = camera.matrix
     options: dict[str, Any] = {
         "appearance": "rgbxy",
         "neighbours": 3,
         "weights": _WEIGHTS,
         "prior": PRIOR,
+        "neutral": np.ones(grid.size) if neutral else None,
         "tol": tol,
     }
     if design == "joint":
         exposure = _pair_brightness(rgb)
+        pixels, spectra = _with_unlit_texels(rgb, pixels, spectra)
         points = PointSpectra(pixels, spectra / exposure[pixels // (rgb.shape[1] * rgb.shape[2])])
         solved = reconstruct(
             rgb / exposure[:, :, None, None],
@@ -259,4 +294,4 @@ def spectralize_rgb_btf(
                 rgb[pair], r_cam, point_spectra=points, p_dyn=_P_DYN[design], **options
             ).spectra
     cube = np.clip(values, 0.0, None).astype(np.float32)
-    return SpectralizedBTF(cube, grid, design, gains, fit, tuple(notes))
+    return SpectralizedBTF(cube, grid, design, camera.gains, camera.fit_residual_pct, tuple(notes))

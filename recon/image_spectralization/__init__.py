@@ -1,7 +1,7 @@
 """A user's RGB image and spot spectra spectralized (thesis chapter 6): the linear RGB image
 (``rgb_image``), the spot spectra at pixel coordinates (``spots``), the camera's response by
-name or from a CSV (``responses``) and the reconstruction with its cross-validated error per
-spot (``run``).
+name or from a CSV (``responses``), the camera term fitted to the spots (``camera_fit``) and
+the reconstruction with its cross-validated error per spot (``run``).
 """
 
 import lazy_loader
@@ -9,6 +9,7 @@ import lazy_loader
 __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
+        "camera_fit": ["CameraTerm", "camera_term"],
         "responses": ["camera_response", "read_response_csv"],
         "rgb_image": ["LinearRGB", "read_linear_rgb", "write_rgb_exr"],
         "run": ["ImageSpectralization", "spectralize_image"],

@@ -8,10 +8,10 @@ Steps:
    grid of that step). The spots must cover at least :data:`MIN_COVERAGE` of every channel's
    response: what the camera sees where no spot was measured would be left to guesswork.
 2. The camera term :math:`R_{cam}` (Eq. 6.2, ``(K, 3)``): the response's band integrals on the
-   grid, times a gain per channel fitted to the spots by least squares
-   (:math:`g_c = \\sum_s v_{s,c} p_{s,c} / \\sum_s p_{s,c}^2` with :math:`p = S R`), since the
-   exposure, the light's colour over the spots and the response's units are unknown. The
-   relative residual of that fit says how well the spots and the image agree.
+   grid, times a smooth factor per channel fitted to the spots
+   (:func:`recon.image_spectralization.camera_fit.camera_term`), since the exposure, the
+   light over the spots and the response's units are unknown. The relative residual of that
+   fit says how well the spots and the image agree.
 3. The prior (Eq. 6.3): chosen by :func:`recon.spectralize.choose_prior` with
    :data:`FOLDS` folds (both priors of each fold in one Kronecker solve, one appearance graph
    for all solves), or with ``fast=True`` the thesis's prior (``"spectra"``) without
@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from recon.errors import InputError
+from recon.image_spectralization.camera_fit import camera_term
 from recon.image_spectralization.spots import SpotSpectra
 from recon.spectra import SampledSpectra, WavelengthGrid, resample
 from recon.spectralize import choose_prior
@@ -43,7 +44,6 @@ __all__ = [
     "FOLDS",
     "MIN_COVERAGE",
     "ImageSpectralization",
-    "camera_term",
     "solve_grid",
     "spectralize_image",
 ]
@@ -87,7 +87,8 @@ class ImageSpectralization:
         ``(m,)`` the held-out error (Eq. 6.8, %) of every spot with the prior used, in the
         order of the spots; None without cross-validation.
     gains
-        ``(3,)`` the gain per channel fitted to the spots.
+        ``(3,)`` the gain per channel fitted to the spots (the mean of the fitted factor,
+        :class:`recon.image_spectralization.camera_fit.CameraTerm`).
     fit_residual_pct
         ``(3,)`` relative RMS residual of that fit per channel, %.
     timings_s
@@ -155,34 +156,6 @@ def solve_grid(spots: SampledSpectra, response: SampledSpectra) -> tuple[Wavelen
     return WavelengthGrid(kept), notes
 
 
-def camera_term(
-    response: SampledSpectra, grid: WavelengthGrid, rgb_at_spots: np.ndarray, spectra: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:math:`R_{cam}` ``(K, 3)`` on ``grid`` with the gains fitted to the spots (module
-    description, step 2), the gains and the fit's relative residual per channel (%)."""
-    on_grid = resample(response, grid, out_of_range="zero").values.T
-    integrals = on_grid * grid.quadrature_weights()[:, None]
-    predicted = spectra @ integrals
-    power = np.sum(predicted**2, axis=0)
-    if np.any(power <= 0):
-        channel = "RGB"[int(np.argmin(power))]
-        raise InputError(
-            f"spots: their spectra give no {channel} signal through the camera's response; "
-            "expected spectra where the camera is sensitive"
-        )
-    gains = np.sum(rgb_at_spots * predicted, axis=0) / power
-    if not np.all(gains > 0):
-        channel = "RGB"[int(np.argmin(gains))]
-        raise InputError(
-            f"image, spots: the image's {channel} values at the spots do not grow with the "
-            "spectra's signal (gain <= 0); expected the spots' coordinates on the image"
-        )
-    residual = rgb_at_spots - gains * predicted
-    scale = np.sqrt(np.mean(rgb_at_spots**2, axis=0))
-    fit = 100 * np.sqrt(np.mean(residual**2, axis=0)) / np.maximum(scale, np.finfo(float).tiny)
-    return integrals * gains, gains, fit
-
-
 def spectralize_image(
     rgb: np.ndarray,
     spots: SpotSpectra,
@@ -229,7 +202,8 @@ def spectralize_image(
     grid, notes = solve_grid(spots.spectra, response)
     spectra = resample(spots.spectra, grid, method="box" if notes else "linear").values
     flat = rgb.reshape(-1, 3)
-    r_cam, gains, fit = camera_term(response, grid, flat[pixels], spectra)
+    camera = camera_term(response, grid, flat[pixels], spectra)
+    r_cam = camera.matrix
     started = time.perf_counter()
     graph = neighbour_graph(rgb, appearance="rgbxy", neighbours=3)
     timings = {"graph": time.perf_counter() - started}
@@ -269,8 +243,8 @@ def spectralize_image(
         cross_validated=choice is not None,
         held_out_errors={} if choice is None else dict(choice.held_out_errors),
         spot_errors=None if choice is None else choice.pixel_errors[prior],
-        gains=gains,
-        fit_residual_pct=fit,
+        gains=camera.gains,
+        fit_residual_pct=camera.fit_residual_pct,
         timings_s=timings,
         notes=tuple(notes),
     )
