@@ -183,7 +183,7 @@ BAD_INPUTS: dict[str, tuple[Callable[[dict], Path], Callable[[dict], list[str]],
     "malformed response CSV": (
         lambda b: b["images"],
         lambda b: ["--spectra", str(b["spots"]), "--response", _response_csv(b)],
-        "expected four finite numbers",
+        "expected 4 finite numbers",
     ),
     "header without pair": (
         lambda b: b["images"],
