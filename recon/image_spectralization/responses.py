@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from recon.errors import InputError
-from recon.measured_data import read_camera_sensitivities
 from recon.image_spectralization.wavelength_table import read_wavelength_table
+from recon.measured_data import read_camera_sensitivities
 from recon.spectra import SampledSpectra
 
 __all__ = ["camera_response", "read_response_csv"]

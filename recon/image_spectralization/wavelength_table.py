@@ -16,9 +16,7 @@ from recon.spectra import SampledSpectra, WavelengthGrid
 __all__ = ["read_wavelength_table"]
 
 
-def read_wavelength_table(
-    path: str | Path, columns: tuple[str, ...], what: str
-) -> SampledSpectra:
+def read_wavelength_table(path: str | Path, columns: tuple[str, ...], what: str) -> SampledSpectra:
     """Read a table ``wavelength_nm,<columns>`` (module description), refusing in one line
     (prefixed by ``what`` and the path) a missing file, another header, a row that is not
     ``1 + len(columns)`` finite numbers, fewer than two wavelengths or wavelengths that do not

@@ -39,7 +39,9 @@ def _camera_values(truth: np.ndarray) -> np.ndarray:
 
 
 def _patches(*names: str) -> np.ndarray:
-    chart = resample(read_spectra_csv("spectra/reflectances/macbeth_colorchecker.csv"), DEFAULT_GRID)
+    chart = resample(
+        read_spectra_csv("spectra/reflectances/macbeth_colorchecker.csv"), DEFAULT_GRID
+    )
     return np.stack([chart.row(name).values for name in names])
 
 
@@ -107,7 +109,7 @@ def test_no_pair_near_45_0_is_refused():
         ("wavelength_nm,reflectance\n400,-0.1\n500,0.5\n", "expected reflectance factors in"),
         ("wavelength_nm,reflectance\n400,nan\n500,0.5\n", "expected 2 finite numbers"),
         ("wavelength_nm,R\n400,0.2\n500,0.5\n", "expected wavelength_nm,reflectance"),
-        ("wavelength_nm,reflectance\n500,0.2\n400,0.5\n", "reading"),
+        ("wavelength_nm,reflectance\n500,0.2\n400,0.5\n", "strictly increasing"),
     ],
 )
 def test_bad_readings_are_refused(tmp_path, text, message):
