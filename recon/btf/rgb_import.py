@@ -279,6 +279,11 @@ def _spectralizer(
     gives the ``rgb_source.spectralized`` attribute (``recon.btf.schema.SpotSource``), after
     the checks that need no images beyond the first (of texture ``shape``); None without
     ``spectra``."""
+    if spectra is not None and not Path(spectra).is_file():
+        raise InputError(
+            f"spectra {spectra}: no such file; expected spots (a CSV pair,x,y,<nm>,...) or a "
+            "45/0 reading (a CSV wavelength_nm,reflectance)"
+        )
     reading = None if spectra is None or not is_reading_csv(spectra) else read_reading_csv(spectra)
     if measuring_spot is not None and reading is None:
         raise InputError(

@@ -53,8 +53,10 @@ class SpotSource(StoreModel):
     (``recon.btf.rgb_spectralization``; thesis Eq. 6.10, 10.2, section 10.1), or the one 45/0
     reading (``recon.btf.reading_spectralization``; Eq. 6.9)."""
 
-    spots: str = Field(description="the spots CSV, as a path")
-    n_spots: int = Field(ge=1, description="spot spectra, each at one texel of one pair")
+    spots: str = Field(description="the spots CSV or the reading's, as a path")
+    n_spots: int = Field(
+        ge=1, description="spot spectra, each at one texel of one pair; of a reading, 1"
+    )
     spot_pairs: list[int] = Field(description="the pairs that hold spots")
     response: str = Field(description="the camera's response: a shipped camera's name or a CSV")
     design: str = Field(description="how the spots were spread over the pairs")

@@ -247,19 +247,6 @@ BAD_INPUTS: dict[str, tuple[Callable[[dict], Path], Callable[[dict], list[str]],
 }
 
 
-@pytest.mark.parametrize("name", sorted(BAD_INPUTS))
-def test_bad_input_is_one_line_and_leaves_nothing(btf, tmp_path, name):
-    source, options, expected = BAD_INPUTS[name]
-    out = tmp_path / "bad.btf.zarr"
-    result = _run("btf", "import", source(btf), "--out", out, *options(btf))
-    assert result.exit_code == 2, result.output
-    assert "Traceback" not in result.output
-    lines = result.stderr.splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: "), result.stderr
-    assert expected in lines[0], lines[0]
-    assert list(tmp_path.iterdir()) == []
-
-
 READING_ANGLES_DEG = ((45.0, 0.0, 0.0, 0.0), *ANGLES_DEG[1:])
 """Pair 0 at 45/0, where the reading belongs."""
 MEASURING_SPOT = (2, 3, 12, 10)
@@ -391,12 +378,19 @@ READING_BAD_INPUTS: dict[str, tuple[Callable[[dict], Path], Callable[[dict], lis
 }
 
 
-@pytest.mark.parametrize("name", sorted(READING_BAD_INPUTS))
-def test_bad_reading_input_is_one_line_and_leaves_nothing(reading, tmp_path, name):
-    source, options, expected = READING_BAD_INPUTS[name]
+@pytest.mark.parametrize(
+    ("fixture", "name"),
+    [("btf", name) for name in sorted(BAD_INPUTS)]
+    + [("reading", name) for name in sorted(READING_BAD_INPUTS)],
+)
+def test_bad_input_is_one_line_and_leaves_nothing(request, tmp_path, fixture, name):
+    """Bad spots and option mixes on the spots' BTF, bad readings on the reading's."""
+    data = request.getfixturevalue(fixture)
+    source, options, expected = {"btf": BAD_INPUTS, "reading": READING_BAD_INPUTS}[fixture][name]
     out = tmp_path / "bad.btf.zarr"
-    result = _run("btf", "import", source(reading), "--out", out, *options(reading))
+    result = _run("btf", "import", source(data), "--out", out, *options(data))
     assert result.exit_code == 2, result.output
+    assert "Traceback" not in result.output
     lines = result.stderr.splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: "), result.stderr
     assert expected in lines[0], lines[0]
