@@ -55,7 +55,8 @@ def measured_as(btf: BTFStore) -> str:
     Returns
     -------
     str
-        ``"spectral"``, RGB upsampled (by which method), or RGB spectralized from spot spectra.
+        ``"spectral"``, RGB upsampled (by which method), or RGB spectralized from spot spectra or
+        a 45/0 reading.
     """
     source = rgb_source(btf)
     if source is None:
