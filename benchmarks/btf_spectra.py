@@ -18,6 +18,13 @@ and mean Delta E94 (thesis illuminants), per method:
 - ``murakami``: Murakami 2007 per pair from that pair's spots (``every_pair`` only), given the
   exact camera term (response times D65), where the spectralization fits its own to the spots.
 
+A third case, ``one_reading``, has no spots but one 45/0 spectrophotometer reading over the whole
+texture (:mod:`recon.btf.reading_spectralization`), given to the pair nearest 45/0 (pair
+:data:`SPOT_PAIR`, 30/0, 15 degrees away), errors over every texel: ``reading_45_0`` with the
+truth's mean at 45/0 itself (rendered apart: what an instrument reads), ``reading_at_pair`` with
+the truth's mean at that pair (the 15 degrees taken out), and ``jakob2019``, ``jakob2019_srgb``
+as above.
+
 Run: PYTHONPATH=. .venv/bin/python -m benchmarks.btf_spectra [--materials lego wallpaper ...]
 """
 
@@ -34,6 +41,12 @@ import numpy as np
 
 from benchmarks.common import machine_description
 from recon import baselines
+from recon.btf.reading_spectralization import (
+    GEOMETRY_DEG,
+    Reading45,
+    reading_pair,
+    spectralize_from_reading,
+)
 from recon.btf.rgb_spectralization import BTFSpots, spectralize_rgb_btf
 from recon.measured_data import read_camera_sensitivities
 from recon.metrics import delta_e94, relative_error
@@ -95,6 +108,15 @@ def _murakami(rgb: np.ndarray, projection: np.ndarray, pixels: np.ndarray, known
     )
 
 
+def _jakob(truth: np.ndarray, rgb: np.ndarray) -> dict[str, Callable[[], np.ndarray]]:
+    """The two Jakob 2019 upsamplings (module description)."""
+    white = np.ones(DEFAULT_GRID.size) @ camera_projection()
+    return {
+        "jakob2019": lambda: upsample_srgb(rgb / white, "jakob2019").values,
+        "jakob2019_srgb": lambda: upsample_srgb(truth @ srgb_response(), "jakob2019").values,
+    }
+
+
 def run_case(truth: np.ndarray, case: str, seed: int) -> dict[str, dict[str, float]]:
     """Every method's errors on one material and spot case (module description)."""
     projection = camera_projection()
@@ -106,12 +128,10 @@ def run_case(truth: np.ndarray, case: str, seed: int) -> dict[str, dict[str, flo
     where = np.stack([pair, texel % width, texel // width], axis=1)
     spots = BTFSpots(where, SampledSpectra(DEFAULT_GRID, known), "benchmark")
     response = read_camera_sensitivities(CAMERA)
-    white = np.ones(DEFAULT_GRID.size) @ projection
     methods: dict[str, Callable[[], np.ndarray]] = {
         "joint": lambda: spectralize_rgb_btf(rgb, spots, response, design="joint").cube,
         "per_pair": lambda: spectralize_rgb_btf(rgb, spots, response, design="per_pair").cube,
-        "jakob2019": lambda: upsample_srgb(rgb / white, "jakob2019").values,
-        "jakob2019_srgb": lambda: upsample_srgb(truth @ srgb_response(), "jakob2019").values,
+        **_jakob(truth, rgb),
         "a_plus": lambda: baselines.recover(
             rgb, projection, method="a_plus", known_pixels=pixels, known_spectra=known
         ),
@@ -120,11 +140,48 @@ def run_case(truth: np.ndarray, case: str, seed: int) -> dict[str, dict[str, flo
         methods["murakami"] = lambda: _murakami(rgb, projection, pixels, known)
     unknown = np.ones(truth.shape[:3], bool).ravel()
     unknown[pixels] = False
-    reference = truth.reshape(-1, DEFAULT_GRID.size)[unknown]
+    return _errors(methods, truth, unknown)
+
+
+def mean_at_45_0(material: str) -> np.ndarray:
+    """``(K,)`` the twin's true mean reflectance factor over the texture of ``material``, lit
+    at 45 degrees and seen along the normal: a 45/0 instrument's reading."""
+    theta = np.radians(GEOMETRY_DEG[0])
+    light, view = np.array([[np.sin(theta), 0.0, np.cos(theta)]]), np.array([[0.0, 0.0, 1.0]])
+    btf = truth_btf(load_material(material), light, view, texels=TEXELS, spp=SPP, seed=0)
+    return np.pi * btf[0].reshape(-1, DEFAULT_GRID.size).mean(axis=0).astype(np.float64)
+
+
+def run_reading(truth: np.ndarray, at_45_0: np.ndarray) -> dict[str, dict[str, float]]:
+    """The ``one_reading`` case (module description); ``at_45_0`` is the truth's mean over the
+    texture at 45/0."""
+    rgb = truth @ camera_projection()
+    pair, _ = reading_pair(*pair_directions())
+    response = read_camera_sensitivities(CAMERA)
+    at_pair = truth[pair].reshape(-1, DEFAULT_GRID.size).mean(axis=0)
+
+    def from_reading(mean: np.ndarray) -> np.ndarray:
+        reading = Reading45(SampledSpectra(DEFAULT_GRID, mean[None]), "benchmark")
+        return spectralize_from_reading(rgb, reading, response, pair=pair).cube
+
+    methods: dict[str, Callable[[], np.ndarray]] = {
+        "reading_45_0": lambda: from_reading(at_45_0),
+        "reading_at_pair": lambda: from_reading(at_pair),
+        **_jakob(truth, rgb),
+    }
+    return _errors(methods, truth, np.ones(truth.shape[:3], bool).ravel())
+
+
+def _errors(
+    methods: dict[str, Callable[[], np.ndarray]], truth: np.ndarray, kept: np.ndarray
+) -> dict[str, dict[str, float]]:
+    """Mean Eq. 6.8 (%), mean Delta E94 against ``truth`` and seconds of each method at the
+    ``kept`` texels (flat)."""
+    reference = truth.reshape(-1, DEFAULT_GRID.size)[kept]
     results = {}
     for name, method in methods.items():
         started = time.perf_counter()
-        estimate = np.asarray(method(), np.float64).reshape(-1, DEFAULT_GRID.size)[unknown]
+        estimate = np.asarray(method(), np.float64).reshape(-1, DEFAULT_GRID.size)[kept]
         seconds = time.perf_counter() - started
         results[name] = {
             "eq_6_8_pct": round(float(np.mean(relative_error(estimate, reference))), 2),
@@ -152,9 +209,11 @@ def main() -> None:
         started = time.perf_counter()
         btf = truth_btf(load_material(name), light, view, texels=TEXELS, spp=SPP, seed=0)
         truth = np.pi * btf.astype(np.float64)
+        render_s = time.perf_counter() - started
         report["materials"][name] = {  # type: ignore[index]
-            "render_s": round(time.perf_counter() - started, 1),
+            "render_s": round(render_s, 1),
             **{case: run_case(truth, case, arguments.seed) for case in ("every_pair", "one_pair")},
+            "one_reading": run_reading(truth, mean_at_45_0(name)),
         }
         print(f"{name} done", file=sys.stderr)
     print(json.dumps(report, indent=2))

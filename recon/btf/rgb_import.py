@@ -26,17 +26,23 @@ metamer among many.
 from __future__ import annotations
 
 import csv
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from recon.btf.bonn_formats import read_image_archive, read_ubo2014
+from recon.btf.reading_spectralization import (
+    MeasuringSpot,
+    is_reading_csv,
+    read_reading_csv,
+    reading_pair,
+    spectralize_from_reading,
+)
 from recon.btf.rgb_images import RGBImageSet
 from recon.btf.rgb_spectralization import (
     PRIOR,
-    BTFSpots,
     SpectralizedBTF,
     check_spots,
     read_btf_spots,
@@ -47,6 +53,7 @@ from recon.btf.staging import staged
 from recon.btf.store import BTFStore
 from recon.errors import InputError
 from recon.image_spectralization import camera_response
+from recon.image_spectralization.run import solve_grid
 from recon.progress import progress_steps
 from recon.rgb_upsampling import read_srgb_image, reduce_image, upsample_srgb
 from recon.spectra import DEFAULT_GRID, WavelengthGrid
@@ -146,6 +153,7 @@ def import_rgb_images(
     texels: int | None = None,
     spectra: str | Path | None = None,
     response: str | None = None,
+    measuring_spot: MeasuringSpot | None = None,
     progress: bool = False,
 ) -> BTFStore:
     """Read an RGB BTF into a new spectral BTF store, upsampled or, given spot spectra,
@@ -170,11 +178,15 @@ def import_rgb_images(
         (:func:`recon.rgb_upsampling.reduce_image`); ``None`` keeps them whole.
     spectra
         A spots CSV ``pair,x,y,<nm>,...`` (:func:`recon.btf.rgb_spectralization.read_btf_spots`;
-        texels of the stored texture): the BTF is spectralized from them instead of upsampled,
-        its images' linear values taken as the camera's, and ``rgb_source.spectralized`` says so.
+        texels of the stored texture), or one 45/0 reading ``wavelength_nm,reflectance``
+        (:func:`recon.btf.reading_spectralization.read_reading_csv`, told apart by the
+        header): the BTF is spectralized from them instead of upsampled, its images' linear
+        values taken as the camera's, and ``rgb_source.spectralized`` says so.
     response
         With ``spectra``: the camera's response, a shipped camera's name or a CSV
         ``wavelength_nm,R,G,B`` (:func:`recon.image_spectralization.camera_response`).
+    measuring_spot
+        With a reading: its measuring spot on the stored texture; None: the whole texture.
 
     Returns
     -------
@@ -198,23 +210,20 @@ def import_rgb_images(
         )
     if spectra is not None and scale != 1.0:
         raise InputError(f"scale: {scale}; a spectralized import takes its scale from the spots")
-    spots = None if spectra is None else read_btf_spots(spectra)
-    curves = None if response is None else camera_response(response)
     images = open_rgb_images(source)
     first, factor = _reduced(images.read(0), texels)
-    if spots is not None and curves is not None:
-        check_spots(spots, curves, (images.n_pairs, *first.shape[:2]))
+    spectralize = _spectralizer(spectra, response, measuring_spot, images, first.shape[:2])
     source_attrs: dict[str, Any] = {
-        "colour_space": "sRGB" if spots is None else "camera RGB",
+        "colour_space": "sRGB" if spectralize is None else "camera RGB",
         "layout": images.layout,
         "encoding": images.encoding,
-        "upsampling": upsampling if spots is None else "spectralization",
+        "upsampling": upsampling if spectralize is None else "spectralization",
         "scale": float(scale),
         "texel_reduction": factor,
         "images": str(images.source.resolve()),
     }
     with staged(out_path) as building:
-        if spots is None or curves is None:
+        if spectralize is None:
             pairs: Iterator[tuple[np.ndarray, WavelengthGrid]] = (
                 ((upsample_srgb(scale * linear, "jakob2019").values / np.pi), DEFAULT_GRID)
                 for linear in _linear_pairs(images, first, texels, progress)
@@ -222,8 +231,7 @@ def import_rgb_images(
             grid = DEFAULT_GRID
         else:
             stack = np.stack(list(_linear_pairs(images, first, texels, progress)))
-            result = spectralize_rgb_btf(stack, spots, curves)
-            source_attrs["spectralized"] = _spot_source(spots, response or "", result)
+            result, source_attrs["spectralized"] = spectralize(stack)
             pairs = ((cube / np.pi, result.grid) for cube in result.cube)
             grid = result.grid
         store = BTFStore.create(
@@ -257,15 +265,69 @@ def _linear_pairs(
             advance()
 
 
-def _spot_source(spots: BTFSpots, response: str, result: SpectralizedBTF) -> dict[str, Any]:
-    """The ``rgb_source.spectralized`` attribute (``recon.btf.schema.SpotSource``)."""
-    return {
-        "spots": str(Path(spots.source).resolve()),
-        "n_spots": len(spots.where),
-        "spot_pairs": sorted({int(pair) for pair in spots.where[:, 0]}),
-        "response": response,
+_Spectralizer = Callable[[np.ndarray], tuple[SpectralizedBTF, dict[str, Any]]]
+
+
+def _spectralizer(
+    spectra: str | Path | None,
+    response: str | None,
+    measuring_spot: MeasuringSpot | None,
+    images: RGBImageSet,
+    shape: tuple[int, int],
+) -> _Spectralizer | None:
+    """What spectralizes the stacked linear images from the spots or the 45/0 reading and
+    gives the ``rgb_source.spectralized`` attribute (``recon.btf.schema.SpotSource``), after
+    the checks that need no images beyond the first (of texture ``shape``); None without
+    ``spectra``."""
+    if spectra is not None and not Path(spectra).is_file():
+        raise InputError(
+            f"spectra {spectra}: no such file; expected spots (a CSV pair,x,y,<nm>,...) or a "
+            "45/0 reading (a CSV wavelength_nm,reflectance)"
+        )
+    reading = None if spectra is None or not is_reading_csv(spectra) else read_reading_csv(spectra)
+    if measuring_spot is not None and reading is None:
+        raise InputError(
+            "measuring_spot: only with a 45/0 reading (a CSV wavelength_nm,reflectance), not "
+            "with spots or without spectra"
+        )
+    if spectra is None or response is None:
+        return None
+    curves = camera_response(response)
+    record: dict[str, Any] = {"response": response}
+    if reading is None:
+        spots = read_btf_spots(spectra)
+        check_spots(spots, curves, (images.n_pairs, *shape))
+        record |= {
+            "spots": str(Path(spots.source).resolve()),
+            "n_spots": len(spots.where),
+            "spot_pairs": sorted({int(pair) for pair in spots.where[:, 0]}),
+            "prior": PRIOR,
+        }
+        return lambda stack: _recorded(spectralize_rgb_btf(stack, spots, curves), record)
+    pair, _ = reading_pair(images.light_dirs(), images.view_dirs())
+    spot = measuring_spot or MeasuringSpot(0, 0, shape[1], shape[0])
+    spot.texels(shape)
+    solve_grid(reading.spectrum, curves)
+    record |= {
+        "spots": str(Path(reading.source).resolve()),
+        "n_spots": 1,
+        "spot_pairs": [pair],
+        "prior": "regression (from the reading)",
+        "measuring_spot": [spot.x, spot.y, spot.width, spot.height],
+    }
+    return lambda stack: _recorded(
+        spectralize_from_reading(stack, reading, curves, pair=pair, spot=spot), record
+    )
+
+
+def _recorded(
+    result: SpectralizedBTF, record: dict[str, Any]
+) -> tuple[SpectralizedBTF, dict[str, Any]]:
+    """``result`` and the ``rgb_source.spectralized`` attribute: ``record`` and the design,
+    gains and fit of ``result``."""
+    return result, {
+        **record,
         "design": result.design,
-        "prior": PRIOR,
         "gains": [float(gain) for gain in result.gains],
         "fit_residual_pct": [float(value) for value in result.fit_residual_pct],
     }

@@ -48,13 +48,16 @@ from recon.spectralize.solve import DYNAMIC_FLOOR, EnergyWeights, PointSpectra, 
 
 __all__ = [
     "DESIGNS",
+    "ENERGY",
     "MAX_TEXELS",
     "MIN_SPOTS",
     "PRIOR",
     "BTFSpots",
     "SpectralizedBTF",
     "read_btf_spots",
+    "check_rgb",
     "check_spots",
+    "pair_brightness",
     "spectralize_rgb_btf",
 ]
 
@@ -66,7 +69,13 @@ MAX_TEXELS = 4_000_000
 """Most texels over all pairs of one joint solve (about 4 GB of solver memory at 33 bands);
 larger BTFs are refused, to be reduced with ``texels``."""
 _P_DYN = {"joint": 1.0, "per_pair": 0.0}
-_WEIGHTS = EnergyWeights(delta=0.0)
+ENERGY: dict[str, Any] = {
+    "appearance": "rgbxy",
+    "neighbours": 3,
+    "weights": EnergyWeights(delta=0.0),
+}
+"""The energy of every design besides the prior and the data (Eq. 6.5, 6.10, 6.11): the RGBXY
+appearance space, three neighbours, equal primed weights, no smoothness term."""
 PRIOR = "regression"
 """The prior of Eq. 6.3 in every design: the spectra minus the regression from camera values
 fitted to the spots (with the flat spectrum of the neutral interface reflection held, unless
@@ -202,7 +211,7 @@ def _with_unlit_texels(
     )
 
 
-def _pair_brightness(rgb: np.ndarray) -> np.ndarray:
+def pair_brightness(rgb: np.ndarray) -> np.ndarray:
     """``(n_pairs, 1)`` the mean camera sum of each pair (1 for a black pair). ``"joint"``
     divides each pair by it, spots included, and multiplies the result back: Eq. 10.2 at
     :math:`p_{dyn} = 1` is blind to such a factor except through its floor (a share of the mean
@@ -210,6 +219,20 @@ def _pair_brightness(rgb: np.ndarray) -> np.ndarray:
     brightest pairs (a mirror highlight) and flatten every texel of the dark ones."""
     sums = rgb.sum(axis=-1).mean(axis=(1, 2))
     return np.where(sums > 0, sums, 1.0)[:, None]
+
+
+def check_rgb(rgb: np.ndarray) -> np.ndarray:
+    """``rgb`` as float64 ``(n_pairs, H, W, 3)`` camera values, refusing another shape or more
+    than :data:`MAX_TEXELS` texels over all pairs."""
+    rgb = np.asarray(rgb, dtype=np.float64)
+    if rgb.ndim != 4 or rgb.shape[3] != 3:
+        raise InputError(f"rgb: expected (n_pairs, H, W, 3) camera values, got {rgb.shape}")
+    if rgb.shape[0] * rgb.shape[1] * rgb.shape[2] > MAX_TEXELS:
+        raise InputError(
+            f"rgb: {rgb.shape[0]} pairs of {rgb.shape[2]} x {rgb.shape[1]} texels; expected at "
+            f"most {MAX_TEXELS} texels over all pairs: resample the texture to fewer texels"
+        )
+    return rgb
 
 
 def spectralize_rgb_btf(
@@ -248,16 +271,9 @@ def spectralize_rgb_btf(
     -------
     SpectralizedBTF
     """
-    rgb = np.asarray(rgb, dtype=np.float64)
-    if rgb.ndim != 4 or rgb.shape[3] != 3:
-        raise InputError(f"rgb: expected (n_pairs, H, W, 3) camera values, got {rgb.shape}")
+    rgb = check_rgb(rgb)
     if design not in DESIGNS:
         raise InputError(f"design: expected one of {', '.join(DESIGNS)}, got {design!r}")
-    if rgb.shape[0] * rgb.shape[1] * rgb.shape[2] > MAX_TEXELS:
-        raise InputError(
-            f"rgb: {rgb.shape[0]} pairs of {rgb.shape[2]} x {rgb.shape[1]} texels; expected at "
-            f"most {MAX_TEXELS} texels over all pairs: resample the texture to fewer texels"
-        )
     pixels, grid, notes = check_spots(spots, response, rgb.shape[:3])
     spectra = resample(spots.spectra, grid, method="box" if notes else "linear").values
     camera = camera_term(
@@ -265,15 +281,13 @@ def spectralize_rgb_btf(
     )
     r_cam = camera.matrix
     options: dict[str, Any] = {
-        "appearance": "rgbxy",
-        "neighbours": 3,
-        "weights": _WEIGHTS,
+        **ENERGY,
         "prior": PRIOR,
         "neutral": np.ones(grid.size) if neutral else None,
         "tol": tol,
     }
     if design == "joint":
-        exposure = _pair_brightness(rgb)
+        exposure = pair_brightness(rgb)
         pixels, spectra = _with_unlit_texels(rgb, pixels, spectra)
         points = PointSpectra(pixels, spectra / exposure[pixels // (rgb.shape[1] * rgb.shape[2])])
         solved = reconstruct(

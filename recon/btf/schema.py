@@ -50,16 +50,30 @@ BTF_UNITS = "1/sr"
 
 class SpotSource(StoreModel):
     """The spot spectra an RGB BTF was spectralized from, not upsampled
-    (``recon.btf.rgb_spectralization``; thesis Eq. 6.10, 10.2, section 10.1)."""
+    (``recon.btf.rgb_spectralization``; thesis Eq. 6.10, 10.2, section 10.1), or the one 45/0
+    reading (``recon.btf.reading_spectralization``; Eq. 6.9)."""
 
-    spots: str = Field(description="the spots CSV, as a path")
-    n_spots: int = Field(ge=1, description="spot spectra, each at one texel of one pair")
+    spots: str = Field(description="the spots CSV or the reading's, as a path")
+    n_spots: int = Field(
+        ge=1, description="spot spectra, each at one texel of one pair; of a reading, 1"
+    )
     spot_pairs: list[int] = Field(description="the pairs that hold spots")
     response: str = Field(description="the camera's response: a shipped camera's name or a CSV")
     design: str = Field(description="how the spots were spread over the pairs")
     prior: str = Field(description="the appearance prior (Eq. 6.3)")
     gains: list[float] = Field(description="gain per channel R, G, B fitted to the spots")
     fit_residual_pct: list[float] = Field(description="relative RMS residual of that fit, %")
+    measuring_spot: list[int] | None = Field(
+        None,
+        description="of one 45/0 reading (`recon.btf.reading_spectralization`): x, y, width, "
+        "height of its measuring spot in texels; null: spots at texels",
+    )
+
+    def describe(self) -> str:
+        """What the BTF was spectralized from, in words."""
+        if self.measuring_spot is None:
+            return f"{self.n_spots} spot spectra"
+        return f"one 45/0 reading at pair {self.spot_pairs[0]}"
 
 
 class RgbSource(StoreModel):

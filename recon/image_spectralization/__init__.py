@@ -1,6 +1,7 @@
 """A user's RGB image and spot spectra spectralized (thesis chapter 6): the linear RGB image
 (``rgb_image``), the spot spectra at pixel coordinates (``spots``), the camera's response by
-name or from a CSV (``responses``), the camera term fitted to the spots (``camera_fit``) and
+name or from a CSV (``responses``), the camera term fitted to the spots (``camera_fit``), tables
+of spectra by wavelength (``wavelength_table``) and
 the reconstruction with its cross-validated error per spot (``run``).
 """
 
@@ -12,6 +13,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "camera_fit": ["CameraTerm", "camera_term"],
         "responses": ["camera_response", "read_response_csv"],
         "rgb_image": ["LinearRGB", "read_linear_rgb", "write_rgb_exr"],
+        "wavelength_table": ["read_wavelength_table"],
         "run": ["ImageSpectralization", "spectralize_image"],
         "spots": ["SpotSpectra", "read_spots_csv"],
     },

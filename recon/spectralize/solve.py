@@ -19,7 +19,8 @@ solved for the scaled image :math:`X_i = f_i S_i` with :math:`f_i = (\\sum_c V_i
 The neighbours :math:`N_i` come from :mod:`recon.spectralize.appearance`. With
 ``prior="regression"`` the prior and smoothness terms act on :math:`X - B` instead, where
 :math:`B_i = f_i V_i W` and :math:`W` is the least-squares map from camera values to the point
-spectra (Hardeberg's inverse matrix, Sec. 6.1; :func:`build_problem`). The weights are
+spectra (Hardeberg's inverse matrix, Sec. 6.1; :func:`build_problem`) or a map the caller gives
+(``regression=``). The weights are
 normalized by the number of terms (Eq. 6.11, or Eq. 10.13 with the smoothness term), so the primed
 weights :class:`EnergyWeights` state the terms' relative importance (defaults
 :math:`\\alpha' = \\beta' = \\gamma' = 1`; :math:`\\delta' = 0.1` with band images, 0 otherwise).
@@ -132,7 +133,10 @@ class BandImage:
 class DeviceIntegrals:
     """General device readings (Eq. 6.9): ``weights`` ``(m, n_pixels * K)`` (sparse, over the
     row-major flattened cube), ``values`` ``(m,)`` and optional per-reading ``alpha`` factors
-    :math:`\\alpha_j / \\alpha` (default 1)."""
+    :math:`\\alpha_j / \\alpha` (default 1). A reading fixes one value, so it anchors one
+    graph component (its first pixel's) against the metameric blacks; the other components it
+    reaches are linked like those without data
+    (:func:`recon.spectralize.appearance.connect_components`)."""
 
     weights: sparse.spmatrix
     values: np.ndarray
@@ -489,6 +493,7 @@ def build_problem(
     p_dyn: float = 0.0,
     prior: str = "spectra",
     neutral: np.ndarray | None = None,
+    regression: np.ndarray | None = None,
     graph: NeighbourGraph | None = None,
 ) -> SpectralizationProblem:
     """Assemble the energy of the module docstring.
@@ -528,6 +533,10 @@ def build_problem(
         where a :math:`W` fitted to spots of body colours alone extrapolates to the highlight's
         camera values freely (on the twin's lego, all spots at one pair, the mirror pair came
         out at 98 % with it free, 15 % with the flat spectrum fixed). None: :math:`W` free.
+    regression
+        :math:`W` ``(C, K)`` of ``prior="regression"`` given by the caller (e.g. made from an
+        area reading, :mod:`recon.btf.reading_spectralization`); None fits it to the point
+        spectra.
     graph
         The appearance links of these pixels found before by :func:`neighbour_graph` with the
         same ``appearance``, ``appearance_options``, ``neighbours`` and ``p_dyn`` (e.g. once
@@ -540,6 +549,8 @@ def build_problem(
     """
     if prior not in PRIORS:
         raise InputError(f"prior: expected one of {PRIORS}, got {prior!r}")
+    if regression is not None and prior != "regression":
+        raise InputError(f"regression: a map for prior='regression', given with prior={prior!r}")
     images = _as_images(rgb)
     response_values, grid = _grid_and_values(response, None, "response")
     if isinstance(response, SampledSpectra):
@@ -575,8 +586,10 @@ def build_problem(
             has_data[term.pixels] = True
         elif isinstance(term, FilteredBandTerm):
             has_data[term.pixel_slice()] = True
-        else:
-            has_data[np.unique(term.weights.indices // bands)] = True
+        else:  # a reading anchors one value per band: the component of its first pixel
+            readings = term.weights.tocsr()
+            reached = np.diff(readings.indptr) > 0
+            has_data[readings.indices[readings.indptr[:-1][reached]] // bands] = True
 
     started = time.perf_counter()
     points = appearance_points(
@@ -613,7 +626,14 @@ def build_problem(
         absolute.append(delta * total / smooth_rows)
     base = None
     if prior == "regression":  # the prior and smoothness terms act on X - B
-        base = scaled_rgb @ _regression_matrix(scaled_rgb, data_terms, response, neutral)
+        if regression is None:
+            regression = _regression_matrix(scaled_rgb, data_terms, response, neutral)
+        elif np.shape(regression) != (channels, bands) or not np.all(np.isfinite(regression)):
+            raise InputError(
+                f"regression: expected a finite ({channels}, {bands}) map from camera values to "
+                f"spectra, got shape {np.shape(regression)}"
+            )
+        base = scaled_rgb @ regression
         terms = [
             t if isinstance(t, _PRIOR_TERMS) else replace(t, target=t.target - t.apply(base))
             for t in terms
@@ -684,8 +704,8 @@ def reconstruct(
         grid the point spectra must share.
     **energy
         The energy: ``point_spectra``, ``band_images``, ``device_integrals``, ``weights``,
-        ``appearance``, ``appearance_options``, ``neighbours``, ``p_dyn``, ``prior``; see
-        :func:`build_problem`.
+        ``appearance``, ``appearance_options``, ``neighbours``, ``p_dyn``, ``prior``,
+        ``regression``; see :func:`build_problem`.
     solver
         ``"auto"``, ``"multigrid"``, ``"lsqr"`` or ``"lsmr"``.
     tol

@@ -128,7 +128,7 @@ PROBES = [
     (["@crop.png", "--spectra", "@missing.csv"], "no such file; expected a CSV of x,y"),
     (["@crop.png", "--response", "Nikon D9999"], "expected one of the 51 measured cameras"),
     (["@crop.png", "--response", "@malformed_response.csv"], "expected wavelength_nm,R,G,B"),
-    (["@crop.png", "--response", "@broken_response.csv"], "expected four finite numbers"),
+    (["@crop.png", "--response", "@broken_response.csv"], "expected 4 finite numbers"),
     (["@crop.png", "--interleave", "bip"], "'--interleave'"),
     (["@crop.png", "--encoding", "gamma"], "'--encoding'"),
 ]

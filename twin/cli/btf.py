@@ -7,13 +7,16 @@ scene (:mod:`twin.validate.btf_preview`)."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from twin.cli.errors import SpectwinGroup, fail, remove_if_interrupted, require_output_folder
 from twin.cli.output import JsonFlag, print_summary
 from twin.cli.store import require_sound_btf
+
+if TYPE_CHECKING:
+    from recon.btf.reading_spectralization import MeasuringSpot
 
 __all__ = ["register"]
 
@@ -85,7 +88,10 @@ def import_(
         typer.Option(
             help="RGB images: spot spectra, a CSV pair,x,y,<nm>,... (pair index in the "
             "directions' order, texel column and row of the stored texture, then the spectrum "
-            "as a reflectance factor): the BTF is spectralized from them, not upsampled.",
+            "as a reflectance factor); or one spectrophotometer reading at 45/0, a CSV "
+            "wavelength_nm,reflectance (the mean over its measuring spot at the BTF's pair "
+            "nearest light at 45, view at 0 degrees, within 15): the BTF is spectralized from "
+            "them, not upsampled.",
             show_default=False,
         ),
     ] = None,
@@ -97,6 +103,14 @@ def import_(
             show_default=False,
         ),
     ] = None,
+    measuring_spot: Annotated[
+        str | None,
+        typer.Option(
+            help="With a 45/0 reading: its measuring spot, X,Y,WIDTH,HEIGHT in texels of the "
+            "stored texture (default: the whole texture).",
+            show_default=False,
+        ),
+    ] = None,
     as_json: JsonFlag = False,
 ) -> None:
     """Read spectral EXR slices and their direction index (as spectwin btf export writes them),
@@ -104,11 +118,13 @@ def import_(
     light_theta_deg, light_phi_deg, view_theta_deg, view_phi_deg; or a Bonn database UBO2003 or
     ATRIUM archive or UBO2014 file), upsampled to spectra and flagged as RGB, into a new BTF
     store; the store is complete once every image is in. With --spectra and --response the
-    RGB BTF is spectralized from spot spectra (thesis section 10.1, Eq. 6.10) and flagged so.
+    RGB BTF is spectralized from spot spectra (thesis section 10.1, Eq. 6.10) or from one
+    45/0 reading of the sample (Eq. 6.9: the mean over its measuring spot) and flagged so.
 
     Example: spectwin btf import out/slices --out out/copy.btf.zarr
     Example: spectwin btf import UBO_CORDUROY256.zip --out corduroy.btf.zarr --texels 64
     Example: spectwin btf import images --spectra spots.csv --response 'Nikon D850' --out s.btf.zarr
+    Example: spectwin btf import images --spectra reading.csv --response 'Nikon D850' --out r.zarr
     """
     from recon.btf.exchange import INDEX_NAME, import_exr_slices
     from recon.btf.rgb_import import DIRECTION_TABLE, import_rgb_images, is_rgb_source, rgb_source
@@ -122,6 +138,7 @@ def import_(
         fail("--spectra, --response: expected both (spot spectra and the camera) or neither")
     if spectra is not None and scale != 1.0:
         fail("--scale: not with --spectra (a spectralized import takes its scale from the spots)")
+    spot = None if measuring_spot is None else _measuring_spot(measuring_spot)
     if rgb:
         btf = import_rgb_images(
             source,
@@ -132,6 +149,7 @@ def import_(
             texels=texels,
             spectra=spectra,
             response=response,
+            measuring_spot=spot,
             progress=not as_json,
         )
     else:
@@ -142,6 +160,7 @@ def import_(
                 ("--scale", scale != 1.0),
                 ("--texels", texels),
                 ("--spectra", spectra),
+                ("--measuring-spot", measuring_spot),
             )
             if value
         ]
@@ -165,10 +184,23 @@ def import_(
         summary["from_rgb"] = (
             f"sRGB, upsampled by {upsampling}"
             if spots is None
-            else f"camera RGB, spectralized from {spots.n_spots} spot spectra ({spots.design})"
+            else f"camera RGB, spectralized from {spots.describe()} ({spots.design})"
         )
         summary["format"] = recorded.layout if recorded is not None else None
     print_summary(summary, "imported BTF", as_json)
+
+
+def _measuring_spot(text: str) -> MeasuringSpot:
+    """``--measuring-spot X,Y,WIDTH,HEIGHT`` as whole texels."""
+    from recon.btf.reading_spectralization import MeasuringSpot
+
+    try:
+        values = [int(cell) for cell in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != 4:
+        fail(f"--measuring-spot {text!r}: expected X,Y,WIDTH,HEIGHT, four whole texels")
+    return MeasuringSpot(*values)
 
 
 @btf_app.command("render")

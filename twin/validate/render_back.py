@@ -67,7 +67,8 @@ def measured_as(btf: BTFStore) -> str:
     Returns
     -------
     str
-        ``"spectral"``, RGB upsampled (by which method), or RGB spectralized from spot spectra.
+        ``"spectral"``, RGB upsampled (by which method), or RGB spectralized from spot spectra or
+        a 45/0 reading.
     """
     source = rgb_source(btf)
     if source is None:
@@ -76,7 +77,7 @@ def measured_as(btf: BTFStore) -> str:
     described = source.colour_space + ("" if layout == "image folder" else f", {layout}")
     if source.spectralized is not None:
         spots = source.spectralized
-        return f"RGB ({described}) spectralized from {spots.n_spots} spot spectra (Eq. 6.10)"
+        return f"RGB ({described}) spectralized from {spots.describe()} (Eq. 6.10)"
     return f"RGB ({described}), rendered spectrally after {source.upsampling}"
 
 

@@ -314,6 +314,33 @@ def test_device_integrals_equal_point_spectra_for_single_pixel_readings(mosaic):
     assert np.max(np.abs(via_device.spectra - via_points.spectra)) < 1e-3
 
 
+def test_an_area_reading_anchors_one_component_and_a_given_map_sets_the_base(mosaic):
+    """A reading of the mean over every pixel fixes one value per band, not one per graph
+    component: the RGB graph's components (at least one per material) are linked to the first
+    pixel's as if they had no data; ``regression=`` gives the base :math:`B = f V W`."""
+    image, labels, response = mosaic
+    flat = image.reshape(-1, image.shape[-1])
+    bands = flat.shape[1]
+    mean = sparse.kron(np.full((1, flat.shape[0]), 1 / flat.shape[0]), sparse.identity(bands))
+    reading = DeviceIntegrals(sparse.csr_matrix(mean), flat.mean(axis=0))
+    rgb = image @ response
+    points = appearance_points(rgb[None], "rgb")
+    components = connect_components(
+        appearance_neighbours(points), points, labels.ravel() == labels.ravel()[0]
+    ).added
+    regression = np.random.default_rng(5).random((3, bands))
+    problem = build_problem(
+        rgb,
+        response,
+        device_integrals=reading,
+        appearance="rgb",
+        prior="regression",
+        regression=regression,
+    )
+    assert components >= len(SIX) - 1 and problem.graph_added == components
+    assert np.allclose(problem.base, rgb.reshape(-1, 3) @ regression)
+
+
 @pytest.mark.parametrize(
     ("change", "message"),
     [
@@ -328,6 +355,8 @@ def test_device_integrals_equal_point_spectra_for_single_pixel_readings(mosaic):
         ({"appearance": "lab"}, "unknown space"),
         ({"band_images": [BandImage(0, 3, np.ones((5, 5)), 1.0)]}, "has shape"),
         ({"band_images": [BandImage(0, 3, np.ones((4, 4)), 1.0)], "solver": "multigrid"}, "lsqr"),
+        ({"prior": "regression", "regression": np.ones((3, 20))}, "regression: expected a finite"),
+        ({"regression": np.ones((3, 33))}, "regression: a map for prior='regression'"),
     ],
 )
 def test_bad_input_is_refused_with_a_clear_message(change, message):
