@@ -95,6 +95,9 @@ def inputs(tmp_path_factory) -> Path:
     _store(root / "grey50.btf.zarr", 0.5 * grey, "user_sample")
     _store(root / "grey25.btf.zarr", 0.25 * grey, "user_sample")
     _store(root / "green.btf.zarr", np.where(DEFAULT_GRID.wavelengths_nm < 560, 0.5, 0.05), "x")
+    # A mirror sphere under the same sky, photographed by the same camera: the sky everywhere.
+    disc = np.hypot(*np.meshgrid(np.arange(WIDTH) + 0.5 - 24, np.arange(HEIGHT) + 0.5 - 18)) < 12
+    write_rgb_exr(root / "sphere.exr", np.where(disc[..., None], SKY_SRGB, 0.05))
     write_rgb_exr(root / "square.exr", np.ones((8, 8, 3)))
     (root / "notes.exr").write_text("not an image\n")
     return root
@@ -147,6 +150,25 @@ def test_a_wrong_btf_is_found_wrong(inputs, tmp_path):
     assert fitted["validation"]["mean_delta_e94_spectral"] < 0.5
     green = _validate(inputs / "green.btf.zarr", tmp_path / "green", *_photo_options(inputs))
     assert green["validation"]["mean_delta_e94_spectral"] > 10  # measured 15.7
+
+
+def test_the_light_from_a_mirror_sphere(inputs, tmp_path):
+    options = _options(
+        inputs,
+        (
+            "--environment",
+            None,
+            "--mirror-sphere",
+            "{inputs}/sphere.exr",
+            "--sphere-circle",
+            "24,18,12",
+        ),
+    )
+    metrics = _validate(inputs / "grey50.btf.zarr", tmp_path / "out", *options)
+    # The sky's linear sRGB becomes spectra by Jakob 2019 times D65: its colour is kept, its
+    # scale is the photograph's exposure.
+    assert metrics["validation"]["mean_delta_e94_spectral"] < 1.0
+    assert "mirror sphere" in metrics["environment_note"]
 
 
 @pytest.mark.parametrize("material", ["lego", "wallpaper", "red_fabric"])
@@ -204,6 +226,33 @@ BAD = {
     "photograph missing": (("--photo", "{inputs}/nothing.exr"), "no such file"),
     "photograph not an image": (("--photo", "{inputs}/corners.txt"), "expected a linear"),
     "unknown camera": (("--camera", "Brownie 127"), "Brownie 127"),
+    "sphere circle outside": (
+        (
+            "--environment",
+            None,
+            "--mirror-sphere",
+            "{inputs}/sphere.exr",
+            "--sphere-circle",
+            "40,18,12",
+        ),
+        "not inside the 48 x 36 photograph",
+    ),
+    "sphere photograph of another size": (
+        (
+            "--environment",
+            None,
+            "--mirror-sphere",
+            "{inputs}/square.exr",
+            "--sphere-circle",
+            "4,4,3",
+        ),
+        "expected the photograph's 48 x 36",
+    ),
+    "sphere without its circle": (
+        ("--environment", None, "--mirror-sphere", "{inputs}/sphere.exr"),
+        "expected both",
+    ),
+    "two lights": (("--mirror-sphere", "{inputs}/sphere.exr"), "one light"),
     "negative exposure": (("--exposure", "-1"), "expected a positive factor"),
 }
 
@@ -238,7 +287,7 @@ def test_bad_input_is_one_line_and_writes_nothing(inputs, tmp_path, name):
     ("options", "says"),
     [
         (("--environment", "{inputs}/sky.exr"), "only with --photo"),
-        (("--photo", "{inputs}/photo.exr"), "expected --environment and --sample-corners"),
+        (("--photo", "{inputs}/photo.exr"), "expected --sample-corners and one light"),
     ],
 )
 def test_options_of_a_photo_go_together(inputs, tmp_path, options, says):

@@ -41,7 +41,7 @@ from twin.cli.errors import (
 )
 from twin.cli.given import given, option_name
 from twin.cli.output import JsonFlag, SchedulerOption, WorkersOption, console, print_summary
-from twin.cli.points import parse_corners
+from twin.cli.points import parse_circle, parse_corners
 from twin.cli.store import require_sound_btf, require_sound_capture
 
 __all__ = ["register"]
@@ -282,6 +282,17 @@ def validate(
             "or RGB (upsampled), +z the sample's normal."
         ),
     ] = None,
+    mirror_sphere: Annotated[
+        Path | None,
+        typer.Option(
+            help="With --photo, instead of --environment: a photograph of a mirror sphere where "
+            "the sample lay, taken by the same camera from the same place."
+        ),
+    ] = None,
+    sphere_circle: Annotated[
+        str | None,
+        typer.Option(help="With --mirror-sphere: the sphere's 'x,y,radius' in its pixels."),
+    ] = None,
     sample_corners: Annotated[
         str | None,
         typer.Option(
@@ -333,7 +344,10 @@ def validate(
     map_height: Annotated[
         int,
         typer.Option(
-            min=4, max=2048, help="Rows of the captured environment map (2x as many columns)."
+            min=4,
+            max=2048,
+            help="Rows of the environment map captured or unwrapped from a mirror sphere (2x as "
+            "many columns).",
         ),
     ] = 64,
     as_json: JsonFlag = False,
@@ -352,7 +366,16 @@ def validate(
     require_sound_btf(btf, "validate", allow_unregistered=True, compressed=compressed)
     photo_only = [
         option_name(ctx, name)
-        for name in ("environment", "sample_corners", "fov_deg", "camera", "exposure", "encoding")
+        for name in (
+            "environment",
+            "mirror_sphere",
+            "sphere_circle",
+            "sample_corners",
+            "fov_deg",
+            "camera",
+            "exposure",
+            "encoding",
+        )
         if given(ctx, name)
     ]
     if photo is None:
@@ -360,19 +383,29 @@ def validate(
             fail(f"{', '.join(photo_only)}: only with --photo (your photograph)")
         _validate_twin(btf, out, compressed, pixels, spp, map_height, as_json)
         return
-    if environment is None or sample_corners is None:
-        fail("--photo: expected --environment and --sample-corners with it")
+    if sample_corners is None or (environment is None) == (mirror_sphere is None):
+        fail("--photo: expected --sample-corners and one light: --environment or --mirror-sphere")
+    if (mirror_sphere is None) != (sphere_circle is None):
+        fail("--mirror-sphere, --sphere-circle: expected both (the photograph and its circle)")
     from twin.validate.photo_validation import read_photo_inputs, validate_photo
+    from twin.validate.sphere_probe import MirrorSphere
+
+    light: Path | MirrorSphere = (
+        MirrorSphere(mirror_sphere, parse_circle(sphere_circle, "--sphere-circle"))
+        if mirror_sphere is not None and sphere_circle is not None
+        else Path(str(environment))
+    )
 
     with console.status("reading the photograph and the light") as status:
         inputs = read_photo_inputs(
             photo,
-            environment,
+            light,
             parse_corners(sample_corners, "--sample-corners"),
             camera=camera,
             fov_deg=fov_deg,
             pixels=pixels,
             encoding=encoding.value if encoding is not None else None,
+            map_height=map_height,
         )
         metrics = validate_photo(
             btf,

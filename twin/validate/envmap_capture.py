@@ -29,7 +29,7 @@ from twin.render.scene import PinholeCamera
 from twin.render.truth import band_passbands
 from twin.rigs.hemisphere import angle_between_deg, direction, spherical_deg
 
-__all__ = ["capture_mirror_sphere", "unwrap_mirror_sphere"]
+__all__ = ["capture_mirror_sphere", "lat_long_from_directions", "unwrap_mirror_sphere"]
 
 
 def _reflected_directions(camera: PinholeCamera, radius_m: float) -> tuple[np.ndarray, np.ndarray]:
@@ -57,6 +57,45 @@ def _reflected_directions(camera: PinholeCamera, radius_m: float) -> tuple[np.nd
     return np.flatnonzero(hit), reflected
 
 
+def lat_long_from_directions(
+    values: np.ndarray,
+    directions: np.ndarray,
+    away: np.ndarray,
+    *,
+    height: int,
+    width: int,
+    blind_spot_deg: float = 20.0,
+) -> np.ndarray:
+    """Lat-long map ``(height, width, K)``: the mean of ``values`` ``(n, K)`` seen in unit
+    ``directions`` ``(n, 3)`` per map pixel; pixels within ``blind_spot_deg`` of ``away`` (the
+    direction hidden behind a mirror sphere) and pixels no direction reached take the nearest
+    seen row (module docstring)."""
+    theta_deg, phi_deg = spherical_deg(directions)
+    row = np.minimum((theta_deg / 180 * height).astype(int), height - 1)
+    column = np.minimum((phi_deg / 360 * width).astype(int), width - 1)
+    cell = row * width + column
+    counts = np.bincount(cell, minlength=height * width)
+    sums = np.stack(
+        [np.bincount(cell, values[:, k], minlength=height * width) for k in range(values.shape[1])],
+        axis=-1,
+    )
+    mean = (sums / np.maximum(counts, 1)[:, None]).reshape(height, width, -1)
+    centres = direction(
+        ((np.arange(height) + 0.5) * 180 / height)[:, None],
+        ((np.arange(width) + 0.5) * 360 / width)[None, :],
+    )
+    hidden = (angle_between_deg(centres, away / np.linalg.norm(away)) < blind_spot_deg) | (
+        counts.reshape(height, width) == 0
+    )
+    if hidden.all():
+        raise InputError("blind_spot_deg: hides every direction of the map")
+    seen = np.argwhere(~hidden)
+    for row_index, column_index in np.argwhere(hidden):
+        distance = np.abs(seen[:, 0] - row_index) + 0.01 * np.abs(seen[:, 1] - column_index)
+        mean[row_index, column_index] = mean[tuple(seen[np.argmin(distance)])]
+    return np.maximum(mean, 0.0)
+
+
 def unwrap_mirror_sphere(
     image: np.ndarray,
     camera: PinholeCamera,
@@ -70,32 +109,12 @@ def unwrap_mirror_sphere(
     """Lat-long map ``(height, width, K)`` from an image ``(P, P, K)`` of a mirror sphere at the
     origin (module docstring)."""
     pixels, directions = _reflected_directions(camera, radius_m)
-    theta_deg, phi_deg = spherical_deg(directions)
-    row = np.minimum((theta_deg / 180 * height).astype(int), height - 1)
-    column = np.minimum((phi_deg / 360 * width).astype(int), width - 1)
-    cell = row * width + column
-    counts = np.bincount(cell, minlength=height * width)
     flat = image.reshape(-1, image.shape[-1])[pixels]
-    sums = np.stack(
-        [np.bincount(cell, flat[:, k], minlength=height * width) for k in range(flat.shape[1])],
-        axis=-1,
-    )
-    values = (sums / np.maximum(counts, 1)[:, None]).reshape(height, width, -1)
-    centres = direction(
-        ((np.arange(height) + 0.5) * 180 / height)[:, None],
-        ((np.arange(width) + 0.5) * 360 / width)[None, :],
-    )
     away = -np.asarray(camera.position_m, np.float64)
-    hidden = (angle_between_deg(centres, away / np.linalg.norm(away)) < blind_spot_deg) | (
-        counts.reshape(height, width) == 0
+    values = lat_long_from_directions(
+        flat, directions, away, height=height, width=width, blind_spot_deg=blind_spot_deg
     )
-    if hidden.all():
-        raise InputError("blind_spot_deg: hides every direction of the map")
-    seen = np.argwhere(~hidden)
-    for row_index, column_index in np.argwhere(hidden):
-        distance = np.abs(seen[:, 0] - row_index) + 0.01 * np.abs(seen[:, 1] - column_index)
-        values[row_index, column_index] = values[tuple(seen[np.argmin(distance)])]
-    return SpectralMap(np.maximum(values, 0.0), grid)
+    return SpectralMap(values, grid)
 
 
 def capture_mirror_sphere(

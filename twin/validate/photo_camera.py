@@ -67,6 +67,11 @@ class PhotoCamera:
         centre = np.array([self.width / 2, self.height / 2])
         return centre + self.focal_px * camera[:, :2] / camera[:, 2:3]
 
+    def ray(self, column: float, row: float) -> np.ndarray:
+        """The unit ray through the image point ``(column, row)`` in the camera's axes."""
+        ray = np.array([column - self.width / 2, row - self.height / 2, self.focal_px])
+        return ray / np.linalg.norm(ray)
+
     def mitsuba_sensor(self, channels: SampledSpectra, spp: int) -> dict[str, object]:
         """A Mitsuba ``perspective`` sensor of this camera with ``specfilm`` ``channels``
         (:func:`twin.render.light_groups.render_lit` takes it)."""

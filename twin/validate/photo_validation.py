@@ -42,8 +42,8 @@ from recon.errors import InputError
 from recon.image_files import Encoding
 from recon.image_spectralization import camera_response, read_linear_rgb
 from recon.rgb_upsampling import reduce_image
-from recon.spectra import SampledSpectra, WavelengthGrid, resample
-from twin.components.lamps import FINE_GRID
+from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid, resample
+from twin.components.lamps import FINE_GRID, cie_illuminant
 from twin.output_format import dumps
 from twin.render.plugins.btf_bsdf import store_table
 from twin.render.plugins.spectral_envmap import SpectralMap
@@ -57,8 +57,9 @@ from twin.validate.figure46 import (
 )
 from twin.validate.panels import compare_panels, write_panels
 from twin.validate.photo_camera import PhotoCamera, recover_camera
-from twin.validate.preview_lighting import read_environment
+from twin.validate.preview_lighting import RGB_MAP_NOTE, read_environment
 from twin.validate.render_back import measured_as
+from twin.validate.sphere_probe import MirrorSphere, unwrap_sphere_photo
 
 __all__ = ["SRGB_LINEAR", "PhotoInputs", "read_photo_inputs", "validate_photo"]
 
@@ -136,15 +137,46 @@ def _read_photograph(path: Path, encoding: Encoding | None) -> tuple[np.ndarray,
     return linear.values, [linear.note] if linear.note else []
 
 
+def _sphere_map(
+    sphere: MirrorSphere,
+    pose: PhotoCamera,
+    response: SampledSpectra | None,
+    encoding: Encoding | None,
+    map_height: int,
+) -> SpectralMap:
+    """The light at the sample from the mirror sphere's photograph, taken by ``pose``'s camera
+    (:mod:`twin.validate.sphere_probe`); a camera's values go to linear sRGB by its XYZ matrix
+    under CIE D65."""
+    path = Path(sphere.path)
+    if not path.is_file():
+        raise InputError(f"--mirror-sphere {path}: no such file")
+    rgb, _ = _read_photograph(path, encoding)
+    factor = 2 if path.suffix.lower() in RAW_SUFFIXES else 1
+    if (rgb.shape[1] * factor, rgb.shape[0] * factor) != (pose.width, pose.height):
+        raise InputError(
+            f"--mirror-sphere {path}: {rgb.shape[1] * factor} x {rgb.shape[0] * factor} pixels; "
+            f"expected the photograph's {pose.width} x {pose.height}, taken by the same camera"
+        )
+    to_srgb = np.eye(3)
+    if response is not None:
+        d65 = cie_illuminant("D65", DEFAULT_GRID).values
+        xyz = _camera_to_xyz(_response_on(response), d65, DEFAULT_GRID)
+        to_srgb = np.linalg.inv(colour.RGB_COLOURSPACES["sRGB"].matrix_RGB_to_XYZ) @ xyz
+    camera = replace(pose, width=rgb.shape[1], height=rgb.shape[0], focal_px=pose.focal_px / factor)
+    x, y, radius = (value / factor for value in sphere.circle)
+    return unwrap_sphere_photo(rgb, (x, y, radius), camera, to_srgb, height=map_height)
+
+
 def read_photo_inputs(
     photo: str | Path,
-    environment: str | Path,
+    environment: str | Path | MirrorSphere,
     corners: np.ndarray,
     *,
     camera: str = SRGB_LINEAR,
     fov_deg: float | None = None,
     pixels: int = 128,
     encoding: Encoding | None = None,
+    map_height: int = 64,
 ) -> PhotoInputs:
     """Read and check the files of a photo validation (module docstring).
 
@@ -153,7 +185,8 @@ def read_photo_inputs(
     photo
         The photograph.
     environment
-        The lat-long map of the light at the sample.
+        The lat-long map of the light at the sample, or a mirror sphere's photograph taken by
+        the same camera from the same place (:mod:`twin.validate.sphere_probe`).
     corners
         ``(4, 2)`` x, y of the sample's corners in the photograph's pixels, in the order of the
         BTF's texture (:mod:`twin.validate.photo_camera`).
@@ -165,6 +198,8 @@ def read_photo_inputs(
         The longer side of the rendered images, at most.
     encoding
         Of an 8-bit photograph: ``"srgb"`` or ``"linear"``.
+    map_height
+        Rows of the map unwrapped from a mirror sphere (twice as many columns).
 
     Returns
     -------
@@ -212,8 +247,12 @@ def read_photo_inputs(
         height=reduced.shape[0],
         focal_px=pose.focal_px / (factor * reduction),
     )
-    spectral_map, note = read_environment(environment)
     response = None if camera == SRGB_LINEAR else camera_response(camera)
+    if isinstance(environment, MirrorSphere):
+        spectral_map = _sphere_map(environment, pose, response, encoding, map_height)
+        note: str | None = f"unwrapped from a mirror sphere; {RGB_MAP_NOTE}"
+    else:
+        spectral_map, note = read_environment(environment)
     return PhotoInputs(reduced, rendered, reprojection, spectral_map, note, response, tuple(notes))
 
 
@@ -242,15 +281,26 @@ def _channels(inputs: PhotoInputs) -> _Channels:
             colour.RGB_COLOURSPACES["sRGB"].matrix_RGB_to_XYZ,
         )
 
+    on = _response_on(response)
+    grid = inputs.environment.grid
+    light = diffuse_white(inputs.environment, np.eye(grid.size) / np.diff(grid.wavelengths_nm)[0])
+    matrix = _camera_to_xyz(on, light, grid)
+    return _Channels(on, on, matrix, matrix, matrix)
+
+
+def _response_on(response: SampledSpectra) -> ResponsesOn:
     def on(grid: WavelengthGrid) -> np.ndarray:
         return resample(response, grid, out_of_range="zero").values
 
-    grid = inputs.environment.grid
-    light = diffuse_white(inputs.environment, np.eye(grid.size) / np.diff(grid.wavelengths_nm)[0])
+    return on
+
+
+def _camera_to_xyz(on: ResponsesOn, light: np.ndarray, grid: WavelengthGrid) -> np.ndarray:
+    """``(3, 3)`` the camera's values to XYZ: least squares over the 24 measured ColorChecker
+    reflectances under ``light`` ``(K,)`` on ``grid``."""
     reflectances = resample(colorchecker_reflectances(), grid, out_of_range="clamp").values
     stimuli = reflectances * light
-    matrix = np.linalg.lstsq(stimuli @ on(grid).T, stimuli @ cmfs_on(grid), rcond=None)[0].T
-    return _Channels(on, on, matrix, matrix, matrix)
+    return np.linalg.lstsq(stimuli @ on(grid).T, stimuli @ cmfs_on(grid), rcond=None)[0].T
 
 
 def validate_photo(

@@ -35,7 +35,15 @@ from twin.render.spectra import irregular_spectrum
 from twin.render.transforms import look_at, rotate, scale, translate
 from twin.validate.preview_geometry import GROUND_Z_M
 
-__all__ = ["MAX_MAP_ROWS", "PRESETS", "PreviewLighting", "environment_lighting", "read_environment"]
+__all__ = [
+    "MAX_MAP_ROWS",
+    "PRESETS",
+    "RGB_MAP_NOTE",
+    "PreviewLighting",
+    "environment_lighting",
+    "radiance_from_linear_srgb",
+    "read_environment",
+]
 
 MAX_MAP_ROWS = 256
 _EXR_MAGIC = b"\x76\x2f\x31\x01"
@@ -187,6 +195,19 @@ def _require_lat_long(path: Path, shape: tuple[int, ...]) -> None:
         )
 
 
+RGB_MAP_NOTE = "RGB map upsampled to spectra by Jakob 2019 times CIE D65"
+
+
+def radiance_from_linear_srgb(linear: np.ndarray) -> np.ndarray:
+    """Spectral radiance ``(..., K)`` on ``DEFAULT_GRID`` of linear sRGB radiance ``(..., 3)``:
+    its reflectance by Jakob and Hanika (2019) times CIE D65 (peak 1), so that a white of the
+    map stays white."""
+    from recon.rgb_upsampling import upsample_srgb
+
+    reflectance = upsample_srgb(np.maximum(linear, 0.0), "jakob2019").values
+    return np.asarray(reflectance * _d65(DEFAULT_GRID).values, np.float64)
+
+
 def read_environment(path: str | Path) -> tuple[SpectralMap, str | None]:
     """Read a lat-long environment map (module docstring).
 
@@ -207,7 +228,7 @@ def read_environment(path: str | Path) -> tuple[SpectralMap, str | None]:
         radiance.
     """
     from recon.image_spectralization import read_linear_rgb
-    from recon.rgb_upsampling import reduce_image, upsample_srgb
+    from recon.rgb_upsampling import reduce_image
     from recon.spectral_exr import read_spectral_exr, read_spectral_layout
 
     path = Path(path)
@@ -236,9 +257,8 @@ def read_environment(path: str | Path) -> tuple[SpectralMap, str | None]:
         linear = read_linear_rgb(path).values
         _require_lat_long(path, linear.shape)
         linear, _ = reduce_image(np.asarray(linear, np.float64), 2 * MAX_MAP_ROWS)
-        reflectance = upsample_srgb(np.maximum(linear, 0.0), "jakob2019").values
-        cube, grid = reflectance * _d65(DEFAULT_GRID).values, DEFAULT_GRID
-        note = "RGB map upsampled to spectra by Jakob 2019 times CIE D65"
+        cube, grid = radiance_from_linear_srgb(linear), DEFAULT_GRID
+        note = RGB_MAP_NOTE
     try:
         return SpectralMap(np.asarray(cube, np.float64), grid), note
     except InputError as error:
