@@ -15,6 +15,6 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "rgb_image": ["LinearRGB", "read_linear_rgb", "write_rgb_exr"],
         "wavelength_table": ["read_wavelength_table"],
         "run": ["ImageSpectralization", "spectralize_image"],
-        "spots": ["SpotSpectra", "read_spots_csv"],
+        "spots": ["SpotSpectra", "read_spot_mask", "read_spots_csv"],
     },
 )

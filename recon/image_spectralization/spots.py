@@ -5,7 +5,10 @@ then one row per spot: its pixel's column ``x`` and row ``y`` (from 0 at the ima
 pixel) and its spectrum, one value per wavelength, in whatever unit the spectrometer gave
 (reflectance factor or radiance; the reconstruction is in the same unit). Lines starting with
 ``#`` are comments. Each spot is one pixel; a spot measured over several pixels is given as
-several rows.
+several rows, or as a region of a label image: the header ``label,<wavelength>,...``, one row
+per label, and an image of whole numbers the size of the RGB image in which a label's pixels
+are its measured area (0: no spot). Every pixel of the area takes the label's spectrum: an area
+small and uniform enough for one spectrometer reading.
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ import numpy as np
 from recon.errors import InputError
 from recon.spectra import SampledSpectra, WavelengthGrid
 
-__all__ = ["SpotSpectra", "read_spot_table", "read_spots_csv"]
+__all__ = ["SpotSpectra", "read_spot_mask", "read_spot_table", "read_spots_csv"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -146,3 +149,45 @@ def read_spots_csv(path: str | Path) -> SpotSpectra:
     """
     pixels, spectra = read_spot_table(path, ("x", "y"), "pixel")
     return SpotSpectra(pixels, spectra, str(path))
+
+
+def read_spot_mask(path: str | Path, mask: str | Path, rgb: np.ndarray) -> SpotSpectra:
+    """Read spot spectra by label (module description) and the label image ``mask`` that
+    places them in the linear RGB image ``rgb`` ``(H, W, 3)``.
+
+    Returns
+    -------
+    SpotSpectra
+        One spot per label: the pixel of its area whose camera values are nearest the area's
+        mean (the pixel the area's mean spectrum stands for best; every pixel of a textured
+        area taking the mean spectrum would contradict its own camera values).
+    """
+    from recon.image_files import read_png_or_tiff
+
+    labels, spectra = read_spot_table(path, ("label",), "label")
+    mask = Path(mask)
+    if not mask.is_file():
+        raise InputError(f"--mask {mask}: no such file; expected a label image (PNG or TIFF)")
+    image = read_png_or_tiff(mask, "--mask")
+    if image.ndim != 2 or image.dtype.kind not in "ui":
+        raise InputError(
+            f"--mask {mask}: {image.dtype} values of shape {image.shape}; expected one channel of "
+            "whole-number labels (0: no spot)"
+        )
+    if image.shape != rgb.shape[:2]:
+        raise InputError(
+            f"--mask {mask}: {image.shape[1]} x {image.shape[0]} pixels; expected the RGB "
+            f"image's {rgb.shape[1]} x {rgb.shape[0]}"
+        )
+    xy = []
+    for label in labels[:, 0]:
+        y, x = np.nonzero(image == label)
+        if label <= 0 or x.size == 0:
+            raise InputError(
+                f"spots {path}: label {label} marks no pixel of --mask {mask}; expected labels "
+                "above 0 that the label image holds"
+            )
+        values = rgb[y, x]
+        nearest = np.argmin(np.linalg.norm(values - values.mean(axis=0), axis=1))
+        xy.append([x[nearest], y[nearest]])
+    return SpotSpectra(np.array(xy), spectra, str(path))

@@ -93,6 +93,36 @@ def test_spectralize_a_real_crop_and_read_it_back(crop, tmp_path):
     assert "already holds spectra.exr" in again.output
 
 
+def test_spots_as_areas_of_a_label_image(crop, tmp_path):
+    # 3 x 3 areas around every spot of the crop, each labelled with its area's mean spectrum
+    # (one spectrometer reading of the area).
+    folder, truth, xy = crop
+    real = read_llanos2019_multispectral()
+    labels = np.zeros(truth.shape[:2], np.uint16)
+    rows = ["label," + ",".join(f"{w:g}" for w in real.wavelengths_nm)]
+    for label, (x, y) in enumerate(xy[(xy[:, 0] > 0) & (xy[:, 1] > 0)], start=1):
+        labels[y - 1 : y + 2, x - 1 : x + 2] = label
+        mean = truth[y - 1 : y + 2, x - 1 : x + 2].mean(axis=(0, 1))
+        rows.append(f"{label}," + ",".join(f"{v:.6g}" for v in mean))
+    cv2.imwrite(str(tmp_path / "labels.png"), labels)
+    (tmp_path / "areas.csv").write_text("\n".join(rows) + "\n")
+    out = tmp_path / "out"
+    result = runner.invoke(
+        app,
+        ["spectralize", str(folder / "crop.png"), "--spectra", str(tmp_path / "areas.csv")]
+        + ["--mask", str(tmp_path / "labels.png"), "--response", str(folder / "flea3.csv")]
+        + ["--out", str(out)],
+    )
+    assert result.exit_code == 0, result.output
+    cube = read_spectral_exr(out / "spectra.exr").cube
+    unlabelled = labels == 0
+    error = float(np.mean(relative_error(cube[unlabelled], truth[unlabelled])))
+    # Measured 3.55 % (1.74 % with each pixel's own spectrum: the 3 x 3 means straddle edges).
+    assert error < 4.5
+    spots = json.loads((out / "spots.json").read_text())
+    assert len(spots["spots"]) == len(rows) - 1
+
+
 @pytest.fixture(scope="module")
 def bad(crop):
     """Bad inputs beside the good ones of ``crop``."""
@@ -111,6 +141,15 @@ def bad(crop):
     _write_spots(folder / "narrow.csv", xy, spectra[:, 2:5], real.wavelengths_nm[2:5])
     _write_spots(folder / "few.csv", xy[:3], spectra[:3], real.wavelengths_nm)
     (folder / "malformed_response.csv").write_text("nm;R;G;B\n400;1;2;3\n")
+    wavelengths = ",".join(f"{w:g}" for w in real.wavelengths_nm)
+    values = ",".join(f"{v:.6g}" for v in spectra[0])
+    (folder / "areas.csv").write_text(f"label,{wavelengths}\n1,{values}\n2,{values}\n")
+    labels = np.zeros((120, 160), np.uint16)
+    labels[10:13, 10:13], labels[50:53, 80:83] = 1, 2
+    cv2.imwrite(str(folder / "labels.png"), labels)
+    cv2.imwrite(str(folder / "labels_small.png"), labels[:60, :80])
+    cv2.imwrite(str(folder / "labels_one.png"), np.where(labels == 2, 0, labels))
+    cv2.imwrite(str(folder / "labels_rgb.png"), np.stack([labels] * 3, axis=-1))
     (folder / "broken_response.csv").write_text("wavelength_nm,R,G,B\n400,1,2\n500,1,2,3\n")
     return folder
 
@@ -129,6 +168,11 @@ PROBES = [
     (["@crop.png", "--response", "Nikon D9999"], "expected one of the 51 measured cameras"),
     (["@crop.png", "--response", "@malformed_response.csv"], "expected wavelength_nm,R,G,B"),
     (["@crop.png", "--response", "@broken_response.csv"], "expected 4 finite numbers"),
+    (["@crop.png", "--spectra", "@areas.csv", "--mask", "@labels_small.png"], "expected the RGB"),
+    (["@crop.png", "--spectra", "@areas.csv", "--mask", "@labels_one.png"], "label 2 marks no"),
+    (["@crop.png", "--spectra", "@areas.csv", "--mask", "@labels_rgb.png"], "one channel of"),
+    (["@crop.png", "--spectra", "@areas.csv", "--mask", "@none.png"], "--mask @none.png: no such"),
+    (["@crop.png", "--spectra", "@spots.csv", "--mask", "@labels.png"], "expected label then"),
     (["@crop.png", "--interleave", "bip"], "'--interleave'"),
     (["@crop.png", "--encoding", "gamma"], "'--encoding'"),
 ]

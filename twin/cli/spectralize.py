@@ -56,7 +56,8 @@ def spectralize(
         Path,
         typer.Option(
             help="Spot spectra: a CSV with the header x,y,<nm>,<nm>,... and one row per spot "
-            "(its pixel's column x and row y from 0 at the top left, then its spectrum).",
+            "(its pixel's column x and row y from 0 at the top left, then its spectrum); with "
+            "--mask, the header label,<nm>,... and one row per label.",
             show_default=False,
         ),
     ],
@@ -83,6 +84,14 @@ def spectralize(
             "(by default the prior is chosen by three-fold cross-validation over the spots)."
         ),
     ] = False,
+    mask: Annotated[
+        Path | None,
+        typer.Option(
+            help="A label image (PNG or TIFF, one channel of whole numbers, the RGB image's "
+            "size) whose areas of each label are where that label's spectrum was measured "
+            "(0: no spot)."
+        ),
+    ] = None,
     encoding: EncodingOption = None,
     radiance: Annotated[
         bool,
@@ -105,6 +114,7 @@ def spectralize(
     from recon.image_spectralization import (
         camera_response,
         read_linear_rgb,
+        read_spot_mask,
         read_spots_csv,
         spectralize_image,
     )
@@ -120,13 +130,17 @@ def spectralize(
         )
     remove_if_interrupted(ctx, out)
     rgb = read_linear_rgb(image, encoding=None if encoding is None else encoding.value)
-    spots = read_spots_csv(spectra)
+    if mask is None:
+        spots = read_spots_csv(spectra)
+    else:
+        spots = read_spot_mask(spectra, mask, rgb.values)
     curves = camera_response(response)
     result = spectralize_image(rgb.values, spots, curves, fast=fast, progress=not as_json)
     inputs = {
         "image": str(image),
         "image_note": rgb.note,
         "spectra": str(spectra),
+        "mask": None if mask is None else str(mask),
         "response": response,
     }
     summary = write_spectralized_image(
