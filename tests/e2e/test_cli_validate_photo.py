@@ -80,7 +80,7 @@ def inputs(tmp_path_factory) -> Path:
     root = tmp_path_factory.mktemp("validate_photo")
     sky = _sky_spectrum()
     write_spectral_exr(
-        root / "sky.exr", np.broadcast_to(sky, (8, 16, sky.size)).astype(np.float32), DEFAULT_GRID
+        root / "sky.exr", np.broadcast_to(sky, (32, 64, sky.size)).astype(np.float32), DEFAULT_GRID
     )
     # The camera that sees the square's corners at CORNERS; the photograph: the sky, and the
     # grey square of reflectance 0.5 over its interior (uniform light: radiance 0.5 x sky).
@@ -135,6 +135,10 @@ def test_a_btf_of_the_photographed_reflectance_matches_it(inputs, tmp_path):
     assert found["mean_delta_e94_rgb"] < 0.5
     assert metrics["exposure"] == pytest.approx(1.0, rel=0.01)
     assert metrics["corners_reprojection_px"] < 0.01
+    # The BTF's lights reach 60 degrees; a uniform sky sends 1 - sin^2(60) = 25 % of its
+    # cosine-weighted light from beyond.
+    (beyond,) = [e for e in metrics["extrapolated"] if "sky's light from beyond 60 deg" in e]
+    assert 20 <= int(beyond.split(" %")[0]) <= 30, beyond
     assert found["compared_pixels"] > 40  # of 24 x 18 rendered pixels
     assert (tmp_path / "out" / "validation.png").stat().st_size > 20_000
 

@@ -425,6 +425,7 @@ def validate(
         "measured_as": metrics["measured_as"],
         "exposure": metrics["exposure"],
         "corners_reprojection_px": metrics["corners_reprojection_px"],
+        "extrapolated": "; ".join(metrics["extrapolated"]) or "nothing",
         "mean_delta_e94_spectral": found["mean_delta_e94_spectral"],
         "mean_delta_e94_rgb": found["mean_delta_e94_rgb"],
         "median_delta_e94_spectral": found["median_delta_e94_spectral"],

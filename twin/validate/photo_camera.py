@@ -25,6 +25,7 @@ from recon.errors import InputError
 from recon.spectra import SampledSpectra
 from twin.render.spectra import ldsampler, specfilm
 from twin.render.transforms import matrix
+from twin.validate.preview_geometry import SurfaceView
 
 __all__ = ["PhotoCamera", "fov_deg", "recover_camera", "square_corners"]
 
@@ -71,6 +72,17 @@ class PhotoCamera:
         """The unit ray through the image point ``(column, row)`` in the camera's axes."""
         ray = np.array([column - self.width / 2, row - self.height / 2, self.focal_px])
         return ray / np.linalg.norm(ray)
+
+    def sample_surface(self, mask: np.ndarray) -> SurfaceView:
+        """The sample's plane z = 0 at the pixels of ``mask`` ``(height, width)``: their
+        points, normals (+z) and unit directions towards the camera."""
+        rows, columns = np.nonzero(mask)
+        rays = np.array([self.ray(c + 0.5, r + 0.5) for r, c in zip(rows, columns, strict=True)])
+        world = rays.reshape(-1, 3) @ self.rotation  # camera axes to the world's
+        origin = self.position_m
+        points = origin - (origin[2] / world[:, 2])[:, None] * world
+        normals = np.broadcast_to(np.array([0.0, 0.0, 1.0]), points.shape)
+        return SurfaceView(mask, points, normals, -world)
 
     def mitsuba_sensor(self, channels: SampledSpectra, spp: int) -> dict[str, object]:
         """A Mitsuba ``perspective`` sensor of this camera with ``specfilm`` ``channels``

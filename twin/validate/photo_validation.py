@@ -48,6 +48,7 @@ from twin.output_format import dumps
 from twin.render.plugins.btf_bsdf import store_table
 from twin.render.plugins.spectral_envmap import SpectralMap
 from twin.validate.btf_panels import ResponsesOn, render_btf_in_channels, render_btf_spectral
+from twin.validate.btf_preview import extrapolated_directions
 from twin.validate.figure46 import (
     CIE_RGB_FROM_XYZ,
     cie_rgb_on,
@@ -57,7 +58,7 @@ from twin.validate.figure46 import (
 )
 from twin.validate.panels import compare_panels, write_panels
 from twin.validate.photo_camera import PhotoCamera, recover_camera
-from twin.validate.preview_lighting import RGB_MAP_NOTE, read_environment
+from twin.validate.preview_lighting import RGB_MAP_NOTE, map_lighting, read_environment
 from twin.validate.render_back import measured_as
 from twin.validate.sphere_probe import MirrorSphere, unwrap_sphere_photo
 
@@ -358,6 +359,8 @@ def validate_photo(
             f"--pixels: the sample covers {int(mask.sum())} rendered pixels; expected a larger "
             "--pixels or a photograph where the sample is larger"
         )
+    lighting = map_lighting(inputs.environment, "the environment")
+    extrapolated = extrapolated_directions(table, lighting, camera.sample_surface(mask))
     fitted = exposure is None
     if exposure is None:
         photo_y, render_y = photograph_xyz[mask][:, 1], spectral_xyz[mask][:, 1]
@@ -387,6 +390,7 @@ def validate_photo(
             round(float(v), 3) for v in camera.position_m / _SIZE_M
         ],
         "corners_reprojection_px": round(inputs.reprojection_px, 2),
+        "extrapolated": extrapolated,
         "exposure": round(exposure, 6),
         "exposure_fitted": fitted,
         "spp": spp,

@@ -41,6 +41,7 @@ __all__ = [
     "RGB_MAP_NOTE",
     "PreviewLighting",
     "environment_lighting",
+    "map_lighting",
     "radiance_from_linear_srgb",
     "read_environment",
 ]
@@ -265,9 +266,11 @@ def read_environment(path: str | Path) -> tuple[SpectralMap, str | None]:
         raise InputError(f"--environment {path}: {error}") from None
 
 
-def environment_lighting(path: str | Path) -> PreviewLighting:
-    """The light of a lat-long environment map at ``path`` (:func:`read_environment`)."""
-    spectral_map, note = read_environment(path)
+def map_lighting(
+    spectral_map: SpectralMap, description: str, note: str | None = None
+) -> PreviewLighting:
+    """The light of a lat-long map: the map as the environment, its mean radiance as the white,
+    its pixels as the sky."""
     white = spectral_map.radiance.reshape(-1, spectral_map.grid.size)
     weights = spectral_map.solid_angles().ravel()
     mean = weights @ white / weights.sum()
@@ -275,7 +278,13 @@ def environment_lighting(path: str | Path) -> PreviewLighting:
         entries={"environment": spectral_envmap(spectral_map)},
         groups=(),
         white=SampledSpectra(spectral_map.grid, mean),
-        description=f"environment {Path(path).name}",
+        description=description,
         sky=_map_directions(spectral_map),
         note=note,
     )
+
+
+def environment_lighting(path: str | Path) -> PreviewLighting:
+    """The light of a lat-long environment map at ``path`` (:func:`read_environment`)."""
+    spectral_map, note = read_environment(path)
+    return map_lighting(spectral_map, f"environment {Path(path).name}", note)
