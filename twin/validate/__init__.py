@@ -1,6 +1,7 @@
 """Validation of measured BTFs: evaluation against the twin's truth (at the measured pairs and at
 held-out ones), the 45/0 spectrophotometer comparison, the environment map capture, the Figure
-4.6 rendering, the smoke render and the preview of any BTF store.
+4.6 rendering, the validation against a user's photograph from files, the smoke render and the
+preview of any BTF store.
 """
 
 import lazy_loader
@@ -13,6 +14,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "figure46": ["render_figure46"],
         "gonio_evaluation": ["evaluate_gonio"],
         "held_out": ["held_out_errors"],
+        "photo_validation": ["read_photo_inputs", "validate_photo"],
         "preview_lighting": ["PRESETS", "environment_lighting"],
         "render_back": ["validate_btf"],
         "smoke": ["run_smoke"],
