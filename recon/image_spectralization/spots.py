@@ -167,16 +167,18 @@ def read_spot_mask(path: str | Path, mask: str | Path, rgb: np.ndarray) -> SpotS
     labels, spectra = read_spot_table(path, ("label",), "label")
     mask = Path(mask)
     if not mask.is_file():
-        raise InputError(f"--mask {mask}: no such file; expected a label image (PNG or TIFF)")
-    image = read_png_or_tiff(mask, "--mask")
+        raise InputError(
+            f"label image {mask}: no such file; expected a PNG or TIFF of whole-number labels"
+        )
+    image = read_png_or_tiff(mask, "label image")
     if image.ndim != 2 or image.dtype.kind not in "ui":
         raise InputError(
-            f"--mask {mask}: {image.dtype} values of shape {image.shape}; expected one channel of "
-            "whole-number labels (0: no spot)"
+            f"label image {mask}: {image.dtype} values of shape {image.shape}; expected one "
+            "channel of whole-number labels (0: no spot)"
         )
     if image.shape != rgb.shape[:2]:
         raise InputError(
-            f"--mask {mask}: {image.shape[1]} x {image.shape[0]} pixels; expected the RGB "
+            f"label image {mask}: {image.shape[1]} x {image.shape[0]} pixels; expected the RGB "
             f"image's {rgb.shape[1]} x {rgb.shape[0]}"
         )
     xy = []
@@ -184,8 +186,8 @@ def read_spot_mask(path: str | Path, mask: str | Path, rgb: np.ndarray) -> SpotS
         y, x = np.nonzero(image == label)
         if label <= 0 or x.size == 0:
             raise InputError(
-                f"spots {path}: label {label} marks no pixel of --mask {mask}; expected labels "
-                "above 0 that the label image holds"
+                f"spots {path}: label {label} marks no pixel of the label image {mask}; expected "
+                "labels above 0 that the label image holds"
             )
         values = rgb[y, x]
         nearest = np.argmin(np.linalg.norm(values - values.mean(axis=0), axis=1))

@@ -171,7 +171,10 @@ PROBES = [
     (["@crop.png", "--spectra", "@areas.csv", "--mask", "@labels_small.png"], "expected the RGB"),
     (["@crop.png", "--spectra", "@areas.csv", "--mask", "@labels_one.png"], "label 2 marks no"),
     (["@crop.png", "--spectra", "@areas.csv", "--mask", "@labels_rgb.png"], "one channel of"),
-    (["@crop.png", "--spectra", "@areas.csv", "--mask", "@none.png"], "--mask @none.png: no such"),
+    (
+        ["@crop.png", "--spectra", "@areas.csv", "--mask", "@none.png"],
+        "label image @none.png: no such",
+    ),
     (["@crop.png", "--spectra", "@spots.csv", "--mask", "@labels.png"], "expected label then"),
     (["@crop.png", "--interleave", "bip"], "'--interleave'"),
     (["@crop.png", "--encoding", "gamma"], "'--encoding'"),
