@@ -2,9 +2,9 @@
 
 Small BTF stores made by hand (9 x 9 gonioreflectometer-like directions on rings at 0, 30 and
 60 degrees, 4 x 4 texels, 33 bands), rendered at 32 px and 4 spp: both presets on a plane and a
-sphere, a constant reflectance rendering in proportion to it (same seed: the same random
-numbers), an imported RGB BTF, the PCA form, spectral and RGB environment maps; and bad inputs,
-each refused in one line with nothing written."""
+sphere, a cloth, a constant reflectance rendering in proportion to it (same seed: the same
+random numbers), an imported RGB BTF, the PCA form, spectral and RGB environment maps; and bad
+inputs, each refused in one line with nothing written."""
 
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ import cv2
 import numpy as np
 import OpenEXR
 import pytest
+from scipy import ndimage
 from typer.testing import CliRunner
 
 from hwbridge.store import CaptureStore
@@ -24,13 +25,19 @@ from recon.btf.store import BTFStore, write_btf
 from recon.spectra import DEFAULT_GRID, WavelengthGrid
 from recon.spectral_exr import read_spectral_exr, write_spectral_exr
 from twin.cli.app import app
-from twin.validate.preview_geometry import surface_view
+from twin.validate.preview_geometry import Shape, surface_view
 
 pytestmark = pytest.mark.render
 
 runner = CliRunner()
 PIXELS, SPP = 32, 4
-RINGS = ((0.0, 0.0), (30.0, 0.0), (30.0, 90.0), (30.0, 180.0), (30.0, 270.0))
+RINGS: tuple[tuple[float, float], ...] = (
+    (0.0, 0.0),
+    (30.0, 0.0),
+    (30.0, 90.0),
+    (30.0, 180.0),
+    (30.0, 270.0),
+)
 RINGS += ((60.0, 0.0), (60.0, 90.0), (60.0, 180.0), (60.0, 270.0))
 
 
@@ -137,7 +144,7 @@ def _render(store: Path, out: Path, *options: object) -> dict:
     return summary
 
 
-def _sample_mean(out: Path, shape: str) -> np.ndarray:
+def _sample_mean(out: Path, shape: Shape) -> np.ndarray:
     """The spectral EXR's mean over the sample's pixels, per band."""
     image = read_spectral_exr(out / "render.exr")
     assert image.cube.shape == (PIXELS, PIXELS, DEFAULT_GRID.size)
@@ -176,6 +183,45 @@ def test_a_constant_reflectance_renders_in_proportion_to_it(inputs, tmp_path):
     np.testing.assert_allclose(means[1] / means[0], 2.0, rtol=0.01)
 
 
+def test_the_cloth_renders_in_proportion_to_the_reflectance(inputs, tmp_path):
+    """On the cloth too a constant BTF at twice the reflectance renders at twice the radiance,
+    but for the light the cloth throws on itself in its folds (rho squared after one bounce):
+    the ratio is 2 (1 + f) / (1 + f / 2) for the share f of the radiance at rho 0.4 that comes
+    from the cloth, a few per cent."""
+    summaries, means = [], []
+    for rho in (20, 40):
+        summaries.append(
+            _render(inputs / f"rho{rho}.btf.zarr", tmp_path / f"c{rho}", "--shape", "cloth")
+        )
+        means.append(_sample_mean(tmp_path / f"c{rho}", "cloth"))
+    ratio = means[1] / means[0]
+    assert np.all(ratio >= 2.0 * 0.995) and np.all(ratio <= 2.0 * 1.06), ratio
+    mask = surface_view("cloth", PIXELS).mask
+    assert summaries[0]["shape"] == "cloth"
+    assert summaries[0]["sample_pixels"] == mask.sum() > 0.2 * PIXELS**2
+    png = cv2.imread(str(tmp_path / "c40" / "render.png"))
+    assert png.shape == (PIXELS, PIXELS, 3) and png[mask].max() > 0
+    assert (tmp_path / "c40" / "render.exr").is_file()
+    # the rim lamp, behind the rod, meets the cloth's visible side beyond the BTF's largest
+    # light angle (60 degrees) wherever it lights it
+    extrapolated = summaries[0]["extrapolated"]
+    assert "rim beyond 60 deg on 100 % of the lit sample" in extrapolated, extrapolated
+
+
+def test_the_cloth_is_seen_where_its_mask_says(inputs, tmp_path):
+    """The pixels whose radiance doubles with the reflectance are those of the sample's mask,
+    but on its outline (pixels the cloth covers in part)."""
+    for rho in (20, 40):
+        _render(inputs / f"rho{rho}.btf.zarr", tmp_path / f"m{rho}", "--shape", "cloth")
+    low, high = (
+        read_spectral_exr(tmp_path / f"m{rho}" / "render.exr").cube.mean(axis=2) for rho in (20, 40)
+    )
+    doubled = high > 1.5 * low
+    mask = surface_view("cloth", PIXELS).mask
+    assert doubled[ndimage.binary_erosion(mask)].all()
+    assert not doubled[~ndimage.binary_dilation(mask)].any()
+
+
 def test_an_imported_rgb_btf_and_the_pca_form_render(inputs, tmp_path):
     rgb = _render(inputs / "rgb.btf.zarr", tmp_path / "rgb")
     assert rgb["measured_as"].startswith("RGB")
@@ -196,6 +242,12 @@ def test_spectral_and_rgb_environment_maps_light_the_sample(inputs, tmp_path):
     )
     assert "upsampled" in rgb["environment_note"]
     assert np.all(_sample_mean(tmp_path / "f", "plane") > 0)
+
+
+def test_shape_help_lists_the_cloth():
+    result = _run("btf", "render", "--help")
+    assert result.exit_code == 0
+    assert "cloth" in " ".join(result.stdout.split())
 
 
 def _busy(out: Path) -> None:
@@ -234,7 +286,7 @@ BAD = {
         "twice as wide",
         None,
     ),
-    "unknown shape": ("rho20.btf.zarr", ("--shape", "cloth"), "--shape", None),
+    "unknown shape": ("rho20.btf.zarr", ("--shape", "cube"), "--shape", None),
     "pixels 0": ("rho20.btf.zarr", ("--pixels", "0"), "--pixels", None),
     "pixels negative": ("rho20.btf.zarr", ("--pixels", "-8"), "--pixels", None),
     "spp 0": ("rho20.btf.zarr", ("--spp", "0"), "--spp", None),

@@ -222,7 +222,11 @@ def render(
         ),
     ] = None,
     shape: Annotated[
-        str, typer.Option(help="plane (tilted towards the camera) or sphere (UV-mapped).")
+        str,
+        typer.Option(
+            help="plane (tilted towards the camera), sphere (UV-mapped) or cloth (hanging over "
+            "a rod in soft folds, the texture repeated in 4 cm tiles)."
+        ),
     ] = "plane",
     pixels: Annotated[int, typer.Option(help="Image size (square).")] = 256,
     spp: Annotated[
@@ -230,14 +234,16 @@ def render(
     ] = 64,
     as_json: JsonFlag = False,
 ) -> None:
-    """Render a preview of the BTF (its PCA form where the store has one) on a plane or a
-    sphere, spectrally where the BTF is, lit by a preset (studio by default) or an environment
-    map: render.exr (spectral OpenEXR, one channel per band), render.png (sRGB) and render.json
-    (settings, time, the BTF's form, the light and view directions beyond those the BTF sampled).
-    A BTF on a sphere is a preview: the sample's square is stretched round it.
+    """Render a preview of the BTF (its PCA form where the store has one) on a plane, a
+    sphere or a cloth, spectrally where the BTF is, lit by a preset (studio by default) or an
+    environment map: render.exr (spectral OpenEXR, one channel per band), render.png (sRGB) and
+    render.json (settings, time, the BTF's form, the light and view directions beyond those the
+    BTF sampled). A BTF on a sphere is a preview: the sample's square is stretched round it; on
+    the cloth it is repeated in tiles.
 
     Example: spectwin btf render out/lego.btf.zarr --out out/lego_preview --preset daylight
     Example: spectwin btf render corduroy.btf.zarr --out prev --environment room.exr --shape sphere
+    Example: spectwin btf render corduroy.btf.zarr --out drape --shape cloth
     """
     from twin.validate.btf_preview import SHAPES, render_btf_preview
     from twin.validate.preview_lighting import PRESETS, environment_lighting

@@ -1,4 +1,5 @@
-"""Surface parts (:mod:`twin.materials.surfaces`) as Mitsuba shapes, built in memory.
+"""Surface parts (:mod:`twin.materials.surfaces`) and other trimesh meshes as Mitsuba shapes,
+built in memory.
 
 Each part's reflectance goes to Mitsuba as an irregular spectrum, so renders and the noise-free
 truth use exactly the same spectra.
@@ -7,6 +8,7 @@ truth use exactly the same spectra.
 from __future__ import annotations
 
 import numpy as np
+import trimesh
 
 from recon.btf.specular_lobe import COATING_IOR
 from recon.errors import InputError
@@ -15,7 +17,7 @@ from twin.render.render import load_scene
 from twin.render.spectra import irregular_spectrum
 from twin.render.variant import activate
 
-__all__ = ["mitsuba_shape", "part_bsdf"]
+__all__ = ["mesh_shape", "mitsuba_shape", "part_bsdf"]
 
 
 def part_bsdf(part: SurfacePart, *, unit: bool = False) -> dict[str, object]:
@@ -61,25 +63,56 @@ def mitsuba_shape(part: SurfacePart, bsdf=None):
     """A Mitsuba mesh built in memory from ``part`` (no files), with its BSDF attached (or
     ``bsdf``, a loaded Mitsuba BSDF that several shapes may share) and, for a textured part,
     its texture coordinates."""
+    textured = part.texture is not None
+    return mesh_shape(
+        part.name,
+        part.mesh,
+        bsdf if bsdf is not None else load_scene(part_bsdf(part)),
+        uv=texture_coordinates(part.mesh) if textured else None,
+    )
+
+
+def mesh_shape(name: str, mesh: trimesh.Trimesh, bsdf=None, *, uv=None, normals: bool = False):
+    """A Mitsuba mesh built in memory from a trimesh ``mesh`` (no files).
+
+    Parameters
+    ----------
+    name
+        The shape's id.
+    mesh
+        Vertices in metres and triangles.
+    bsdf
+        A loaded Mitsuba BSDF, or ``None`` for Mitsuba's default (diffuse).
+    uv
+        Per-vertex texture coordinates ``(n_vertices, 2)``, or ``None`` for none (Mitsuba's
+        shading frame then does not follow a texture).
+    normals
+        Give the mesh ``mesh.vertex_normals`` (smooth shading) instead of flat faces.
+
+    Returns
+    -------
+    mitsuba.Mesh
+    """
     activate()
     import mitsuba as mi
 
     properties = mi.Properties()
-    properties["bsdf"] = bsdf if bsdf is not None else load_scene(part_bsdf(part))
-    textured = part.texture is not None
-    mesh = mi.Mesh(
-        part.name,
-        len(part.mesh.vertices),
-        len(part.mesh.faces),
+    if bsdf is not None:
+        properties["bsdf"] = bsdf
+    shape = mi.Mesh(
+        name,
+        len(mesh.vertices),
+        len(mesh.faces),
         props=properties,
-        has_vertex_normals=False,
-        has_vertex_texcoords=textured,
+        has_vertex_normals=normals,
+        has_vertex_texcoords=uv is not None,
     )
-    parameters = mi.traverse(mesh)
-    parameters["vertex_positions"] = mi.Float(np.asarray(part.mesh.vertices, np.float32).ravel())
-    parameters["faces"] = mi.UInt32(np.asarray(part.mesh.faces, np.uint32).ravel())
-    if textured:
-        uv = texture_coordinates(part.mesh)
+    parameters = mi.traverse(shape)
+    parameters["vertex_positions"] = mi.Float(np.asarray(mesh.vertices, np.float32).ravel())
+    parameters["faces"] = mi.UInt32(np.asarray(mesh.faces, np.uint32).ravel())
+    if normals:
+        parameters["vertex_normals"] = mi.Float(np.asarray(mesh.vertex_normals, np.float32).ravel())
+    if uv is not None:
         parameters["vertex_texcoords"] = mi.Float(np.asarray(uv, np.float32).ravel())
     parameters.update()
-    return mesh
+    return shape

@@ -2,11 +2,13 @@
 
 The BTF (gonioreflectometer, dome or imported; its PCA form where the store has one, else its
 pairs decoded with the specular lobes fitted per texel, as ``spectwin validate`` renders them:
-:func:`twin.render.plugins.btf_bsdf.store_table`) is put on a plane tilted towards the camera
-or on a sphere (:mod:`twin.validate.preview_geometry`) and lit by a preset or an environment map
+:func:`twin.render.plugins.btf_bsdf.store_table`) is put on a plane tilted towards the camera,
+on a sphere or on a cloth hanging over a grey rod (:mod:`twin.validate.preview_geometry`,
+:mod:`twin.validate.preview_cloth`) and lit by a preset or an environment map
 (:mod:`twin.validate.preview_lighting`). A BTF sample on a sphere is a preview only: the
 measured square is wrapped round it by the sphere's UV mapping, stretched along the equator and
-pinched at the poles.
+pinched at the poles. On the cloth it is repeated in tiles of 4 cm, unstretched, its seams
+visible where the texture does not tile.
 
 The image is rendered spectrally (Mitsuba's path tracer, at most 4 bounces, below its Russian
 roulette, so that two BTFs are rendered with the same random numbers: the BSDF samples the cosine
@@ -39,11 +41,15 @@ from recon.progress import progress_steps
 from recon.spectra import SampledSpectra, WavelengthGrid, resample
 from recon.spectral_exr import write_spectral_exr
 from twin.components.lamps import FINE_GRID
+from twin.materials.surfaces import texture_coordinates
 from twin.output_format import dumps
 from twin.render.light_groups import group_seed, render_lit
 from twin.render.plugins.btf_bsdf import BTFTable, CompressedTable, btf_bsdf, store_table
+from twin.render.render import load_scene
+from twin.render.shapes import mesh_shape
 from twin.render.spectra import rendered_spp
 from twin.render.transforms import rotate, scale
+from twin.validate.preview_cloth import ROD_HEIGHT_M, ROD_RADIUS_M, cloth_mesh
 from twin.validate.preview_geometry import (
     PLANE_TILT_DEG,
     SAMPLE_SIZE_M,
@@ -60,8 +66,10 @@ from twin.validate.render_back import measured_as
 
 __all__ = ["SHAPES", "band_channels", "extrapolated_directions", "render_btf_preview"]
 
-SHAPES: tuple[Shape, ...] = ("plane", "sphere")
+SHAPES: tuple[Shape, ...] = ("plane", "sphere", "cloth")
 MAX_DEPTH = 4
+_ROD_LENGTH_M = 0.15
+"""The cloth's rod (grey, reflectance 0.3), its ends beyond the cloth's edges."""
 _TOLERANCE_DEG = 0.5
 _MAX_SKY_POINTS = 2000
 
@@ -83,14 +91,30 @@ def band_channels(grid: WavelengthGrid) -> SampledSpectra:
     return SampledSpectra(FINE_GRID, values, names)
 
 
-def _sample_entry(shape: Shape, table: BTFTable | CompressedTable) -> dict[str, object]:
+def _sample_entries(shape: Shape, table: BTFTable | CompressedTable) -> dict[str, object]:
+    """The sample's scene entries: the shape with the BTF (and the cloth's rod)."""
     bsdf = btf_bsdf(table)
     if shape == "sphere":
-        return {"type": "sphere", "radius": SPHERE_RADIUS_M, "bsdf": bsdf}
+        return {"sample": {"type": "sphere", "radius": SPHERE_RADIUS_M, "bsdf": bsdf}}
+    if shape == "cloth":
+        mesh = cloth_mesh()
+        ends = [[sign * _ROD_LENGTH_M / 2, 0.0, ROD_HEIGHT_M] for sign in (-1, 1)]
+        rod = {
+            "type": "cylinder",
+            "p0": ends[0],
+            "p1": ends[1],
+            "radius": ROD_RADIUS_M - 0.001,
+            "bsdf": {"type": "diffuse", "reflectance": {"type": "uniform", "value": 0.3}},
+        }
+        uv = texture_coordinates(mesh)
+        sample = mesh_shape("sample", mesh, load_scene(bsdf), uv=uv, normals=True)
+        return {"sample": sample, "rod": rod}
     return {
-        "type": "rectangle",
-        "to_world": rotate([1, 0, 0], PLANE_TILT_DEG) @ scale(SAMPLE_SIZE_M / 2),
-        "bsdf": bsdf,
+        "sample": {
+            "type": "rectangle",
+            "to_world": rotate([1, 0, 0], PLANE_TILT_DEG) @ scale(SAMPLE_SIZE_M / 2),
+            "bsdf": bsdf,
+        }
     }
 
 
@@ -197,7 +221,7 @@ def render_btf_preview(
     lighting
         The light (:mod:`twin.validate.preview_lighting`).
     shape
-        ``"plane"`` or ``"sphere"``.
+        ``"plane"``, ``"sphere"`` or ``"cloth"``.
     pixels
         Image size (square).
     spp
@@ -223,7 +247,7 @@ def render_btf_preview(
     grid = table.grid
     channels = band_channels(grid)
     camera = preview_camera(pixels)
-    entries = {**lighting.entries, "sample": _sample_entry(shape, table)}
+    entries = {**lighting.entries, **_sample_entries(shape, table)}
 
     total = rendered_spp(spp)
     passes = 4 if total >= 16 else 1

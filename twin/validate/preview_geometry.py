@@ -2,11 +2,15 @@
 directions of its lights and views lie beyond those the BTF sampled.
 
 The sample lies at the origin: a plane of :data:`SAMPLE_SIZE_M` square tilted by
-:data:`PLANE_TILT_DEG` about +x towards the camera, or a sphere of radius
-:data:`SPHERE_RADIUS_M` (its UV mapping: ``u`` the azimuth, ``v`` the polar angle). The camera
-looks at the origin from :data:`CAMERA_POSITION_M`. Rays through the pixel centres, cast here in
-NumPy, give every pixel that sees the sample, its normal and its view direction without a render:
-the mask of the sample in the image and the polar angles the BTF is looked up at.
+:data:`PLANE_TILT_DEG` about +x towards the camera, a sphere of radius :data:`SPHERE_RADIUS_M`
+(its UV mapping: ``u`` the azimuth, ``v`` the polar angle), or a cloth hanging over a rod along
++x (:mod:`twin.validate.preview_cloth`: the texture repeated in tiles). The camera looks at the
+origin from :data:`CAMERA_POSITION_M`. Rays through the pixel centres give every pixel that sees
+the sample, its normal and its view direction without a render: the mask of the sample in the
+image and the polar angles the BTF is looked up at. They are cast in NumPy on the plane and the
+sphere, by Mitsuba's ray tracer on the cloth's mesh (:func:`twin.render.ray_cast.first_hits`:
+its normals are those the renderer shades with). The rod (inside the cloth, its ends beyond the
+cloth's edges) hides no part of the cloth from the camera.
 
 The BSDF (:mod:`twin.render.plugins.btf_bsdf`) uses the nearest measured direction outside the
 hull of the BTF's directions; this module reports the directions beyond the largest polar angle
@@ -21,7 +25,9 @@ from typing import Literal
 
 import numpy as np
 
+from twin.render.ray_cast import first_hits
 from twin.render.scene import PinholeCamera
+from twin.validate.preview_cloth import cloth_mesh
 
 __all__ = [
     "CAMERA_POSITION_M",
@@ -35,7 +41,7 @@ __all__ = [
     "surface_view",
 ]
 
-Shape = Literal["plane", "sphere"]
+Shape = Literal["plane", "sphere", "cloth"]
 
 CAMERA_POSITION_M = np.array([0.0, -0.30, 0.22])
 """The camera, 37 degrees above the horizon, 0.37 m from the sample."""
@@ -46,7 +52,8 @@ PLANE_TILT_DEG = 25.0
 """The plane's tilt about +x towards the camera (its normal leans to -y)."""
 SPHERE_RADIUS_M = 0.05
 GROUND_Z_M = -0.051
-"""Height of the ground under the sample (just below the sphere and the tilted plane)."""
+"""Height of the ground under the sample (just below the sphere, the tilted plane and the
+cloth's hem)."""
 
 
 def preview_camera(pixels: int) -> PinholeCamera:
@@ -92,7 +99,7 @@ def surface_view(shape: Shape, pixels: int) -> SurfaceView:
     Parameters
     ----------
     shape
-        ``"plane"`` or ``"sphere"``.
+        ``"plane"``, ``"sphere"`` or ``"cloth"``.
     pixels
         Image size.
 
@@ -103,24 +110,39 @@ def surface_view(shape: Shape, pixels: int) -> SurfaceView:
     camera = preview_camera(pixels)
     origin = camera.position_m
     rays = _pixel_rays(camera)
-    if shape == "plane":
-        normal = plane_normal()
-        distance = -(origin @ normal) / (rays @ normal)
-        points = origin + distance[:, None] * rays
-        tilt = np.radians(PLANE_TILT_DEG)
-        along_y = points[:, 1] * np.cos(tilt) + points[:, 2] * np.sin(tilt)
-        half = SAMPLE_SIZE_M / 2
-        hit = (distance > 0) & (np.abs(points[:, 0]) <= half) & (np.abs(along_y) <= half)
-        normals = np.broadcast_to(normal, points.shape)
-    else:
-        b = rays @ origin
-        discriminant = b**2 - (origin @ origin - SPHERE_RADIUS_M**2)
-        distance = -b - np.sqrt(np.maximum(discriminant, 0.0))
-        hit = (discriminant > 0) & (distance > 0)
-        points = origin + distance[:, None] * rays
-        normals = points / SPHERE_RADIUS_M
-    views = -rays[hit]
-    return SurfaceView(hit.reshape(pixels, pixels), points[hit], normals[hit], views)
+    hit, points, normals = _HITS[shape](np.broadcast_to(origin, rays.shape), rays)
+    return SurfaceView(hit.reshape(pixels, pixels), points, normals, -rays[hit])
+
+
+def _plane_hits(origins: np.ndarray, rays: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    normal = plane_normal()
+    distance = -np.sum(origins * normal, axis=1) / (rays @ normal)
+    points = origins + distance[:, None] * rays
+    tilt = np.radians(PLANE_TILT_DEG)
+    along_y = points[:, 1] * np.cos(tilt) + points[:, 2] * np.sin(tilt)
+    half = SAMPLE_SIZE_M / 2
+    hit = (distance > 0) & (np.abs(points[:, 0]) <= half) & (np.abs(along_y) <= half)
+    return hit, points[hit], np.broadcast_to(normal, points[hit].shape)
+
+
+def _sphere_hits(
+    origins: np.ndarray, rays: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    b = np.sum(rays * origins, axis=1)
+    discriminant = b**2 - (np.sum(origins**2, axis=1) - SPHERE_RADIUS_M**2)
+    distance = -b - np.sqrt(np.maximum(discriminant, 0.0))
+    hit = (discriminant > 0) & (distance > 0)
+    points = origins[hit] + distance[hit, None] * rays[hit]
+    return hit, points, points / SPHERE_RADIUS_M
+
+
+def _cloth_hits(origins: np.ndarray, rays: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    return first_hits(cloth_mesh(), origins, rays)
+
+
+_HITS = {"plane": _plane_hits, "sphere": _sphere_hits, "cloth": _cloth_hits}
+"""Per shape: which rays ``(n, 3)`` from ``origins`` ``(n, 3)`` meet the sample, and where
+they do the points and unit normals."""
 
 
 def polar_deg(normals: np.ndarray, directions: np.ndarray) -> np.ndarray:
