@@ -45,10 +45,10 @@ def _run(*arguments):
     return runner.invoke(app, [str(argument) for argument in arguments], prog_name="spectwin")
 
 
-def _store(path: Path, spectrum: np.ndarray, material: str) -> Path:
+def _store(path: Path, spectrum: np.ndarray, material: str, texels: int = 8) -> Path:
     """A BTF of one Lambertian spectrum (reflectance ``spectrum`` over pi) on every texel."""
     lights, views = np.meshgrid(np.arange(len(DIRECTIONS)), np.arange(len(DIRECTIONS)))
-    values = np.broadcast_to(spectrum / np.pi, (lights.size, 8, 8, DEFAULT_GRID.size))
+    values = np.broadcast_to(spectrum / np.pi, (lights.size, texels, texels, DEFAULT_GRID.size))
     write_btf(
         path,
         np.ascontiguousarray(values, np.float32),
@@ -175,10 +175,13 @@ def test_the_light_from_a_mirror_sphere(inputs, tmp_path):
     assert "mirror sphere" in metrics["environment_note"]
 
 
-@pytest.mark.parametrize("material", ["lego", "wallpaper", "red_fabric"])
+@pytest.mark.parametrize("material", ["lego", "wallpaper", "red_fabric", "colorchecker16"])
 def test_the_file_path_gives_the_twin_paths_delta_e(inputs, tmp_path, material):
     store = _store(
-        tmp_path / f"{material}.btf.zarr", np.linspace(0.2, 0.6, DEFAULT_GRID.size), material
+        tmp_path / f"{material}.btf.zarr",
+        np.linspace(0.2, 0.6, DEFAULT_GRID.size),
+        material,
+        texels=16,  # a chart field's 45/0 spot holds a texel
     )
     twin = _validate(store, tmp_path / "twin", "--map-height", 8, "--spp", 16)
     replay = twin["photo_inputs"]
@@ -199,7 +202,10 @@ def test_the_file_path_gives_the_twin_paths_delta_e(inputs, tmp_path, material):
         16,
     )
     assert photo["corners_reprojection_px"] < 0.01
-    for key in ("mean_delta_e94_spectral", "mean_delta_e94_rgb", "median_delta_e94_spectral"):
+    keys = ["mean_delta_e94_spectral", "mean_delta_e94_rgb", "median_delta_e94_spectral"]
+    if material == "colorchecker16":  # the chart's per-field figures, from files too
+        keys += ["field_mean_delta_e94_spectral", "field_mean_delta_e94_rgb"]
+    for key in keys:
         assert photo["validation"][key] == pytest.approx(twin["figure46"][key], rel=0.02), key
     assert photo["validation"]["compared_pixels"] == twin["figure46"]["compared_pixels"]
 

@@ -44,7 +44,7 @@ from twin.render.transforms import look_at, rotate, scale, translate
 from twin.validate.btf_panels import PANEL_SEED, render_btf_in_channels, render_btf_spectral
 from twin.validate.envmap_capture import capture_mirror_sphere
 from twin.validate.panels import Panels, compare_panels, polygon_mask
-from twin.validate.photo_camera import square_corners
+from twin.validate.photo_camera import PhotoCamera, square_corners
 
 __all__ = [
     "CIE_RGB_FROM_XYZ",
@@ -169,34 +169,41 @@ class Figure46:
     environment: SpectralMap
 
 
-def field_interiors(material: Material, pixels: int, interior: float = 0.5) -> np.ndarray:
-    """``(n_fields, H, W)`` image masks of the central ``interior`` of every chart field's top
-    face (the comparison leaves out field edges, where the flat BTF square and the raised fields
-    of the true material differ by parallax)."""
-    camera = photograph_camera(pixels)
+def field_interiors(
+    material: Material, camera: PinholeCamera | PhotoCamera, size_m: float | None = None
+) -> np.ndarray:
+    """``(n_fields, H, W)`` image masks of the central half of every chart field's top face as
+    ``camera`` sees it (the comparison leaves out field edges, where the flat BTF square and the
+    raised fields of the true material differ by parallax); ``size_m``: the side the camera's
+    world gives the sample (default the material's own)."""
+    scale = 1.0 if size_m is None else size_m / material.size_m
     masks = []
     for part in (p for p in material.parts if p.name.startswith("field_")):
         low, high = part.mesh.bounds
-        middle, half = (low + high) / 2, interior * (high - low) / 2
+        middle, half = (low + high) / 2, 0.25 * (high - low)
         corners = np.array(
             [
                 [middle[0] + sx * half[0], middle[1] + sy * half[1], high[2]]
                 for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))
             ]
         )
-        masks.append(polygon_mask(camera.project(corners), pixels, pixels))
-    return np.stack(masks) if masks else np.zeros((0, pixels, pixels), bool)
+        masks.append(polygon_mask(camera.project(scale * corners), *_image_size(camera)))
+    width, height = _image_size(camera)
+    return np.stack(masks) if masks else np.zeros((0, height, width), bool)
 
 
-def sample_interior(camera, size_m: float) -> np.ndarray:
-    """``(H, W)`` the pixels of ``camera`` (a :class:`PinholeCamera` or
-    :class:`twin.validate.photo_camera.PhotoCamera`) inside the central
-    :data:`SAMPLE_INTERIOR` of the sample's square: the region compared on a material without
-    chart fields."""
-    corners = camera.project(square_corners(SAMPLE_INTERIOR * size_m))
+def _image_size(camera: PinholeCamera | PhotoCamera) -> tuple[int, int]:
+    """``(width, height)`` of ``camera``'s image."""
     if isinstance(camera, PinholeCamera):
-        return polygon_mask(corners, camera.pixels, camera.pixels)
-    return polygon_mask(corners, camera.width, camera.height)
+        return camera.pixels, camera.pixels
+    return camera.width, camera.height
+
+
+def sample_interior(camera: PinholeCamera | PhotoCamera, size_m: float) -> np.ndarray:
+    """``(H, W)`` the pixels of ``camera`` inside the central :data:`SAMPLE_INTERIOR` of the
+    sample's square: the region compared on a material without chart fields."""
+    corners = camera.project(square_corners(SAMPLE_INTERIOR * size_m))
+    return polygon_mask(corners, *_image_size(camera))
 
 
 def diffuse_white(environment: SpectralMap, responses: np.ndarray) -> np.ndarray:
@@ -247,7 +254,7 @@ def render_figure46(
         render_btf_in_channels(camera, table, environment, material.size_m, cie_rgb_on, spp=spp),
     )
     white = diffuse_white(environment, cmfs_on(environment.grid).T)
-    fields = field_interiors(material, pixels)
+    fields = field_interiors(material, camera)
     if len(fields):
         glossy = np.array(
             [p.roughness is not None for p in material.parts if p.name.startswith("field_")]

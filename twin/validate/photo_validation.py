@@ -44,6 +44,7 @@ from recon.image_spectralization import camera_response, read_linear_rgb
 from recon.rgb_upsampling import reduce_image
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid, resample
 from twin.components.lamps import FINE_GRID, cie_illuminant
+from twin.materials import load_material
 from twin.output_format import dumps
 from twin.render.plugins.btf_bsdf import store_table
 from twin.render.plugins.spectral_envmap import SpectralMap
@@ -54,6 +55,7 @@ from twin.validate.figure46 import (
     cie_rgb_on,
     cmfs_on,
     diffuse_white,
+    field_interiors,
     sample_interior,
 )
 from twin.validate.panels import compare_panels, write_panels
@@ -304,6 +306,21 @@ def _camera_to_xyz(on: ResponsesOn, light: np.ndarray, grid: WavelengthGrid) -> 
     return np.linalg.lstsq(stimuli @ on(grid).T, stimuli @ cmfs_on(grid), rcond=None)[0].T
 
 
+def _chart_fields(material_name: str, camera: PhotoCamera) -> dict[str, np.ndarray]:
+    """The field interiors and glossiness of the twin's chart the store names, where it names
+    one and every field is in view: compared as the twin's Figure 4.6 compares them (per pixel
+    over the matte fields' interiors, and per field)."""
+    try:
+        material = load_material(material_name)
+    except InputError:
+        return {}
+    fields = field_interiors(material, camera, _SIZE_M)
+    if not len(fields) or not fields.any(axis=(1, 2)).all():
+        return {}
+    glossy = [p.roughness is not None for p in material.parts if p.name.startswith("field_")]
+    return {"fields": fields, "glossy": np.array(glossy)}
+
+
 def validate_photo(
     btf_path: str | Path,
     inputs: PhotoInputs,
@@ -353,7 +370,10 @@ def validate_photo(
     timings["rgb_s"] = round(time.perf_counter() - start, 1)
     spectral_xyz, rgb_xyz = spectral @ paths.film_to_xyz.T, rgb @ paths.rgb_to_xyz.T
     photograph_xyz = inputs.photograph @ paths.photo_to_xyz.T
-    mask = sample_interior(camera, _SIZE_M)
+    chart = _chart_fields(btf.material, camera)
+    mask, region = sample_interior(camera, _SIZE_M), "sample"
+    if chart:  # as the twin's Figure 4.6: the matte fields' interiors
+        mask, region = chart["fields"][~chart["glossy"]].any(axis=0), "matte fields"
     if mask.sum() < 4:
         raise InputError(
             f"--pixels: the sample covers {int(mask.sum())} rendered pixels; expected a larger "
@@ -373,7 +393,9 @@ def validate_photo(
     white = paths.film_to_xyz @ diffuse_white(
         inputs.environment, paths.film_on(inputs.environment.grid)
     )
-    panels = compare_panels(photograph_xyz / exposure, spectral_xyz, rgb_xyz, white, mask, "sample")
+    panels = compare_panels(
+        photograph_xyz / exposure, spectral_xyz, rgb_xyz, white, mask, region, **chart
+    )
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     write_panels(panels, out / "validation.png")

@@ -149,7 +149,7 @@ def validate_btf(
             f"{btf_path}: its {btf.texels[0]} texels leave chart fields without a texel in the "
             "45/0 measuring spot; process the capture with --texels 16 or more"
         )
-    field_pixels = field_interiors(material, pixels).reshape(-1, pixels * pixels).sum(axis=1)
+    field_pixels = field_interiors(material, photograph_camera(pixels)).sum(axis=(1, 2))
     if chart and not field_pixels.all():
         raise InputError(
             f"pixels: {pixels} px leave chart fields of {btf.material!r} without an interior "
