@@ -49,7 +49,10 @@ __all__ = [
 ]
 
 FOLDS = 3
-"""Folds of the cross-validation that chooses the prior and measures every spot's error."""
+"""Folds of the cross-validation that chooses the prior and measures every spot's error. Two
+folds would save a third of its solves but picked the worse prior on 2 of the 13 cases of
+``benchmarks/spectralize_real.py`` (seed 0) where three and five folds picked the better one
+(BENCHMARKS.md, "Spectralizing a user's image")."""
 MIN_SPOTS = 2 * FOLDS
 """Fewest spots: two per fold."""
 MIN_COVERAGE = 0.95

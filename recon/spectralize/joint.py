@@ -45,14 +45,14 @@ def _same_matrices(
 
 
 def _spectra(
-    problem: SpectralizationProblem, scaled: np.ndarray, shape: tuple[int, ...]
+    problem: SpectralizationProblem, scaled: np.ndarray, rows: slice | np.ndarray
 ) -> np.ndarray:
-    """The spectra of a solution for the scaled unknowns :math:`X` (Eq. 10.2 undone)."""
+    """The spectra of the scaled unknowns :math:`X` at the pixels ``rows`` (Eq. 10.2 undone)."""
     if problem.base is not None:
-        scaled = scaled + problem.base
+        scaled = scaled + problem.base[rows]
     if np.any(problem.scale != 1.0):
-        scaled = scaled / problem.scale[:, None]
-    return scaled.reshape(*shape, problem.n_bands)
+        scaled = scaled / problem.scale[rows, None]
+    return scaled
 
 
 def reconstruct_priors(
@@ -60,6 +60,7 @@ def reconstruct_priors(
     response: np.ndarray,
     *,
     priors: Sequence[str] = PRIORS,
+    at_pixels: np.ndarray | None = None,
     tol: float = 1e-6,
     max_iterations: int = 500,
     **energy: Any,
@@ -73,6 +74,11 @@ def reconstruct_priors(
     priors
         The priors to reconstruct with (distinct names of
         :data:`recon.spectralize.solve.PRIORS`).
+    at_pixels
+        Optional flat pixel indices (over the leading shape of ``rgb``) at which to return the
+        spectra: the held-out spots of a fold of :func:`recon.spectralize.choose_prior`, which
+        needs no other pixel. The solve is the same; the spectra of the other pixels are not
+        assembled from it.
     tol, max_iterations
         As in :func:`~recon.spectralize.solve.reconstruct` (the joint solve's tolerance holds
         for the columns of both priors together).
@@ -83,7 +89,8 @@ def reconstruct_priors(
     Returns
     -------
     dict
-        Per prior, the spectra with the leading shape of ``rgb`` and ``K`` bands.
+        Per prior, the spectra with the leading shape of ``rgb`` and ``K`` bands, or ``(m, K)``
+        at the ``m`` pixels ``at_pixels``.
 
     Examples
     --------
@@ -104,13 +111,22 @@ def reconstruct_priors(
     if unknown or len(set(priors)) != len(priors) or not priors:
         raise InputError(f"priors: expected distinct names among {PRIORS}, got {list(priors)}")
     shape = tuple(np.shape(rgb)[:-1])
+    pixels = None if at_pixels is None else np.asarray(at_pixels)
+    rows = slice(None) if pixels is None else pixels
+
+    def shaped(spectra: np.ndarray) -> np.ndarray:
+        """Spectra at ``rows``, ``(m, K)``, with the leading shape of ``rgb`` if all pixels."""
+        return spectra.reshape(*shape, -1) if pixels is None else spectra
+
     problems = [build_problem(rgb, response, prior=prior, **energy) for prior in priors]
     parts = [problem.kronecker_parts() for problem in problems]
     if any(part is None for part in parts) or not _same_matrices(parts):  # type: ignore[arg-type]
         return {
-            prior: reconstruct(
-                rgb, response, prior=prior, tol=tol, max_iterations=max_iterations, **energy
-            ).spectra
+            prior: shaped(
+                reconstruct(
+                    rgb, response, prior=prior, tol=tol, max_iterations=max_iterations, **energy
+                ).spectra.reshape(problems[0].n_pixels, -1)[rows]
+            )
             for prior in priors
         }
     solved = [part for part in parts if part is not None]
@@ -126,9 +142,10 @@ def reconstruct_priors(
         rhs,
         rtol=tol,
         max_iterations=max_iterations,
+        rows=pixels,
     )
     bands = problems[0].n_bands
     return {
-        prior: _spectra(problem, joint[:, index * bands : (index + 1) * bands], shape)
+        prior: shaped(_spectra(problem, joint[:, index * bands : (index + 1) * bands], rows))
         for index, (prior, problem) in enumerate(zip(priors, problems, strict=True))
     }

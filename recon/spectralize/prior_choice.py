@@ -11,10 +11,10 @@ leaves every fifth spot out in turn, reconstructs the image with each prior from
 and keeps the prior with the smaller mean relative error (Eq. 6.8) over all spots, each predicted
 while it was left out (push-broom lines are cut into segments first). It costs ``folds``
 solves, each of both priors together (:func:`recon.spectralize.joint.reconstruct_priors`: one
-Kronecker solve with twice the columns), on the appearance graph found once for the image
-(:func:`recon.spectralize.solve.neighbour_graph`). ``folds=3`` is the cheap setting of
-``spectwin spectralize``; BENCHMARKS.md, "Spectralizing a user's image", measures its cost
-against a single solve.
+Kronecker solve with twice the columns, its spectra assembled at the held-out spots only), on
+the appearance graph found once for the image (:func:`recon.spectralize.solve.neighbour_graph`).
+``folds=3`` is the cheap setting of ``spectwin spectralize``; BENCHMARKS.md, "Spectralizing a
+user's image", measures its cost against a single solve.
 
 On the 21 mosaic and real-image cases of ``benchmarks/spectralize_real.py`` a single held-out
 fold chose the worse prior 8 times (once losing the 30 % margin over the best peer), five folds
@@ -181,12 +181,12 @@ def choose_prior(
                 images,
                 response,
                 point_spectra=PointSpectra(pixels[~held_out], spectra[~held_out]),
+                at_pixels=pixels[held_out],
                 graph=graph,
                 **options,
             )
             for prior, estimate in estimates.items():
-                known = estimate.reshape(-1, spectra.shape[1])[pixels[held_out]]
-                predicted[prior][held_out] = known
+                predicted[prior][held_out] = estimate
             advance()
     pixel_errors = {prior: relative_error(predicted[prior], spectra) for prior in PRIORS}
     errors = {prior: float(np.mean(values)) for prior, values in pixel_errors.items()}

@@ -157,6 +157,22 @@ def test_both_priors_solved_jointly_match_each_solved_alone(span_of_three):
         np.testing.assert_allclose(jointly[prior], alone, rtol=0, atol=1e-6 * truth.max())
 
 
+def test_both_priors_at_held_out_pixels_are_those_rows_of_the_whole_images(span_of_three):
+    """What a fold of ``choose_prior`` asks for: the spectra at the held-out pixels only, the
+    same as those rows of the whole reconstructions."""
+    truth, response, pixels, spectra = span_of_three
+    rgb, held_out = truth @ response, np.arange(pixels.size) % 3 == 0
+    known = PointSpectra(pixels[~held_out], spectra[~held_out])
+    whole = reconstruct_priors(rgb, response, point_spectra=known, **OPTIONS)
+    at_spots = reconstruct_priors(
+        rgb, response, point_spectra=known, at_pixels=pixels[held_out], **OPTIONS
+    )
+    for prior, image in whole.items():
+        assert at_spots[prior].shape == (held_out.sum(), truth.shape[-1])
+        rows = image.reshape(-1, truth.shape[-1])[pixels[held_out]]
+        np.testing.assert_allclose(at_spots[prior], rows, rtol=1e-12, atol=1e-12 * truth.max())
+
+
 def test_the_neutral_is_held_where_the_spots_say_nothing_of_it(span_of_three):
     """Spots of the three basis mixtures say nothing of a flat spectrum added to them (the
     dichromatic model's neutral interface reflection): held in the regression base
