@@ -53,6 +53,7 @@ from recon.btf.staging import staged
 from recon.btf.store import BTFStore
 from recon.errors import InputError
 from recon.image_spectralization import camera_response
+from recon.image_spectralization.camera_fit import MAX_DEGREE
 from recon.image_spectralization.run import solve_grid
 from recon.progress import progress_steps
 from recon.rgb_upsampling import read_srgb_image, reduce_image, upsample_srgb
@@ -154,6 +155,8 @@ def import_rgb_images(
     spectra: str | Path | None = None,
     response: str | None = None,
     measuring_spot: MeasuringSpot | None = None,
+    camera_degree: int = MAX_DEGREE,
+    neutral: bool = True,
     progress: bool = False,
 ) -> BTFStore:
     """Read an RGB BTF into a new spectral BTF store, upsampled or, given spot spectra,
@@ -187,6 +190,10 @@ def import_rgb_images(
         ``wavelength_nm,R,G,B`` (:func:`recon.image_spectralization.camera_response`).
     measuring_spot
         With a reading: its measuring spot on the stored texture; None: the whole texture.
+    camera_degree, neutral
+        With spots: the camera term's highest degree and the neutral highlight of
+        :func:`recon.btf.rgb_spectralization.spectralize_rgb_btf` (0 and False: a gain per
+        channel and a free base).
 
     Returns
     -------
@@ -212,7 +219,9 @@ def import_rgb_images(
         raise InputError(f"scale: {scale}; a spectralized import takes its scale from the spots")
     images = open_rgb_images(source)
     first, factor = _reduced(images.read(0), texels)
-    spectralize = _spectralizer(spectra, response, measuring_spot, images, first.shape[:2])
+    spectralize = _spectralizer(
+        spectra, response, measuring_spot, images, first.shape[:2], camera_degree, neutral
+    )
     source_attrs: dict[str, Any] = {
         "colour_space": "sRGB" if spectralize is None else "camera RGB",
         "layout": images.layout,
@@ -274,6 +283,8 @@ def _spectralizer(
     measuring_spot: MeasuringSpot | None,
     images: RGBImageSet,
     shape: tuple[int, int],
+    camera_degree: int,
+    neutral: bool,
 ) -> _Spectralizer | None:
     """What spectralizes the stacked linear images from the spots or the 45/0 reading and
     gives the ``rgb_source.spectralized`` attribute (``recon.btf.schema.SpotSource``), after
@@ -303,7 +314,10 @@ def _spectralizer(
             "spot_pairs": sorted({int(pair) for pair in spots.where[:, 0]}),
             "prior": PRIOR,
         }
-        return lambda stack: _recorded(spectralize_rgb_btf(stack, spots, curves), record)
+        return lambda stack: _recorded(
+            spectralize_rgb_btf(stack, spots, curves, camera_degree=camera_degree, neutral=neutral),
+            record,
+        )
     pair, _ = reading_pair(images.light_dirs(), images.view_dirs())
     spot = measuring_spot or MeasuringSpot(0, 0, shape[1], shape[0])
     spot.texels(shape)

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from recon.errors import InputError
-from recon.image_spectralization.camera_fit import camera_term
+from recon.image_spectralization.camera_fit import MAX_DEGREE, camera_term
 from recon.image_spectralization.spots import SpotSpectra
 from recon.spectra import SampledSpectra, WavelengthGrid, resample
 from recon.spectralize import choose_prior
@@ -165,6 +165,7 @@ def spectralize_image(
     response: SampledSpectra,
     *,
     fast: bool = False,
+    camera_degree: int = MAX_DEGREE,
     tol: float = 1e-6,
     progress: bool = False,
 ) -> ImageSpectralization:
@@ -180,6 +181,9 @@ def spectralize_image(
         ``(3, K')`` the camera's spectral response, rows R, G, B, any scale.
     fast
         The thesis's prior without cross-validation (no spot errors).
+    camera_degree
+        Highest degree of the camera term's smooth factor per channel
+        (:func:`recon.image_spectralization.camera_fit.camera_term`); 0: a gain per channel.
     tol
         Relative residual of the solves (:func:`recon.spectralize.solve.reconstruct`).
     progress
@@ -205,7 +209,7 @@ def spectralize_image(
     grid, notes = solve_grid(spots.spectra, response)
     spectra = resample(spots.spectra, grid, method="box" if notes else "linear").values
     flat = rgb.reshape(-1, 3)
-    camera = camera_term(response, grid, flat[pixels], spectra)
+    camera = camera_term(response, grid, flat[pixels], spectra, max_degree=camera_degree)
     r_cam = camera.matrix
     started = time.perf_counter()
     graph = neighbour_graph(rgb, appearance="rgbxy", neighbours=3)

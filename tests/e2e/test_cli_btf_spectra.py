@@ -132,6 +132,23 @@ def test_spectralized_import_beats_jakob_and_is_flagged(btf, tmp_path):
     assert spectral_error * JAKOB_MARGIN < jakob_error, (spectral_error, jakob_error)
 
 
+def test_the_switches_back_to_gains_and_a_free_base(btf, tmp_path):
+    errors = {}
+    for name, options in (("default", []), ("before", ["--gains-only", "--free-highlights"])):
+        out = tmp_path / f"{name}.btf.zarr"
+        result = _run(
+            "btf", "import", btf["images"], "--out", out, "--spectra", btf["spots"],
+            "--response", CAMERA, "--json", *options,
+        )  # fmt: skip
+        assert result.exit_code == 0, result.output
+        errors[name] = _error(out, btf["truth"], btf["where"])
+    # The images were taken under D65: a gain per channel cannot take its shape within a
+    # channel, the smooth factor can.
+    assert errors["default"] < errors["before"], errors
+    refused = _run("btf", "import", btf["images"], "--out", tmp_path / "x.zarr", "--gains-only")
+    assert refused.exit_code == 2 and "only with --spectra" in refused.stderr
+
+
 def _edit(change: Callable[[list[str]], list[str]]) -> Callable[[dict], list[str]]:
     """Options giving a spots CSV whose lines ``change`` rewrote."""
 

@@ -93,6 +93,20 @@ def test_spectralize_a_real_crop_and_read_it_back(crop, tmp_path):
     assert "already holds spectra.exr" in again.output
 
 
+def test_a_gain_per_channel_when_asked(crop, tmp_path):
+    # The crop's RGB is the bare Flea3 response's: a gain per channel is the whole camera term.
+    folder, truth, _ = crop
+    out = tmp_path / "out"
+    result = runner.invoke(
+        app,
+        ["spectralize", str(folder / "crop.png"), "--spectra", str(folder / "spots.csv")]
+        + ["--response", str(folder / "flea3.csv"), "--out", str(out), "--gains-only"],
+    )
+    assert result.exit_code == 0, result.output
+    cube = read_spectral_exr(out / "spectra.exr").cube
+    assert float(np.mean(relative_error(cube, truth))) < ERROR_BOUND_PCT
+
+
 def test_spots_as_areas_of_a_label_image(crop, tmp_path):
     # 3 x 3 areas around every spot of the crop, each labelled with its area's mean spectrum
     # (one spectrometer reading of the area).

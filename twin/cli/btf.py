@@ -111,6 +111,22 @@ def import_(
             show_default=False,
         ),
     ] = None,
+    gains_only: Annotated[
+        bool,
+        typer.Option(
+            "--gains-only",
+            help="With spots: fit the camera term as a gain per channel (not the response "
+            "times a smooth factor per channel).",
+        ),
+    ] = False,
+    free_highlights: Annotated[
+        bool,
+        typer.Option(
+            "--free-highlights",
+            help="With spots: fit the regression prior's base freely (not holding a flat "
+            "reflectance, the interface reflection of a dielectric, to itself).",
+        ),
+    ] = False,
     as_json: JsonFlag = False,
 ) -> None:
     """Read spectral EXR slices and their direction index (as spectwin btf export writes them),
@@ -128,6 +144,7 @@ def import_(
     """
     from recon.btf.exchange import INDEX_NAME, import_exr_slices
     from recon.btf.rgb_import import DIRECTION_TABLE, import_rgb_images, is_rgb_source, rgb_source
+    from recon.image_spectralization.camera_fit import MAX_DEGREE
 
     require_output_folder(out)
     if out.exists():
@@ -138,6 +155,8 @@ def import_(
         fail("--spectra, --response: expected both (spot spectra and the camera) or neither")
     if spectra is not None and scale != 1.0:
         fail("--scale: not with --spectra (a spectralized import takes its scale from the spots)")
+    if (gains_only or free_highlights) and spectra is None:
+        fail("--gains-only, --free-highlights: only with --spectra (spot spectra)")
     spot = None if measuring_spot is None else _measuring_spot(measuring_spot)
     if rgb:
         btf = import_rgb_images(
@@ -150,6 +169,8 @@ def import_(
             spectra=spectra,
             response=response,
             measuring_spot=spot,
+            camera_degree=0 if gains_only else MAX_DEGREE,
+            neutral=not free_highlights,
             progress=not as_json,
         )
     else:
@@ -161,6 +182,8 @@ def import_(
                 ("--texels", texels),
                 ("--spectra", spectra),
                 ("--measuring-spot", measuring_spot),
+                ("--gains-only", gains_only),
+                ("--free-highlights", free_highlights),
             )
             if value
         ]

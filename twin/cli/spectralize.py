@@ -92,6 +92,14 @@ def spectralize(
             "(0: no spot)."
         ),
     ] = None,
+    gains_only: Annotated[
+        bool,
+        typer.Option(
+            "--gains-only",
+            help="Fit the camera term as a gain per channel (not the response times a smooth "
+            "factor per channel).",
+        ),
+    ] = False,
     encoding: EncodingOption = None,
     radiance: Annotated[
         bool,
@@ -118,6 +126,7 @@ def spectralize(
         read_spots_csv,
         spectralize_image,
     )
+    from recon.image_spectralization.camera_fit import MAX_DEGREE
     from twin.studies.spectralized_image import OUTPUTS, write_spectralized_image
 
     started = time.perf_counter()
@@ -135,7 +144,14 @@ def spectralize(
     else:
         spots = read_spot_mask(spectra, mask, rgb.values)
     curves = camera_response(response)
-    result = spectralize_image(rgb.values, spots, curves, fast=fast, progress=not as_json)
+    result = spectralize_image(
+        rgb.values,
+        spots,
+        curves,
+        fast=fast,
+        camera_degree=0 if gains_only else MAX_DEGREE,
+        progress=not as_json,
+    )
     inputs = {
         "image": str(image),
         "image_note": rgb.note,
