@@ -139,6 +139,16 @@ def test_three_folds_give_every_known_pixel_its_held_out_error(span_of_three):
         assert errors.shape == pixels.shape
         assert np.mean(errors) == pytest.approx(choice.held_out_errors[prior])
     assert choice.spot_of_pixel.shape == pixels.shape
+    # The last fold (every third spot held out from the second on) of the chosen prior, whole.
+    kept = choice.spot_of_pixel % 3 != 2
+    last_fold = reconstruct(
+        truth @ response,
+        response,
+        point_spectra=PointSpectra(pixels[kept], spectra[kept]),
+        prior=choice.prior,
+        **OPTIONS,
+    ).spectra
+    np.testing.assert_allclose(choice.fold_spectra, last_fold, rtol=0, atol=1e-6 * truth.max())
     with pytest.raises(InputError, match="folds: expected an integer >= 2"):
         choose_prior(truth @ response, response, pixels, spectra, folds=1)
 
