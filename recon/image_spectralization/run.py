@@ -18,7 +18,9 @@ Steps:
    cross-validation.
 4. The solve of Eq. 6.10 (RGBXY appearance space, three neighbours, equal primed weights of
    Eq. 6.11, no smoothness term: the settings of the chapter 7 experiments,
-   :mod:`recon.experiments.sparse`) on the same graph. Negative values are clipped to zero.
+   :mod:`recon.experiments.sparse`) on the same graph, started from the chosen prior's
+   reconstruction of the last fold (fewer iterations; the same solution within the solver's
+   tolerance). Negative values are clipped to zero.
 
 References
 ----------
@@ -238,6 +240,7 @@ def spectralize_image(
         prior=prior,
         graph=graph,
         tol=tol,
+        initial=None if choice is None else choice.fold_spectra,
         progress=progress,
         **_ENERGY,
     )

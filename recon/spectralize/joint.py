@@ -7,9 +7,10 @@ the bands; they differ only in the right-hand side :math:`C` (the regression pri
 :math:`X - B_{reg}`). Side by side, :math:`A [X_1\\, X_2] + [X_1\\, X_2]\\,
 \\mathrm{diag}(B, B) = [C_1\\, C_2]` is one Kronecker sum with ``2 K`` columns: one set of
 multigrid hierarchies and one run of block conjugate gradients serve both priors
-(:mod:`recon.spectralize.kronecker`), which is what makes the cross-validation of
-:func:`recon.spectralize.choose_prior` cheap. Energies that do not split as a Kronecker sum
-are solved one prior at a time.
+(:mod:`recon.spectralize.kronecker`), and one assembly of the energy (neighbour links,
+Laplacian, terms) serves both (:func:`recon.spectralize.solve.regression_prior`), which is what
+makes the cross-validation of :func:`recon.spectralize.choose_prior` cheap. Energies that do not
+split as a Kronecker sum are solved one prior at a time.
 
 References
 ----------
@@ -27,21 +28,15 @@ from scipy import sparse
 
 from recon.errors import InputError
 from recon.spectralize.kronecker import FactoredRhs, solve_kronecker_sum
-from recon.spectralize.solve import PRIORS, SpectralizationProblem, build_problem, reconstruct
+from recon.spectralize.solve import (
+    PRIORS,
+    SpectralizationProblem,
+    build_problem,
+    reconstruct,
+    regression_prior,
+)
 
 __all__ = ["reconstruct_priors"]
-
-
-def _same_matrices(
-    parts: list[tuple[sparse.csr_matrix, np.ndarray, FactoredRhs]],
-) -> bool:
-    spatial, spectral, _ = parts[0]
-    return all(
-        other_spectral.shape == spectral.shape
-        and np.array_equal(other_spectral, spectral)
-        and abs(other_spatial - spatial).max() == 0
-        for other_spatial, other_spectral, _ in parts[1:]
-    )
 
 
 def _spectra(
@@ -84,7 +79,9 @@ def reconstruct_priors(
         for the columns of both priors together).
     **energy
         The energy of :func:`~recon.spectralize.solve.build_problem` (``point_spectra``,
-        ``weights``, ``appearance``, ``graph``, ...) except ``prior``.
+        ``weights``, ``appearance``, ``graph``, ...) except ``prior``; ``neutral`` and
+        ``regression`` apply to the regression prior. It is assembled once for all priors
+        (:func:`~recon.spectralize.solve.regression_prior`).
 
     Returns
     -------
@@ -118,13 +115,26 @@ def reconstruct_priors(
         """Spectra at ``rows``, ``(m, K)``, with the leading shape of ``rgb`` if all pixels."""
         return spectra.reshape(*shape, -1) if pixels is None else spectra
 
-    problems = [build_problem(rgb, response, prior=prior, **energy) for prior in priors]
+    regression_options = {
+        key: energy.pop(key) for key in ("neutral", "regression") if key in energy
+    }
+    plain = build_problem(rgb, response, **energy)
+    problems = [
+        plain if prior == "spectra" else regression_prior(plain, **regression_options)
+        for prior in priors
+    ]
     parts = [problem.kronecker_parts() for problem in problems]
-    if any(part is None for part in parts) or not _same_matrices(parts):  # type: ignore[arg-type]
+    if any(part is None for part in parts):
         return {
             prior: shaped(
                 reconstruct(
-                    rgb, response, prior=prior, tol=tol, max_iterations=max_iterations, **energy
+                    rgb,
+                    response,
+                    prior=prior,
+                    tol=tol,
+                    max_iterations=max_iterations,
+                    **energy,
+                    **(regression_options if prior == "regression" else {}),
                 ).spectra.reshape(problems[0].n_pixels, -1)[rows]
             )
             for prior in priors

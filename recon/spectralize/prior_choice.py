@@ -11,7 +11,8 @@ leaves every fifth spot out in turn, reconstructs the image with each prior from
 and keeps the prior with the smaller mean relative error (Eq. 6.8) over all spots, each predicted
 while it was left out (push-broom lines are cut into segments first). It costs ``folds``
 solves, each of both priors together (:func:`recon.spectralize.joint.reconstruct_priors`: one
-Kronecker solve with twice the columns, its spectra assembled at the held-out spots only), on
+Kronecker solve with twice the columns, its spectra assembled at the held-out spots only but
+in the last fold, whose whole images are kept as the starting guess of the final solve), on
 the appearance graph found once for the image (:func:`recon.spectralize.solve.neighbour_graph`).
 ``folds=3`` is the cheap setting of ``spectwin spectralize``; BENCHMARKS.md, "Spectralizing a
 user's image", measures its cost against a single solve.
@@ -56,13 +57,17 @@ class PriorChoice:
     pixels, each predicted from the other folds, and the number of ``spots`` (or line
     segments). ``pixel_errors``: per prior, the error (Eq. 6.8, %) of every known pixel
     predicted while its fold was held out, in the order of ``known_pixels``; ``spot_of_pixel``:
-    the spot (or segment) number of every known pixel."""
+    the spot (or segment) number of every known pixel. ``fold_spectra``: the chosen prior's
+    reconstruction of the last fold at every pixel (the leading shape of ``rgb``, then ``K``),
+    a starting guess for the solve from all spots (``initial=`` of
+    :func:`~recon.spectralize.solve.reconstruct`), which it leaves fewer iterations to do."""
 
     prior: str
     held_out_errors: dict[str, float]
     spots: int
     pixel_errors: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
     spot_of_pixel: np.ndarray = field(default_factory=lambda: np.empty(0, int), repr=False)
+    fold_spectra: np.ndarray | None = field(default=None, repr=False)
 
 
 def _spot_labels(
@@ -177,17 +182,22 @@ def choose_prior(
     with progress_steps("choosing the prior: folds", folds, enabled=progress) as advance:
         for fold in range(folds):
             held_out = spots % folds == fold
+            last = fold == folds - 1  # its whole images are kept as the starting guess
             estimates = reconstruct_priors(
                 images,
                 response,
                 point_spectra=PointSpectra(pixels[~held_out], spectra[~held_out]),
-                at_pixels=pixels[held_out],
+                at_pixels=None if last else pixels[held_out],
                 graph=graph,
                 **options,
             )
             for prior, estimate in estimates.items():
-                predicted[prior][held_out] = estimate
+                rows = (
+                    estimate.reshape(-1, spectra.shape[1])[pixels[held_out]] if last else estimate
+                )
+                predicted[prior][held_out] = rows
             advance()
     pixel_errors = {prior: relative_error(predicted[prior], spectra) for prior in PRIORS}
     errors = {prior: float(np.mean(values)) for prior, values in pixel_errors.items()}
-    return PriorChoice(min(errors, key=errors.__getitem__), errors, count, pixel_errors, spots)
+    chosen = min(errors, key=errors.__getitem__)
+    return PriorChoice(chosen, errors, count, pixel_errors, spots, estimates[chosen])

@@ -88,6 +88,7 @@ __all__ = [
     "dynamic_scale",
     "neighbour_graph",
     "reconstruct",
+    "regression_prior",
     "spectralize",
 ]
 
@@ -557,13 +558,8 @@ def build_problem(
         response_values = response_values.T  # (channels, K) rows -> (K, channels)
     response = _checked_response(response_values, images.shape[-1])
     bands, channels = response.shape
-    if neutral is not None:
-        neutral = np.asarray(neutral, dtype=np.float64)
-        if prior != "regression" or neutral.shape != (bands,):
-            raise InputError(
-                f"neutral: expected shape ({bands},) with prior='regression', got shape "
-                f"{neutral.shape} with prior={prior!r}"
-            )
+    if neutral is not None and prior != "regression":
+        raise InputError(f"neutral: a spectrum for prior='regression', given with prior={prior!r}")
     image_shape = images.shape[:3]
     scale = dynamic_scale(images, p_dyn)
     scaled_rgb = images.reshape(-1, channels) * scale[:, None]
@@ -624,21 +620,7 @@ def build_problem(
     if smooth_rows:
         terms.append(SpectralSmoothnessTerm(n, bands))
         absolute.append(delta * total / smooth_rows)
-    base = None
-    if prior == "regression":  # the prior and smoothness terms act on X - B
-        if regression is None:
-            regression = _regression_matrix(scaled_rgb, data_terms, response, neutral)
-        elif np.shape(regression) != (channels, bands) or not np.all(np.isfinite(regression)):
-            raise InputError(
-                f"regression: expected a finite ({channels}, {bands}) map from camera values to "
-                f"spectra, got shape {np.shape(regression)}"
-            )
-        base = scaled_rgb @ regression
-        terms = [
-            t if isinstance(t, _PRIOR_TERMS) else replace(t, target=t.target - t.apply(base))
-            for t in terms
-        ]
-    return SpectralizationProblem(
+    problem = SpectralizationProblem(
         terms,
         absolute,
         scale,
@@ -647,8 +629,61 @@ def build_problem(
         graph.n_links,
         graph.added,
         {"neighbours": graph_s, "connect": connect_s},
-        base,
     )
+    if prior == "regression":
+        return regression_prior(problem, neutral=neutral, regression=regression)
+    return problem
+
+
+def regression_prior(
+    problem: SpectralizationProblem,
+    *,
+    neutral: np.ndarray | None = None,
+    regression: np.ndarray | None = None,
+) -> SpectralizationProblem:
+    """The energy of ``problem`` (built with ``prior="spectra"``) with the regression prior
+    instead: the prior and smoothness terms act on :math:`X - B`, so the other terms' targets
+    lose :math:`B`'s share. Its terms, weights and graph are those of ``problem``, so one
+    assembly serves both priors (:func:`recon.spectralize.reconstruct_priors`).
+
+    Parameters
+    ----------
+    problem
+        A problem of :func:`build_problem` with ``prior="spectra"``.
+    neutral, regression
+        As in :func:`build_problem`.
+
+    Returns
+    -------
+    SpectralizationProblem
+        ``problem`` as :func:`build_problem` assembles it with ``prior="regression"``.
+    """
+    if problem.base is not None:
+        raise InputError("problem: expected one built with prior='spectra'")
+    camera = next(t for t in problem.terms if isinstance(t, CameraTerm))
+    scaled_rgb, response = camera.target, camera.response
+    bands, channels = response.shape
+    if neutral is not None:
+        neutral = np.asarray(neutral, dtype=np.float64)
+        if neutral.shape != (bands,):
+            raise InputError(
+                f"neutral: expected shape ({bands},) with prior='regression', got shape "
+                f"{neutral.shape}"
+            )
+    if regression is None:
+        data_terms = [t for t in problem.terms if not isinstance(t, (CameraTerm, *_PRIOR_TERMS))]
+        regression = _regression_matrix(scaled_rgb, data_terms, response, neutral)
+    elif np.shape(regression) != (channels, bands) or not np.all(np.isfinite(regression)):
+        raise InputError(
+            f"regression: expected a finite ({channels}, {bands}) map from camera values to "
+            f"spectra, got shape {np.shape(regression)}"
+        )
+    base = scaled_rgb @ regression
+    terms = [
+        t if isinstance(t, _PRIOR_TERMS) else replace(t, target=t.target - t.apply(base))
+        for t in problem.terms
+    ]
+    return replace(problem, terms=terms, base=base)
 
 
 def _solve_least_squares(

@@ -14,7 +14,9 @@ from recon.spectralize.solve import (
     BandImage,
     EnergyWeights,
     PointSpectra,
+    build_problem,
     reconstruct,
+    regression_prior,
     spectralize,
 )
 
@@ -137,6 +139,16 @@ def test_three_folds_give_every_known_pixel_its_held_out_error(span_of_three):
         assert errors.shape == pixels.shape
         assert np.mean(errors) == pytest.approx(choice.held_out_errors[prior])
     assert choice.spot_of_pixel.shape == pixels.shape
+    # The last fold (every third spot held out from the second on) of the chosen prior, whole.
+    kept = choice.spot_of_pixel % 3 != 2
+    last_fold = reconstruct(
+        truth @ response,
+        response,
+        point_spectra=PointSpectra(pixels[kept], spectra[kept]),
+        prior=choice.prior,
+        **OPTIONS,
+    ).spectra
+    np.testing.assert_allclose(choice.fold_spectra, last_fold, rtol=0, atol=1e-6 * truth.max())
     with pytest.raises(InputError, match="folds: expected an integer >= 2"):
         choose_prior(truth @ response, response, pixels, spectra, folds=1)
 
@@ -171,6 +183,32 @@ def test_both_priors_at_held_out_pixels_are_those_rows_of_the_whole_images(span_
         assert at_spots[prior].shape == (held_out.sum(), truth.shape[-1])
         rows = image.reshape(-1, truth.shape[-1])[pixels[held_out]]
         np.testing.assert_allclose(at_spots[prior], rows, rtol=1e-12, atol=1e-12 * truth.max())
+
+
+def test_the_regression_prior_derived_from_the_plain_energy_is_the_one_built_for_it(
+    span_of_three,
+):
+    """``regression_prior`` turns the plain prior's assembled energy into the regression
+    prior's, as ``build_problem(prior="regression")`` assembles it, the neutral held too; the
+    joint solve of both priors passes the neutral to the regression prior only."""
+    truth, response, pixels, spectra = span_of_three
+    rgb, known, neutral = truth @ response, PointSpectra(pixels, spectra), np.ones(16)
+    plain = build_problem(rgb, response, point_spectra=known, appearance="rgbxy")
+    derived = regression_prior(plain, neutral=neutral)
+    built = build_problem(
+        rgb, response, point_spectra=known, appearance="rgbxy", prior="regression", neutral=neutral
+    )
+    np.testing.assert_array_equal(derived.base, built.base)
+    assert derived.weights == built.weights
+    for ours, theirs in zip(derived.terms, built.terms, strict=True):
+        np.testing.assert_array_equal(ours.target, theirs.target)
+    with pytest.raises(InputError, match="prior='spectra'"):
+        regression_prior(derived)
+    jointly = reconstruct_priors(rgb, response, point_spectra=known, neutral=neutral, **OPTIONS)
+    alone = reconstruct(
+        rgb, response, point_spectra=known, prior="regression", neutral=neutral, **OPTIONS
+    ).spectra
+    np.testing.assert_allclose(jointly["regression"], alone, rtol=0, atol=1e-6 * truth.max())
 
 
 def test_the_neutral_is_held_where_the_spots_say_nothing_of_it(span_of_three):
