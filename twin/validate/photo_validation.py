@@ -129,15 +129,15 @@ def _exif_fov_deg(path: Path, width: int, height: int) -> float | None:
     return float(np.degrees(2 * np.arctan(width / 2 / focal_px)))
 
 
-def _read_photograph(path: Path, encoding: Encoding | None) -> tuple[np.ndarray, list[str]]:
-    """Linear RGB of the photograph at its full size (superpixels of a raw mosaic are scaled
-    back up in coordinates by the caller through the returned size)."""
+def _read_photograph(path: Path, encoding: Encoding | None) -> tuple[np.ndarray, int, list[str]]:
+    """``(rgb, factor, notes)``: linear RGB of the photograph, the factor its pixels are larger
+    than the file's (2 for a raw mosaic's superpixels, else 1) and what was done to it."""
     if path.suffix.lower() in RAW_SUFFIXES:
         photo = read_photo(path, encoding=encoding)
-        rgb, _ = photo.rgb()
-        return rgb, [note for note in (photo.note, "2 x 2 superpixels") if note]
+        rgb, factor = photo.rgb()
+        return rgb, factor, [note for note in (photo.note, "2 x 2 superpixels") if note]
     linear = read_linear_rgb(path, encoding=encoding)
-    return linear.values, [linear.note] if linear.note else []
+    return linear.values, 1, [linear.note] if linear.note else []
 
 
 def _sphere_map(
@@ -153,8 +153,7 @@ def _sphere_map(
     path = Path(sphere.path)
     if not path.is_file():
         raise InputError(f"--mirror-sphere {path}: no such file")
-    rgb, _ = _read_photograph(path, encoding)
-    factor = 2 if path.suffix.lower() in RAW_SUFFIXES else 1
+    rgb, factor, _ = _read_photograph(path, encoding)
     if (rgb.shape[1] * factor, rgb.shape[0] * factor) != (pose.width, pose.height):
         raise InputError(
             f"--mirror-sphere {path}: {rgb.shape[1] * factor} x {rgb.shape[0] * factor} pixels; "
@@ -216,8 +215,7 @@ def read_photo_inputs(
             f"--photo {path}: a camera raw file holds the camera's own RGB; expected --camera "
             "with its response (a name or a spectwin camchar CSV)"
         )
-    full, notes = _read_photograph(path, encoding)
-    factor = 2 if path.suffix.lower() in RAW_SUFFIXES else 1
+    full, factor, notes = _read_photograph(path, encoding)
     height, width = full.shape[0] * factor, full.shape[1] * factor
     where = _corners(corners, width, height)
     if fov_deg is None:
