@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from recon.errors import InputError
+from recon.image_spectralization.wavelength_table import csv_lines
 from recon.spectra import SampledSpectra, WavelengthGrid
 
 __all__ = ["SpotSpectra", "read_spot_mask", "read_spot_table", "read_spots_csv"]
@@ -78,17 +79,7 @@ def read_spot_table(
     """
     path = Path(path)
     names = ",".join(keys)
-    if not path.is_file():
-        raise InputError(f"spots {path}: no such file; expected a CSV of {names} and spectra")
-    try:
-        text = path.read_text()
-    except UnicodeDecodeError:
-        raise InputError(f"spots {path}: not a text file; expected a CSV") from None
-    lines = [
-        (number, line)
-        for number, line in enumerate(text.splitlines(), start=1)
-        if line.strip() and not line.lstrip().startswith("#")
-    ]
+    lines = csv_lines(path, "spots", f"a CSV of {names} and spectra")
     if not lines:
         raise InputError(f"spots {path}: empty; expected a header {names},<wavelength nm>,...")
     header = [cell.strip() for cell in lines[0][1].split(",")]

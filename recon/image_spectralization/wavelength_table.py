@@ -13,7 +13,24 @@ import numpy as np
 from recon.errors import InputError
 from recon.spectra import SampledSpectra, WavelengthGrid
 
-__all__ = ["read_wavelength_table"]
+__all__ = ["csv_lines", "read_wavelength_table"]
+
+
+def csv_lines(path: Path, what: str, expected: str) -> list[tuple[int, str]]:
+    """The numbered lines of the CSV file at ``path`` that are neither blank nor comments
+    (``#``), refusing in one line (prefixed by ``what`` and the path) a missing file, naming
+    ``expected``, or one that is not text."""
+    if not path.is_file():
+        raise InputError(f"{what} {path}: no such file; expected {expected}")
+    try:
+        text = path.read_text()
+    except UnicodeDecodeError:
+        raise InputError(f"{what} {path}: not a text file; expected a CSV") from None
+    return [
+        (number, line)
+        for number, line in enumerate(text.splitlines(), start=1)
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
 
 
 def read_wavelength_table(path: str | Path, columns: tuple[str, ...], what: str) -> SampledSpectra:
@@ -39,16 +56,7 @@ def read_wavelength_table(path: str | Path, columns: tuple[str, ...], what: str)
     path = Path(path)
     header = ["wavelength_nm", *columns]
     expected = ",".join(header)
-    if not path.is_file():
-        raise InputError(f"{what} {path}: no such file; expected a CSV {expected}")
-    try:
-        lines = [
-            (number, line)
-            for number, line in enumerate(path.read_text().splitlines(), start=1)
-            if line.strip() and not line.lstrip().startswith("#")
-        ]
-    except UnicodeDecodeError:
-        raise InputError(f"{what} {path}: not a text file; expected a CSV") from None
+    lines = csv_lines(path, what, f"a CSV {expected}")
     found = [cell.strip() for cell in lines[0][1].split(",")] if lines else []
     if found != header:
         raise InputError(
