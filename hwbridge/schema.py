@@ -34,6 +34,7 @@ __all__ = [
     "CaptureAttrs",
     "CheckerboardTarget",
     "DomeCamera",
+    "DomeChart",
     "DomeGeometry",
     "DomeHolder",
     "DomeRigAttrs",
@@ -49,7 +50,7 @@ __all__ = [
     "refuse_other_version",
 ]
 
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 """The version of the capture store's attributes that this code writes and reads (2: the store
 has an identity, seals its settings and frames, ``hwbridge.integrity.Seal``)."""
 
@@ -398,13 +399,28 @@ class DomeGeometry(StoreModel):
     )
 
 
+class DomeChart(StoreModel):
+    """The colour chart of the dome's response series, on the holder at stage position 0."""
+
+    name: str = Field(description="the chart and the source of its reflectances")
+    columns: int = Field(gt=0, description="fields per row, in reading order")
+    field_centres_m: tuple[tuple[float, float, float], ...] = Field(
+        min_length=1, description="centre of every field, sample frame, reading order"
+    )
+    field_half_m: float = Field(gt=0, description="half the side of a field's coloured square")
+    reflectance: Spectrum = Field(
+        description="every field's reflectance factor (rows, reading order), from the chart's "
+        "certificate"
+    )
+
+
 class DomeRigAttrs(RigAttrs):
     """The ``rig`` attribute of the LED dome's captures (``twin.dome.programs``)."""
 
     model_config = ConfigDict(frozen=True, extra="forbid")
 
     program_fields: ClassVar[dict[str, tuple[str, ...]]] = {
-        "dome-calibration": ("dark_frames",),
+        "dome-calibration": ("dark_frames", "chart", "spectrometer_wavelengths_nm"),
         "dome-run": ("material", "sample_size_m", "stage_positions"),
     }
 
@@ -440,12 +456,16 @@ class DomeRigAttrs(RigAttrs):
         ge=0, description="LED of the response series and the band-wise white frames"
     )
     led_current_ma: float = Field(gt=0, description="drive current of every lit frame")
-    led_spectrum: Spectrum = Field(
-        description="the LEDs' radiant intensity at that current, W sr^-1 nm^-1"
+    white_reflectance: Spectrum = Field(
+        description="the white standard's reflectance factor, from its certificate"
     )
-    white_reflectance: Spectrum = Field(description="the white standard's reflectance factor")
-    rgb_response: Spectrum = Field(
-        description="the RGB cameras' relative spectral response, rows R, G, B (thesis ch. 9)"
+    chart: DomeChart | None = Field(
+        None, description="of a calibration: the chart of the response series (`DomeChart`)"
+    )
+    spectrometer_wavelengths_nm: tuple[float, ...] | None = Field(
+        None,
+        description="of a calibration: the wavelengths of the spectrometer's readings of the "
+        "white standard (`lamp_monitor`, one per lit frame)",
     )
     geometry: DomeGeometry = Field(description="cameras, LEDs, stage, targets (`DomeGeometry`)")
 

@@ -34,6 +34,7 @@ MODELS: tuple[type[BaseModel], ...] = (
     schema.DomeCamera,
     schema.DomeHolder,
     schema.CheckerboardTarget,
+    schema.DomeChart,
     schema.Spectrum,
     schema.ReplayRigAttrs,
     btf_schema.BTFAttrs,

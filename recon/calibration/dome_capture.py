@@ -15,9 +15,10 @@ From the store's frames (layout: :mod:`hwbridge.dome_layout`), without a rendere
    the calibrated camera and fitted by the LED's irradiance field
    (:mod:`recon.calibration.dome_lighting`): the white reference of every image
    (:math:`V_c = x_c / x^{white}_c`, 10.3) and the irradiance of every spectral image;
-5. :math:`R_{cam}` per band: the RGB cameras' spectral response (their characterization,
-   thesis chapter 9, stored with the capture) times the LED spectrum, averaged over each
-   band's 10 nm cell and scaled so that the white standard reads one.
+5. the LED spectrum from the spectrometer's readings of the white standard, and each RGB
+   camera's spectral response from its response series of the colour chart by the chapter 9
+   estimator (:mod:`recon.calibration.dome_spectra`); :math:`R_{cam}` per band their product,
+   averaged over the cameras and scaled so that the white standard reads one.
 
 The result, :class:`DomeCalibration`, is saved as one ``.npz`` file (the dark frames are images)
 with a JSON summary inside; :mod:`recon.dome` processes dome runs with it.
@@ -34,7 +35,7 @@ import json
 import os
 import zipfile
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -45,7 +46,6 @@ from hwbridge.schema import (
     DomeHolder,
     DomeRigAttrs,
     RigAttrs,
-    Spectrum,
     recorded,
 )
 from hwbridge.store import CaptureStore
@@ -63,23 +63,32 @@ from recon.calibration.dome_geometric import (
     stage_rotation,
 )
 from recon.calibration.dome_lighting import field_scale, led_irradiance
+from recon.calibration.dome_spectra import (
+    CameraResponse,
+    MeasuredLedSpectrum,
+    chart_field_rgb,
+    combined_response,
+    measured_camera_response,
+    measured_led_spectrum,
+    rig_spectrum,
+    square_region,
+)
+from recon.camera_char import MeasuredPrior
+from recon.camera_prior import ResponsePrior
 from recon.errors import InputError, Remedy
 from recon.progress import progress_steps
 from recon.radiometric.demosaic import demosaic
 from recon.registration.border import extract_texture
-from recon.registration.corners import texture_transform
 from recon.registration.sample_plane import texel_centres_m
-from recon.spectra import SampledSpectra, WavelengthGrid, resample
+from recon.spectra import WavelengthGrid
 
 __all__ = [
     "DOME_FORMAT",
     "DomeCalibration",
-    "band_response",
     "calibrate_dome",
     "dome_rig",
     "reference_band_nm",
     "rgb_linear_image",
-    "rig_spectrum",
 ]
 
 DOME_FORMAT = "spectwin-dome-calibration"
@@ -116,34 +125,6 @@ def dome_rig(store: CaptureStore, program: str) -> DomeRigAttrs:
     return store.rig_attrs(DomeRigAttrs)
 
 
-def rig_spectrum(spectrum: Spectrum, grid: WavelengthGrid) -> np.ndarray:
-    """A spectrum the capture stores with its rig (``led_spectrum``, ``white_reflectance``,
-    ``rgb_response``), linearly interpolated to ``grid`` (rows first)."""
-    source = WavelengthGrid(np.asarray(spectrum.wavelengths_nm, np.float64))
-    values = SampledSpectra(source, np.asarray(spectrum.values, np.float64))
-    return resample(values, grid, out_of_range="zero").values
-
-
-def band_response(
-    rgb_response: SampledSpectra, led: np.ndarray, white: np.ndarray, bands: WavelengthGrid
-) -> np.ndarray:
-    """:math:`R_{cam}` ``(K, 3)`` (Eq. 10.1): the camera's response ``(3, n)`` times the LED
-    ``(n,)``, averaged over each band's cell (``resample(..., method="box")``) and scaled so
-    that the white standard ``(K,)`` reads one in every channel.
-
-    Examples
-    --------
-    >>> fine = WavelengthGrid.regular(400, 720, 1)
-    >>> flat = SampledSpectra(fine, np.ones((3, fine.size)))
-    >>> bands = WavelengthGrid.regular(410, 700, 10)
-    >>> band_response(flat, np.ones(fine.size), np.ones(30), bands).sum(axis=0).round(12).tolist()
-    [1.0, 1.0, 1.0]
-    """
-    lit = SampledSpectra(rgb_response.grid, rgb_response.values * np.asarray(led, np.float64))
-    shape = resample(lit, bands, method="box", out_of_range="zero").values.T
-    return shape / (np.asarray(white, np.float64) @ shape)
-
-
 def rgb_linear_image(calibration: RgbCameraCalibration, frames: np.ndarray) -> np.ndarray:
     """Linear, dark-subtracted RGB ``(2H, 2W, 3)`` of one image's raw HDR set ``(n, 2H, 2W)``:
     merged (Eq. 10.3), then demosaiced (``colour-demosaicing``, Malvar et al. 2004)."""
@@ -178,9 +159,16 @@ class DomeCalibration:
     nominal_deviation
         Per camera how far the calibrated camera lies from the store's nominal one.
     response
-        ``(K, 3)`` :math:`R_{cam}`.
+        ``(K, 3)`` :math:`R_{cam}`: the mean of the RGB cameras' (:func:`recon.calibration
+        .dome_spectra.band_response` of each camera's measured response and the LED spectrum).
     window_px
         Side of the cameras' stored windows.
+    led_spectrum
+        The LEDs' spectrum measured on the white standard, with its uncertainty and the spread
+        over the LEDs.
+    camera_response
+        Per RGB camera its measured spectral response ``(K, 3)`` (peak one per channel) and the
+        chart fit's residual.
     """
 
     source: str
@@ -197,6 +185,8 @@ class DomeCalibration:
     nominal_deviation: dict[str, dict[str, float]]
     response: np.ndarray
     window_px: int
+    led_spectrum: MeasuredLedSpectrum
+    camera_response: dict[str, CameraResponse]
 
     @property
     def grid(self) -> WavelengthGrid:
@@ -211,6 +201,11 @@ class DomeCalibration:
                 "calibrate with the run's LEDs"
             )
         return int(rows[0])
+
+    def response_uncertainty(self) -> np.ndarray:
+        """``(K, 3)`` the standard error of :attr:`response` over the RGB cameras (each
+        measured on its own, :func:`recon.calibration.dome_spectra.combined_response`)."""
+        return combined_response(self.camera_response, self.led_per_band, self.white_per_band)[1]
 
     def summary(self) -> dict[str, object]:
         """The calibration in numbers (the JSON inside the saved file)."""
@@ -229,6 +224,15 @@ class DomeCalibration:
             "rgb_white": {camera: white.tolist() for camera, white in self.rgb_white.items()},
             "rgb_exposure_s": {c: cal.exposure_s.tolist() for c, cal in self.rgb.items()},
             "response": self.response.tolist(),
+            "response_uncertainty": self.response_uncertainty().tolist(),
+            "led_spectrum": self.led_spectrum.summary(),
+            "camera_response": {
+                camera: {
+                    "values": measured.values.tolist(),
+                    "fit_residual_pct": measured.fit_residual_pct,
+                }
+                for camera, measured in self.camera_response.items()
+            },
             "geometry": {
                 camera: {
                     **result.geometry.to_json(),
@@ -319,6 +323,11 @@ class DomeCalibration:
             nominal_deviation=summary["nominal_deviation"],
             response=np.asarray(summary["response"]),
             window_px=int(summary["window_px"]),
+            led_spectrum=MeasuredLedSpectrum.from_summary(summary["led_spectrum"]),
+            camera_response={
+                camera: CameraResponse(np.asarray(entry["values"]), entry["fit_residual_pct"])
+                for camera, entry in summary["camera_response"].items()
+            },
         )
 
 
@@ -358,10 +367,7 @@ class _WhiteSquare:
 
     def region(self, shape: tuple[int, int]) -> np.ndarray:
         """The pixels ``shape`` whose centres lie on the square."""
-        rows, columns = np.indices(shape)
-        centres = np.stack([columns.ravel() + 0.5, rows.ravel() + 0.5], axis=1)
-        uv = texture_transform(self.corners_xy)(centres)
-        return np.all((uv > 0) & (uv < 1), axis=1).reshape(shape)
+        return square_region(self.corners_xy, shape)
 
     def scale(self, image: np.ndarray, led_position_m: np.ndarray) -> np.ndarray:
         """The scale of the LED's irradiance field in ``image`` (channels last, or one)."""
@@ -478,8 +484,32 @@ def _rgb_calibration(
     return calibration, np.array(scales)
 
 
+def _chart_response(
+    store: CaptureStore,
+    camera: str,
+    rig: DomeRigAttrs,
+    calibration: RgbCameraCalibration,
+    geometry: CameraGeometry,
+    led: MeasuredLedSpectrum,
+    prior: ResponsePrior | MeasuredPrior | None,
+) -> CameraResponse:
+    """An RGB camera's spectral response from its response series of the chart (module
+    docstring, step 5): the series merged to one linear image, the fields' means, chapter 9."""
+    chart = recorded(rig.chart, f"{store.path}: rig chart")
+    series = select_frames(store, camera, kind="oecf")
+    merged = replace(calibration, exposure_s=np.asarray(series.exposure_s, np.float64))
+    image = rgb_linear_image(merged, series.frames)
+    position = np.asarray(rig.geometry.led_positions_m, np.float64)[rig.calibration_led]
+    field_rgb = chart_field_rgb(image, geometry, chart, position)
+    grid = WavelengthGrid(np.asarray(rig.bands_nm, np.float64))
+    return measured_camera_response(field_rgb, chart, led, grid, prior=prior)
+
+
 def calibrate_dome(
-    store: str | Path | CaptureStore, *, show_progress: bool = False
+    store: str | Path | CaptureStore,
+    *,
+    show_progress: bool = False,
+    camera_prior: ResponsePrior | MeasuredPrior | None = "measured",
 ) -> DomeCalibration:
     """Calibrate the dome from a ``dome-calibration`` capture (module docstring).
 
@@ -489,6 +519,10 @@ def calibrate_dome(
         The calibration capture store (complete).
     show_progress
         A progress bar over the cameras.
+    camera_prior
+        The prior of the RGB cameras' chapter 9 estimates (:func:`recon.camera_char
+        .estimate_response`'s ``prior``: by default learned from the measured cameras that ship
+        with spectwin).
 
     Returns
     -------
@@ -497,8 +531,10 @@ def calibrate_dome(
     store = store if isinstance(store, CaptureStore) else CaptureStore.open(store)
     rig = dome_rig(store, "dome-calibration")
     grid = WavelengthGrid(np.asarray(rig.bands_nm, np.float64))
-    led = rig_spectrum(rig.led_spectrum, grid)
+    led_spectrum = measured_led_spectrum(store, rig)
+    led = led_spectrum.on(grid)
     white_reflectance = rig_spectrum(rig.white_reflectance, grid)
+    measured: dict[str, CameraResponse] = {}
     cameras = rig.geometry.cameras
     nominal = {camera: CameraGeometry.nominal(entry) for camera, entry in cameras.items()}
     geometry, rgb, rgb_white = {}, {}, {}
@@ -513,11 +549,16 @@ def calibrate_dome(
                 spectral, spectral_white = _spectral_calibration(store, rig, white, led)
             else:
                 rgb[camera], rgb_white[camera] = _rgb_calibration(store, camera, rig, white)
+                measured[camera] = _chart_response(
+                    store,
+                    camera,
+                    rig,
+                    rgb[camera],
+                    geometry[camera].geometry,
+                    led_spectrum,
+                    camera_prior,
+                )
             advance()
-    fine = SampledSpectra(
-        WavelengthGrid(np.asarray(rig.rgb_response.wavelengths_nm, np.float64)),
-        np.asarray(rig.rgb_response.values, np.float64),
-    )
     return DomeCalibration(
         source=str(store.path),
         bands_nm=grid.wavelengths_nm.copy(),
@@ -534,10 +575,10 @@ def calibrate_dome(
             camera: result.geometry.deviation_from(nominal[camera])
             for camera, result in geometry.items()
         },
-        response=band_response(
-            fine, rig_spectrum(rig.led_spectrum, fine.grid), white_reflectance, grid
-        ),
+        response=combined_response(measured, led, white_reflectance)[0],
         window_px=rig.window_px,
+        led_spectrum=led_spectrum,
+        camera_response=measured,
     )
 
 

@@ -187,6 +187,7 @@ class DomeProcessing:
     partner: str
     manual_corners: Mapping[str, np.ndarray] | None = None
     target_relative_noise: float = TARGET_RELATIVE_NOISE
+    p_dyn: float = P_DYN
     registrations: dict[tuple[str, int], Registration] = field(default_factory=dict)
     band_shift: dict[int, np.ndarray] = field(default_factory=dict)
     saturated_texels: int = 0
@@ -308,8 +309,8 @@ def _open_btf(
         calibration={
             "source": work.calibration.source,
             "rig": "dome",
-            "p_dyn": P_DYN,
-            "target_relative_noise": TARGET_RELATIVE_NOISE,
+            "p_dyn": work.p_dyn,
+            "target_relative_noise": work.target_relative_noise,
         },
         rig=work.run.rig.rig,
         inputs=None if digests is None else digests.recorded(work.texels),
@@ -338,7 +339,11 @@ def _solve_group(
         ]
         advance()
     cube = reconstruct(
-        np.stack(rgb), work.calibration.response, band_images=band_images, p_dyn=P_DYN, **solver
+        np.stack(rgb),
+        work.calibration.response,
+        band_images=band_images,
+        p_dyn=work.p_dyn,
+        **solver,
     ).spectra
     advance(len(group))
     for slot, (image, camera) in enumerate(shown):
@@ -363,6 +368,7 @@ def process_dome(
     solver: Mapping[str, Any] | None = None,
     band_partner: str | None = None,
     target_relative_noise: float = TARGET_RELATIVE_NOISE,
+    p_dyn: float = P_DYN,
     created: Callable[[BTFStore], None] = lambda btf: None,
     digests: InputDigests | None = None,
 ) -> BTFStore:
@@ -397,6 +403,8 @@ def process_dome(
     target_relative_noise
         The relative noise the band images' Gaussian filters leave (Figure 10.5's filter size;
         :func:`band_sigma_px`).
+    p_dyn
+        Eq. 10.2's exponent of the joint solve (default :data:`P_DYN`).
     created
         Called with the BTF store once it exists (before any pair is written): a writer lock
         moves into it.
@@ -427,8 +435,10 @@ def process_dome(
         raise InputError(
             f"target_relative_noise: expected a fraction in (0, 1), got {target_relative_noise}"
         )
+    if not 0 <= p_dyn <= 1:
+        raise InputError(f"p_dyn: expected a value in [0, 1], got {p_dyn}")
     work = DomeProcessing(
-        run, calibration, int(texels), band_partner, manual_corners, target_relative_noise
+        run, calibration, int(texels), band_partner, manual_corners, target_relative_noise, p_dyn
     )
     btf = _open_btf(work, out, resume, digests)
     created(btf)

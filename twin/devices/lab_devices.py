@@ -194,6 +194,7 @@ class LabDevices:
             leds=twin.leds
             if leds is None
             else ReadBackLeds(open_device("leds", leds, {"count": simulated.led_count}), rig),
+            monitor=twin.monitor,
         )
 
     def _gonio(self, rig: VirtualRig, twin: SessionDevices) -> SessionDevices:

@@ -40,6 +40,7 @@ from hwbridge.schema import NO_VIEW
 from hwbridge.session import SessionDevices
 from recon.spectra import DEFAULT_GRID, WavelengthGrid
 from twin.components.lamps import HMILamp, LightSource
+from twin.devices.dome_spectrometer import DomeSpectrometer
 from twin.sensor.model import Sensor
 
 __all__ = [
@@ -503,6 +504,8 @@ class SimDomeDevices:
         Number of LEDs and the current at which they emit their nominal intensity.
     fault_rate, fault_seed
         Injected device faults per call and the seed of their draws (``[fault_seed, 99]``).
+    spectrometer
+        The spectrometer on the white standard (the session's monitor), or none.
     """
 
     cameras: tuple[tuple[str, Sensor, Signal], ...]
@@ -512,6 +515,7 @@ class SimDomeDevices:
     led_full_scale_ma: float = 700.0
     fault_rate: float = 0.0
     fault_seed: int = 0
+    spectrometer: DomeSpectrometer | None = None
     backend: ClassVar[str] = "sim"
 
     def __call__(self, seed: int = 0, steps: Sequence[int] | None = None) -> SessionDevices:
@@ -520,6 +524,7 @@ class SimDomeDevices:
     def on_rig(self, rig: VirtualRig) -> SessionDevices:
         """The devices over ``rig``."""
         return SessionDevices(
+            monitor=None if self.spectrometer is None else self.spectrometer.on_rig(rig),
             cameras={
                 camera_id: SimCamera(rig, sensor, signal, self.start_times_s, name=camera_id)
                 for camera_id, sensor, signal in self.cameras

@@ -19,10 +19,14 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from hwbridge.schema import CheckerboardTarget, DomeHolder
+from hwbridge.schema import CheckerboardTarget, DomeChart, DomeHolder, Spectrum
 from recon.errors import InputError
+from recon.spectra import WavelengthGrid
+from twin.components.targets import colorchecker_reflectances
 from twin.materials import Material
 from twin.materials.calibration_targets import (
+    CHART_FILL,
+    chart_field_centres,
     checkerboard_corners,
     checkerboard_target,
     colorchecker_chart,
@@ -38,7 +42,10 @@ from twin.materials.sample_holder import (
 from twin.materials.surfaces import SurfacePart, transformed
 
 __all__ = [
+    "CHART_COLUMNS",
+    "CHART_SIZE_M",
     "CHECKERBOARD",
+    "chart_geometry",
     "holder_content",
     "holder_geometry",
     "holder_scene_parts",
@@ -49,6 +56,12 @@ __all__ = [
 CHECKERBOARD: dict[str, Any] = {"columns": 9, "rows": 8, "square_m": 0.005, "margin_m": 0.003}
 """The geometric calibration target: 9 x 8 squares of 5 mm (8 x 7 inner corners) on a white
 card with a 3 mm border, 51 x 46 mm: it covers the holder's opening and stays inside its frame."""
+
+CHART_SIZE_M = 2 * PAPER_INNER_HALF_M - 0.001
+"""Width of the colour checker of the response series: it fills the holder's opening."""
+
+CHART_COLUMNS = 6
+"""Fields per row of the colour checker (4 rows of 6)."""
 
 _ON_PLATE_M = 0.0001  # targets in the opening lie this much above the plate, below the paper
 _CLEARANCE_M = 0.0015  # the checkerboard card's lowest edge above the plate's top
@@ -100,7 +113,7 @@ def holder_scene_parts(content: str, material: Material | None) -> list[SurfaceP
     elif content == "white":
         extra = _raised(zenith_white_target(2 * PAPER_INNER_HALF_M), _ON_PLATE_M)
     elif content == "chart":
-        extra = _raised(colorchecker_chart(2 * PAPER_INNER_HALF_M - 0.001), _ON_PLATE_M)
+        extra = _raised(colorchecker_chart(CHART_SIZE_M), _ON_PLATE_M)
     elif content.startswith("checkerboard@"):
         tilt = float(content.split("@", 1)[1])
         extra = [
@@ -109,6 +122,24 @@ def holder_scene_parts(content: str, material: Material | None) -> list[SurfaceP
     else:
         raise InputError(f"content: unknown holder content {content!r}")
     return holder_parts() + extra
+
+
+def chart_geometry(grid: WavelengthGrid) -> DomeChart:
+    """The colour checker of the response series for a calibration store's metadata: its
+    fields' centres and half-size in the sample frame and, as its certificate, the ColorChecker
+    N Ohta reflectances (``colour``) on ``grid``."""
+    reflectance = colorchecker_reflectances(grid, out_of_range="clamp")
+    centres = chart_field_centres(reflectance.values.shape[0], CHART_COLUMNS, CHART_SIZE_M)
+    centres[:, 2] += _ON_PLATE_M
+    return DomeChart(
+        name="ColorChecker N Ohta (colour-science)",
+        columns=CHART_COLUMNS,
+        field_centres_m=centres.tolist(),
+        field_half_m=CHART_FILL * CHART_SIZE_M / CHART_COLUMNS / 2,
+        reflectance=Spectrum(
+            wavelengths_nm=grid.wavelengths_nm.tolist(), values=reflectance.values.tolist()
+        ),
+    )
 
 
 def holder_geometry() -> DomeHolder:

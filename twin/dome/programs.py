@@ -43,8 +43,9 @@ from hwbridge.dome_plans import (
 from hwbridge.schema import NO_LIGHT, NO_VIEW, DomeRigAttrs, Spectrum
 from hwbridge.store import CaptureStore
 from recon.errors import InputError
-from twin.components.lamps import FINE_GRID, PhosphorWhiteLED
+from recon.spectra import WavelengthGrid
 from twin.components.targets import zenith_white_reflectance
+from twin.devices.dome_spectrometer import SPECTROMETER_GRID, DomeSpectrometer
 from twin.devices.programs import (
     ProgramCapture,
     check_exposures,
@@ -55,7 +56,7 @@ from twin.devices.programs import (
 from twin.devices.sim_devices import SimDomeDevices
 from twin.dome.capture_geometry import FrameSize, camera_arc_index, geometry_metadata
 from twin.dome.exposure_plan import dome_exposures
-from twin.dome.holder import holder_content
+from twin.dome.holder import chart_geometry, holder_content
 from twin.dome.render import DOME_SPP
 from twin.dome.setup import CALIBRATION_LIGHT, THESIS_LONGEST_BAND_S
 from twin.dome.signals import (
@@ -71,6 +72,7 @@ from twin.rigs.rig_config import DomeConfig, load_rig
 from twin.sensor.model import Sensor
 
 __all__ = [
+    "CERTIFICATE_GRID",
     "DEFAULT_SPP",
     "LED_FULL_SCALE_MA",
     "GEOMETRIC_VIEWS",
@@ -95,6 +97,10 @@ wedge turns the board away from them)."""
 
 RGB_DARK_FRAMES = 16
 """Most dark frames per exposure time of an RGB camera (its darks serve the HDR merge only)."""
+
+CERTIFICATE_GRID = WavelengthGrid.regular(380.0, 780.0, 5.0)
+"""Wavelengths of the certificates a calibration store records (the white standard's and the
+colour chart's reflectance), as a certificate gives them: 380-780 nm in 5 nm steps."""
 
 LED_FULL_SCALE_MA = 700.0
 """The LED drivers' full scale, at which the dome's LEDs emit their nominal intensity (the
@@ -253,7 +259,7 @@ def calibration_plan(parts: DomePlanParts, dark_frames: int) -> list[dict]:
 
 
 def _spectrum(values: np.ndarray) -> Spectrum:
-    return Spectrum(wavelengths_nm=FINE_GRID.wavelengths_nm.tolist(), values=values.tolist())
+    return Spectrum(wavelengths_nm=CERTIFICATE_GRID.wavelengths_nm.tolist(), values=values.tolist())
 
 
 @dataclass(frozen=True, eq=False)
@@ -385,6 +391,7 @@ def _program(
         cameras.append((camera, Sensor(definition, roi=roi), RenderedDomeSignal(scene, arc)))
     timing = dome_timing(config, parts.cameras)
     check_exposures(plan, {camera: sensor for camera, sensor, _ in cameras})
+    calibration = dark_frames is not None
     devices = SimDomeDevices(
         tuple(cameras),
         dome_start_times_s(plan, timing),
@@ -393,6 +400,11 @@ def _program(
         LED_FULL_SCALE_MA,
         fault_rate=float(fault_rate),
         fault_seed=seed,
+        spectrometer=(
+            DomeSpectrometer.of_dome(dome_geometry(config).led_positions_m, LED_FULL_SCALE_MA)
+            if calibration
+            else None
+        ),
     )
     views = sorted({step["view_id"] for step in plan if step.get("view_id", NO_VIEW) >= 0})
     tilts = sorted({step["tilt_deg"] for step in plan if "tilt_deg" in step})
@@ -416,9 +428,11 @@ def _program(
         band_schedule=exposures.schedule,
         calibration_led=parts.calibration_led,
         led_current_ma=LED_FULL_SCALE_MA,
-        led_spectrum=_spectrum(PhosphorWhiteLED().intensity(FINE_GRID).values),
-        white_reflectance=_spectrum(zenith_white_reflectance(FINE_GRID).values),
-        rgb_response=_spectrum(Sensor(config.rgb_camera).electron_responses(FINE_GRID).values),
+        white_reflectance=_spectrum(zenith_white_reflectance(CERTIFICATE_GRID).values),
+        chart=chart_geometry(CERTIFICATE_GRID) if calibration else None,
+        spectrometer_wavelengths_nm=(
+            SPECTROMETER_GRID.wavelengths_nm.tolist() if calibration else None
+        ),
         geometry=geometry_metadata(
             config, parts.cameras.all, frame, stage_views=views, tilts_deg=tilts
         ),

@@ -97,6 +97,7 @@ def _calibrate(
     capture: CaptureStore, out: Path | None, options: dict[str, Any], show_progress: bool
 ) -> Outcome:
     from recon.calibration.dome_capture import calibrate_dome
+    from twin.studies.dome_figures import write_measured_spectra
 
     out = DOME_CALIBRATION if out is None else out
     calibration = calibrate_dome(capture, show_progress=show_progress)
@@ -108,6 +109,22 @@ def _calibrate(
         "leds": int(calibration.leds.size),
         "spectral_observed_levels": list(calibration.spectral.observed_levels),
     }
+    led = calibration.led_spectrum
+    summary["LED spectrum"] = (
+        f"peak {led.wavelengths_nm[np.argmax(led.values)]:.0f} nm from {led.readings} "
+        f"spectrometer readings, standard error at most {100 * led.uncertainty.max():.2f} % of "
+        f"the peak, LED-to-LED spread at most {max(led.spread_pct.values(), default=0.0):.2f} %"
+    )
+    for camera, measured in calibration.camera_response.items():
+        peaks = calibration.bands_nm[np.argmax(measured.values, axis=0)]
+        summary[f"{camera} response"] = (
+            "peaks R {:.0f}, G {:.0f}, B {:.0f} nm; chart fit residual {:.1f} %".format(
+                *peaks, measured.fit_residual_pct
+            )
+        )
+    figure = out.with_suffix(".spectra.png")
+    write_measured_spectra(calibration, figure)
+    summary["figure"] = str(figure)
     for camera, result in calibration.geometry.items():
         deviation = calibration.nominal_deviation[camera]
         summary[f"{camera} geometry"] = (
@@ -117,7 +134,7 @@ def _calibrate(
             summary[f"{camera} reprojection_rms_px"] = result.reprojection_rms_px
         summary[f"{camera} position off nominal_mm"] = deviation["position_mm"]
         summary[f"{camera} orientation off nominal_deg"] = deviation["rotation_deg"]
-    as_json = calibration.summary() | {"calibration": str(out)}
+    as_json = calibration.summary() | {"calibration": str(out), "figure": str(figure)}
     return Outcome("dome calibration", summary, as_json=as_json)
 
 

@@ -25,6 +25,8 @@ from twin.materials.geometry import box
 from twin.materials.surfaces import SurfacePart
 
 __all__ = [
+    "CHART_FILL",
+    "chart_field_centres",
     "chart_parts",
     "checkerboard_corners",
     "checkerboard_target",
@@ -32,6 +34,9 @@ __all__ = [
     "esser_chart",
     "zenith_white_target",
 ]
+
+CHART_FILL = 0.8
+"""Side of a chart's coloured square relative to the pitch of its fields."""
 
 _CARD_THICKNESS_M = 0.001
 _PRINT_THICKNESS_M = 0.00002
@@ -43,14 +48,37 @@ def zenith_white_target(size_m: float = 0.05) -> list[SurfacePart]:
     return [SurfacePart("zenith_white", box((0, 0, -0.002), (size_m, size_m, 0.004)), reflectance)]
 
 
+def chart_field_centres(count: int, columns: int, size_m: float) -> np.ndarray:
+    """``(count, 3)`` centres of a chart's fields (:func:`chart_parts`), reading order, on the
+    chart's top (z = 0.1 mm above its card's middle).
+
+    Examples
+    --------
+    >>> (chart_field_centres(2, 2, 0.02)[:, :2] * 1000).round(6).tolist()
+    [[-5.0, 0.0], [5.0, 0.0]]
+    """
+    rows = math.ceil(count / columns)
+    pitch = size_m / columns
+    index = np.arange(count)
+    return np.column_stack(
+        [
+            -size_m / 2 + (index % columns + 0.5) * pitch,
+            rows * pitch / 2 - (index // columns + 0.5) * pitch,
+            np.full(count, 0.0001),
+        ]
+    )
+
+
 def chart_parts(
-    reflectances: SampledSpectra, columns: int, size_m: float, fill: float = 0.8
+    reflectances: SampledSpectra, columns: int, size_m: float, fill: float = CHART_FILL
 ) -> list[SurfacePart]:
-    """A chart of ``len(reflectances.values)`` patches in ``columns`` columns, ``size_m`` wide."""
+    """A chart of ``len(reflectances.values)`` patches in ``columns`` columns, ``size_m`` wide,
+    each a square of ``fill`` times the pitch."""
     count = reflectances.values.shape[0]
     rows = math.ceil(count / columns)
     pitch = size_m / columns
     black = SampledSpectra(FINE_GRID, np.full(FINE_GRID.size, 0.03))
+    centres = chart_field_centres(count, columns, size_m)
     parts = [
         SurfacePart(
             "card",
@@ -58,17 +86,13 @@ def chart_parts(
             black,
         )
     ]
-    for index in range(count):
-        row, column = divmod(index, columns)
-        centre = (
-            -size_m / 2 + (column + 0.5) * pitch,
-            rows * pitch / 2 - (row + 0.5) * pitch,
-            0.0001,
-        )
+    for index, centre in enumerate(centres):
         spectrum = SampledSpectra(reflectances.grid, reflectances.values[index])
         parts.append(
             SurfacePart(
-                f"patch_{index:03d}", box(centre, (fill * pitch, fill * pitch, 0.0002)), spectrum
+                f"patch_{index:03d}",
+                box(tuple(centre), (fill * pitch, fill * pitch, 0.0002)),
+                spectrum,
             )
         )
     return parts

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
+from recon.calibration.dome_capture import DomeCalibration
 from twin.dome.capture import THESIS_BANDS_NM
 from twin.dome.setup import DomeSetup
 
@@ -25,6 +26,7 @@ __all__ = [
     "write_comparison",
     "write_cross_check",
     "write_error_histograms",
+    "write_measured_spectra",
     "write_exposure_vs_error",
     "write_plan",
     "write_store_comparison",
@@ -225,5 +227,41 @@ def write_store_comparison(stores: dict, path: Path) -> None:
         fontsize=9,
     )
     panels[0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+
+
+def write_measured_spectra(calibration: DomeCalibration, path: Path) -> None:
+    """The spectra a dome calibration measured: the LED spectrum on the white standard (its
+    standard error, times ten, shaded) and every RGB camera's response from its chart photograph
+    (one line style per camera)."""
+    fig = Figure(figsize=(10, 3.6))
+    led_axis, camera_axis = fig.subplots(1, 2)
+    led = calibration.led_spectrum
+    led_axis.plot(led.wavelengths_nm, led.values, color="black")
+    led_axis.fill_between(
+        led.wavelengths_nm,
+        led.values - 10 * led.uncertainty,
+        led.values + 10 * led.uncertainty,
+        color="tab:orange",
+        alpha=0.5,
+        label="standard error x 10",
+    )
+    led_axis.set_title(f"LED spectrum on the white standard ({led.readings} readings)", fontsize=9)
+    led_axis.set_xlabel("wavelength (nm)")
+    led_axis.legend(fontsize=8)
+    styles = ("-", "--", ":", "-.")
+    for index, (camera, measured) in enumerate(calibration.camera_response.items()):
+        for channel, colour in enumerate(("tab:red", "tab:green", "tab:blue")):
+            camera_axis.plot(
+                calibration.bands_nm,
+                measured.values[:, channel],
+                color=colour,
+                linestyle=styles[index % len(styles)],
+                label=f"{camera} (fit {measured.fit_residual_pct:.1f} %)" if channel == 0 else None,
+            )
+    camera_axis.set_title("RGB cameras' responses from the chart (peak one)", fontsize=9)
+    camera_axis.set_xlabel("wavelength (nm)")
+    camera_axis.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=90)

@@ -175,6 +175,7 @@ class SameImages:
     partner: str
     leds: list[int]
     projected_marks: list[str]
+    p_dyn: float = P_DYN
 
     def summary(self) -> dict:
         """Errors of both paths (:class:`twin.dome.capture_study.ReconstructionErrors`) with and
@@ -236,7 +237,7 @@ class SameImages:
             "cameras": list(dict.fromkeys(self.cameras)),
             "band_partner": self.partner,
             "texels": self.truth.shape[1],
-            "p_dyn": P_DYN,
+            "p_dyn": self.p_dyn,
             "projected_marks": self.projected_marks,
         }
         return out
@@ -250,10 +251,12 @@ def same_images(
     rng: np.random.Generator,
     *,
     band_partner: str | None = None,
+    p_dyn: float = P_DYN,
 ) -> SameImages:
     """A ``dome-run`` store processed into ``btf_path`` and its images taken by the analytic
     path with ``setup`` (module description); the band data on the images of ``band_partner``
-    (default: the RGB camera nearest the spectral camera) in both paths."""
+    (default: the RGB camera nearest the spectral camera) in both paths, both solved with Eq.
+    10.2's exponent ``p_dyn``."""
     run = open_dome_run(run_store)
     texels = setup.cameras.spectral.height // setup.cameras.pixels_per_texel
     shutil.rmtree(btf_path, ignore_errors=True)
@@ -264,6 +267,7 @@ def same_images(
         texels=texels,
         show_progress=True,
         band_partner=band_partner,
+        p_dyn=p_dyn,
     )
     found = btf.metadata
     partner = recorded(found.band_partner, f"{btf.path}: band_partner")
@@ -279,7 +283,7 @@ def same_images(
     stored = np.pi * np.stack([btf.read_pair(pair) for pair in range(btf.n_pairs)])
     return SameImages(
         stored.astype(np.float64),
-        reconstruct_capture(setup, analytic, p_dyn=P_DYN),
+        reconstruct_capture(setup, analytic, p_dyn=p_dyn),
         analytic.truth,
         run.material,
         view_dirs,
@@ -287,6 +291,7 @@ def same_images(
         partner,
         [light for _, light in run.images],
         list(recorded(found.projected_marks, f"{btf.path}: projected_marks")),
+        p_dyn,
     )
 
 

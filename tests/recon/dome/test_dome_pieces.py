@@ -6,14 +6,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from recon.calibration.dome_capture import band_response
 from recon.calibration.dome_geometric import CameraGeometry
 from recon.calibration.dome_lighting import field_scale, led_irradiance
+from recon.calibration.dome_spectra import band_response
 from recon.dome.processing import TARGET_RELATIVE_NOISE, band_sigma_px, parallax_shift
 from recon.dome.run import joint_groups
 from recon.errors import InputError
 from recon.registration.sample_plane import sample_square_corners
-from recon.spectra import SampledSpectra, WavelengthGrid
+from recon.spectra import WavelengthGrid
 
 
 def _oblique_camera() -> CameraGeometry:
@@ -89,15 +89,14 @@ def test_joint_groups_follow_the_schedule_cycles():
 
 def test_band_response_reads_one_on_the_white_standard():
     """:math:`R_{cam}` of a camera whose channels see one band each: a unit white reads one in
-    every channel, a colour by its band."""
-    fine = WavelengthGrid.regular(400, 700, 1)
+    every channel, a colour by its band; a brighter LED band weighs more."""
     bands = WavelengthGrid.regular(410, 690, 10)
     channels = np.stack(
-        [np.exp(-0.5 * ((fine.wavelengths_nm - centre) / 20) ** 2) for centre in (600, 540, 450)]
-    )
-    response = band_response(
-        SampledSpectra(fine, channels), np.ones(fine.size), np.ones(bands.size), bands
-    )
+        [np.exp(-0.5 * ((bands.wavelengths_nm - centre) / 20) ** 2) for centre in (600, 540, 450)]
+    ).T
+    response = band_response(channels, np.ones(bands.size), np.ones(bands.size))
     np.testing.assert_allclose(np.ones(bands.size) @ response, 1.0)
     red = (bands.wavelengths_nm > 580).astype(float)
     assert np.argmax(red @ response) == 0
+    blue_led = np.where(bands.wavelengths_nm < 500, 4.0, 1.0)
+    assert (red @ band_response(channels, blue_led, np.ones(bands.size)))[2] < (red @ response)[2]
