@@ -304,7 +304,7 @@ class GonioRigAttrs(RigAttrs):
     lamp: str = Field(description="spectrum of the lamp (`hmi`: flickers)")
     config: dict[str, Any] | None = Field(None, description="the rig model (`scenes/rigs`)")
     white_reflectance: Spectrum | None = Field(
-        None, description="the white standard's reflectance factor (data sheet)"
+        None, description="the white standard's reflectance factor (its calibration certificate)"
     )
     sensor_px: int | None = Field(None, gt=0, description="pixels across the camera's field")
     material: str | None = Field(None, description="the material on the holder")

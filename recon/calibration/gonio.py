@@ -12,7 +12,10 @@ photographs of the white standard through every band (``white``):
    thesis's :math:`\\hat f^{-1}(p - d)` for a camera whose dark electrons pass the same response
    as the photo-electrons;
 3. :math:`F_\\lambda` of Eq. 3.3 per unit lamp, i.e. :math:`F'_\\lambda` (the lamp spectrum
-   cancels, Eq. 3.6), from the white standard's data sheet reflectance stored with the capture;
+   cancels, Eq. 3.6), from the white standard's frames and its certified reflectance stored with
+   the capture: the one spectrum calibration takes from the capture's rig attribute; the
+   filter's passbands, the lamp's spectrum and the camera's quantum efficiency are in
+   :math:`F'_\\lambda`, measured together;
 4. the exposure plan of Eq. 3.4, :math:`t_\\lambda = t_{base} F'_\\lambda`, with :math:`t_{base}`
    bringing the white standard to ``white_fill`` of the camera's range, rounded up to multiples
    of 1/15 s for the HMI lamp (section 3.2.2).
@@ -113,13 +116,13 @@ def extend_curve(curve: np.ndarray, *, fit_levels: int = 64, trim_levels: int = 
 
 
 def white_reflectance(rig: GonioRigAttrs, bands_nm: np.ndarray) -> np.ndarray:
-    """The white standard's data-sheet reflectance :math:`W_\\lambda` (stored with the capture)
-    at the band centres."""
+    """The white standard's reflectance :math:`W_\\lambda` from its calibration certificate
+    (stored with the capture) at the band centres."""
     sheet = rig.white_reflectance
     if sheet is None:
         raise InputError(
             f"capture of program {rig.program}: records no white_reflectance (the white "
-            "standard's data sheet)"
+            "standard's certified reflectance)"
         )
     return np.interp(bands_nm, sheet.wavelengths_nm, sheet.values)
 

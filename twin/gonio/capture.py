@@ -15,10 +15,11 @@ The material is rendered by Mitsuba for the pose the robot actually reaches
 (:func:`actual_poses`: the nominal pose off by the robot's repeatability), so every frame needs
 registration. The store's ``rig`` attribute carries what real processing knows about the rig:
 the nominal directions, the approximate image corners of the registration marks from the nominal
-kinematics, the sample's size relative to the marks and the white standard's data sheet, and the
-program's settings (``program``, ``material``, ``sensor_px``, ``window_px``, ``spp``), which a
-resumed capture reads back (:func:`stored_settings`). Exposure times are multiples of 1/15 s
-(HMI flicker, thesis 3.2.2).
+kinematics, the sample's size relative to the marks and the white standard's certified
+reflectance, and the program's settings (``program``, ``material``, ``sensor_px``,
+``window_px``, ``spp``), which a resumed capture reads back (:func:`stored_settings`); its
+``config``, the rig model, is for the twin's evaluation (processing never reads it). Exposure
+times are multiples of 1/15 s (HMI flicker, thesis 3.2.2).
 
 Each program is first built as a :class:`CaptureProgram` (:func:`gonio_calibration_program`,
 :func:`gonio_measurement_program`): building checks every setting against the rig and camera
