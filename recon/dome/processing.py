@@ -295,6 +295,12 @@ def _open_btf(
     if resume and out.exists():
         btf = BTFStore.open(out, writable=True)
         require_same_inputs(btf, digests, work.texels)
+        begun = (btf.metadata.calibration or {}).get("p_dyn", work.p_dyn)
+        if begun != work.p_dyn:
+            raise InputError(
+                f"{out}: begun with p_dyn {begun:g}; a resumed processing keeps it, got "
+                f"{work.p_dyn:g}"
+            )
         btf.prepare_resume()
         return btf
     light_dirs, view_dirs = dome_directions(work.run, work.calibration)
