@@ -64,6 +64,7 @@ from recon.calibration.dome_geometric import (
 )
 from recon.calibration.dome_lighting import field_scale, led_irradiance
 from recon.calibration.dome_spectra import (
+    MIN_FIELDS,
     CameraResponse,
     MeasuredLedSpectrum,
     chart_field_rgb,
@@ -167,8 +168,8 @@ class DomeCalibration:
         The LEDs' spectrum measured on the white standard, with its uncertainty and the spread
         over the LEDs.
     camera_response
-        Per RGB camera its measured spectral response ``(K, 3)`` (peak one per channel) and the
-        chart fit's residual.
+        Per RGB camera that resolves the charts' fields its measured spectral response ``(K, 3)``
+        (peak one per channel) and the chart fit's residual.
     """
 
     source: str
@@ -492,17 +493,23 @@ def _chart_response(
     geometry: CameraGeometry,
     led: MeasuredLedSpectrum,
     prior: ResponsePrior | MeasuredPrior | None,
-) -> CameraResponse:
-    """An RGB camera's spectral response from its response series of the chart (module
-    docstring, step 5): the series merged to one linear image, the fields' means, chapter 9."""
-    chart = recorded(rig.chart, f"{store.path}: rig chart")
-    series = select_frames(store, camera, kind="oecf")
-    merged = replace(calibration, exposure_s=np.asarray(series.exposure_s, np.float64))
-    image = rgb_linear_image(merged, series.frames)
+) -> CameraResponse | None:
+    """An RGB camera's spectral response from its photographs of the charts (module docstring,
+    step 5): each chart's frames merged to one linear image, the fields' means, chapter 9;
+    ``None`` where the camera resolves fewer than :data:`~recon.calibration.dome_spectra
+    .MIN_FIELDS` fields (a grazing view of small fields)."""
+    charts = recorded(rig.charts, f"{store.path}: rig charts")
     position = np.asarray(rig.geometry.led_positions_m, np.float64)[rig.calibration_led]
-    field_rgb = chart_field_rgb(image, geometry, chart, position)
+    field_rgb = []
+    for chart in charts:
+        frames = select_frames(store, camera, kind=chart.kind)
+        merged = replace(calibration, exposure_s=np.asarray(frames.exposure_s, np.float64))
+        quads = merged.hdr(frames.frames)  # no demosaicing: no colour bleeding between fields
+        field_rgb.append(chart_field_rgb(quads, geometry, chart, position, binning=2))
+    if np.all(np.isfinite(np.concatenate(field_rgb)), axis=1).sum() < MIN_FIELDS:
+        return None
     grid = WavelengthGrid(np.asarray(rig.bands_nm, np.float64))
-    return measured_camera_response(field_rgb, chart, led, grid, prior=prior)
+    return measured_camera_response(field_rgb, charts, led, grid, prior=prior)
 
 
 def calibrate_dome(
@@ -549,7 +556,7 @@ def calibrate_dome(
                 spectral, spectral_white = _spectral_calibration(store, rig, white, led)
             else:
                 rgb[camera], rgb_white[camera] = _rgb_calibration(store, camera, rig, white)
-                measured[camera] = _chart_response(
+                response = _chart_response(
                     store,
                     camera,
                     rig,
@@ -558,7 +565,14 @@ def calibrate_dome(
                     led_spectrum,
                     camera_prior,
                 )
+                if response is not None:
+                    measured[camera] = response
             advance()
+    if not measured:
+        raise InputError(
+            f"{store.path}: no RGB camera resolves {MIN_FIELDS} of the charts' fields; capture "
+            "the calibration at more texels"
+        )
     return DomeCalibration(
         source=str(store.path),
         bands_nm=grid.wavelengths_nm.copy(),

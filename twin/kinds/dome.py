@@ -97,6 +97,7 @@ def _calibrate(
     capture: CaptureStore, out: Path | None, options: dict[str, Any], show_progress: bool
 ) -> Outcome:
     from recon.calibration.dome_capture import calibrate_dome
+    from recon.calibration.dome_spectra import response_weights
     from twin.studies.dome_figures import write_measured_spectra
 
     out = DOME_CALIBRATION if out is None else out
@@ -115,12 +116,12 @@ def _calibrate(
         f"spectrometer readings, standard error at most {100 * led.uncertainty.max():.2f} % of "
         f"the peak, LED-to-LED spread at most {max(led.spread_pct.values(), default=0.0):.2f} %"
     )
+    weights = response_weights(calibration.camera_response)
     for camera, measured in calibration.camera_response.items():
         peaks = calibration.bands_nm[np.argmax(measured.values, axis=0)]
         summary[f"{camera} response"] = (
-            "peaks R {:.0f}, G {:.0f}, B {:.0f} nm; chart fit residual {:.1f} %".format(
-                *peaks, measured.fit_residual_pct
-            )
+            "peaks R {:.0f}, G {:.0f}, B {:.0f} nm; chart fit residual {:.1f} %; weight in "
+            "R_cam {:.0f} %".format(*peaks, measured.fit_residual_pct, 100 * weights[camera])
         )
     figure = out.with_suffix(".spectra.png")
     write_measured_spectra(calibration, figure)
