@@ -10,13 +10,14 @@ measures both:
 2. **Each RGB camera's spectral response** (:func:`measured_camera_response`): the camera's
    photographs of the charts under the calibration LED (the colour checker of its response
    series, ``oecf``, and a second chart, ``chart``: 24 fields leave a response's shape loosely
-   constrained) merged to linear RGB, each field's mean over the inner half of its square (its
-   corners projected by the calibrated camera), divided by the LED's irradiance fall-off over the
-   chart, and the chapter 9 extended estimator (:func:`recon.camera_char.estimate_response`, with
-   the prior learned from measured cameras) given the fields' certified reflectances and the
-   measured LED spectrum.
+   constrained) merged to linear RGB per Bayer quad, each field's mean over the quads wholly
+   inside it (its corners projected by the calibrated camera), divided by the LED's irradiance
+   fall-off over the chart, and the chapter 9 extended estimator
+   (:func:`recon.camera_char.estimate_response`, with the prior learned from measured cameras)
+   given the fields' certified reflectances and the measured LED spectrum. A camera that resolves
+   fewer than :data:`MIN_FIELDS` fields is left out.
 
-What a lab takes from certificates rather than frames: the white standard's and the chart's
+What a lab takes from certificates rather than frames: the white standard's and the charts'
 reflectances (recorded with the store's rig), and the spectral camera's band passbands (the
 filter's nominal 10 nm cells: measuring their shape needs a monochromator; 10.3 calibrates only
 their sensitivity, against the spectrometer's reading of the white standard).
@@ -34,7 +35,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy import ndimage
 
 from hwbridge.schema import DomeChart, DomeRigAttrs, Spectrum
 from hwbridge.store import CaptureStore
@@ -53,8 +53,6 @@ from recon.spectra import SampledSpectra, WavelengthGrid, resample
 
 __all__ = [
     "FIELD_FRACTION",
-    "FIELD_SAMPLES",
-    "FIELD_UNIFORMITY",
     "CameraResponse",
     "MIN_FIELDS",
     "MeasuredLedSpectrum",
@@ -69,23 +67,16 @@ __all__ = [
     "square_region",
 ]
 
-FIELD_FRACTION = 0.5
-"""Fraction of a chart field's square (its side) that gives the field's mean RGB: the inner
-half, clear of the field's edges and of a pixel or two of registration error."""
+FIELD_FRACTION = 0.9
+"""Fraction of a chart field's square (its side) whose pixels give the field's mean RGB: a pixel
+counts where it lies wholly inside, so that no neighbour's light mixes in, with a margin of a
+tenth of the side for registration error (the cameras' reprojection error is a fifth of a pixel)."""
 
 MIN_FIELDS = 12
 """Fewest resolved chart fields a camera's response is estimated from."""
 
 RESIDUAL_FLOOR_PCT = 0.5
 """Smallest chart fit residual (%) :func:`combined_response` weighs a camera by."""
-
-FIELD_UNIFORMITY = 0.04
-"""Largest relative spread of a field's samples (:func:`chart_field_rgb`) for the field to
-count: the colour checker's fields spread by about 1.5 % (noise) where the cameras resolve them,
-the Esser chart's 4.5 mm fields by 6-9 % at 32 texels (a Bayer quad per 1.25 mm)."""
-
-FIELD_SAMPLES = 7
-"""Sample points per side of a field's inner square (:func:`chart_field_rgb`)."""
 
 
 def rig_spectrum(spectrum: Spectrum, grid: WavelengthGrid) -> np.ndarray:
@@ -241,36 +232,32 @@ def chart_field_rgb(
 ) -> np.ndarray:
     """Mean linear RGB ``(J, 3)`` of every chart field in ``image`` ``(H, W, 3)`` (stage position
     0; each of its pixels ``binning`` x ``binning`` of the camera's, e.g. 2 for Bayer quads):
-    the image sampled bilinearly at :data:`FIELD_SAMPLES` x :data:`FIELD_SAMPLES` points spread
-    over the inner ``fraction`` of the field's square (so that a field a grazing camera sees a
-    pixel wide still counts), divided by the LED's relative irradiance at the field's centre
-    (:func:`recon.calibration.dome_lighting.led_irradiance`). A field whose samples vary more
-    than :data:`FIELD_UNIFORMITY` (the median over the channels of their standard deviation
-    over their mean) is not resolved, its neighbours' light mixed in: its row is NaN."""
+    the mean of the pixels that lie wholly inside the central ``fraction`` of the field's
+    square, divided by the LED's relative irradiance at the field's centre
+    (:func:`recon.calibration.dome_lighting.led_irradiance`); NaN for a field no pixel lies
+    inside (too small in the camera's view: not resolved)."""
     centres = np.asarray(chart.field_centres_m, np.float64)
-    offsets = fraction * chart.field_half_m * np.linspace(-1, 1, FIELD_SAMPLES)
-    grid_x, grid_y = np.meshgrid(offsets, offsets)
-    square = np.column_stack([grid_x.ravel(), grid_y.ravel(), np.zeros(grid_x.size)])
-    points = (centres[:, None, :] + square[None]).reshape(-1, 3)
-    xy = (geometry.project(points) - (binning - 1) / 2) / binning
     height, width = image.shape[:2]
-    outside = (xy[:, 0] < 0) | (xy[:, 0] > width - 1) | (xy[:, 1] < 0) | (xy[:, 1] > height - 1)
-    if outside.any():
-        field = int(np.flatnonzero(outside)[0]) // square.shape[0]
-        raise InputError(
-            f"chart field {field + 1}: outside the camera's {width} x {height} px image"
-        )
-    sampled = np.stack(
-        [
-            ndimage.map_coordinates(image[..., channel], [xy[:, 1], xy[:, 0]], order=1)
-            for channel in range(image.shape[-1])
-        ],
-        axis=-1,
-    )
-    samples = sampled.reshape(len(centres), square.shape[0], -1)
-    means = samples.mean(axis=1)
-    spread = samples.std(axis=1) / np.maximum(np.abs(means), np.finfo(float).tiny)
-    means[np.median(spread, axis=1) > FIELD_UNIFORMITY] = np.nan
+    half = fraction * chart.field_half_m
+    square = np.array([[-half, half, 0], [half, half, 0], [half, -half, 0], [-half, -half, 0]])
+    means = np.full((len(centres), image.shape[-1]), np.nan)
+    for field, centre in enumerate(centres):
+        # the field's corners with pixel edges at integers, in units of the image's pixels
+        corners = (geometry.project(centre + square) + 0.5) / binning
+        outside = (corners < 0) | (corners > [width, height])
+        if outside.any():
+            raise InputError(
+                f"chart field {field + 1}: outside the camera's {width} x {height} px image"
+            )
+        (left, top), (right, bottom) = np.floor(corners.min(0)), np.ceil(corners.max(0))
+        rows, columns = np.mgrid[top : bottom + 1, left : right + 1]
+        grid = np.stack([columns.ravel(), rows.ravel()], axis=1)
+        uv = texture_transform(corners)(grid).reshape(*rows.shape, 2)
+        within = np.all((uv >= 0) & (uv <= 1), axis=-1)
+        inside = within[:-1, :-1] & within[1:, :-1] & within[:-1, 1:] & within[1:, 1:]
+        if inside.any():
+            block = image[int(top) : int(bottom), int(left) : int(right)]
+            means[field] = block[inside].mean(axis=0)
     irradiance = led_irradiance(centres, led_position_m)
     return means / (irradiance / irradiance.mean())[:, None]
 

@@ -1,7 +1,7 @@
 """The dome's measured spectra, piece by piece: chart fields sampled from an image through a camera
-looking straight down (resolved fields give their colour, fields smaller than the image's blur
-are refused), and the chapter 9 estimate from both charts' exact field values against a measured
-camera (the Nikon D70's response, which the dome's RGB camera model uses)."""
+looking straight down (resolved fields give their colour, fields smaller than a pixel none), and
+the chapter 9 estimate from both charts' exact field values against a measured camera (the Nikon
+D70's response, which the dome's RGB camera model uses)."""
 
 import numpy as np
 import pytest
@@ -67,7 +67,7 @@ def _painted(camera: CameraGeometry, chart: DomeChart, side_px: int, colours: np
     return image
 
 
-def test_resolved_fields_give_their_colour_and_small_ones_are_refused():
+def test_resolved_fields_give_their_colour_and_fields_under_a_pixel_none():
     spectra = SampledSpectra(BANDS, np.full((6, BANDS.size), 0.5))
     chart = _chart(6, 3, 0.01, spectra)
     colours = np.arange(1, 19, dtype=float).reshape(6, 3)
@@ -76,10 +76,9 @@ def test_resolved_fields_give_their_colour_and_small_ones_are_refused():
     found = chart_field_rgb(_painted(sharp, chart, 160, colours), sharp, chart, overhead)
     irradiance = overhead[2] / np.linalg.norm(overhead - np.asarray(chart.field_centres_m), axis=1)
     np.testing.assert_allclose(found * irradiance[:, None] ** 3 / np.mean(irradiance**3), colours)
-    coarse = _downward_camera(300.0, 16)  # 3 px a field: its edges blur into the inner half
-    image = _painted(coarse, chart, 16, colours)
-    blurred = (image + np.roll(image, 1, 0) + np.roll(image, 1, 1) + np.roll(image, -1, 0)) / 4
-    assert np.isnan(chart_field_rgb(blurred, coarse, chart, overhead)).all()
+    coarse = _downward_camera(100.0, 8)  # 0.8 px a field: no pixel wholly inside one
+    image = _painted(coarse, chart, 8, colours)
+    assert np.isnan(chart_field_rgb(image, coarse, chart, overhead)).all()
 
 
 def test_a_chart_outside_the_image_is_named():
