@@ -76,17 +76,17 @@ __all__ = [
 
 P_DYN = 0.0
 """Eq. 10.2's exponent: no dynamic-range compression. The thesis found 0.5-0.6 best for BTFs, and
-so does the analytic path of the twin's dome study (the same images reconstructed 4-6 % better
-at 0.5 than at 0 for all four materials). From the twin's dome capture stores (one stage
-position x 10 LEDs x 3 RGB cameras, 32 texels, the calibration's measured spectra; mean Eq. 6.8
-with / without spectral data, BENCHMARKS.md "The dome's spectra measured") 0 is better or equal
-for every material: colour checker 41.5 / 46.3 % at 0 against 42.4 / 46.8 % at 0.5 and 43.3 /
-47.2 % at 0.6 (its diffuse fields 5.0, 5.5, 5.8 %), Lego 103 / 102 against 111 / 106 and
-115 / 108 %, red fabric 307 / 375 against 325 / 404 and 345 / 426 %, wallpaper equal within
-0.4 points (29.4 / 35.3, 29.3 / 34.9, 29.4 / 34.9 %). The stores' errors come mostly from
-texels at edges and in shadows (their edge-free texels do several times better, "Dome study
-from capture stores"); that the compression weighs those up is the likely cause, not separated
-further. ``spectwin process --p-dyn`` chooses another."""
+so does the analytic path of the twin's dome study for three materials of four (the same images
+reconstructed 4-6 % better at 0.5 than at 0; the wallpaper equal). From the twin's dome capture
+stores (one stage position x 10 LEDs x 3 RGB cameras, 32 texels, the calibration's measured
+spectra; mean Eq. 6.8 with / without spectral data at 0, 0.5 and 0.6, BENCHMARKS.md "The dome's
+spectra measured") 0 does better for three materials of four: colour checker 40.3 / 45.3, 41.1 /
+45.8, 42.0 / 46.2 % (its diffuse fields 4.8, 5.2, 5.5 %), Lego 101 / 100, 108 / 104, 112 /
+106 %, red fabric 296 / 364, 314 / 392, 333 / 412 %; the wallpaper 0.2-0.4 points worse (28.4
+/ 34.5, 28.2 / 34.1, 28.3 / 34.1 %). The stores' errors come mostly from texels at edges and in
+shadows (their edge-free texels do several times better, "Dome study from capture stores");
+that the compression weighs those up is the likely cause, not separated further. ``spectwin
+process --p-dyn`` chooses another."""
 
 TARGET_RELATIVE_NOISE = 0.04
 """Relative noise the band filters leave. Figure 10.5's filters nearly cancel the noise; the

@@ -150,8 +150,8 @@ def process(
             min=0.0,
             max=1.0,
             help="dome: Eq. 10.2's exponent of the joint solve (default 0: on the twin's dome "
-            "stores the thesis's 0.5-0.6 did worse for three materials of four, as well for the "
-            "fourth).",
+            "stores the thesis's 0.5-0.6 did worse for three materials of four, 1 % better for "
+            "the fourth).",
         ),
     ] = None,
     as_json: JsonFlag = False,
