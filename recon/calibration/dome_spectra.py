@@ -229,13 +229,15 @@ def chart_field_rgb(
     fraction: float = FIELD_FRACTION,
     *,
     binning: int = 1,
+    centre_pixels: bool = False,
 ) -> np.ndarray:
     """Mean linear RGB ``(J, 3)`` of every chart field in ``image`` ``(H, W, 3)`` (stage position
     0; each of its pixels ``binning`` x ``binning`` of the camera's, e.g. 2 for Bayer quads):
     the mean of the pixels that lie wholly inside the central ``fraction`` of the field's
     square, divided by the LED's relative irradiance at the field's centre
     (:func:`recon.calibration.dome_lighting.led_irradiance`); NaN for a field no pixel lies
-    inside (too small in the camera's view: not resolved)."""
+    inside (too small in the camera's view: not resolved). With ``centre_pixels`` each field's
+    RGB is the pixel at its centre instead, resolved or not."""
     centres = np.asarray(chart.field_centres_m, np.float64)
     height, width = image.shape[:2]
     half = fraction * chart.field_half_m
@@ -252,6 +254,10 @@ def chart_field_rgb(
         (left, top), (right, bottom) = np.floor(corners.min(0)), np.ceil(corners.max(0))
         rows, columns = np.mgrid[top : bottom + 1, left : right + 1]
         grid = np.stack([columns.ravel(), rows.ravel()], axis=1)
+        if centre_pixels:
+            column, row = np.floor(corners.mean(axis=0)).astype(int)
+            means[field] = image[row, column]
+            continue
         uv = texture_transform(corners)(grid).reshape(*rows.shape, 2)
         within = np.all((uv >= 0) & (uv <= 1), axis=-1)
         inside = within[:-1, :-1] & within[1:, :-1] & within[:-1, 1:] & within[1:, 1:]
@@ -271,11 +277,15 @@ class CameraResponse:
     values
         ``(K, 3)`` the response in the spectral camera's bands, peak one per channel.
     fit_residual_pct
-            RMS of what the fitted model leaves of the fields' RGB (Eq. 9.7), in % of their mean.
+        RMS of what the fitted model leaves of the fields' RGB (Eq. 9.7), in % of their mean.
+    centre_pixels
+        The fields were not resolved by any camera (a capture of few texels): each field's RGB is
+        the pixel at its centre, its neighbours' light mixed in.
     """
 
     values: np.ndarray
     fit_residual_pct: float
+    centre_pixels: bool = False
 
 
 def measured_camera_response(
@@ -285,11 +295,13 @@ def measured_camera_response(
     grid: WavelengthGrid,
     *,
     prior: ResponsePrior | MeasuredPrior | None = "measured",
+    centre_pixels: bool = False,
 ) -> CameraResponse:
     """An RGB camera's response on ``grid`` from the fields' RGB ``(J_c, 3)`` of each of its
     ``charts`` (:func:`chart_field_rgb`), all under the same light, by the extended estimator
     (Eq. 9.6-9.14) with ``prior`` (module docstring, step 2). The charts' fields are one set,
-    each chart's its own shading neighbourhood (Eq. 9.9)."""
+    each chart's its own shading neighbourhood (Eq. 9.9); ``centre_pixels`` says how the fields'
+    RGB was taken (:func:`chart_field_rgb`)."""
     if len(field_rgb) != len(charts) or not charts:
         raise InputError(f"charts: {len(charts)} described, {len(field_rgb)} photographed")
     reflectances, positions, first_row = [], [], 0.0
@@ -327,7 +339,7 @@ def measured_camera_response(
     )
     residual = fit_residuals(all_rgb, all_fields, illuminant, grid.wavelengths_nm, result)
     values = result.response / result.response.max(axis=0)
-    return CameraResponse(values, float(100 * np.sqrt(np.mean(residual**2))))
+    return CameraResponse(values, float(100 * np.sqrt(np.mean(residual**2))), centre_pixels)
 
 
 def response_weights(measured: dict[str, CameraResponse]) -> dict[str, float]:

@@ -122,7 +122,7 @@ def _calibrate(
         summary[f"{camera} response"] = (
             "peaks R {:.0f}, G {:.0f}, B {:.0f} nm; chart fit residual {:.1f} %; weight in "
             "R_cam {:.0f} %".format(*peaks, measured.fit_residual_pct, 100 * weights[camera])
-        )
+        ) + ("; fields not resolved: their centre pixels" if measured.centre_pixels else "")
     figure = out.with_suffix(".spectra.png")
     write_measured_spectra(calibration, figure)
     summary["figure"] = str(figure)
