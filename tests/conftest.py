@@ -2,11 +2,20 @@
 
 import json
 import shutil
+import signal
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pytest
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """Ctrl-C as in a terminal: a suite started in the background (``make test &``, a CI
+    runner) inherits SIGINT ignored, which the captures, rightly, leave ignored; the tests that
+    stop captures with SIGINT, in this process or in the commands it starts, need it handled."""
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.fixture

@@ -256,9 +256,6 @@ def test_sigint_stops_a_capture_on_the_cluster_inside_the_coordinators_lock(
             seen["busy"] = str(busy)
         os.kill(os.getpid(), signal.SIGINT)
 
-    # Ctrl-C as in a terminal: a suite started in the background inherits SIGINT ignored, and
-    # the capture leaves an ignored signal ignored
-    previous_handler = signal.signal(signal.SIGINT, signal.default_int_handler)
     interrupter = threading.Thread(target=interrupt_once_frames_are_written)
     interrupter.start()
     try:
@@ -275,7 +272,6 @@ def test_sigint_stops_a_capture_on_the_cluster_inside_the_coordinators_lock(
     finally:
         gate.touch()
         interrupter.join()
-        signal.signal(signal.SIGINT, previous_handler)
         cloudpickle.unregister_pickle_by_value(sys.modules[__name__])
     assert seen["owner"].pid == os.getpid()  # the coordinator's lock, not a worker's
     assert f"is being written by PID {os.getpid()}" in seen["busy"]
