@@ -18,8 +18,10 @@ Groups, one per camera
     One entry per frame:
 
     - ``kind``: ``dark`` (shutter closed), ``oecf`` (exposure series of the colour checker for
-      the response curve), ``white`` (the white standard), ``geometric`` (the checkerboard
-      target), ``alignment`` (the material, all LEDs on), ``sample`` (the material, one LED on);
+      the response curve), ``chart`` (a second chart, the RGB cameras' HDR sets: with the
+      colour checker, their spectral responses), ``white`` (the white standard), ``geometric``
+      (the checkerboard target), ``alignment`` (the material, all LEDs on), ``sample`` (the
+      material, one LED on);
       :data:`DOME_KINDS`;
     - ``view_id``: the stage position, an index into the geometry's ``stage_angles_deg``;
       :data:`~hwbridge.schema.NO_VIEW` (-1) for dark frames;
@@ -71,7 +73,7 @@ SPECTRAL_CAMERA = "spectral"
 ALL_LEDS = -2
 """``light_id`` of frames with every LED on (alignment and geometric frames)."""
 
-DOME_KINDS = ("dark", "oecf", "white", "geometric", "alignment", "sample")
+DOME_KINDS = ("dark", "oecf", "chart", "white", "geometric", "alignment", "sample")
 """Frame kinds of dome stores (module docstring)."""
 
 

@@ -6,7 +6,9 @@ the capture store (layout: :mod:`hwbridge.dome_layout`):
 - :func:`dome_calibration`: dark frames of the spectral camera, ``dark_frames`` (thesis 10.3:
   200) per exposure time it uses, and of the RGB cameras per exposure time they use; the response
   series of a colour checker under the calibration LED (the spectral camera in one band, thesis
-  10.3, Eq. 10.4-10.8; the RGB cameras for Robertson's curve); the white standard under every LED
+  10.3, Eq. 10.4-10.8; the RGB cameras for Robertson's curve); every RGB camera's HDR set of a
+  second chart under the same LED (with the colour checker, the cameras' spectral responses by
+  the method of chapter 9); the white standard under every LED
   of the run (every RGB camera's HDR set and the spectral camera's reference band: the
   irradiance each LED gives, as each camera sees it) and under the calibration LED through every
   band (the sensitivity :math:`E_\\lambda`, 10.3); a checkerboard target, flat and tilted on a
@@ -296,7 +298,8 @@ def dome_calibration(
     Returns
     -------
     list of dict
-        Dark frames, response series (``oecf``), white frames, geometric frames, in this order.
+        Dark frames, response series (``oecf``, of the colour checker), every RGB camera's HDR
+        set of the second chart (``chart``), white frames, geometric frames, in this order.
     """
     lights = _check_ids("leds", leds)
     if not exposures.rgb_series_s or not exposures.spectral_series_s:
@@ -319,6 +322,7 @@ def dome_calibration(
         for camera in cameras.rgb
         for t in exposures.rgb_series_s
     ]
+    plan += _hdr_sets(cameras, exposures, "chart", **lit)
     reference_s = exposures.band_exposure_s(exposures.reference_band_nm)
     for led in lights:
         plan += _hdr_sets(cameras, exposures, "white", view_id=0, light_id=led)

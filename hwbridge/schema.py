@@ -400,8 +400,9 @@ class DomeGeometry(StoreModel):
 
 
 class DomeChart(StoreModel):
-    """The colour chart of the dome's response series, on the holder at stage position 0."""
+    """A colour chart the dome's RGB cameras photograph, on the holder at stage position 0."""
 
+    kind: FrameKind = Field(description="the `kind` of the frames that show it")
     name: str = Field(description="the chart and the source of its reflectances")
     columns: int = Field(gt=0, description="fields per row, in reading order")
     field_centres_m: tuple[tuple[float, float, float], ...] = Field(
@@ -420,7 +421,7 @@ class DomeRigAttrs(RigAttrs):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
     program_fields: ClassVar[dict[str, tuple[str, ...]]] = {
-        "dome-calibration": ("dark_frames", "chart", "spectrometer_wavelengths_nm"),
+        "dome-calibration": ("dark_frames", "charts", "spectrometer_wavelengths_nm"),
         "dome-run": ("material", "sample_size_m", "stage_positions"),
     }
 
@@ -459,8 +460,8 @@ class DomeRigAttrs(RigAttrs):
     white_reflectance: Spectrum = Field(
         description="the white standard's reflectance factor, from its certificate"
     )
-    chart: DomeChart | None = Field(
-        None, description="of a calibration: the chart of the response series (`DomeChart`)"
+    charts: tuple[DomeChart, ...] | None = Field(
+        None, description="of a calibration: the charts the RGB cameras photograph (`DomeChart`)"
     )
     spectrometer_wavelengths_nm: tuple[float, ...] | None = Field(
         None,

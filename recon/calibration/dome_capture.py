@@ -37,6 +37,7 @@ import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -64,6 +65,7 @@ from recon.calibration.dome_geometric import (
 )
 from recon.calibration.dome_lighting import field_scale, led_irradiance
 from recon.calibration.dome_spectra import (
+    MIN_FIELDS,
     CameraResponse,
     MeasuredLedSpectrum,
     chart_field_rgb,
@@ -167,8 +169,8 @@ class DomeCalibration:
         The LEDs' spectrum measured on the white standard, with its uncertainty and the spread
         over the LEDs.
     camera_response
-        Per RGB camera its measured spectral response ``(K, 3)`` (peak one per channel) and the
-        chart fit's residual.
+        Per RGB camera that resolves the charts' fields its measured spectral response ``(K, 3)``
+        (peak one per channel) and the chart fit's residual.
     """
 
     source: str
@@ -230,6 +232,7 @@ class DomeCalibration:
                 camera: {
                     "values": measured.values.tolist(),
                     "fit_residual_pct": measured.fit_residual_pct,
+                    "centre_pixels": measured.centre_pixels,
                 }
                 for camera, measured in self.camera_response.items()
             },
@@ -325,7 +328,11 @@ class DomeCalibration:
             window_px=int(summary["window_px"]),
             led_spectrum=MeasuredLedSpectrum.from_summary(summary["led_spectrum"]),
             camera_response={
-                camera: CameraResponse(np.asarray(entry["values"]), entry["fit_residual_pct"])
+                camera: CameraResponse(
+                    np.asarray(entry["values"]),
+                    entry["fit_residual_pct"],
+                    bool(entry.get("centre_pixels", False)),
+                )
                 for camera, entry in summary["camera_response"].items()
             },
         )
@@ -492,17 +499,32 @@ def _chart_response(
     geometry: CameraGeometry,
     led: MeasuredLedSpectrum,
     prior: ResponsePrior | MeasuredPrior | None,
-) -> CameraResponse:
-    """An RGB camera's spectral response from its response series of the chart (module
-    docstring, step 5): the series merged to one linear image, the fields' means, chapter 9."""
-    chart = recorded(rig.chart, f"{store.path}: rig chart")
-    series = select_frames(store, camera, kind="oecf")
-    merged = replace(calibration, exposure_s=np.asarray(series.exposure_s, np.float64))
-    image = rgb_linear_image(merged, series.frames)
+    centre_pixels: bool = False,
+) -> CameraResponse | None:
+    """An RGB camera's spectral response from its photographs of the charts (module docstring,
+    step 5): each chart's frames merged to one linear image, the fields' means, chapter 9;
+    ``None`` where the camera resolves fewer than :data:`~recon.calibration.dome_spectra
+    .MIN_FIELDS` fields (a grazing view of small fields), unless ``centre_pixels`` takes each
+    field's centre pixel (where no camera resolves them)."""
+    charts = recorded(rig.charts, f"{store.path}: rig charts")
     position = np.asarray(rig.geometry.led_positions_m, np.float64)[rig.calibration_led]
-    field_rgb = chart_field_rgb(image, geometry, chart, position)
+    field_rgb = []
+    for chart in charts:
+        frames = select_frames(store, camera, kind=chart.kind)
+        merged = replace(calibration, exposure_s=np.asarray(frames.exposure_s, np.float64))
+        quads = merged.hdr(frames.frames)  # no demosaicing: no colour bleeding between fields
+        field_rgb.append(
+            chart_field_rgb(
+                quads, geometry, chart, position, binning=2, centre_pixels=centre_pixels
+            )
+        )
+    resolved = np.all(np.isfinite(np.concatenate(field_rgb)), axis=1).sum()
+    if not centre_pixels and resolved < MIN_FIELDS:
+        return None
     grid = WavelengthGrid(np.asarray(rig.bands_nm, np.float64))
-    return measured_camera_response(field_rgb, chart, led, grid, prior=prior)
+    return measured_camera_response(
+        field_rgb, charts, led, grid, prior=prior, centre_pixels=centre_pixels
+    )
 
 
 def calibrate_dome(
@@ -549,7 +571,7 @@ def calibrate_dome(
                 spectral, spectral_white = _spectral_calibration(store, rig, white, led)
             else:
                 rgb[camera], rgb_white[camera] = _rgb_calibration(store, camera, rig, white)
-                measured[camera] = _chart_response(
+                response = _chart_response(
                     store,
                     camera,
                     rig,
@@ -558,7 +580,22 @@ def calibrate_dome(
                     led_spectrum,
                     camera_prior,
                 )
+                if response is not None:
+                    measured[camera] = response
             advance()
+    if not measured:  # a capture of few texels: every camera from its fields' centre pixels
+        for camera in rgb:
+            response = _chart_response(
+                store,
+                camera,
+                rig,
+                rgb[camera],
+                geometry[camera].geometry,
+                led_spectrum,
+                camera_prior,
+                centre_pixels=True,
+            )
+            measured[camera] = cast(CameraResponse, response)
     return DomeCalibration(
         source=str(store.path),
         bands_nm=grid.wavelengths_nm.copy(),

@@ -8,14 +8,16 @@ measures both:
    averaged and divided by the white standard's certified reflectance; the same under every other
    LED of the calibration gives the LED-to-LED spread of the spectrum's shape.
 2. **Each RGB camera's spectral response** (:func:`measured_camera_response`): the camera's
-   photograph of the colour chart (its response series, ``oecf``, under the calibration LED)
-   merged to linear RGB, each field's mean over the inner half of its square (its corners
-   projected by the calibrated camera), divided by the LED's irradiance fall-off over the chart,
-   and the chapter 9 extended estimator (:func:`recon.camera_char.estimate_response`, with the
-   prior learned from measured cameras) given the fields' certified reflectances and the measured
-   LED spectrum.
+   photographs of the charts under the calibration LED (the colour checker of its response
+   series, ``oecf``, and a second chart, ``chart``: 24 fields leave a response's shape loosely
+   constrained) merged to linear RGB per Bayer quad, each field's mean over the quads wholly
+   inside it (its corners projected by the calibrated camera), divided by the LED's irradiance
+   fall-off over the chart, and the chapter 9 extended estimator
+   (:func:`recon.camera_char.estimate_response`, with the prior learned from measured cameras)
+   given the fields' certified reflectances and the measured LED spectrum. A camera that resolves
+   fewer than :data:`MIN_FIELDS` fields is left out.
 
-What a lab takes from certificates rather than frames: the white standard's and the chart's
+What a lab takes from certificates rather than frames: the white standard's and the charts'
 reflectances (recorded with the store's rig), and the spectral camera's band passbands (the
 filter's nominal 10 nm cells: measuring their shape needs a monochromator; 10.3 calibrates only
 their sensitivity, against the spectrometer's reading of the white standard).
@@ -28,11 +30,11 @@ References
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy import ndimage
 
 from hwbridge.schema import DomeChart, DomeRigAttrs, Spectrum
 from hwbridge.store import CaptureStore
@@ -51,8 +53,8 @@ from recon.spectra import SampledSpectra, WavelengthGrid, resample
 
 __all__ = [
     "FIELD_FRACTION",
-    "FIELD_SAMPLES",
     "CameraResponse",
+    "MIN_FIELDS",
     "MeasuredLedSpectrum",
     "RESIDUAL_FLOOR_PCT",
     "band_response",
@@ -60,19 +62,21 @@ __all__ = [
     "combined_response",
     "measured_camera_response",
     "measured_led_spectrum",
+    "response_weights",
     "rig_spectrum",
     "square_region",
 ]
 
-FIELD_FRACTION = 0.5
-"""Fraction of a chart field's square (its side) that gives the field's mean RGB: the inner
-half, clear of the field's edges and of a pixel or two of registration error."""
+FIELD_FRACTION = 0.9
+"""Fraction of a chart field's square (its side) whose pixels give the field's mean RGB: a pixel
+counts where it lies wholly inside, so that no neighbour's light mixes in, with a margin of a
+tenth of the side for registration error (the cameras' reprojection error is a fifth of a pixel)."""
+
+MIN_FIELDS = 12
+"""Fewest resolved chart fields a camera's response is estimated from."""
 
 RESIDUAL_FLOOR_PCT = 0.5
 """Smallest chart fit residual (%) :func:`combined_response` weighs a camera by."""
-
-FIELD_SAMPLES = 7
-"""Sample points per side of a field's inner square (:func:`chart_field_rgb`)."""
 
 
 def rig_spectrum(spectrum: Spectrum, grid: WavelengthGrid) -> np.ndarray:
@@ -223,33 +227,43 @@ def chart_field_rgb(
     chart: DomeChart,
     led_position_m: np.ndarray,
     fraction: float = FIELD_FRACTION,
+    *,
+    binning: int = 1,
+    centre_pixels: bool = False,
 ) -> np.ndarray:
     """Mean linear RGB ``(J, 3)`` of every chart field in ``image`` ``(H, W, 3)`` (stage position
-    0): the image sampled bilinearly at :data:`FIELD_SAMPLES` x :data:`FIELD_SAMPLES` points
-    spread over the inner ``fraction`` of the field's square (so that a field a grazing camera
-    sees a pixel wide still counts), divided by the LED's relative irradiance at the field's
-    centre (:func:`recon.calibration.dome_lighting.led_irradiance`)."""
+    0; each of its pixels ``binning`` x ``binning`` of the camera's, e.g. 2 for Bayer quads):
+    the mean of the pixels that lie wholly inside the central ``fraction`` of the field's
+    square, divided by the LED's relative irradiance at the field's centre
+    (:func:`recon.calibration.dome_lighting.led_irradiance`); NaN for a field no pixel lies
+    inside (too small in the camera's view: not resolved). With ``centre_pixels`` each field's
+    RGB is the pixel at its centre instead, resolved or not."""
     centres = np.asarray(chart.field_centres_m, np.float64)
-    offsets = fraction * chart.field_half_m * np.linspace(-1, 1, FIELD_SAMPLES)
-    grid_x, grid_y = np.meshgrid(offsets, offsets)
-    square = np.column_stack([grid_x.ravel(), grid_y.ravel(), np.zeros(grid_x.size)])
-    points = (centres[:, None, :] + square[None]).reshape(-1, 3)
-    xy = geometry.project(points)
     height, width = image.shape[:2]
-    outside = (xy[:, 0] < 0) | (xy[:, 0] > width - 1) | (xy[:, 1] < 0) | (xy[:, 1] > height - 1)
-    if outside.any():
-        field = int(np.flatnonzero(outside)[0]) // square.shape[0]
-        raise InputError(
-            f"chart field {field + 1}: outside the camera's {width} x {height} px image"
-        )
-    sampled = np.stack(
-        [
-            ndimage.map_coordinates(image[..., channel], [xy[:, 1], xy[:, 0]], order=1)
-            for channel in range(image.shape[-1])
-        ],
-        axis=-1,
-    )
-    means = sampled.reshape(len(centres), square.shape[0], -1).mean(axis=1)
+    half = fraction * chart.field_half_m
+    square = np.array([[-half, half, 0], [half, half, 0], [half, -half, 0], [-half, -half, 0]])
+    means = np.full((len(centres), image.shape[-1]), np.nan)
+    for field, centre in enumerate(centres):
+        # the field's corners with pixel edges at integers, in units of the image's pixels
+        corners = (geometry.project(centre + square) + 0.5) / binning
+        outside = (corners < 0) | (corners > [width, height])
+        if outside.any():
+            raise InputError(
+                f"chart field {field + 1}: outside the camera's {width} x {height} px image"
+            )
+        (left, top), (right, bottom) = np.floor(corners.min(0)), np.ceil(corners.max(0))
+        rows, columns = np.mgrid[top : bottom + 1, left : right + 1]
+        grid = np.stack([columns.ravel(), rows.ravel()], axis=1)
+        if centre_pixels:
+            column, row = np.floor(corners.mean(axis=0)).astype(int)
+            means[field] = image[row, column]
+            continue
+        uv = texture_transform(corners)(grid).reshape(*rows.shape, 2)
+        within = np.all((uv >= 0) & (uv <= 1), axis=-1)
+        inside = within[:-1, :-1] & within[1:, :-1] & within[:-1, 1:] & within[1:, 1:]
+        if inside.any():
+            block = image[int(top) : int(bottom), int(left) : int(right)]
+            means[field] = block[inside].mean(axis=0)
     irradiance = led_irradiance(centres, led_position_m)
     return means / (irradiance / irradiance.mean())[:, None]
 
@@ -263,52 +277,84 @@ class CameraResponse:
     values
         ``(K, 3)`` the response in the spectral camera's bands, peak one per channel.
     fit_residual_pct
-            RMS of what the fitted model leaves of the fields' RGB (Eq. 9.7), in % of their mean.
+        RMS of what the fitted model leaves of the fields' RGB (Eq. 9.7), in % of their mean.
+    centre_pixels
+        The fields were not resolved by any camera (a capture of few texels): each field's RGB is
+        the pixel at its centre, its neighbours' light mixed in.
     """
 
     values: np.ndarray
     fit_residual_pct: float
+    centre_pixels: bool = False
 
 
 def measured_camera_response(
-    field_rgb: np.ndarray,
-    chart: DomeChart,
+    field_rgb: Sequence[np.ndarray],
+    charts: Sequence[DomeChart],
     led: MeasuredLedSpectrum,
     grid: WavelengthGrid,
     *,
     prior: ResponsePrior | MeasuredPrior | None = "measured",
+    centre_pixels: bool = False,
 ) -> CameraResponse:
-    """An RGB camera's response on ``grid`` from its chart fields' RGB ``(J, 3)``
-    (:func:`chart_field_rgb`) by the extended estimator (Eq. 9.6-9.14) with ``prior`` (module
-    docstring, step 2)."""
-    reflectance = SampledSpectra(
-        WavelengthGrid(np.asarray(chart.reflectance.wavelengths_nm, np.float64)),
-        np.atleast_2d(np.asarray(chart.reflectance.values, np.float64)),
-    )
-    fields = resample(reflectance, grid, method="box", out_of_range="clamp").values
-    if fields.shape[0] != field_rgb.shape[0]:
-        raise InputError(
-            f"chart: {fields.shape[0]} certified fields, {field_rgb.shape[0]} photographed"
+    """An RGB camera's response on ``grid`` from the fields' RGB ``(J_c, 3)`` of each of its
+    ``charts`` (:func:`chart_field_rgb`), all under the same light, by the extended estimator
+    (Eq. 9.6-9.14) with ``prior`` (module docstring, step 2). The charts' fields are one set,
+    each chart's its own shading neighbourhood (Eq. 9.9); ``centre_pixels`` says how the fields'
+    RGB was taken (:func:`chart_field_rgb`)."""
+    if len(field_rgb) != len(charts) or not charts:
+        raise InputError(f"charts: {len(charts)} described, {len(field_rgb)} photographed")
+    reflectances, positions, first_row = [], [], 0.0
+    for rgb, chart in zip(field_rgb, charts, strict=True):
+        reflectance = SampledSpectra(
+            WavelengthGrid(np.asarray(chart.reflectance.wavelengths_nm, np.float64)),
+            np.atleast_2d(np.asarray(chart.reflectance.values, np.float64)),
         )
-    index = np.arange(fields.shape[0])
-    positions = np.column_stack([index % chart.columns, index // chart.columns]).astype(float)
+        fields = resample(reflectance, grid, method="box", out_of_range="clamp").values
+        if fields.shape[0] != len(rgb):
+            raise InputError(
+                f"chart {chart.name}: {fields.shape[0]} certified fields, {len(rgb)} photographed"
+            )
+        index = np.arange(fields.shape[0])
+        rows = index // chart.columns + first_row
+        positions.append(np.column_stack([index % chart.columns, rows]).astype(float))
+        reflectances.append(np.clip(fields, 0.0, 1.0))
+        first_row = rows.max() + 2  # apart, so that no shading neighbourhood spans two charts
+    all_rgb = np.concatenate(field_rgb).astype(np.float64)
+    resolved = np.all(np.isfinite(all_rgb), axis=1)
+    if resolved.sum() < MIN_FIELDS:
+        raise InputError(f"charts: {resolved.sum()} fields resolved, expected {MIN_FIELDS}")
+    all_rgb = np.maximum(all_rgb[resolved], 0.0)  # dark fields' noise
+    all_fields = np.concatenate(reflectances)[resolved]
     illuminant = led.on(grid)
-    field_rgb = np.maximum(np.asarray(field_rgb, np.float64), 0.0)  # dark fields' noise
     result: CharacterizationResult = estimate_response(
-        field_rgb,
-        np.clip(fields, 0.0, 1.0),
+        all_rgb,
+        all_fields,
         illuminant,
         grid.wavelengths_nm,
         method="extended",
-        field_positions=positions,
+        field_positions=np.concatenate(positions)[resolved],
         prior=prior,
         return_details=True,
     )
-    residual = fit_residuals(
-        field_rgb, np.clip(fields, 0.0, 1.0), illuminant, grid.wavelengths_nm, result
-    )
+    residual = fit_residuals(all_rgb, all_fields, illuminant, grid.wavelengths_nm, result)
     values = result.response / result.response.max(axis=0)
-    return CameraResponse(values, float(100 * np.sqrt(np.mean(residual**2))))
+    return CameraResponse(values, float(100 * np.sqrt(np.mean(residual**2))), centre_pixels)
+
+
+def response_weights(measured: dict[str, CameraResponse]) -> dict[str, float]:
+    """Per camera its weight in :func:`combined_response`: the inverse square of its chart fit's
+    residual (at least :data:`RESIDUAL_FLOOR_PCT`), normalized to a sum of one.
+
+    Examples
+    --------
+    >>> response_weights({"a": CameraResponse(np.ones((2, 3)), 1.0),
+    ...                   "b": CameraResponse(np.ones((2, 3)), 2.0)})
+    {'a': 0.8, 'b': 0.2}
+    """
+    residual = np.array([max(m.fit_residual_pct, RESIDUAL_FLOOR_PCT) for m in measured.values()])
+    weights = residual**-2 / np.sum(residual**-2)
+    return {camera: round(float(w), 12) for camera, w in zip(measured, weights, strict=True)}
 
 
 def combined_response(
@@ -328,8 +374,7 @@ def combined_response(
     ([0.249, 0.25, 0.25, 0.251], True)
     """
     per_camera = np.array([band_response(m.values, led, white) for m in measured.values()])
-    residual = np.array([max(m.fit_residual_pct, RESIDUAL_FLOOR_PCT) for m in measured.values()])
-    weights = residual**-2 / np.sum(residual**-2)
+    weights = np.array(list(response_weights(measured).values()))
     mean = np.tensordot(weights, per_camera, axes=1)
     if len(per_camera) < 2:
         return mean, np.zeros_like(mean)

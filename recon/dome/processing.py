@@ -75,10 +75,18 @@ __all__ = [
 ]
 
 P_DYN = 0.0
-"""Eq. 10.2's exponent: no dynamic-range compression. The thesis found 0.5-0.6 best for BTFs;
-on the twin's reduced dome capture of the colour checker (2 stage positions x 5 LEDs x 3 RGB
-cameras, 32 texels) its diffuse fields came out at 27.8 % (Eq. 6.8) with 0.5, 13.2 % with 0.25
-and 10.8 % with 0 (BENCHMARKS.md, "Dome processing")."""
+"""Eq. 10.2's exponent: no dynamic-range compression. The thesis found 0.5-0.6 best for BTFs, and
+so does the analytic path of the twin's dome study for three materials of four (the same images
+reconstructed 4-6 % better at 0.5 than at 0; the wallpaper equal). From the twin's dome capture
+stores (one stage position x 10 LEDs x 3 RGB cameras, 32 texels, the calibration's measured
+spectra; mean Eq. 6.8 with / without spectral data at 0, 0.5 and 0.6, BENCHMARKS.md "The dome's
+spectra measured") 0 does better for three materials of four: colour checker 40.3 / 45.3, 41.1 /
+45.8, 42.0 / 46.2 % (its diffuse fields 4.8, 5.2, 5.5 %), Lego 101 / 100, 108 / 104, 112 /
+106 %, red fabric 296 / 364, 314 / 392, 333 / 412 %; the wallpaper 0.2-0.4 points worse (28.4
+/ 34.5, 28.2 / 34.1, 28.3 / 34.1 %). The stores' errors come mostly from texels at edges and in
+shadows (their edge-free texels do several times better, "Dome study from capture stores");
+that the compression weighs those up is the likely cause, not separated further. ``spectwin
+process --p-dyn`` chooses another."""
 
 TARGET_RELATIVE_NOISE = 0.04
 """Relative noise the band filters leave. Figure 10.5's filters nearly cancel the noise; the
@@ -295,6 +303,12 @@ def _open_btf(
     if resume and out.exists():
         btf = BTFStore.open(out, writable=True)
         require_same_inputs(btf, digests, work.texels)
+        begun = (btf.metadata.calibration or {}).get("p_dyn", work.p_dyn)
+        if begun != work.p_dyn:
+            raise InputError(
+                f"{out}: begun with p_dyn {begun:g}; a resumed processing keeps it, got "
+                f"{work.p_dyn:g}"
+            )
         btf.prepare_resume()
         return btf
     light_dirs, view_dirs = dome_directions(work.run, work.calibration)

@@ -19,7 +19,7 @@ import zarr
 from typer.testing import CliRunner
 
 from hwbridge.lock import StoreLock
-from hwbridge.schema import GonioRigAttrs
+from hwbridge.schema import SCHEMA_VERSION, GonioRigAttrs
 from hwbridge.store import CaptureStore, FrameRecord
 from recon.btf.store import BTFStore
 from recon.calibration.gonio import GonioCalibration
@@ -157,13 +157,13 @@ PROBES: list[tuple[list[str], int, str]] = [
     (
         ["process", "@OLD_CAPTURE", "--calibration", "@CAL", "--out", "@NEW_BTF"],
         2,
-        "old.capture.zarr: a capture store of schema version 0, expected 2 (written by another "
-        "version of the software)",
+        f"old.capture.zarr: a capture store of schema version 0, expected {SCHEMA_VERSION} "
+        "(written by another version of the software)",
     ),
     (
         ["process", "@UNVERSIONED_CAPTURE", "--calibration", "@CAL", "--out", "@NEW_BTF"],
         2,
-        "a capture store of schema version none recorded, expected 2",
+        f"a capture store of schema version none recorded, expected {SCHEMA_VERSION}",
     ),
     (
         ["process", "@EMPTY", "--calibration", "@CAL", "--out", "@NEW_BTF"],
@@ -253,8 +253,16 @@ PROBES: list[tuple[list[str], int, str]] = [
     (["store", "check", "@PLAIN"], 2, "is a file: expected a capture store or a BTF store"),
     (["store", "check", "@EMPTY"], 2, "is not a spectwin store"),
     (["store", "check", "@CAPTURE", "--bogus"], 2, "No such option: --bogus"),
-    (["store", "check", "@OLD_CAPTURE"], 2, "a capture store of schema version 0, expected 2"),
-    (["store", "check", "@UNVERSIONED_CAPTURE"], 2, "schema version none recorded, expected 2"),
+    (
+        ["store", "check", "@OLD_CAPTURE"],
+        2,
+        f"a capture store of schema version 0, expected {SCHEMA_VERSION}",
+    ),
+    (
+        ["store", "check", "@UNVERSIONED_CAPTURE"],
+        2,
+        f"schema version none recorded, expected {SCHEMA_VERSION}",
+    ),
     (["store", "check", "@OLD_BTF"], 2, "old.btf.zarr: a BTF store of format version 1, expected"),
     (["store", "nosuch"], 2, "No such command 'nosuch'"),
     # camchar-study

@@ -61,7 +61,7 @@ def test_the_run_takes_per_stage_position_an_alignment_set_then_hdr_sets_and_sch
     assert camera_steps(steps, "spectral")[0] == 2  # the spectral alignment frame
 
 
-def test_the_calibration_has_dark_series_response_series_white_and_geometric_frames():
+def test_the_calibration_has_dark_series_response_series_charts_white_and_geometric_frames():
     plan = dome_calibration(
         CAMERAS,
         EXPOSURES,
@@ -72,7 +72,7 @@ def test_the_calibration_has_dark_series_response_series_white_and_geometric_fra
         rgb_dark_frames=4,
     )
     kinds = [step["kind"] for step in plan]
-    assert kinds == sorted(kinds, key=["dark", "oecf", "white", "geometric"].index)
+    assert kinds == sorted(kinds, key=["dark", "oecf", "chart", "white", "geometric"].index)
     darks = [s for s in plan if s["kind"] == "dark"]
     spectral_times = {s["exposure_s"] for s in darks if s["camera"] == "spectral"}
     # every exposure the spectral camera makes: bands, response series, all-LED frames
@@ -84,6 +84,11 @@ def test_the_calibration_has_dark_series_response_series_white_and_geometric_fra
     assert {s["light_id"] for s in oecf} == {3}
     assert [s["exposure_s"] for s in oecf if s["camera"] == "spectral"] == [0.5, 1.0]
     assert {s["band_nm"] for s in oecf if s["camera"] == "spectral"} == {550.0}
+    chart = [s for s in plan if s["kind"] == "chart"]  # every RGB camera's HDR set, no bands
+    assert [(s["camera"], s["exposure_s"]) for s in chart] == [
+        (camera, t) for camera in CAMERAS.rgb for t in HDR
+    ]
+    assert {s["light_id"] for s in chart} == {3} and {s["view_id"] for s in chart} == {0}
     white = [s for s in plan if s["kind"] == "white"]
     for led in (5, 7):  # every RGB camera's HDR set and the spectral reference band per LED
         lit = [s for s in white if s["light_id"] == led]

@@ -147,30 +147,37 @@ def _spectra_in(node, path: str = ""):
             yield path
         for key, value in node.items():
             yield from _spectra_in(value, f"{path}.{key}".lstrip("."))
+    elif isinstance(node, list):
+        for index, value in enumerate(node):
+            yield from _spectra_in(value, f"{path}.{index}")
 
 
 def test_the_calibration_store_records_no_model_spectrum(root):
     """The calibration capture records no spectrum of the twin's models: the only spectra in its
-    rig attribute are certificates (the white standard's and the chart's reflectance); the LED
-    spectrum comes from the spectrometer's readings and the cameras' responses from their chart
-    photographs."""
+    rig attribute are certificates (the white standard's and the two charts' reflectances); the
+    LED spectrum comes from the spectrometer's readings and the cameras' responses from their
+    chart photographs."""
     rig = CaptureStore.open(root / "cal.capture.zarr").attrs["rig"]
-    assert sorted(_spectra_in(rig)) == ["chart.reflectance", "white_reflectance"]
+    certificates = ["charts.0.reflectance", "charts.1.reflectance", "white_reflectance"]
+    assert sorted(_spectra_in(rig)) == certificates
     assert {"led_spectrum", "rgb_response"}.isdisjoint(rig)
 
 
 def test_the_measured_spectra_meet_the_twins_truth(root):
     """10.3 as a lab does it: the LED spectrum from the spectrometer's readings of the white
-    standard, every RGB camera's response from its chart photograph (chapter 9, the measured
-    cameras' prior). Measured with this seed: LED {led} % of the peak (RMSE); cameras at 0 /
-    37.5 / 75 degrees, RMSE in % of each channel's peak (R, G, B): {cameras}; R_cam (the cameras
-    weighted by their chart fit) {response}."""
+    standard, every RGB camera's response from its photographs of the colour checker and the
+    Esser chart (chapter 9, the measured cameras' prior). Measured with this seed at 32 texels:
+    the LED spectrum 0.05 % of its peak (RMSE); the cameras at 0 / 37.5 degrees 3.7, 5.6, 2.9 /
+    2.3, 2.3, 3.8 % of each channel's peak (R, G, B); the 75 degree camera resolves too few
+    fields to be measured (its response is left out); R_cam 2.8, 2.2, 1.0 % (BENCHMARKS.md,
+    "The dome's spectra measured"). Bounds 1.5-2 times those."""
     errors = spectra_errors(DomeCalibration.load(root / "cal.npz"))
     assert errors["led_rmse_pct_of_peak"] < 0.5
+    assert sorted(errors["cameras"]) == ["rgb00", "rgb05"]
     for camera in ("rgb00", "rgb05"):
         rmse = errors["cameras"][camera]["rmse_pct_of_peak_rgb"]
-        assert np.mean(rmse) < 5.0 and max(rmse) < 8.0, (camera, rmse)
-    assert max(errors["response_rmse_pct_of_peak_rgb"]) < 8.0
+        assert np.mean(rmse) < 6.0 and max(rmse) < 9.0, (camera, rmse)
+    assert max(errors["response_rmse_pct_of_peak_rgb"]) < 5.0
 
 
 def test_band_sensitivities_follow_the_camera_model(root):

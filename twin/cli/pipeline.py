@@ -90,7 +90,9 @@ def calibrate(
     """Gonioreflectometer: response curve (Robertson), white factors F' (Eq. 3.3) and the
     exposure plan (Eq. 3.4, multiples of 1/15 s for the HMI lamp). Dome: every camera's
     geometry (checkerboard frames, OpenCV), the spectral camera's low-SNR calibration (10.3),
-    the RGB cameras' responses and the white standard under every LED.
+    the RGB cameras' response curves, the white standard under every LED, the LED spectrum from
+    the spectrometer's readings of the white standard and every RGB camera's spectral response
+    from its photograph of the colour chart (chapter 9), with a figure of both.
 
     Example: spectwin calibrate out/cal.capture.zarr --out out/cal.json
     """
@@ -142,6 +144,16 @@ def process(
     ] = False,
     workers: WorkersOption = 1,
     scheduler: SchedulerOption = None,
+    p_dyn: Annotated[
+        float | None,
+        typer.Option(
+            min=0.0,
+            max=1.0,
+            help="dome: Eq. 10.2's exponent of the joint solve (default 0: on the twin's dome "
+            "stores the thesis's 0.5-0.6 did worse for three materials of four, 1 % better for "
+            "the fourth).",
+        ),
+    ] = None,
     as_json: JsonFlag = False,
 ) -> None:
     """Calibrate and register a measurement run into a spectral BTF store: the
@@ -168,13 +180,16 @@ def process(
         require_new_store(out)
     capture = CaptureStore.open(store)
     kind = capture_rig_kind(capture)
-    _refuse_unused(ctx, ("workers", "scheduler"), kind.process_options, f"a {kind.name} run")
+    _refuse_unused(
+        ctx, ("workers", "scheduler", "p_dyn"), kind.process_options, f"a {kind.name} run"
+    )
     options = {
         "texels": texels,
         "manual_corners": read_manual_corners(manual_corners) if manual_corners else None,
         "resume": resume,
         "workers": workers,
         "scheduler": scheduler,
+        "p_dyn": p_dyn,
     }
     require_sound_capture(capture, store)
     try:

@@ -22,14 +22,16 @@ from scipy.spatial.transform import Rotation
 from hwbridge.schema import CheckerboardTarget, DomeChart, DomeHolder, Spectrum
 from recon.errors import InputError
 from recon.spectra import WavelengthGrid
-from twin.components.targets import colorchecker_reflectances
+from twin.components.targets import colorchecker_reflectances, esser_reflectances
 from twin.materials import Material
 from twin.materials.calibration_targets import (
     CHART_FILL,
+    ESSER_COLUMNS,
     chart_field_centres,
     checkerboard_corners,
     checkerboard_target,
     colorchecker_chart,
+    esser_chart,
     zenith_white_target,
 )
 from twin.materials.sample_holder import (
@@ -42,7 +44,6 @@ from twin.materials.sample_holder import (
 from twin.materials.surfaces import SurfacePart, transformed
 
 __all__ = [
-    "CHART_COLUMNS",
     "CHART_SIZE_M",
     "CHECKERBOARD",
     "chart_geometry",
@@ -60,8 +61,6 @@ card with a 3 mm border, 51 x 46 mm: it covers the holder's opening and stays in
 CHART_SIZE_M = 2 * PAPER_INNER_HALF_M - 0.001
 """Width of the colour checker of the response series: it fills the holder's opening."""
 
-CHART_COLUMNS = 6
-"""Fields per row of the colour checker (4 rows of 6)."""
 
 _ON_PLATE_M = 0.0001  # targets in the opening lie this much above the plate, below the paper
 _CLEARANCE_M = 0.0015  # the checkerboard card's lowest edge above the plate's top
@@ -70,6 +69,7 @@ _CONTENT_OF_KIND = {
     "alignment": "material",
     "white": "white",
     "oecf": "chart",
+    "chart": "esser",
     "geometric": "checkerboard",
 }
 
@@ -114,6 +114,8 @@ def holder_scene_parts(content: str, material: Material | None) -> list[SurfaceP
         extra = _raised(zenith_white_target(2 * PAPER_INNER_HALF_M), _ON_PLATE_M)
     elif content == "chart":
         extra = _raised(colorchecker_chart(CHART_SIZE_M), _ON_PLATE_M)
+    elif content == "esser":
+        extra = _raised(esser_chart(CHART_SIZE_M), _ON_PLATE_M)
     elif content.startswith("checkerboard@"):
         tilt = float(content.split("@", 1)[1])
         extra = [
@@ -124,22 +126,34 @@ def holder_scene_parts(content: str, material: Material | None) -> list[SurfaceP
     return holder_parts() + extra
 
 
-def chart_geometry(grid: WavelengthGrid) -> DomeChart:
-    """The colour checker of the response series for a calibration store's metadata: its
-    fields' centres and half-size in the sample frame and, as its certificate, the ColorChecker
-    N Ohta reflectances (``colour``) on ``grid``."""
-    reflectance = colorchecker_reflectances(grid, out_of_range="clamp")
-    centres = chart_field_centres(reflectance.values.shape[0], CHART_COLUMNS, CHART_SIZE_M)
-    centres[:, 2] += _ON_PLATE_M
-    return DomeChart(
-        name="ColorChecker N Ohta (colour-science)",
-        columns=CHART_COLUMNS,
-        field_centres_m=centres.tolist(),
-        field_half_m=CHART_FILL * CHART_SIZE_M / CHART_COLUMNS / 2,
-        reflectance=Spectrum(
-            wavelengths_nm=grid.wavelengths_nm.tolist(), values=reflectance.values.tolist()
-        ),
+def chart_geometry(grid: WavelengthGrid) -> tuple[DomeChart, ...]:
+    """The charts the RGB cameras photograph for their spectral responses, for a calibration
+    store's metadata: the colour checker of the response series (``oecf`` frames) and the Esser
+    chart (``chart`` frames), each with its fields' centres and half-size in the sample frame
+    and, as its certificate, its reflectances on ``grid`` (the ColorChecker N Ohta's from
+    ``colour``; the Esser chart's measured spectra)."""
+    charts = (
+        ("oecf", "ColorChecker N Ohta (colour-science)", colorchecker_reflectances, 6),
+        ("chart", "Esser test chart (isetbio measurements)", esser_reflectances, ESSER_COLUMNS),
     )
+    described = []
+    for kind, name, reflectances, columns in charts:
+        reflectance = reflectances(grid, out_of_range="clamp")
+        centres = chart_field_centres(reflectance.values.shape[0], columns, CHART_SIZE_M)
+        centres[:, 2] += _ON_PLATE_M
+        described.append(
+            DomeChart(
+                kind=kind,
+                name=name,
+                columns=columns,
+                field_centres_m=centres.tolist(),
+                field_half_m=CHART_FILL * CHART_SIZE_M / columns / 2,
+                reflectance=Spectrum(
+                    wavelengths_nm=grid.wavelengths_nm.tolist(), values=reflectance.values.tolist()
+                ),
+            )
+        )
+    return tuple(described)
 
 
 def holder_geometry() -> DomeHolder:

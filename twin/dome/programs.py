@@ -429,7 +429,7 @@ def _program(
         calibration_led=parts.calibration_led,
         led_current_ma=LED_FULL_SCALE_MA,
         white_reflectance=_spectrum(zenith_white_reflectance(CERTIFICATE_GRID).values),
-        chart=chart_geometry(CERTIFICATE_GRID) if calibration else None,
+        charts=chart_geometry(CERTIFICATE_GRID) if calibration else None,
         spectrometer_wavelengths_nm=(
             SPECTROMETER_GRID.wavelengths_nm.tolist() if calibration else None
         ),

@@ -97,6 +97,7 @@ def _calibrate(
     capture: CaptureStore, out: Path | None, options: dict[str, Any], show_progress: bool
 ) -> Outcome:
     from recon.calibration.dome_capture import calibrate_dome
+    from recon.calibration.dome_spectra import response_weights
     from twin.studies.dome_figures import write_measured_spectra
 
     out = DOME_CALIBRATION if out is None else out
@@ -115,13 +116,13 @@ def _calibrate(
         f"spectrometer readings, standard error at most {100 * led.uncertainty.max():.2f} % of "
         f"the peak, LED-to-LED spread at most {max(led.spread_pct.values(), default=0.0):.2f} %"
     )
+    weights = response_weights(calibration.camera_response)
     for camera, measured in calibration.camera_response.items():
         peaks = calibration.bands_nm[np.argmax(measured.values, axis=0)]
         summary[f"{camera} response"] = (
-            "peaks R {:.0f}, G {:.0f}, B {:.0f} nm; chart fit residual {:.1f} %".format(
-                *peaks, measured.fit_residual_pct
-            )
-        )
+            "peaks R {:.0f}, G {:.0f}, B {:.0f} nm; chart fit residual {:.1f} %; weight in "
+            "R_cam {:.0f} %".format(*peaks, measured.fit_residual_pct, 100 * weights[camera])
+        ) + ("; fields not resolved: their centre pixels" if measured.centre_pixels else "")
     figure = out.with_suffix(".spectra.png")
     write_measured_spectra(calibration, figure)
     summary["figure"] = str(figure)
@@ -148,7 +149,7 @@ def _process(
     from hwbridge.lock import StoreLock
     from recon.btf.inputs import input_digests
     from recon.calibration.dome_capture import DomeCalibration
-    from recon.dome.processing import check_dome_run, process_dome
+    from recon.dome.processing import P_DYN, check_dome_run, process_dome
     from recon.dome.run import open_dome_run
 
     dome_calibration = DomeCalibration.load(calibration)
@@ -165,6 +166,7 @@ def _process(
             manual_corners=options.get("manual_corners"),
             resume=resume,
             show_progress=show_progress,
+            p_dyn=P_DYN if options.get("p_dyn") is None else options["p_dyn"],
             created=lambda _: lock.move_into(),
             digests=digests,
         )
@@ -178,6 +180,7 @@ def _process(
         ),
         "projected_marks": list(recorded(found.projected_marks, f"{out}: projected_marks")),
         "saturated_texels": found.saturated_texels,
+        "p_dyn": found.calibration.get("p_dyn") if found.calibration else None,
     }
     return Outcome("dome processing", summary)
 
@@ -228,6 +231,7 @@ DOME = RigKind(
     process=_process,
     evaluate=_evaluate,
     estimate=_estimate,
+    process_options=frozenset({"p_dyn"}),
     sweep=SweepKind(DomeConfig, DomePlan, DOME_MEASURES, check_dome_point, measure_dome_point),
     calibration_file=DOME_CALIBRATION,
     calibration_suffix=".npz",

@@ -26,6 +26,7 @@ from twin.materials.surfaces import SurfacePart
 
 __all__ = [
     "CHART_FILL",
+    "ESSER_COLUMNS",
     "chart_field_centres",
     "chart_parts",
     "checkerboard_corners",
@@ -34,6 +35,9 @@ __all__ = [
     "esser_chart",
     "zenith_white_target",
 ]
+
+ESSER_COLUMNS = 11
+"""Fields per row of the Esser chart (:func:`esser_chart`)."""
 
 CHART_FILL = 0.8
 """Side of a chart's coloured square relative to the pitch of its fields."""
@@ -105,7 +109,7 @@ def colorchecker_chart(size_m: float = 0.05) -> list[SurfacePart]:
 
 def esser_chart(size_m: float = 0.05) -> list[SurfacePart]:
     """The Esser test chart's 113 measured patches (``esser_reflectances``), 11 columns."""
-    return chart_parts(esser_reflectances(FINE_GRID, out_of_range="clamp"), 11, size_m)
+    return chart_parts(esser_reflectances(FINE_GRID, out_of_range="clamp"), ESSER_COLUMNS, size_m)
 
 
 def checkerboard_target(

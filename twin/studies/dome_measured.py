@@ -39,7 +39,7 @@ from twin.dome.programs import DomeCaptureSize
 from twin.dome.setup import dome_setup
 from twin.rigs.rig_config import load_rig
 from twin.sensor.model import Sensor
-from twin.studies.dome_stores import STORE_CAPTURE, capture_study_stores, same_images
+from twin.studies.dome_stores import STORE_CAPTURE, material_stores, same_images
 
 __all__ = [
     "P_DYNS",
@@ -145,13 +145,7 @@ def measured_study(
     result: dict = {"capture": size.__dict__, "seed": seed, "materials": {}}
     calibration: DomeCalibration | None = None
     for material in materials:
-
-        def material_step(name: str, material: str = material) -> None:
-            step(f"{material}: {name}")
-
-        run_store, calibration_store = capture_study_stores(
-            folder, material, size, seed=seed, step=material_step
-        )
+        run_store, calibration_store = material_stores(folder, material, size, seed=seed, step=step)
         if calibration is None:
             step("calibrating from the store (measured spectra)")
             calibration = calibrate_dome(calibration_store)

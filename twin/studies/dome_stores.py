@@ -58,6 +58,7 @@ __all__ = [
     "UNIFORM_TRUTH_PCT",
     "SameImages",
     "capture_study_stores",
+    "material_stores",
     "same_images",
     "store_exposure_ratio",
     "store_study",
@@ -115,6 +116,20 @@ def capture_study_stores(
         step(f"capturing the {name} store")
         programs[name]().run(path, resume=path.exists())
     return paths[material], paths["calibration"]
+
+
+def material_stores(
+    folder: Path,
+    material: str,
+    size: DomeCaptureSize,
+    *,
+    seed: int,
+    step: Callable[[str], None],
+) -> tuple[Path, Path]:
+    """:func:`capture_study_stores` with its steps named after ``material``."""
+    return capture_study_stores(
+        folder, material, size, seed=seed, step=lambda name: step(f"{material}: {name}")
+    )
 
 
 def _check_capture_size(path: Path, size: DomeCaptureSize) -> None:
@@ -377,13 +392,7 @@ def store_study(
     result: dict = {"capture": size.__dict__, "folder": str(folder), "materials": {}}
     calibration = None
     for material in materials:
-
-        def material_step(name: str, material: str = material) -> None:
-            step(f"{material}: {name}")
-
-        run_store, calibration_store = capture_study_stores(
-            folder, material, size, seed=seed, step=material_step
-        )
+        run_store, calibration_store = material_stores(folder, material, size, seed=seed, step=step)
         if calibration is None:
             step("calibrating the dome from its calibration store")
             calibration = study_calibration(calibration_store)

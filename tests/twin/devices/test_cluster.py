@@ -170,6 +170,12 @@ def test_a_capture_cut_short_resumes_on_the_cluster_with_the_same_frames(client,
     _assert_same_capture(resumed, reference, "k4")
 
 
+GATE_TIMEOUT_S = 300
+"""How long a gated camera waits for its gate (and the test for written frames): the gate opens
+after the coordinator's first gather, which takes a minute or more on a loaded 2-core machine; a
+gate that never opens still fails the test."""
+
+
 def _done(path) -> int:
     try:
         store = CaptureStore.open(path)
@@ -190,7 +196,7 @@ class _GatedCamera:
         return getattr(self._camera, name)
 
     def snap(self):
-        deadline = time.monotonic() + 120
+        deadline = time.monotonic() + GATE_TIMEOUT_S
         while self._steps[self._taken] >= self._first_gated and not self._gate.exists():
             assert time.monotonic() < deadline, "the gate was never opened"
             time.sleep(0.01)
@@ -240,7 +246,7 @@ def test_sigint_stops_a_capture_on_the_cluster_inside_the_coordinators_lock(
     monkeypatch.setattr(cluster_module, "_gather", gather_then_open_the_gate)
 
     def interrupt_once_frames_are_written() -> None:
-        deadline = time.monotonic() + 120
+        deadline = time.monotonic() + GATE_TIMEOUT_S
         while _done(path) < 5 and time.monotonic() < deadline:
             time.sleep(0.02)
         seen["owner"] = lock_owner(path)
@@ -250,6 +256,9 @@ def test_sigint_stops_a_capture_on_the_cluster_inside_the_coordinators_lock(
             seen["busy"] = str(busy)
         os.kill(os.getpid(), signal.SIGINT)
 
+    # Ctrl-C as in a terminal: a suite started in the background inherits SIGINT ignored, and
+    # the capture leaves an ignored signal ignored
+    previous_handler = signal.signal(signal.SIGINT, signal.default_int_handler)
     interrupter = threading.Thread(target=interrupt_once_frames_are_written)
     interrupter.start()
     try:
@@ -266,6 +275,7 @@ def test_sigint_stops_a_capture_on_the_cluster_inside_the_coordinators_lock(
     finally:
         gate.touch()
         interrupter.join()
+        signal.signal(signal.SIGINT, previous_handler)
         cloudpickle.unregister_pickle_by_value(sys.modules[__name__])
     assert seen["owner"].pid == os.getpid()  # the coordinator's lock, not a worker's
     assert f"is being written by PID {os.getpid()}" in seen["busy"]
