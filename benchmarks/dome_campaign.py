@@ -6,8 +6,10 @@ x 198 LEDs x 11 RGB cameras and the spectral camera) at ``--texels`` (64: 264 x 
 Its store is made for the whole plan; then the first stage position is captured: its alignment
 frames (all LEDs on), then the frames of the first ``--leds`` LEDs in plan order (all 198 by
 default: with ``--led-renders pose`` a stage position's LEDs are rendered in passes of
-consecutive LEDs, so a subset shows their cost only where it fills whole passes). The full run
-is projected as 24 times the alignment plus ``198 / --leds`` times the LEDs' time.
+consecutive LEDs, so a subset shows their cost only where it fills whole passes; at 64 texels
+an RGB camera's pass of all 198 LEDs is rendered for its alignment frame, their sum, and so
+counts in the alignment's time). The full run is projected as 24 times the alignment plus
+``198 / --leds`` times the LEDs' time.
 
 ``--program calibration``: the ``dome-calibration`` at full size: every frame that is rendered
 (response series, the white standard under every LED, the checkerboard) and ``--dark-share``

@@ -369,7 +369,7 @@ class SimCamera:
         """Nothing to close."""
 
     def set_exposure(self, exposure_s: float) -> None:
-        self._sensor.mean_dark_electrons(exposure_s)  # validates against the camera's range
+        self._sensor.check_exposure(exposure_s)
         self._exposure_s = float(exposure_s)
 
     def set_shutter(self, open_: bool) -> None:

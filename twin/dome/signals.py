@@ -13,10 +13,14 @@ By default (``led_renders="pose"``) the LEDs a plan switches on one at a time ar
 together, per camera, stage angle and holder content: one pass traces the camera's paths and
 gives every LED's image (:func:`twin.dome.render.dome_scene_rates` with ``each``), in blocks of
 LEDs that keep a pass's images within :data:`PASS_MEMORY_BYTES`. ``led_renders="single"``
-renders one LED at a time, as before. Each render's Monte Carlo seed follows from what it shows
-(with passes: the content, stage angle and camera; one LED's image does not depend on the
-others of its block), so a resumed or distributed capture renders the same images as an
-uninterrupted one.
+renders one LED at a time, as before. Where the LEDs lit one at a time at a stage position
+all fit in one pass of every channel (an RGB camera of a full run at 64 texels), a frame with
+all of them lit together (a run's alignment frame) is the sum of that pass's images: light
+transport is linear in the light, so the sum has the expectation of a render of the LEDs
+together, and less noise (every LED is lit at a path's bounce, where the render of the LEDs
+together samples one). Each render's Monte Carlo seed follows from what it shows (with passes:
+the content, stage angle and camera; one LED's image does not depend on the others of its
+block), so a resumed or distributed capture renders the same images as an uninterrupted one.
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ import numpy as np
 
 from hwbridge.dome_layout import SPECTRAL_CAMERA
 from twin.devices.sim_devices import VirtualRig
-from twin.dome.holder import holder_scene_parts
+from twin.dome.holder import holder_content, holder_scene_parts
 from twin.dome.render import DomeView, dome_scene_rates
 from twin.materials import Material
 from twin.render.node_transport import NodeScene
@@ -47,8 +51,9 @@ LED_RENDERS = ("pose", "single")
 """How the LEDs lit one at a time are rendered: all of a stage position in passes (``pose``,
 the default), or one render per LED (``single``)."""
 
-PASS_MEMORY_BYTES = 128 * 2**20
-"""The most memory one camera's pass of LED images takes (float32 rates)."""
+PASS_MEMORY_BYTES = 160 * 2**20
+"""The most memory one camera's pass of LED images takes (float32 rates): at 64 texels
+(264 px) the 198 LEDs of the rig's dome in one pass of an RGB camera."""
 
 
 def leds_per_pass(window: int, channels: int) -> int:
@@ -174,29 +179,63 @@ class RenderedDomeSignal:
         if key == self._key and self._rates is not None:
             return self._rates
         scene = self._scene
+        every = tuple(range(self.view.weights.shape[1]))
         if len(leds) == 1 and scene.led_renders == "pose":
             block = scene.led_block(leds[0], self._camera)
             if scene.node_scene(content).has_metal:  # rendered LED by LED: no pass to share
                 block = leds
-            every = tuple(range(self.view.weights.shape[1]))
-            wanted = [
-                scene.led_bands.get(led, every) if self._camera == SPECTRAL_CAMERA else every
-                for led in block
-            ]
-            if (content, stage_deg, block) != self._pass_key or self._pass is None:
-                self._pass = None  # the last pass's memory is free for the next
-                self._pass = self._render(content, stage_deg, block, "pose", wanted)
-                self._pass_key = (content, stage_deg, block)
+            wanted = self._wanted(block, every)
+            led_pass = self._led_pass(content, stage_deg, block, wanted)
             index = block.index(leds[0])
             chosen = list(wanted[index])
-            rates = np.full((*self._pass.shape[1:3], len(every)), np.nan, np.float32)
-            rates[..., chosen] = self._pass[index, ..., : len(chosen)]  # NaN: not rendered
+            if chosen == list(every):  # a copy: the pass's memory is freed with the pass
+                rates = np.ascontiguousarray(led_pass[index, ..., : len(chosen)])
+            else:
+                rates = np.full((*led_pass.shape[1:3], len(every)), np.nan, np.float32)
+                rates[..., chosen] = led_pass[index, ..., : len(chosen)]  # NaN: not rendered
+        elif self._summed_pass(content, leds, every):
+            block = scene.led_block(scene.single_leds[0], self._camera)
+            led_pass = self._led_pass(content, stage_deg, block, self._wanted(block, every))
+            rates = led_pass.sum(axis=0, dtype=np.float64).astype(np.float32)
         else:
             self._pass = self._pass_key = None
             lit = "all" if len(leds) == scene.config.led_count else ",".join(map(str, leds))
             rates = self._render(content, stage_deg, leds, lit).astype(np.float32)
         self._key, self._rates = key, rates
         return rates
+
+    def _wanted(self, block: tuple[int, ...], every: tuple[int, ...]) -> list[tuple[int, ...]]:
+        """The channels of each LED of ``block`` in a pass: every one, or for the spectral
+        camera the LED's scheduled bands."""
+        if self._camera != SPECTRAL_CAMERA:
+            return [every] * len(block)
+        return [self._scene.led_bands.get(led, every) for led in block]
+
+    def _led_pass(self, content, stage_deg, block, wanted) -> np.ndarray:
+        """The pass of ``block`` (kept until another is asked for)."""
+        if (content, stage_deg, block) != self._pass_key or self._pass is None:
+            self._pass = None  # the last pass's memory is free for the next
+            self._pass = self._render(content, stage_deg, block, "pose", wanted)
+            self._pass_key = (content, stage_deg, block)
+        return self._pass
+
+    def _summed_pass(self, content: str, leds: tuple[int, ...], every: tuple[int, ...]) -> bool:
+        """Whether the LEDs ``leds`` lit together on ``content`` are the sum of one pass: a
+        run's alignment frame, which shows the sample its LEDs then light one at a time, all of
+        them in one pass of every channel. (A calibration's checkerboard, lit only all
+        together, keeps its own render: a pass, dearer, would serve it alone.)"""
+        scene = self._scene
+        single = scene.single_leds
+        if scene.led_renders != "pose" or not single or sorted(leds) != sorted(single):
+            return False
+        if content != holder_content("sample"):
+            return False
+        block = scene.led_block(single[0], self._camera)
+        return (
+            len(block) == len(single)
+            and not scene.node_scene(content).has_metal
+            and all(chosen == every for chosen in self._wanted(block, every))
+        )
 
     def _render(self, content, stage_deg, leds, lit: str, channels=None) -> np.ndarray:
         """The render of ``leds`` together, or with ``channels`` (one list per LED) a pass of

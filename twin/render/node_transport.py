@@ -32,8 +32,8 @@ The integrator is matched to the scene: direct lighting by emitter sampling (one
 the delta light; to every lamp of a group of point lights at the first surface, to one lamp
 chosen at random after a bounce), the bounces by sampling the BSDF, pixel positions stratified
 on a grid of :func:`twin.render.spectra.rendered_spp` samples. Random numbers come from a PCG32
-stream per pixel seeded by ``seed``: the same seed gives the same image whatever the thread
-count.
+stream per pixel and sample seeded by ``seed``: the same seed gives the same image whatever the
+thread count and however the image is cut into kernel launches.
 
 References
 ----------
@@ -55,7 +55,6 @@ from dataclasses import dataclass
 import drjit as dr
 import mitsuba as mi
 import numpy as np
-from scipy import sparse
 
 from recon.errors import InputError
 from recon.spectra import SampledSpectra, resample
@@ -242,28 +241,25 @@ def _lobes() -> list:
 
 
 def _add_lanes(values: np.ndarray, pixels: np.ndarray, terms: list) -> None:
-    """Add lanes' values to their pixels: ``values`` ``(n_pixels, n_lamps, n_channels)``
+    """Add lanes' values to their pixels: ``values`` ``(n_lamps, n_pixels, n_channels)``
     gains, for each lane ``j`` and lamp ``l``, the sum over ``terms`` of ``factors[l, j]`` times
     ``channels[j]`` (each term a pair ``factors`` ``(n_lamps, n_lanes)``, ``channels``
-    ``(n_lanes, n_channels)``) at pixel ``pixels[j]``; lamps in groups of at most
-    :data:`_LANE_VALUES` values."""
-    lamps, channels = values.shape[1:]
+    ``(n_lanes, n_channels)``) at pixel ``pixels[j]`` (in ascending order: a pixel's lanes are
+    consecutive); lamps in groups of at most :data:`_LANE_VALUES` values. Only the pixels that
+    have lanes are touched: each pixel's lanes are summed in order (``numpy.add.reduceat``)."""
+    lamps, _, channels = values.shape
     if not pixels.size:
         return
-    into = sparse.csr_matrix(
-        (np.ones(pixels.size, np.float32), (pixels, np.arange(pixels.size))),
-        shape=(values.shape[0], pixels.size),
-    )
+    starts = np.flatnonzero(np.diff(pixels, prepend=pixels[0] - 1))
+    rows = pixels[starts]
     group = max(1, _LANE_VALUES // max(1, pixels.size * channels))
     for first in range(0, lamps, group):
         chosen = slice(first, min(first + group, lamps))
-        per_lane = sum(
-            factors[chosen].T[:, :, None] * values_per_lane[:, None, :]
-            for factors, values_per_lane in terms
-        )
-        values[:, chosen] += (into @ per_lane.reshape(pixels.size, -1)).reshape(
-            values.shape[0], -1, channels
-        )
+        factors, values_per_lane = terms[0]
+        per_lane = factors[chosen, :, None] * values_per_lane[None, :, :]
+        for factors, values_per_lane in terms[1:]:
+            per_lane += factors[chosen, :, None] * values_per_lane[None, :, :]
+        values[chosen, rows] += np.add.reduceat(per_lane, starts, axis=1)
 
 
 @dataclass
@@ -450,19 +446,25 @@ class NodeScene:
             return values
         samples = rendered_spp(spp)
         per_launch = max(1, min(_EACH_LANES, _EACH_FACTORS // len(positions)) // samples)
-        values = np.empty((height * width, len(positions), max(map(len, wanted))), np.float32)
+        values = np.empty((len(positions), height * width, max(map(len, wanted))), np.float32)
+        projected = self.reflectance.astype(np.float32) @ weights  # (n_texels, n_channels)
         for first in range(0, height * width, per_launch):
             count = min(per_launch, height * width - first)
-            values[first : first + count] = self._each_pixels(
-                camera, positions, weights, wanted, seed, bounces, first, count, samples
+            self._each_pixels(
+                camera,
+                positions,
+                (weights, projected, wanted),
+                (seed, bounces, samples),
+                first,
+                values[:, first : first + count],
             )
-        return values.reshape(height, width, len(positions), -1).transpose(2, 0, 1, 3)
+        return values.reshape(len(positions), height, width, -1)
 
-    def _each_pixels(
-        self, camera, positions, weights, wanted, seed, bounces, first, count, samples
-    ) -> np.ndarray:
-        """:meth:`transport_each` of ``count`` pixels from flat index ``first`` on:
-        ``(count, n_lamps, n_channels)``.
+    def _each_pixels(self, camera, positions, channels, trace, first, out) -> None:
+        """:meth:`transport_each` of the pixels from flat index ``first`` on, written into
+        ``out`` ``(n_lamps, count, n_channels)``; ``channels`` is ``(weights, projected,
+        wanted)`` (``projected``: the reflectance table projected on the channels, ``(n_texels,
+        n_channels)``), ``trace`` is ``(seed, bounces, samples)``.
 
         At the first surface the diffuse lobe's channel values are the texel's reflectance
         projected on the channels (a table) and the glossy lobe's the channels' sums; each
@@ -470,23 +472,32 @@ class NodeScene:
         sums of the lamps' factors times the first sample's texel, plus for the samples on
         another texel the difference of the two. After a bounce only the lanes still on the
         scene are kept, with their throughput at the nodes; each lamp's factors there are summed
-        into the pixels by a sparse matrix. Lamps that want the same channels are combined
-        together."""
+        into the pixels that have such lanes (:func:`_add_lanes`). Lamps that want the same
+        channels are combined together; a lobe whose factors are zero everywhere (no glossy
+        part in sight) adds nothing and is skipped."""
+        weights, projected, wanted = channels
+        seed, bounces, samples = trace
+        count = out.shape[1]
         _, rng, ray = self._lanes(camera, seed, first, count, samples)
         table = self.reflectance.astype(np.float32)
         vertices = list(self._walk(ray, rng, bounces))
         first_vertex = vertices[0]
-        dr.eval(first_vertex.si, first_vertex.bsdf, first_vertex.part, first_vertex.active)
+        dr.eval(
+            first_vertex.si,
+            first_vertex.bsdf,
+            first_vertex.part,
+            first_vertex.active,
+            first_vertex.texel,
+        )
         texel = np.asarray(first_vertex.texel)
         bounced = self._bounced(vertices, table, weights, texel, samples)
         lamps = mi.Float(np.asarray(positions, np.float32).ravel())
         diffuse, glossy = self._lamp_factors(first_vertex, lamps)
         # (n_lamps, pixels): the factors summed over each pixel's samples
         diffuse_sum, glossy_sum = (
-            np.asarray(dr.block_sum(table_, samples)).reshape(len(positions), count).T
+            np.asarray(dr.block_sum(table_, samples)).reshape(len(positions), count)
             for table_ in (diffuse, glossy)
         )
-        projected = table @ weights
         texel = texel.reshape(count, samples)
         reference = projected[texel[:, 0]]
         pixel, sample = np.nonzero(texel != texel[:, :1])
@@ -511,24 +522,29 @@ class NodeScene:
             ]
             for after in bounced
         ]
-        values = np.zeros((count, len(positions), max(map(len, wanted))), np.float32)
         groups: dict[tuple[int, ...], list[int]] = {}
         for lamp, chosen in enumerate(wanted):
             groups.setdefault(chosen, []).append(lamp)
+        whole = len(groups) == 1 and len(wanted[0]) == out.shape[2]
+        if not whole:
+            out.fill(0)
+        glossy_seen = bool(glossy_sum.any())
         for chosen, members in groups.items():
             ks = list(chosen)
             lamp_rows = slice(None) if len(members) == len(wanted) else np.array(members)
-            part = diffuse_sum[:, lamp_rows, None] * reference[:, None, ks]
-            part += glossy_sum[:, lamp_rows, None] * weights[:, ks].sum(axis=0)
+            part = out if whole else np.empty((len(members), count, len(ks)), np.float32)
+            np.multiply(diffuse_sum[lamp_rows, :, None], reference[None, :, ks], out=part)
+            if glossy_seen:
+                part += glossy_sum[lamp_rows, :, None] * weights[:, ks].sum(axis=0)
             _add_lanes(part, pixel, [(edge[lamp_rows], difference[:, ks])])
             for after, (after_diffuse, after_glossy) in zip(bounced, later, strict=True):
-                terms = [
-                    (after_diffuse[lamp_rows], after.diffuse[:, ks]),
-                    (after_glossy[lamp_rows], after.glossy[:, ks]),
-                ]
+                terms = [(after_diffuse[lamp_rows], after.diffuse[:, ks])]
+                if after_glossy.any():
+                    terms.append((after_glossy[lamp_rows], after.glossy[:, ks]))
                 _add_lanes(part, after.pixels, terms)
-            values[:, lamp_rows, : len(ks)] = part
-        return values * np.float32(1 / samples)
+            if not whole:
+                out[lamp_rows, :, : len(ks)] = part
+        out *= np.float32(1 / samples)
 
     def _lamp_factors(self, vertex, lamps):
         """The diffuse and glossy lobes' geometric factors at ``vertex`` for each lamp of
@@ -565,6 +581,8 @@ class NodeScene:
         reached = np.arange(texel.size)
         throughput = np.ones((texel.size, 1), np.float32)
         for vertex in vertices[1:]:
+            # one kernel traces the bounce for everything read of it below
+            dr.eval(vertex.active, vertex.bounce, vertex.texel, vertex.si, vertex.part)
             active = np.asarray(vertex.active)
             keep = active[reached]
             diffuse_weight, glossy_weight = (np.asarray(w)[reached[keep]] for w in vertex.bounce)
@@ -603,11 +621,13 @@ class NodeScene:
         pixel = slot + dr.opaque(mi.UInt32, first)
         row = pixel // width
         column = pixel - row * width
-        rng = mi.PCG32(
-            size=dr.width(lane),
-            initstate=mi.UInt64(pixel) * samples + mi.UInt64(sample),
-            initseq=dr.opaque(mi.UInt64, seed),
-        )
+        # PCG32's constructor offsets each lane's state and stream by its index in the launch,
+        # which would tie the numbers to how the image is cut into launches (the pixels per
+        # launch of transport_each depend on its lamps): seed with the lane's index in the
+        # whole image instead (the same numbers as before in a launch from pixel 0)
+        index = mi.UInt64(pixel) * samples + mi.UInt64(sample)
+        rng = mi.PCG32(size=dr.width(lane))
+        rng.seed(initstate=index + index, initseq=dr.opaque(mi.UInt64, seed) + index)
         strata = int(round(np.sqrt(samples)))
         stratum_x = mi.Float(sample % strata)
         stratum_y = mi.Float(sample // strata)

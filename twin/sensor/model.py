@@ -15,7 +15,10 @@ Mitsuba gives radiance; real cameras give raw digital numbers. Between the two:
    DSNU that does not grow with exposure time).
 3. Temporal noise: Poisson shot noise of photo and dark electrons, with the dark current
    following the doubling-temperature law (so the cooled K4 has almost none); full-well clip;
-   read noise (3 DN for the K4, thesis 10.3).
+   read noise (3 DN for the K4, thesis 10.3). From :data:`GAUSSIAN_SHOT_E` mean electrons on,
+   the Poisson count is drawn as its Cornish-Fisher normal approximation, rounded to whole
+   electrons (:func:`shot_electrons`: the same mean, variance and skewness, a fifth of the
+   cost).
 4. Conversion: system gain K, a monotone OECF (thesis 3.3: :math:`p = f(tI) + d`, Eq. 3.1;
    :mod:`recon.emva.linear_model`), ADC offset, quantization to the bit depth and clamping to
    :math:`[0, 2^n - 1]`.
@@ -49,9 +52,14 @@ from recon.errors import InputError
 from recon.spectra import SampledSpectra, WavelengthGrid, band_integrals
 from twin.rigs.camera_config import CameraConfig, load_camera_config
 
-__all__ = ["Sensor", "bayer_channel_index", "mosaic_channels"]
+__all__ = ["GAUSSIAN_SHOT_E", "Sensor", "bayer_channel_index", "mosaic_channels", "shot_electrons"]
 
-_ROW_BLOCKS = 8  # fixed, so the same seed gives the same frame whatever the thread count
+GAUSSIAN_SHOT_E = 10.0
+"""Mean electrons from which the shot noise is drawn as a normal approximation of the Poisson
+count (:func:`shot_electrons`, within 0.25 % of it in total variation); below it, as Poisson
+counts."""
+
+_ROW_BLOCKS = 2  # fixed, so the same seed gives the same frame whatever the thread count
 _THREADS = 2  # numpy's generators release the GIL: the row blocks are drawn on two threads
 _pool: ThreadPoolExecutor | None = None
 
@@ -79,6 +87,44 @@ def bayer_channel_index(height: int, width: int, pattern: str = "RGGB") -> np.nd
         raise InputError(f"pattern: expected a Bayer tile such as RGGB, got {pattern!r}")
     tile = np.array(["RGB".index(letter) for letter in pattern]).reshape(2, 2)
     return np.tile(tile, (height // 2 + 1, width // 2 + 1))[:height, :width]
+
+
+def shot_electrons(mean_electrons: np.ndarray, generator: np.random.Generator) -> np.ndarray:
+    """Electrons counted in pixels of ``mean_electrons`` (float32): Poisson counts of that mean.
+
+    Below :data:`GAUSSIAN_SHOT_E` they are Poisson draws. From there on a Poisson count of mean
+    :math:`\\lambda` is drawn as its first-order Cornish-Fisher expansion,
+    :math:`\\lambda + s z + (z^2 - 1) / 6` with :math:`z` standard normal, rounded to a whole
+    number: its mean is :math:`\\lambda`, with :math:`s^2 = \\lambda - 5/36` its variance
+    is :math:`\\lambda` (the expansion's term adds 1/18, the rounding 1/12) and its third
+    cumulant :math:`\\lambda` (Poisson's) to 0.1; its fourth cumulant is
+    :math:`4 \\lambda / 3` instead of :math:`\\lambda`. Its distribution differs from
+    Poisson's by a total variation distance of 0.22 % at the threshold (:math:`\\lambda = 10`),
+    0.07 % at 30 and 0.02 % at 100 (a plain normal approximation, rounded: 4 %, 2.3 %, 1.3 %),
+    far below what a frame's statistics resolve behind the read noise. A normal number costs a
+    fifth of a Poisson count (12 against 40 to 75 ns here). Every pixel's normal number is drawn
+    first, then the Poisson counts of the pixels below the threshold, in row-major order: the
+    same generator state gives the same counts.
+
+    References
+    ----------
+    - Cornish, E. A., Fisher, R. A. (1938). Moments and cumulants in the specification of
+      distributions. Revue de l'Institut International de Statistique 5(4), 307-320.
+    """
+    normal = generator.standard_normal(mean_electrons.shape, np.float32)
+    electrons = np.maximum(mean_electrons - np.float32(5 / 36), 0, dtype=np.float32)
+    np.sqrt(electrons, out=electrons)
+    electrons *= normal
+    electrons += mean_electrons
+    np.square(normal, out=normal)
+    normal -= np.float32(1)
+    normal *= np.float32(1 / 6)
+    electrons += normal
+    np.rint(electrons, out=electrons)
+    low = mean_electrons < GAUSSIAN_SHOT_E
+    if low.any():
+        electrons[low] = generator.poisson(mean_electrons[low])
+    return np.maximum(electrons, 0, out=electrons)
 
 
 def mosaic_channels(image: np.ndarray, channel_index: np.ndarray) -> np.ndarray:
@@ -279,6 +325,14 @@ class Sensor:
             "defects": defects[window],
         }
 
+    @cached_property
+    def _mosaic_index(self) -> np.ndarray:
+        """``(H, W)``: the flat index into an ``(H, W, 3)`` image of each pixel's own channel
+        of the Bayer mosaic (:func:`mosaic_channels`)."""
+        channel = bayer_channel_index(self.height, self.width, self.config.mosaic)
+        pixels = np.arange(self.height * self.width, dtype=np.intp).reshape(self.height, -1)
+        return pixels * 3 + channel
+
     def defect_pixels(self) -> np.ndarray:
         """``(H, W)`` bool: the defect pixels (``defect_pixel_fraction``), whose offset is
         ``defect_offset_dn`` higher at every exposure."""
@@ -314,10 +368,9 @@ class Sensor:
         electrons = self._check_image(
             photo_electrons, "photo_electrons", channels=3 if self.is_colour else None
         )
-        if self.is_colour:
-            channel = bayer_channel_index(self.height, self.width, self.config.mosaic)
-            electrons = mosaic_channels(electrons, channel)
-        mean = electrons.astype(np.float32) * self._fixed_pattern["photo_response"]
+        if self.is_colour:  # each pixel's own channel (mosaic_channels), by a cached index
+            electrons = np.take(electrons.reshape(-1), self._mosaic_index)
+        mean = np.multiply(electrons, self._fixed_pattern["photo_response"], dtype=np.float32)
         mean += self.mean_dark_electrons(exposure_s)
         blocks = np.array_split(np.arange(self.height), _ROW_BLOCKS)
         generators = rng.spawn(_ROW_BLOCKS)
@@ -348,7 +401,7 @@ class Sensor:
         self, mean_electrons: np.ndarray, offset_dn: np.ndarray, generator: np.random.Generator
     ) -> np.ndarray:
         config = self.config
-        signal_dn = generator.poisson(mean_electrons).astype(np.float32)
+        signal_dn = shot_electrons(mean_electrons, generator)
         np.minimum(signal_dn, config.full_well_e, out=signal_dn)
         signal_dn *= config.system_gain_dn_per_e
         read_dn = generator.standard_normal(signal_dn.shape, np.float32)
@@ -360,6 +413,11 @@ class Sensor:
         return np.clip(digital, 0, self.max_dn, out=digital).astype(np.uint16)
 
     # -- validation --------------------------------------------------------------------------
+
+    def check_exposure(self, exposure_s: float) -> None:
+        """Raise :class:`InputError` unless ``exposure_s`` is a positive exposure time within the
+        camera's ``exposure_range_s``."""
+        self._check_exposure(exposure_s)
 
     def _check_exposure(self, exposure_s: float) -> None:
         low, high = self.config.exposure_range_s

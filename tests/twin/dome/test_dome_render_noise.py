@@ -12,6 +12,9 @@ from twin.dome.render import (
     dome_camera,
     dome_scene_rates,
 )
+from twin.dome.signals import DomeScene, RenderedDomeSignal
+from twin.materials import Material
+from twin.materials.sample_holder import holder_parts
 from twin.render.node_transport import NodeScene
 from twin.rigs.rig_config import load_rig
 
@@ -78,3 +81,30 @@ def test_an_led_of_a_pass_renders_as_its_own_render_with_the_same_noise(camera):
     channels = view.weights.shape[1]
     first, second = (rates.reshape(-1, channels).astype(np.float64) for rates in (passed, other))
     assert _render_over_temporal_noise(config, camera, first, second).max() < 0.2
+
+
+def test_all_leds_of_one_pass_are_its_images_summed_within_the_render_noise():
+    """A run's alignment frame (the sample with every LED of the stage position lit) is, where
+    those LEDs fit in one pass of every channel, the sum of the pass's images (no render of its
+    own): to float rounding the sum of the LEDs' frames, and against a render of the LEDs
+    together (another seed) it differs by less than the noise bound held above. The spectral
+    camera, whose pass holds each LED's scheduled bands only, renders the LEDs together."""
+    config = load_rig("dome")
+    leds = (58, 59, 60, 61, 62)
+    standard = holder_scene_parts("white", None)[len(holder_parts()) :]
+    sample = Material("white standard", 0.05, tuple(standard), {}, ())  # as a run's sample
+    scene = DomeScene(
+        config, sample, ("material",), 700.0, 320, 32, DOME_SPP, (550.0, 600.0), "pose", leds,
+        {led: (0,) for led in leds},
+    )  # fmt: skip
+    signal = RenderedDomeSignal(scene, 0)
+    together = signal.rates("material", 15.0, leds)
+    each = sum(signal.rates("material", 15.0, (led,)).astype(np.float64) for led in leds)
+    np.testing.assert_allclose(together, each, rtol=1e-5)  # a render would differ by its noise
+    rendered = dome_scene_rates(
+        config, scene.node_scene("material"), signal.view, stage_deg=15.0, leds=leds, seed=3
+    )
+    first, second = (rates.reshape(-1, 3).astype(np.float64) for rates in (together, rendered))
+    assert _render_over_temporal_noise(config, 0, first, second).max() < 0.2
+    spectral = RenderedDomeSignal(scene, SPECTRAL_CAMERA).rates("material", 15.0, leds)
+    assert np.all(spectral[..., 1] > 0)  # a band no LED's pass holds: rendered

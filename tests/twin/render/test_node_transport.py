@@ -16,6 +16,7 @@ from twin.materials import load_material
 from twin.materials.geometry import box
 from twin.materials.sample_holder import holder_parts
 from twin.materials.surfaces import SurfacePart
+from twin.render import node_transport
 from twin.render.node_transport import (
     NODES_NM,
     DistantLight,
@@ -187,6 +188,29 @@ def test_a_seed_gives_the_same_image_on_any_number_of_threads():
     again = scene.part_rates(pose, pixels=48, spp=16, seed=3)
     np.testing.assert_array_equal(one, again)
     assert not np.array_equal(one, scene.part_rates(pose, pixels=48, spp=16, seed=4))
+
+
+@pytest.mark.render
+def test_an_image_does_not_depend_on_how_it_is_cut_into_launches(monkeypatch):
+    """A pixel's random numbers follow from the seed, the pixel and the sample alone: rendered
+    in launches of 37 pixels, or a pass of lamps in launches of 23, the images are the same as
+    in one launch (a pass's pixels per launch depend on its lamps, so an LED's image does not
+    depend on the others of its pass however large the image)."""
+    scene = NodeScene(holder_parts() + list(load_material("lego").parts))
+    camera = _oblique_view(24)
+    lamps = np.array([[0.3, 0.2, 0.8], [-0.4, 0.1, 0.7]])
+    weights = node_weights(
+        LiquidCrystalTunableFilter.varispec("VS-10").transmission(FINE_GRID)
+    ).astype(np.float32)
+    whole = scene.transport(camera, PointLight(lamps[0]), spp=16, seed=5)
+    each = scene.transport_each(camera, lamps, weights, spp=16, seed=5)
+    monkeypatch.setattr(node_transport, "_MAX_LANES", 37 * 16)
+    monkeypatch.setattr(node_transport, "_EACH_LANES", 23 * 16)
+    np.testing.assert_array_equal(
+        scene.transport(camera, PointLight(lamps[0]), spp=16, seed=5), whole
+    )
+    cut = scene.transport_each(camera, lamps, weights, spp=16, seed=5)
+    np.testing.assert_allclose(cut, each, rtol=1e-5, atol=1e-7 * each.max())  # sums' rounding
 
 
 @pytest.mark.render

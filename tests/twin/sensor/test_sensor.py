@@ -16,7 +16,7 @@ from recon.spectra import SampledSpectra, WavelengthGrid
 from twin.components.lamps import FINE_GRID, HMILamp
 from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.rigs.camera_config import load_camera_config
-from twin.sensor.model import Sensor, bayer_channel_index
+from twin.sensor.model import Sensor, bayer_channel_index, shot_electrons
 from twin.sensor.white_reference import white_reference_rates
 
 WAVELENGTH_NM = 550.0
@@ -304,3 +304,26 @@ def test_bad_camera_files_name_the_field(tmp_path):
         load_camera_config("no_such_camera")
     with pytest.raises(InputError, match="roi"):
         Sensor("coolsnap_k4", roi=(4096, 10))
+
+
+@pytest.mark.parametrize("mean_e", [0.3, 4.0, 9.5, 10.0, 30.0, 300.0, 20000.0])
+def test_shot_noise_has_the_poisson_counts_moments(mean_e):
+    """Shot noise is counted in whole electrons with the mean, variance and third cumulant of a
+    Poisson count (all equal to the mean), below GAUSSIAN_SHOT_E by Poisson draws and from it
+    on by a Cornish-Fisher normal approximation; 400 000 pixels, within five standard errors."""
+    count = 400_000
+    electrons = shot_electrons(np.full(count, mean_e, np.float32), np.random.default_rng(11))
+    assert electrons.dtype == np.float32 and np.all(electrons == np.rint(electrons))
+    assert electrons.min() >= 0
+    centred = electrons.astype(np.float64) - mean_e
+    # standard errors of the sample's mean, variance and third moment of a Poisson count
+    moments = [centred.mean(), (centred**2).mean() - mean_e, (centred**3).mean() - mean_e]
+    errors = [
+        math.sqrt(mean_e / count),
+        math.sqrt((mean_e + 2 * mean_e**2) / count),
+        math.sqrt((mean_e + 24 * mean_e**2 + 15 * mean_e**3) / count),
+    ]
+    for moment, error in zip(moments, errors, strict=True):
+        assert abs(moment) < 5 * error, (moments, errors)
+    again = shot_electrons(np.full(count, mean_e, np.float32), np.random.default_rng(11))
+    np.testing.assert_array_equal(electrons, again)
