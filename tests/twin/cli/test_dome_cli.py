@@ -50,14 +50,15 @@ def test_dome_study_prints_its_metrics_as_json(tmp_path):
     # Exposure totals against quantities known without the study: the thesis's HDR RGB set
     # once (one image) plus the plan's 30 band exposures times each hybrid's scale. The plan
     # summed by the schedule comes from the 1 px per texel setup, the hybrids from the 2 px one
-    # (its own noisy calibration): measured 48.17 s against 48.12 s, 0.11 % apart.
+    # (its own noisy calibration, whose noise sets the hybrids' exposures): measured 0.11 % and
+    # 0.32 % apart with two draws of the sensors' noise; held within 1 %.
     rgb_set_s = sum(THESIS_RGB_EXPOSURES_S)
     band_sum_s = printed["schedules"]["band_exposures_sum_s"]
     assert printed["schedules"]["rgb_set_s"] == pytest.approx(rgb_set_s, rel=1e-12)
     assert [h["scale"] for h in exposure["hybrid"]] == pytest.approx([1.0, 0.25, 1 / 12])
     spectral_s = [h["spectral_s"] for h in exposure["hybrid"]]
     for hybrid in exposure["hybrid"]:
-        assert hybrid["spectral_s"] == pytest.approx(hybrid["scale"] * band_sum_s, rel=3e-3)
+        assert hybrid["spectral_s"] == pytest.approx(hybrid["scale"] * band_sum_s, rel=1e-2)
         assert hybrid["spectral_s"] == pytest.approx(hybrid["scale"] * spectral_s[0], rel=1e-12)
         assert hybrid["total_s"] - hybrid["spectral_s"] == pytest.approx(rgb_set_s, rel=1e-12)
     reference_s = exposure["spectral_only_totals_s"][0]
