@@ -559,7 +559,22 @@ def calibrate_dome(
     measured: dict[str, CameraResponse] = {}
     cameras = rig.geometry.cameras
     nominal = {camera: CameraGeometry.nominal(entry) for camera, entry in cameras.items()}
-    geometry, rgb, rgb_white = {}, {}, {}
+    geometry: dict[str, GeometricCalibration] = {}
+    rgb: dict[str, RgbCameraCalibration] = {}
+    rgb_white = {}
+
+    def chart_response(camera: str, centre_pixels: bool = False) -> CameraResponse | None:
+        return _chart_response(
+            store,
+            camera,
+            rig,
+            rgb[camera],
+            geometry[camera].geometry,
+            led_spectrum,
+            camera_prior,
+            centre_pixels=centre_pixels,
+        )
+
     with progress_steps("calibrate", len(cameras), enabled=show_progress) as advance:
         for camera in cameras:
             grey = _grey_frame(camera)
@@ -571,31 +586,13 @@ def calibrate_dome(
                 spectral, spectral_white = _spectral_calibration(store, rig, white, led)
             else:
                 rgb[camera], rgb_white[camera] = _rgb_calibration(store, camera, rig, white)
-                response = _chart_response(
-                    store,
-                    camera,
-                    rig,
-                    rgb[camera],
-                    geometry[camera].geometry,
-                    led_spectrum,
-                    camera_prior,
-                )
+                response = chart_response(camera)
                 if response is not None:
                     measured[camera] = response
             advance()
     if not measured:  # a capture of few texels: every camera from its fields' centre pixels
         for camera in rgb:
-            response = _chart_response(
-                store,
-                camera,
-                rig,
-                rgb[camera],
-                geometry[camera].geometry,
-                led_spectrum,
-                camera_prior,
-                centre_pixels=True,
-            )
-            measured[camera] = cast(CameraResponse, response)
+            measured[camera] = cast(CameraResponse, chart_response(camera, centre_pixels=True))
     return DomeCalibration(
         source=str(store.path),
         bands_nm=grid.wavelengths_nm.copy(),
