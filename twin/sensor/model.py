@@ -271,7 +271,7 @@ class Sensor:
         :math:`\\mu_e = \\eta(\\lambda) \\mu_p`, :math:`\\mu_p = E A t \\lambda / (hc)`. Returns
         ``(H, W)`` for a monochrome sensor and ``(H, W, 3)`` for a colour one.
         """
-        self._check_exposure(exposure_s)
+        self.check_exposure(exposure_s)
         irradiance = self._check_image(irradiance_w_m2, "irradiance_w_m2", channels=None)
         photons = (
             irradiance
@@ -340,7 +340,7 @@ class Sensor:
 
     def mean_dark_electrons(self, exposure_s: float) -> np.ndarray:
         """Expected dark electrons per pixel, ``(H, W)``: dark current x time x DSNU + transfer."""
-        self._check_exposure(exposure_s)
+        self.check_exposure(exposure_s)
         pattern = self._fixed_pattern
         return (
             self.dark_current_e_per_s * exposure_s * pattern["dark_factor"] + pattern["transfer_e"]
@@ -417,9 +417,6 @@ class Sensor:
     def check_exposure(self, exposure_s: float) -> None:
         """Raise :class:`InputError` unless ``exposure_s`` is a positive exposure time within the
         camera's ``exposure_range_s``."""
-        self._check_exposure(exposure_s)
-
-    def _check_exposure(self, exposure_s: float) -> None:
         low, high = self.config.exposure_range_s
         if not np.isfinite(exposure_s) or exposure_s <= 0:
             raise InputError(f"exposure_s: expected a positive exposure time, got {exposure_s}")
