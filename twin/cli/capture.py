@@ -122,8 +122,8 @@ SppOption = Annotated[
     typer.Option(
         min=1,
         max=65536,
-        help="Samples per pixel of the renders (default 16 stratified: "
-        "twin.gonio.render.GONIO_SPP, twin.dome.render.DOME_SPP).",
+        help="Samples per pixel of the renders (default: the rig's own, 16 stratified on "
+        "both rigs).",
     ),
 ]
 MaterialOption = Annotated[

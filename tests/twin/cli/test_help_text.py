@@ -34,6 +34,17 @@ def test_every_help_paragraph_is_one_line(path, command):
     assert all("\n" not in paragraph for paragraph in paragraphs), " ".join(path)
 
 
+@pytest.mark.parametrize(
+    ("path", "command"), COMMANDS, ids=[" ".join(path) for path, _ in COMMANDS]
+)
+def test_no_help_names_a_python_module(path, command):
+    """Help speaks of the rigs and files, not of the code: a module path such as
+    ``twin.gonio.render.GONIO_SPP`` is also cut short with an ellipsis in an 80-column table."""
+    texts = [command.help or "", *(getattr(p, "help", None) or "" for p in command.params)]
+    named = [m for text in texts for m in re.findall(r"\b(?:twin|recon|hwbridge)\.[a-z_]\w*", text)]
+    assert not named, (" ".join(path), named)
+
+
 def test_the_capture_group_lists_one_subcommand_per_program_and_resume():
     capture = dict(COMMANDS)[("capture",)]
     assert list(capture.commands) == [
