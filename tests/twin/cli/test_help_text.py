@@ -7,7 +7,6 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-import click
 import pytest
 import typer
 
@@ -16,10 +15,12 @@ from twin.cli.app import app
 ROOT = Path(__file__).resolve().parents[3]
 
 
-def _commands(group: click.Group, path: tuple[str, ...] = ()):
+def _commands(group, path: tuple[str, ...] = ()):
+    """Every command under ``group``, subcommands included (typer's groups are its own click's,
+    not ``click.Group``)."""
     for name, command in group.commands.items():
         yield (*path, name), command
-        if isinstance(command, click.Group):
+        if getattr(command, "commands", None):
             yield from _commands(command, (*path, name))
 
 
