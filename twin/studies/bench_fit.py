@@ -20,6 +20,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import cv2
@@ -125,6 +126,15 @@ def lamp_irradiance_ratio(
     """The irradiance :math:`\\cos\\theta / r^2` a point lamp at ``lamp_m`` gives chart-plane
     ``points`` ``(..., 3)`` (:func:`chart_points`), over that of a lamp at ``reference_m``
     (camera frame); zero where the lamp lies behind the chart."""
+    irradiance = _point_lamp_irradiance(pose, points)
+    return irradiance(lamp_m) / irradiance(reference_m)
+
+
+def _point_lamp_irradiance(
+    pose: np.ndarray, points: np.ndarray
+) -> Callable[[np.ndarray], np.ndarray]:
+    """The irradiance :math:`\\cos\\theta / r^2` of chart-plane ``points`` as a function of the
+    lamp's position (zero where the lamp lies behind the chart)."""
     normal = pose[:3, 2] if pose[:3, 2] @ pose[:3, 3] < 0 else -pose[:3, 2]  # towards the camera
 
     def irradiance(lamp: np.ndarray) -> np.ndarray:
@@ -132,7 +142,7 @@ def lamp_irradiance_ratio(
         squared = np.sum(towards**2, axis=-1)
         return np.clip(towards @ normal, 0, None) / squared**1.5
 
-    return irradiance(lamp_m) / irradiance(reference_m)
+    return irradiance
 
 
 def fit_exposure_index(bench: BenchConfig, means: np.ndarray, exposures: np.ndarray) -> int:
@@ -214,10 +224,13 @@ def fit_lamp(
     )
     points = chart_points(pose, focal_px, shape).reshape(-1, 3)[used]
     where = np.split(inverse, np.cumsum([item.flat_index.size for item in pixels])[:-1])
+    # lamp_irradiance_ratio with the reference lamp's irradiance computed once
+    irradiance = _point_lamp_irradiance(pose, points)
+    at_reference = irradiance(reference)
 
     def residuals(parameters: np.ndarray) -> np.ndarray:
         position = parameters[:3] if bench.lamp.fit_position else reference
-        ratio = lamp_irradiance_ratio(pose, points, position, reference)
+        ratio = irradiance(position) / at_reference
         log_ratio = np.log(np.maximum(ratio, _FLOOR))
         return np.concatenate(
             [
