@@ -3,7 +3,7 @@ counterparts are in ``test_session.py``).
 
 The capture here is smaller than the reduced capture of the benchmark (two stage positions, two
 LEDs, one RGB camera and the spectral camera, 8 texels, 4 samples per pixel: 26 frames from 12
-renders), so that six kills and their resumes take about 25 s; the code path is the
+renders), so that six kills and their resumes take about half a minute; the code path is the
 same at any size.
 """
 
