@@ -3,7 +3,7 @@ counterparts are in ``test_session.py``).
 
 The capture here is smaller than the reduced capture of the benchmark (two stage positions, two
 LEDs, one RGB camera and the spectral camera, 8 texels, 4 samples per pixel: 26 frames from 12
-renders), so that ten kills and their resumes take well under a minute; the code path is the
+renders), so that six kills and their resumes take about half a minute; the code path is the
 same at any size.
 """
 
@@ -25,6 +25,7 @@ pytestmark = pytest.mark.render
 SEED = 2027
 MATERIAL = "lego"
 SIZE = DomeCaptureSize(stage_positions=2, leds=2, rgb_cameras=1, texels=8, spp=4)
+KILLS = 6  # three at random moments, three once a stage position is written
 ARGS = [
     "--material",
     MATERIAL,
@@ -98,10 +99,10 @@ def _capture_args(path) -> list[str]:
     return ["capture", "dome-run", str(path), "--json", *ARGS, "--seed", str(SEED)]
 
 
-def test_10_sigkills_at_random_moments_resume_to_the_uninterrupted_store(
+def test_6_sigkills_at_random_moments_resume_to_the_uninterrupted_store(
     tmp_path, capture_kit, reference
 ):
-    """``spectwin capture dome-run`` killed by SIGKILL ten times, at seeded random moments or
+    """``spectwin capture dome-run`` killed by SIGKILL six times, at seeded random moments or
     once it has written the frames of a stage position (a capture writes them together, a stage
     position at a time), and continued with ``spectwin capture resume`` until complete
     (then begun afresh): after every kill every step flagged done holds the uninterrupted run's
@@ -111,7 +112,7 @@ def test_10_sigkills_at_random_moments_resume_to_the_uninterrupted_store(
     rng = np.random.default_rng(SEED)
     kills = completed = progressed = 0
     started = time.monotonic()
-    while kills < 10:
+    while kills < KILLS:
         pid, stderr = captures.start(_capture_args(path))
         deadline = time.monotonic() + 120
         while not capture_kit.lock_names(path, pid) and capture_kit.running(pid):
@@ -141,7 +142,7 @@ def test_10_sigkills_at_random_moments_resume_to_the_uninterrupted_store(
     store = CaptureStore.open(path)
     assert store.complete
     _assert_same(_contents(store), reference)
-    assert progressed >= 3  # kills in a partly written store (half of them wait for one)
+    assert progressed >= 2  # kills in a partly written store (half of them wait for one)
     leftovers = [p.name for p in tmp_path.iterdir() if p.name.startswith(".")]
     assert leftovers == []
     print(
