@@ -34,6 +34,10 @@ from twin.validate.figure46 import render_figure46, render_spectral_panel
 
 pytestmark = pytest.mark.render
 runner = CliRunner()
+# spectwin validate at its smallest useful size: the mirror sphere is imaged with 8 x the map's
+# height in pixels at 64 spp, which was most of each validation at a map height of 16 (63 of
+# 91 s of two validations under load 7); at 8 the renderings are still finite and positive.
+SMALL = ("--pixels", 32, "--spp", 16, "--map-height", 8, "--json")
 
 
 def _counted(open_store, opened: list):
@@ -143,7 +147,7 @@ def test_validate_renders_raw_and_compressed_btf_back_with_figures_and_metrics(
     root, *_ = pipeline
     btf = root / "cc.btf.zarr"
     invoke_json("compress", btf, "--brightness", 2, "--spectral", 60, "--json")
-    small = ("--pixels", 32, "--spp", 16, "--map-height", 16, "--json")
+    small = SMALL
     raw = invoke_json("validate", btf, "--out", root / "raw", *small)
     pca = invoke_json("validate", btf, "--out", root / "pca", "--compressed", *small)
     for out, metrics in ((root / "raw", raw), (root / "pca", pca)):
@@ -280,7 +284,7 @@ def test_an_rgb_btf_imported_from_images_is_validated_and_said_to_be_rgb(pipelin
     )
     assert imported["from_rgb"] == "sRGB, upsampled by jakob2019" and imported["complete"]
     np.testing.assert_allclose(BTFStore.open(store).view_dirs, btf.view_dirs, atol=1e-9)
-    small = ("--pixels", 32, "--spp", 16, "--map-height", 16, "--json")
+    small = SMALL
     metrics = invoke_json("validate", store, "--out", root / "rgb_validation", *small)
     assert metrics["measured_as"] == "RGB (sRGB), rendered spectrally after jakob2019"
     assert all(np.isfinite(value) and value > 0 for value in metrics["figure46"].values())
@@ -317,7 +321,7 @@ def test_bonn_archives_and_files_are_imported_and_validated(pipeline, invoke_jso
     )
     truth_rgb = (np.pi * truth @ srgb_response()).reshape(3, 3, 32, 32, 3)
     bonn_files.write_ubo2014(root / "cc.btf", np.radians(degrees), np.radians(degrees), truth_rgb)
-    small = ("--pixels", 32, "--spp", 16, "--map-height", 16, "--json")
+    small = SMALL
     for source, layout in ((root / "cc.zip", "UBO2003"), (root / "cc.btf", "UBO2014")):
         store = root / f"{layout}.btf.zarr"
         imported = invoke_json(
