@@ -282,6 +282,20 @@ def _coverage(centres: np.ndarray, edge: float, sign: float, width: float | None
         return special.ndtr(sign * (centres - edge) / width)
 
 
+def _corner_errors(
+    values: np.ndarray,
+    across: np.ndarray,
+    down: np.ndarray,
+    outside_value: float,
+    contrast: float,
+) -> np.ndarray:
+    """Squared error of :func:`fit_corner_model`'s model against the piece ``values`` ``(n, n)``
+    for the columns' coverages ``across`` ``(..., n)`` and the rows' ``down`` ``(..., n)``
+    (broadcast against each other: one error per corner)."""
+    model = outside_value + contrast * (down[..., :, None] * across[..., None, :])
+    return np.sum((values - model) ** 2, axis=(-2, -1))
+
+
 def _grid_scan(
     values: np.ndarray,
     inside: tuple[int, int],
@@ -300,10 +314,9 @@ def _grid_scan(
     grid = np.mgrid[span, span]
     across = _coverage(centres[None, :], grid[0][:, :1], inside[0], widths[0])
     down = _coverage(centres[None, :], grid[1][:1, :].T, inside[1], widths[1])
-    errors = np.empty(grid.shape[1:])
-    for row, across_row in enumerate(across):
-        model = outside_value + contrast * (down[:, :, None] * across_row[None, None, :])
-        errors[row] = np.sum((values - model) ** 2, axis=(1, 2))
+    errors = np.stack(
+        [_corner_errors(values, row[None, :], down, outside_value, contrast) for row in across]
+    )
     best = np.unravel_index(np.argmin(errors), errors.shape)
     return np.array([grid[0][best], grid[1][best]])
 
@@ -382,8 +395,7 @@ def fit_corner_model(
     def squared_error(corner: np.ndarray, width_u: float | None, width_v: float | None) -> float:
         across = _coverage(centres, corner[0], inside[0], width_u)
         down = _coverage(centres, corner[1], inside[1], width_v)
-        model = outside_value + contrast * np.outer(down, across)
-        return float(np.sum((values - model) ** 2))
+        return float(_corner_errors(values, across, down, outside_value, contrast))
 
     fixed = (None, None) if widths is None else (float(widths[0]), float(widths[1]))
     found = _grid_scan(values, inside, fixed, outside_value, contrast, grid_points)
