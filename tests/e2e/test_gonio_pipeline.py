@@ -147,9 +147,8 @@ def test_validate_renders_raw_and_compressed_btf_back_with_figures_and_metrics(
     root, *_ = pipeline
     btf = root / "cc.btf.zarr"
     invoke_json("compress", btf, "--brightness", 2, "--spectral", 60, "--json")
-    small = SMALL
-    raw = invoke_json("validate", btf, "--out", root / "raw", *small)
-    pca = invoke_json("validate", btf, "--out", root / "pca", "--compressed", *small)
+    raw = invoke_json("validate", btf, "--out", root / "raw", *SMALL)
+    pca = invoke_json("validate", btf, "--out", root / "pca", "--compressed", *SMALL)
     for out, metrics in ((root / "raw", raw), (root / "pca", pca)):
         assert json.loads((out / "metrics.json").read_text()) == metrics
         assert (out / "figure46.png").stat().st_size > 20_000
@@ -284,8 +283,7 @@ def test_an_rgb_btf_imported_from_images_is_validated_and_said_to_be_rgb(pipelin
     )
     assert imported["from_rgb"] == "sRGB, upsampled by jakob2019" and imported["complete"]
     np.testing.assert_allclose(BTFStore.open(store).view_dirs, btf.view_dirs, atol=1e-9)
-    small = SMALL
-    metrics = invoke_json("validate", store, "--out", root / "rgb_validation", *small)
+    metrics = invoke_json("validate", store, "--out", root / "rgb_validation", *SMALL)
     assert metrics["measured_as"] == "RGB (sRGB), rendered spectrally after jakob2019"
     assert all(np.isfinite(value) and value > 0 for value in metrics["figure46"].values())
     refused = runner.invoke(
@@ -321,14 +319,13 @@ def test_bonn_archives_and_files_are_imported_and_validated(pipeline, invoke_jso
     )
     truth_rgb = (np.pi * truth @ srgb_response()).reshape(3, 3, 32, 32, 3)
     bonn_files.write_ubo2014(root / "cc.btf", np.radians(degrees), np.radians(degrees), truth_rgb)
-    small = SMALL
     for source, layout in ((root / "cc.zip", "UBO2003"), (root / "cc.btf", "UBO2014")):
         store = root / f"{layout}.btf.zarr"
         imported = invoke_json(
             "btf", "import", source, "--out", store, "--material", "colorchecker16", "--json"
         )
         assert imported["format"] == layout and imported["complete"]
-        metrics = invoke_json("validate", store, "--out", root / f"{layout}_validation", *small)
+        metrics = invoke_json("validate", store, "--out", root / f"{layout}_validation", *SMALL)
         assert (
             metrics["measured_as"] == f"RGB (sRGB, {layout}), rendered spectrally after jakob2019"
         )
