@@ -113,10 +113,10 @@ def average_dark_frames(
             f"shape {times.shape}"
         )
     distinct, group = np.unique(times, return_inverse=True)
-    sums = np.zeros((distinct.size,) + frames.shape[1:], dtype=np.float64)
-    np.add.at(sums, group, frames.astype(np.float64))
-    counts = np.bincount(group, minlength=distinct.size).astype(np.float64)
-    return distinct, sums / counts.reshape((-1,) + (1,) * (frames.ndim - 1))
+    means = np.stack(
+        [frames[group == index].mean(axis=0, dtype=np.float64) for index in range(distinct.size)]
+    )
+    return distinct, means
 
 
 def _dark_model(dark_exposure_s: object, mean_dark_frames: object) -> tuple[np.ndarray, np.ndarray]:

@@ -93,24 +93,31 @@ def capture_study_stores(
     *,
     seed: int,
     dark_frames: int = STORE_DARK_FRAMES,
+    calibration_spp: int | None = None,
     step: Callable[[str], None] = lambda name: None,
 ) -> tuple[Path, Path]:
     """The ``dome-run`` store of ``material`` and the ``dome-calibration`` store of ``size`` in
-    ``folder``, captured where missing, resumed where incomplete."""
+    ``folder``, captured where missing, resumed where incomplete; ``calibration_spp`` renders
+    the calibration at other samples per pixel than ``size.spp`` (its targets are flat: at 4 the
+    cameras' poses and spectra come out as at 16, ``tests/integration/test_dome_processing.py``)."""
     folder.mkdir(parents=True, exist_ok=True)
     paths = {
         "calibration": folder / "calibration.capture.zarr",
         material: folder / f"{material}.capture.zarr",
     }
+    sizes = {
+        "calibration": size if calibration_spp is None else replace(size, spp=calibration_spp),
+        material: size,
+    }
     programs = {
         "calibration": lambda: dome_calibration_program(
-            size=size, dark_frames=dark_frames, seed=seed
+            size=sizes["calibration"], dark_frames=dark_frames, seed=seed
         ),
         material: lambda: dome_run_program(material, size=size, seed=seed),
     }
     for name, path in paths.items():
         if path.exists():
-            _check_capture_size(path, size)
+            _check_capture_size(path, sizes[name])
             if CaptureStore.open(path).complete:
                 continue
         step(f"capturing the {name} store")
