@@ -219,20 +219,27 @@ class SpectralizationProblem:
         roots = [np.sqrt(w) for w in self.weights]
         sizes = [t.n_rows for t in self.terms]
         offsets = np.concatenate([[0], np.cumsum(sizes)])
+        rows = int(offsets[-1])
+        # each term's rows, root weight and residual shape, found once (the priors' targets are
+        # zero arrays as large as their residuals, built anew on every access)
+        blocks = [
+            (t, r, slice(start, stop), np.shape(t.target))
+            for t, r, start, stop in zip(self.terms, roots, offsets[:-1], offsets[1:], strict=True)
+        ]
 
         def matvec(vector: np.ndarray) -> np.ndarray:
             x = vector.reshape(shape)
-            return np.concatenate(
-                [r * t.apply(x).ravel() for t, r in zip(self.terms, roots, strict=True)]
-            )
+            stacked = np.empty(rows)
+            for t, r, span, _ in blocks:  # scaled straight into place, no copy to concatenate
+                np.multiply(t.apply(x).ravel(), r, out=stacked[span])
+            return stacked
 
         def rmatvec(vector: np.ndarray) -> np.ndarray:
             out = np.zeros(shape)
-            for t, r, start, stop in zip(self.terms, roots, offsets[:-1], offsets[1:], strict=True):
-                t.adjoint(r * vector[start:stop].reshape(np.shape(t.target)), out)
+            for t, r, span, residual_shape in blocks:
+                t.adjoint(r * vector[span].reshape(residual_shape), out)
             return out.ravel()
 
-        rows = int(offsets[-1])
         operator = linalg.LinearOperator(
             (rows, shape[0] * shape[1]), matvec=matvec, rmatvec=rmatvec, dtype=np.float64
         )
