@@ -365,6 +365,15 @@ def validate(
             "many columns).",
         ),
     ] = 64,
+    map_spp: Annotated[
+        int,
+        typer.Option(
+            min=4,
+            max=65536,
+            help="Without --photo: samples per pixel of the twin's mirror-sphere image the map "
+            "is captured from (8 x --map-height pixels across).",
+        ),
+    ] = 64,
     as_json: JsonFlag = False,
 ) -> None:
     """Render the BTF back (thesis 4.2, Figure 4.6): a photograph of the sample, the BTF
@@ -396,8 +405,10 @@ def validate(
     if photo is None:
         if photo_only:
             fail(f"{', '.join(photo_only)}: only with --photo (your photograph)")
-        _validate_twin(btf, out, compressed, pixels, spp, map_height, as_json)
+        _validate_twin(btf, out, compressed, pixels, spp, map_height, map_spp, as_json)
         return
+    if given(ctx, "map_spp"):
+        fail("--map-spp: only without --photo (the twin captures its room's map)")
     if sample_corners is None or (environment is None) == (mirror_sphere is None):
         fail("--photo: expected --sample-corners and one light: --environment or --mirror-sphere")
     if (mirror_sphere is None) != (sphere_circle is None):
@@ -450,7 +461,14 @@ def validate(
 
 
 def _validate_twin(
-    btf: Path, out: Path, compressed: bool, pixels: int, spp: int, map_height: int, as_json: bool
+    btf: Path,
+    out: Path,
+    compressed: bool,
+    pixels: int,
+    spp: int,
+    map_height: int,
+    map_spp: int,
+    as_json: bool,
 ) -> None:
     """``spectwin validate`` without --photo: the twin's photograph of the store's material."""
     from recon.btf.store import BTFStore
@@ -466,6 +484,7 @@ def _validate_twin(
             pixels=pixels,
             spp=spp,
             map_height=map_height,
+            map_spp=map_spp,
             passbands=None if rig is None else rig_kind(rig).passbands,
             step=lambda name: status.update(name),
         )

@@ -89,6 +89,7 @@ def validate_btf(
     pixels: int = 96,
     spp: int = 256,
     map_height: int = 64,
+    map_spp: int = 64,
     passbands: Callable[[Any], Any] | None = None,
     step: Callable[[str], None] = lambda name: None,
 ) -> dict[str, Any]:
@@ -111,8 +112,9 @@ def validate_btf(
         (spectral) vs 3.21 (RGB) at 128 px and 64 spp, 1.23 vs 2.77 at 96 px and 256 spp; per
         field mean 0.85 vs 2.77 and 0.61 vs 2.71 (with specular lobes; the same to the last
         digit on every run).
-    map_height
-        Rows of the captured lat-long map (twice as many columns).
+    map_height, map_spp
+        Rows of the captured lat-long map (twice as many columns) and the samples per pixel of
+        the mirror sphere's image it is unwrapped from.
     passbands
         ``passbands(wavelengths_nm)``: the passbands the BTF's bands stand for in the 45/0
         comparison (the rig's, :attr:`twin.kinds.registry.RigKind.passbands`); ``None``: narrow
@@ -125,7 +127,8 @@ def validate_btf(
     dict
         The metrics written to ``metrics.json``.
     """
-    for name, value in (("pixels", pixels), ("spp", spp), ("map_height", map_height)):
+    sizes = {"pixels": pixels, "spp": spp, "map_height": map_height, "map_spp": map_spp}
+    for name, value in sizes.items():
         if isinstance(value, bool) or not isinstance(value, int) or value < 4:
             raise InputError(f"{name}: expected an integer of at least 4, got {value!r}")
     btf = BTFStore.open(btf_path)
@@ -164,7 +167,12 @@ def validate_btf(
     step("Figure 4.6: map capture and three renderings")
     start = time.perf_counter()
     figure = render_figure46(
-        material, table, pixels=pixels, spp=spp, map_size=(map_height, 2 * map_height)
+        material,
+        table,
+        pixels=pixels,
+        spp=spp,
+        map_size=(map_height, 2 * map_height),
+        map_spp=map_spp,
     )
     write_panels(figure.panels, out / "figure46.png")
     photo_inputs = write_photo_inputs(figure, material.size_m, pixels, out)
@@ -178,7 +186,12 @@ def validate_btf(
         "specular_lobe_texels_fraction": round(
             table.lobes.glossy_fraction if table.lobes is not None else 0.0, 4
         ),
-        "settings": {"pixels": pixels, "spp": spp, "map_size": [map_height, 2 * map_height]},
+        "settings": {
+            "pixels": pixels,
+            "spp": spp,
+            "map_size": [map_height, 2 * map_height],
+            "map_spp": map_spp,
+        },
         "figure46": figure.panels.summary(),
         "photo_inputs": photo_inputs,
         "figures": figures,

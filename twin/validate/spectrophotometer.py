@@ -119,8 +119,22 @@ def write_45_0_figure(result: FortyFiveZero, wavelengths_nm: np.ndarray, path) -
     count = len(result.field_names)
     columns = int(np.ceil(np.sqrt(count)))
     rows = int(np.ceil(count / columns))
-    figure = Figure(figsize=(3 * columns, 2.4 * rows))
-    axes = figure.subplots(rows, columns, sharex=True)
+    width, height = 3.0 * columns, 2.4 * rows
+    figure = Figure(figsize=(width, height))
+    # Margins and gaps in inches, fixed: what tight_layout gave for tick labels of up to six
+    # characters (0.0000), which took a third of the figure's time.
+    left, right, bottom, top, column_gap, row_gap = 0.97, 0.15, 0.71, 0.35, 0.65, 0.43
+    axes_width = (width - left - right - (columns - 1) * column_gap) / columns
+    axes_height = (height - bottom - top - (rows - 1) * row_gap) / rows
+    layout = {
+        "left": left / width,
+        "right": 1 - right / width,
+        "bottom": bottom / height,
+        "top": 1 - top / height,
+        "wspace": column_gap / axes_width,
+        "hspace": row_gap / axes_height,
+    }
+    axes = figure.subplots(rows, columns, sharex=True, gridspec_kw=layout)
     for index, axis in enumerate(np.ravel(axes)):
         if index >= count:
             axis.axis("off")
@@ -135,5 +149,4 @@ def write_45_0_figure(result: FortyFiveZero, wavelengths_nm: np.ndarray, path) -
     np.ravel(axes)[0].legend(fontsize=7)
     figure.supxlabel("wavelength, nm")
     figure.supylabel("reflectance factor")
-    figure.tight_layout()
     figure.savefig(path, dpi=100)
