@@ -71,14 +71,20 @@ def _counts(out: Path, event: str) -> dict[str, int]:
     }
 
 
-def _point_started(process: subprocess.Popen, out: Path, starts_before: int) -> bool:
-    """Wait until the sweep ``process`` starts a point (``out`` then holds more than
-    ``starts_before`` starts); False when it ends first."""
-    while sum(_counts(out, "started").values()) == starts_before:
+def _wait_for_start(
+    process: subprocess.Popen, out: Path, before: dict[str, int], point: str | None
+) -> bool:
+    """Wait until the sweep ``process`` starts ``point`` (None: any point) in ``out``, which held
+    ``before`` starts per point; False when the process ends first."""
+    while True:
+        now = _counts(out, "started")
+        if point is None and sum(now.values()) > sum(before.values()):
+            return True
+        if point is not None and now.get(point, 0) > before.get(point, 0):
+            return True
         if process.poll() is not None:
             return False
         time.sleep(0.05)
-    return True
 
 
 @pytest.fixture(scope="module")
@@ -123,18 +129,17 @@ def test_a_tiny_sweep_writes_its_table_front_and_page(uninterrupted):
 def test_a_sweep_killed_three_times_resumes_to_the_uninterrupted_table(uninterrupted, tmp_path):
     sweep, reference = uninterrupted
     out = tmp_path / "killed"
-    # Each kill comes at a seeded random moment within the points, after the run has started
-    # one: within a point's wall time of the uninterrupted sweep, so that the first kill cuts
-    # the first point short.
-    point_s = max(
-        row["measures"]["point_s"] for row in json.loads((reference / "table.json").read_text())
-    )
+    # Each kill comes at a seeded random moment within a point the run has started, within a
+    # point's wall time of the uninterrupted sweep: the first cuts the first point short, the last
+    # cuts the second point short, after the first is finished.
+    rows = json.loads((reference / "table.json").read_text())
+    point_s = max(row["measures"]["point_s"] for row in rows)
     rng = np.random.default_rng(22)
     kills = 0
     while kills < 3:
-        starts_before = sum(_counts(out, "started").values())
+        starts_before = _counts(out, "started")
         process = _start(sweep, out)
-        if not _point_started(process, out, starts_before):
+        if not _wait_for_start(process, out, starts_before, rows[1]["key"] if kills == 2 else None):
             break
         time.sleep(rng.uniform(0.2, 0.8) * point_s)
         if process.poll() is not None:  # finished before the kill: not a kill
@@ -142,7 +147,7 @@ def test_a_sweep_killed_three_times_resumes_to_the_uninterrupted_table(uninterru
         os.killpg(process.pid, signal.SIGKILL)
         process.wait()
         kills += 1
-    assert kills == 3, "the sweep finished before three kills"
+    assert kills == 3, f"the sweep ended before three kills: {process.communicate()[1]}"
     process = _start(sweep, out)
     _, stderr = process.communicate(timeout=600)
     assert process.returncode == 0, stderr
