@@ -9,6 +9,8 @@ white LEDs (``recon.metamers``). Renders use the same spectra on ``FINE_GRID``.
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 import trimesh
 
@@ -39,9 +41,16 @@ __all__ = [
 ]
 
 
+@cache
+def _chart_reflectances() -> SampledSpectra:
+    """The ColorChecker's 24 patches on ``MATERIAL_GRID``, resampled once per process (a chart
+    takes 17 of them)."""
+    return colorchecker_reflectances(MATERIAL_GRID)
+
+
 def chart_colour(name: str, scale: float = 1.0) -> SampledSpectra:
     """A ColorChecker patch reflectance (``ColorChecker N Ohta``), optionally scaled."""
-    return colorchecker_reflectances(MATERIAL_GRID).row(name) * scale
+    return _chart_reflectances().row(name) * scale
 
 
 def dome_camera_and_light() -> tuple[SampledSpectra, SampledSpectra]:
