@@ -20,6 +20,7 @@
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -223,21 +224,23 @@ def fit_lamp(
         np.concatenate([item.flat_index for item in pixels]), return_inverse=True
     )
     points = chart_points(pose, focal_px, shape).reshape(-1, 3)[used]
-    where = np.split(inverse, np.cumsum([item.flat_index.size for item in pixels])[:-1])
+    observed = np.concatenate([item.log_ratio for item in pixels])
+    filter_of = np.repeat(np.arange(filters), [item.flat_index.size for item in pixels])
     # lamp_irradiance_ratio with the reference lamp's irradiance computed once
     irradiance = _point_lamp_irradiance(pose, points)
     at_reference = irradiance(reference)
 
+    @functools.lru_cache(maxsize=4)
+    def log_ratio_at(position: bytes) -> np.ndarray:
+        """The log irradiance ratio of a lamp position (its float64 bytes): the finite
+        differences of the powers ask again for the position they start from."""
+        ratio = irradiance(np.frombuffer(position)) / at_reference
+        return np.log(np.maximum(ratio, _FLOOR))
+
     def residuals(parameters: np.ndarray) -> np.ndarray:
         position = parameters[:3] if bench.lamp.fit_position else reference
-        ratio = irradiance(position) / at_reference
-        log_ratio = np.log(np.maximum(ratio, _FLOOR))
-        return np.concatenate(
-            [
-                item.log_ratio - parameters[3 + index] - log_ratio[where[index]]
-                for index, item in enumerate(pixels)
-            ]
-        )
+        log_ratio = log_ratio_at(np.asarray(position, np.float64).tobytes())
+        return observed - parameters[3 + filter_of] - log_ratio[inverse]
 
     powers = np.array([np.mean(item.log_ratio) for item in pixels])
     starts = _LAMP_STARTS_M + reference if bench.lamp.fit_position else reference[None, :]
@@ -331,19 +334,10 @@ def fit_dark(
     shape = (bench.reduction.height, bench.reduction.width)
     stored_per_raw = stored_per_raw_dn(bench, camera)
     scales = exposures * camera.system_gain_dn_per_e * stored_per_raw
-    dark_units = {
-        sigma: reduce_linear(
-            Sensor(camera_with_dark(camera, 1.0, float(sigma))).mean_dark_electrons(1.0),
-            camera.mosaic,
-            shape,
-        ).ravel()
-        for sigma in _DSNU_GRID
-    }
+    dark_units, defect_units = _unit_dark_signals(camera.model_dump_json(), shape)
     best = (np.inf, DarkFit(0.0, 0.0))
-    for fraction in _DEFECT_GRID:
-        unit_camera = camera_with_dark(camera, 0.0, 0.0, float(fraction), 1.0)
-        defects = Sensor(unit_camera).defect_pixels().astype(np.float64)
-        per_offset = reduce_linear(defects, camera.mosaic, shape).ravel() * stored_per_raw
+    for fraction, defects in zip(_DEFECT_GRID, defect_units, strict=True):
+        per_offset = defects * stored_per_raw
         touched = per_offset > 1e-9
         for sigma, unit in dark_units.items():
             clean = _SortedTail(unit[~touched])
@@ -358,6 +352,36 @@ def fit_dark(
                     )
                     best = (errors[index], fit)
     return best[1]
+
+
+@functools.lru_cache(maxsize=2)
+def _unit_dark_signals(
+    camera_json: str, shape: tuple[int, int]
+) -> tuple[dict[float, np.ndarray], list[np.ndarray]]:
+    """The reduced (``shape``, flattened) unit dark signals of a camera (its JSON): the mean
+    dark electrons at 1 e-/s for 1 s per DSNU spread of the grid, and the defect pixels at a
+    unit offset per defect fraction of the grid (zero where the fraction is). They depend on
+    the camera and the reduction alone, so another fit of the same camera reuses them."""
+    camera = CameraConfig.model_validate_json(camera_json)
+    dark_units = {
+        sigma: reduce_linear(
+            Sensor(camera_with_dark(camera, 1.0, float(sigma))).mean_dark_electrons(1.0),
+            camera.mosaic,
+            shape,
+        ).ravel()
+        for sigma in _DSNU_GRID
+    }
+    defect_units = []
+    for fraction in _DEFECT_GRID:
+        if fraction > 0:
+            unit_camera = camera_with_dark(camera, 0.0, 0.0, float(fraction), 1.0)
+            defects = Sensor(unit_camera).defect_pixels().astype(np.float64)
+            defect_units.append(reduce_linear(defects, camera.mosaic, shape).ravel())
+        else:  # the reduction of an all-zero frame (float32, as reduce_linear gives)
+            defect_units.append(np.zeros(shape[0] * shape[1], np.float32))
+    for unit in [*dark_units.values(), *defect_units]:
+        unit.flags.writeable = False
+    return dark_units, defect_units
 
 
 class _SortedTail:

@@ -1,7 +1,8 @@
 """Reduced copies of raw frames (twin.sensor.reduced_copy) and GBRG mosaics in the sensor model.
 
 The fast bilinear demosaicing is checked against colour-demosaicing's, the peer it replaces, for
-every Bayer tile; the reduction against frames whose reduced values follow by hand.
+every Bayer tile; the reduction against scikit-image's resize, whose work it restricts to what the
+re-mosaiced frame reads, and against frames whose reduced values follow by hand.
 """
 
 from __future__ import annotations
@@ -9,10 +10,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from colour_demosaicing import demosaicing_CFA_Bayer_bilinear
+from skimage.transform import resize
 
 from recon.spectra import WavelengthGrid
 from twin.rigs.camera_config import load_camera_config
-from twin.sensor.model import Sensor, bayer_channel_index
+from twin.sensor.model import Sensor, bayer_channel_index, mosaic_channels
 from twin.sensor.reduced_copy import bilinear_demosaic, reduce_linear, reduce_raw_frame
 
 
@@ -22,6 +24,18 @@ def test_bilinear_demosaic_equals_colour_demosaicing(pattern):
     ours = bilinear_demosaic(raw, pattern)
     peer = demosaicing_CFA_Bayer_bilinear(raw, pattern)
     assert np.abs(ours - peer).max() <= 1e-3 * 4096
+
+
+@pytest.mark.parametrize("pattern", ["RGGB", "GBRG"])
+def test_the_reduction_is_scikit_images_resize_bit_for_bit(pattern):
+    """Whole, fractional and unit factors: the same bits as resizing the demosaiced frame."""
+    rng = np.random.default_rng(4)
+    for raw_shape, shape in (((120, 144), (20, 24)), ((61, 75), (13, 11)), ((50, 40), (50, 20))):
+        raw = rng.random(raw_shape).astype(np.float32) * 4095
+        rgb = bilinear_demosaic(raw, pattern)
+        peer = resize(rgb, (*shape, 3), order=1, anti_aliasing=True, preserve_range=True)
+        expected = mosaic_channels(peer, bayer_channel_index(*shape, pattern))
+        assert np.array_equal(reduce_linear(raw, pattern, shape), expected)
 
 
 def test_a_grey_frame_reduces_to_its_level_in_the_stored_bits():
