@@ -305,11 +305,27 @@ def btf_bsdf(table: BTFTable | CompressedTable, *, resolution: int = 128) -> dic
     return {"type": "spectral_btf", "btf": _TABLES.keep(table), "resolution": resolution}
 
 
+class _KernelSizes:
+    """A BTF table's sizes as opaque Dr.Jit values: they enter the kernels as variables, not
+    literals, so a table of other sizes reuses the compiled kernels (the same values)."""
+
+    def __init__(self, views: int, rows: int, columns: int, bands: int):
+        def opaque(value: int):
+            return dr.opaque(mi.UInt32, value)
+
+        self.views, self.rows, self.columns = opaque(views), opaque(rows), opaque(columns)
+        self.texels, self.bands = opaque(rows * columns), opaque(bands)
+        # the last first index of a pair of neighbours (0 for a single row, column or band)
+        self.last_row_pair = opaque(max(rows - 2, 0))
+        self.last_column_pair = opaque(max(columns - 2, 0))
+        self.last_band_pair = opaque(max(bands - 2, 0))
+
+
 class _DecodedSpectra:
     """Texel spectra of a :class:`BTFTable`, gathered from its values (Dr.Jit side)."""
 
     def __init__(self, table: BTFTable):
-        _, self.n_views, self.height, self.width, self.bands = table.values.shape
+        self.sizes = _KernelSizes(*table.values.shape[1:])
         self._values = mi.Float(table.values.astype(np.float32).ravel())
 
     def blend(self, combinations, texels, lows, fractions, active):
@@ -321,10 +337,10 @@ class _DecodedSpectra:
             for texel, texel_weight in texels:
                 weight = combination_weight * texel_weight
                 mask = active & (weight > 0)
-                base = (combination * (self.height * self.width) + texel) * self.bands
+                base = (combination * self.sizes.texels + texel) * self.sizes.bands
                 for channel, (low, fraction) in enumerate(zip(lows, fractions, strict=True)):
                     first = dr.gather(mi.Float, self._values, base + low, mask)
-                    high = dr.minimum(low + 1, self.bands - 1)
+                    high = dr.minimum(low + 1, self.sizes.bands - 1)
                     second = dr.gather(mi.Float, self._values, base + high, mask)
                     value = first + fraction * (second - first)
                     channels[channel] += dr.select(mask, weight * value, 0.0)
@@ -344,11 +360,9 @@ class _CompressedSpectra:
 
     def __init__(self, table: CompressedTable):
         compressed = table.compressed
-        _, self.height, self.width, self.bands = compressed.shape
-        self.n_views = len(table.view_dirs)
-        self._texels = self.height * self.width
+        self.sizes = _KernelSizes(len(table.view_dirs), *compressed.shape[1:])
         self._per_band = compressed.layout == "per_band"
-        self._n_spectral = compressed.n_spectral
+        self._n_spectral = dr.opaque(mi.UInt32, compressed.n_spectral)
         self._pairs = mi.UInt32(table.pairs.ravel().astype(np.uint32))
         brightness = compressed.brightness_mean + (
             compressed.brightness_scores @ compressed.brightness_components
@@ -364,7 +378,7 @@ class _CompressedSpectra:
 
     def blend(self, combinations, texels, lows, fractions, active):
         """As :meth:`_DecodedSpectra.blend`, decoding from the factors (class docstring)."""
-        n_texels, c_s = self._texels, self._n_spectral
+        n_texels, c_s, bands = self.sizes.texels, self._n_spectral, self.sizes.bands
         pairs = [
             (dr.gather(mi.UInt32, self._pairs, combination, active), weight)
             for combination, weight in combinations
@@ -379,7 +393,7 @@ class _CompressedSpectra:
             ]
             for pair, pair_weight in pairs
         ]
-        highs = [dr.minimum(low + 1, self.bands - 1) for low in lows]
+        highs = [dr.minimum(low + 1, bands - 1) for low in lows]
         ends = [(low, high) for low, high in zip(lows, highs, strict=True)]
 
         def blended(name, group_offset):
@@ -416,7 +430,7 @@ class _CompressedSpectra:
                 sums, ends, fractions, gammas, strict=True
             ):
                 for (pair, _), g_low, g_high in zip(pairs, gamma_low, gamma_high, strict=True):
-                    row = pair * self.bands
+                    row = pair * bands
                     score_low = self._gather(
                         "spectral_scores", (row + low) * c_s + component, active
                     )
@@ -491,11 +505,12 @@ class SpectralBTF(mi.BSDF):
 
     def _texels(self, uv):
         """Four (texel offset, weight) of the bilinear footprint of ``uv``."""
-        height, width = self._spectra.height, self._spectra.width
-        x = dr.clip(uv.x * width - 0.5, 0.0, width - 1.0)
-        y = dr.clip((1 - uv.y) * height - 0.5, 0.0, height - 1.0)
-        x0 = dr.minimum(mi.UInt32(x), max(width - 2, 0))
-        y0 = dr.minimum(mi.UInt32(y), max(height - 2, 0))
+        sizes = self._spectra.sizes
+        height, width = sizes.rows, sizes.columns
+        x = dr.clip(uv.x * mi.Float(width) - 0.5, 0.0, mi.Float(width - 1))
+        y = dr.clip((1 - uv.y) * mi.Float(height) - 0.5, 0.0, mi.Float(height - 1))
+        x0 = dr.minimum(mi.UInt32(x), sizes.last_column_pair)
+        y0 = dr.minimum(mi.UInt32(y), sizes.last_row_pair)
         fx, fy = dr.clip(x - mi.Float(x0), 0, 1), dr.clip(y - mi.Float(y0), 0, 1)
         x1, y1 = dr.minimum(x0 + 1, width - 1), dr.minimum(y0 + 1, height - 1)
         return [
@@ -506,16 +521,16 @@ class SpectralBTF(mi.BSDF):
         ]
 
     def _reflectance(self, si, light, view, active):
-        bands = self._spectra.bands
+        sizes = self._spectra.sizes
         value = mi.UnpolarizedSpectrum(0.0)
         lows, fractions = [], []
         for channel in range(4):
             position = (si.wavelengths[channel] - self._first_nm) / self._step_nm
-            low = dr.minimum(mi.UInt32(dr.maximum(position, 0.0)), max(bands - 2, 0))
+            low = dr.minimum(mi.UInt32(dr.maximum(position, 0.0)), sizes.last_band_pair)
             lows.append(low)
             fractions.append(dr.clip(position - mi.Float(low), 0.0, 1.0))
         combinations = [
-            (light_index * self._spectra.n_views + view_index, light_weight * view_weight)
+            (light_index * sizes.views + view_index, light_weight * view_weight)
             for light_index, light_weight in self._corners(0, light)
             for view_index, view_weight in self._corners(1, view)
         ]

@@ -22,6 +22,7 @@ Mitsuba at import (:mod:`twin.render.plugins.registry`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import drjit as dr
@@ -106,37 +107,47 @@ class SpectralEnvmapEmitter(mi.Emitter):
         self.m_flags = mi.EmitterFlags.Infinite | mi.EmitterFlags.SpatiallyVarying
         height, width, bands = spectral_map.radiance.shape
         self._height, self._width, self._bands = height, width, bands
+        # the map's sizes enter the kernels as opaque values, not literals: a map of another
+        # size reuses the compiled kernels (the same single-precision values as the literals)
+        self._last_row, self._last_column = (dr.opaque(mi.UInt32, n - 1) for n in (height, width))
+        self._columns, self._band_count = dr.opaque(mi.UInt32, width), dr.opaque(mi.UInt32, bands)
+        self._last_band_pair = dr.opaque(mi.UInt32, max(bands - 2, 0))
+        self._rows_per_radian = dr.opaque(mi.Float, height / math.pi)
+        self._columns_per_radian = dr.opaque(mi.Float, width / (2 * math.pi))
+        self._row_radians = dr.opaque(mi.Float, math.pi / height)
+        self._column_radians = dr.opaque(mi.Float, 2 * math.pi / width)
         wavelengths = spectral_map.grid.wavelengths_nm
         self._first_nm = float(wavelengths[0])
         self._step_nm = float(wavelengths[1] - wavelengths[0]) if bands > 1 else 1.0
+        self._span_nm = dr.opaque(mi.Float, self._step_nm * max(bands - 1, 1))
         self._radiance = mi.Float(spectral_map.radiance.astype(np.float32).ravel())
         weights = spectral_map.radiance.mean(axis=2) * spectral_map.solid_angles()
         if not weights.sum() > 0:
             raise InputError("radiance: the map emits nothing")
         self._distribution = mi.DiscreteDistribution(mi.Float(weights.ravel()))
         self._importance = bool(props.get("importance", True))
-        self._radius = 1e4
+        self._radius = dr.opaque(mi.Float, 1e4)
 
     def set_scene(self, scene):
         sphere = scene.bbox().bounding_sphere()
-        self._radius = max(float(dr.max(sphere.radius)), 1e-3) * 2.0
+        self._radius = dr.opaque(mi.Float, max(float(dr.max(sphere.radius)), 1e-3) * 2.0)
 
     def _pixel(self, direction):
         theta = dr.acos(dr.clip(direction.z, -1.0, 1.0))
         phi = dr.atan2(direction.y, direction.x)
         phi = dr.select(phi < 0, phi + 2 * dr.pi, phi)
-        row = dr.minimum(mi.UInt32(theta * (self._height / dr.pi)), self._height - 1)
-        column = dr.minimum(mi.UInt32(phi * (self._width / (2 * dr.pi))), self._width - 1)
+        row = dr.minimum(mi.UInt32(theta * self._rows_per_radian), self._last_row)
+        column = dr.minimum(mi.UInt32(phi * self._columns_per_radian), self._last_column)
         return row, column
 
     def _radiance_at(self, direction, wavelengths, active):
         row, column = self._pixel(direction)
-        base = (row * self._width + column) * self._bands
+        base = (row * self._columns + column) * self._band_count
         value = mi.UnpolarizedSpectrum(0.0)
         for channel in range(4):
             position = (wavelengths[channel] - self._first_nm) / self._step_nm
-            low = dr.minimum(mi.UInt32(dr.maximum(position, 0.0)), max(self._bands - 2, 0))
-            high = dr.minimum(low + 1, self._bands - 1)
+            low = dr.minimum(mi.UInt32(dr.maximum(position, 0.0)), self._last_band_pair)
+            high = dr.minimum(low + 1, self._band_count - 1)
             t = dr.clip(position - mi.Float(low), 0.0, 1.0)
             first = dr.gather(mi.Float, self._radiance, base + low, active)
             second = dr.gather(mi.Float, self._radiance, base + high, active)
@@ -147,10 +158,10 @@ class SpectralEnvmapEmitter(mi.Emitter):
         if not self._importance:
             return mi.Float(1 / (4 * dr.pi))
         row, column = self._pixel(direction)
-        pmf = self._distribution.eval_pmf_normalized(row * self._width + column)
-        top = dr.cos(mi.Float(row) * (dr.pi / self._height))
-        bottom = dr.cos(mi.Float(row + 1) * (dr.pi / self._height))
-        return pmf / ((top - bottom) * (2 * dr.pi / self._width))
+        pmf = self._distribution.eval_pmf_normalized(row * self._columns + column)
+        top = dr.cos(mi.Float(row) * self._row_radians)
+        bottom = dr.cos(mi.Float(row + 1) * self._row_radians)
+        return pmf / ((top - bottom) * self._column_radians)
 
     def eval(self, si, active=True):
         return self._radiance_at(-si.wi, si.wavelengths, active)
@@ -161,11 +172,14 @@ class SpectralEnvmapEmitter(mi.Emitter):
     def sample_direction(self, it, sample, active=True):
         if self._importance:
             index, reused = self._distribution.sample_reuse(sample.x, active)
-            row, column = index // self._width, index % self._width
-            top = dr.cos(mi.Float(row) * (dr.pi / self._height))
-            bottom = dr.cos(mi.Float(row + 1) * (dr.pi / self._height))
+            # lanes of other emitters read the opaque width as 0 in Mitsuba's calls: a divisor
+            # of at least 1 keeps their (discarded) integer division from trapping
+            columns = dr.maximum(self._columns, 1)
+            row, column = index // columns, index % columns
+            top = dr.cos(mi.Float(row) * self._row_radians)
+            bottom = dr.cos(mi.Float(row + 1) * self._row_radians)
             cos_theta = top + reused * (bottom - top)
-            phi = (mi.Float(column) + sample.y) * (2 * dr.pi / self._width)
+            phi = (mi.Float(column) + sample.y) * self._column_radians
             sin_theta = dr.safe_sqrt(1 - cos_theta * cos_theta)
             direction = mi.Vector3f(sin_theta * dr.cos(phi), sin_theta * dr.sin(phi), cos_theta)
         else:
@@ -186,9 +200,8 @@ class SpectralEnvmapEmitter(mi.Emitter):
         return self._pdf(ds.d)
 
     def sample_wavelengths(self, si, sample, active=True):
-        span = self._step_nm * max(self._bands - 1, 1)
-        wavelengths = self._first_nm + span * mi.sample_shifted(sample)
-        return wavelengths, self._radiance_at(-si.wi, wavelengths, active) * span
+        wavelengths = self._first_nm + self._span_nm * mi.sample_shifted(sample)
+        return wavelengths, self._radiance_at(-si.wi, wavelengths, active) * self._span_nm
 
     def bbox(self):
         return mi.ScalarBoundingBox3f()
