@@ -9,9 +9,8 @@ from recon.spectra import DEFAULT_GRID, WavelengthGrid
 from twin.render.plugins.btf_bsdf import btf_bsdf, product_table
 from twin.render.plugins.spectral_envmap import SpectralMap, spectral_envmap
 from twin.render.render import render_scene
-from twin.render.spectra import specfilm
+from twin.render.scene import PinholeCamera
 from twin.render.truth import band_passbands
-from twin.render.variant import activate
 from twin.rigs.hemisphere import sattler_directions
 
 pytestmark = pytest.mark.render
@@ -19,13 +18,11 @@ pytestmark = pytest.mark.render
 # to compile); the few-operation kernels that set up a map's sampling distribution take its size
 # as a literal and compile in milliseconds
 LARGE_KERNEL_OPS = 500
+CAMERA = PinholeCamera(np.array([0.0, -3.0, 3.0]), field_of_view_m=2.0, pixels=8)
 
 
 def _scene(map_height: int, texels: int, direction_step: int) -> dict:
     """A BTF square under a spectral map, both of the given sizes."""
-    activate()
-    import mitsuba as mi
-
     rng = np.random.default_rng(map_height + texels)
     directions = sattler_directions()[::direction_step]
     lights = np.repeat(directions, len(directions), axis=0)
@@ -35,15 +32,9 @@ def _scene(map_height: int, texels: int, direction_step: int) -> dict:
     return {
         "type": "scene",
         "integrator": {"type": "path", "max_depth": 2},
-        "sensor": {
-            "type": "perspective",
-            "fov": 30,
-            "to_world": mi.ScalarTransform4f.look_at(
-                origin=[0, -3, 3], target=[0, 0, 0], up=[0, 0, 1]
-            ),
-            "film": specfilm(band_passbands(WavelengthGrid(np.array([450.0, 650.0]))), 8, 8),
-            "sampler": {"type": "independent", "sample_count": 2},
-        },
+        "sensor": CAMERA.mitsuba_sensor(
+            band_passbands(WavelengthGrid(np.array([450.0, 650.0]))), 2
+        ),
         "environment": spectral_envmap(SpectralMap(radiance, DEFAULT_GRID)),
         "square": {
             "type": "rectangle",
