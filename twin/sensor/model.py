@@ -61,6 +61,9 @@ counts."""
 
 _ROW_BLOCKS = 2  # fixed, so the same seed gives the same frame whatever the thread count
 _THREADS = 2  # numpy's generators release the GIL: the row blocks are drawn on two threads
+_POOL_MIN_PIXELS = 192 * 192  # smaller frames are drawn on the calling thread (same blocks, same
+# generators, so the same frame): handing two blocks to the threads and waiting for them cost
+# more than drawing a 128 x 128 frame's noise
 _pool: ThreadPoolExecutor | None = None
 
 
@@ -382,7 +385,11 @@ class Sensor:
                 offset_dn = self._fixed_pattern["offset_dn"][rows]
                 frame[rows] = self._digitize(mean[rows], offset_dn, generators[block])
 
-        list(_row_pool().map(convert, range(_ROW_BLOCKS)))
+        if self.height * self.width < _POOL_MIN_PIXELS:
+            for block in range(_ROW_BLOCKS):
+                convert(block)
+        else:
+            list(_row_pool().map(convert, range(_ROW_BLOCKS)))
         return frame
 
     def dark_frame(self, exposure_s: float, rng: np.random.Generator) -> np.ndarray:

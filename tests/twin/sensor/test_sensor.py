@@ -16,6 +16,7 @@ from recon.spectra import SampledSpectra, WavelengthGrid
 from twin.components.lamps import FINE_GRID, HMILamp
 from twin.components.lctf import LiquidCrystalTunableFilter
 from twin.rigs.camera_config import load_camera_config
+from twin.sensor import model as sensor_model
 from twin.sensor.model import Sensor, bayer_channel_index, shot_electrons
 from twin.sensor.white_reference import white_reference_rates
 
@@ -221,6 +222,19 @@ def test_same_seed_gives_the_same_frame_and_another_seed_another():
     other = sensor.capture(electrons, 0.01, np.random.default_rng(43))
     np.testing.assert_array_equal(first, again)
     assert not np.array_equal(first, other)
+
+
+@pytest.mark.parametrize("roi", [(16, 16), (256, 320)])
+def test_a_frame_is_the_same_drawn_on_the_calling_thread_or_on_the_pool(monkeypatch, roi):
+    """Small frames skip the threads that draw row blocks (``_POOL_MIN_PIXELS``); the blocks and
+    their generators are the same, so the same seed gives the same frame either way."""
+    sensor = Sensor("svs_vistek_4022", roi=roi)
+    electrons = np.full((*roi, 3), 30.0)
+    frames = []
+    for smallest in (0, 10**9):
+        monkeypatch.setattr(sensor_model, "_POOL_MIN_PIXELS", smallest)
+        frames.append(sensor.capture(electrons, 0.01, np.random.default_rng(7)))
+    np.testing.assert_array_equal(*frames)
 
 
 def test_bayer_mosaic_is_rggb_and_demosaics_back():
