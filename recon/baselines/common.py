@@ -22,6 +22,7 @@ __all__ = [
     "check_reflectance_rgb",
     "check_response",
     "check_spectra",
+    "check_target_pixels",
 ]
 
 CHUNK_ELEMENTS = 1 << 22
@@ -94,34 +95,47 @@ def check_spectra(name: str, value: object, bands: int | None = None) -> np.ndar
     return spectra
 
 
+def _flat_indices(
+    value: object, n_pixels: int, image_shape: tuple[int, ...], name: str
+) -> np.ndarray:
+    """1-D integer flat row-major indices into the image's leading dimensions."""
+    indices = np.asarray(value)
+    if indices.dtype == bool:
+        raise InputError(
+            f"{name}: expected flat integer indices into rgb.shape[:-1], got a boolean "
+            f"mask; pass np.flatnonzero(mask) (rows of known_spectra in row-major mask order)"
+        )
+    if indices.ndim != 1 or not (np.issubdtype(indices.dtype, np.integer) or indices.size == 0):
+        raise InputError(
+            f"{name}: expected a 1-D array of integer flat indices into rgb.shape[:-1] "
+            f"= {image_shape}, got dtype {indices.dtype} and shape {indices.shape}"
+        )
+    indices = indices.astype(np.int64)
+    if indices.size and (indices.min() < 0 or indices.max() >= n_pixels):
+        raise InputError(
+            f"{name}: expected flat indices in [0, {n_pixels}) for an image of shape "
+            f"{image_shape}, got range [{indices.min()}, {indices.max()}]"
+        )
+    return indices
+
+
 def check_known_pixels(
     value: object, n_pixels: int, count: int, image_shape: tuple[int, ...]
 ) -> np.ndarray:
     """Distinct flat row-major indices into the image's leading dimensions."""
-    indices = np.asarray(value)
-    if indices.dtype == bool:
-        raise InputError(
-            "known_pixels: expected flat integer indices into rgb.shape[:-1], got a boolean "
-            "mask; pass np.flatnonzero(mask) (rows of known_spectra in row-major mask order)"
-        )
-    if indices.ndim != 1 or not (np.issubdtype(indices.dtype, np.integer) or indices.size == 0):
-        raise InputError(
-            f"known_pixels: expected a 1-D array of integer flat indices into rgb.shape[:-1] "
-            f"= {image_shape}, got dtype {indices.dtype} and shape {indices.shape}"
-        )
-    indices = indices.astype(np.int64)
+    indices = _flat_indices(value, n_pixels, image_shape, "known_pixels")
     if indices.size != count:
         raise InputError(
             f"known_pixels: expected one index per known spectrum ({count}), got {indices.size}"
         )
-    if indices.size and (indices.min() < 0 or indices.max() >= n_pixels):
-        raise InputError(
-            f"known_pixels: expected flat indices in [0, {n_pixels}) for an image of shape "
-            f"{image_shape}, got range [{indices.min()}, {indices.max()}]"
-        )
     if np.unique(indices).size != indices.size:
         raise InputError("known_pixels: expected distinct pixel indices, found repeats")
     return indices
+
+
+def check_target_pixels(value: object, n_pixels: int, image_shape: tuple[int, ...]) -> np.ndarray:
+    """Flat row-major indices of the pixels to estimate (``at_pixels``)."""
+    return _flat_indices(value, n_pixels, image_shape, "at_pixels")
 
 
 def check_known_rgb(

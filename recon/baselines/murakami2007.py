@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 from scipy import linalg, spatial
+from scipy.interpolate import RegularGridInterpolator as interpolate_grid
 
 from recon.baselines.common import (
     CHUNK_ELEMENTS,
@@ -20,6 +21,7 @@ from recon.baselines.common import (
     check_positive,
     check_response,
     check_spectra,
+    check_target_pixels,
 )
 from recon.errors import InputError
 
@@ -35,6 +37,8 @@ def murakami(
     correlation_length: float | None = None,
     rgb_noise_std: float = 0.0,
     nugget: float = 0.0,
+    at_pixels: np.ndarray | None = None,
+    grid_step: int = 1,
 ) -> np.ndarray:
     """Gaussian-prior estimate with spatial correction from point spectra (Murakami et al. 2007).
 
@@ -85,15 +89,23 @@ def murakami(
     nugget
         :math:`\\eta`, noise of the known spectra relative to the residual variance; 0
         interpolates the residuals exactly.
+    at_pixels
+        Flat row-major indices of the pixels to estimate (e.g. spots held out of
+        ``known_pixels``); default every pixel.
+    grid_step
+        With every pixel estimated, the spatial correction is evaluated on every
+        ``grid_step``-th row and column (and the last) and interpolated bilinearly between
+        them: ``grid_step**2`` times fewer kernel values. 1 (default): at every pixel.
 
     Returns
     -------
     numpy.ndarray
-        ``(H, W, K)`` spectra.
+        ``(H, W, K)`` spectra, or ``(n, K)`` at the ``n`` ``at_pixels``.
 
     Notes
     -----
-    Cost: one ``m x m`` solve and an ``H W x m`` kernel evaluated in chunks.
+    Cost: one ``m x m`` solve and an ``n x m`` kernel evaluated in chunks, ``n`` the pixels
+    at which the correction is evaluated.
     """
     image = check_image("rgb", rgb)
     if image.ndim != 3:
@@ -114,6 +126,13 @@ def murakami(
     noise = check_positive("rgb_noise_std", rgb_noise_std, allow_zero=True)
     nugget = check_positive("nugget", nugget, allow_zero=True)
 
+    if not (isinstance(grid_step, (int, np.integer)) and grid_step >= 1):
+        raise InputError(f"grid_step: expected a whole number of pixels >= 1, got {grid_step!r}")
+    flat = image.reshape(-1, channels)
+    if at_pixels is not None:
+        targets = check_target_pixels(at_pixels, height * width, (height, width))
+        flat = flat[targets]
+
     # 1. Wiener estimate under the Gaussian prior of the known spectra.
     mean = spectra.mean(axis=0)
     centred = spectra - mean
@@ -123,23 +142,52 @@ def murakami(
     projected = covariance @ matrix  # (K, C)
     system = matrix.T @ projected + noise**2 * np.eye(channels)
     gain = np.linalg.pinv(system, hermitian=True) @ projected.T  # (C, K)
-    flat = image.reshape(-1, channels)
-    estimate = mean + (flat - mean @ matrix) @ gain
+    wiener = mean + (image.reshape(-1, channels)[index] - mean @ matrix) @ gain
 
     # 2. Residuals at the known points, metameric black, interpolated by simple kriging.
     black = np.eye(bands) - matrix @ np.linalg.pinv(matrix)
-    residuals = (spectra - estimate[index]) @ black
+    residuals = (spectra - wiener) @ black
     known_xy = np.column_stack(np.divmod(index, width)).astype(np.float64)
-    kernel = np.exp(-spatial.distance.cdist(known_xy, known_xy) / length)
+    kernel = _correlation(known_xy, known_xy, length)
     kernel[np.diag_indices_from(kernel)] += nugget
     try:
         weights = linalg.solve(kernel, residuals, assume_a="pos")
     except (linalg.LinAlgError, ValueError):
         weights = linalg.lstsq(kernel, residuals)[0]
-    rows_per_chunk = max(1, CHUNK_ELEMENTS // len(index))
-    all_xy = np.indices((height, width)).reshape(2, -1).T.astype(np.float64)
-    for start in range(0, len(flat), rows_per_chunk):
+    estimate = mean + (flat - mean @ matrix) @ gain
+    if at_pixels is not None:
+        positions = np.column_stack(np.divmod(targets, width)).astype(np.float64)
+        return estimate + _kriged(positions, known_xy, weights, length)
+    if grid_step == 1:
+        positions = np.indices((height, width)).reshape(2, -1).T.astype(np.float64)
+        estimate += _kriged(positions, known_xy, weights, length)
+        return estimate.reshape(height, width, bands)
+    rows, cols = (np.unique(np.r_[np.arange(0, n, grid_step), n - 1]) for n in (height, width))
+    coarse = np.stack(np.meshgrid(rows, cols, indexing="ij"), axis=-1).reshape(-1, 2)
+    correction = _kriged(coarse.astype(np.float64), known_xy, weights, length)
+    interpolate = interpolate_grid((rows, cols), correction.reshape(rows.size, cols.size, bands))
+    estimate = estimate.reshape(height, width, bands)
+    for row in range(height):
+        estimate[row] += interpolate(np.column_stack([np.full(width, row), np.arange(width)]))
+    return estimate
+
+
+def _correlation(first: np.ndarray, second: np.ndarray, length: float) -> np.ndarray:
+    """``exp(-d / L)`` between two sets of ``(n, 2)`` positions, in place of the distances."""
+    distances = spatial.distance.cdist(first, second)
+    np.divide(distances, -length, out=distances)
+    return np.exp(distances, out=distances)
+
+
+def _kriged(
+    positions: np.ndarray, known_xy: np.ndarray, weights: np.ndarray, length: float
+) -> np.ndarray:
+    """Simple kriging's correction ``k(x)^T (P + eta I)^{-1} E`` at ``(n, 2)`` positions,
+    ``weights`` being the solved ``(P + eta I)^{-1} E``; the ``n x m`` kernel in chunks."""
+    correction = np.empty((len(positions), weights.shape[1]))
+    rows_per_chunk = max(1, CHUNK_ELEMENTS // len(known_xy))
+    for start in range(0, len(positions), rows_per_chunk):
         chunk = slice(start, start + rows_per_chunk)
-        near = np.exp(-spatial.distance.cdist(all_xy[chunk], known_xy) / length)
-        estimate[chunk] += near @ weights
-    return estimate.reshape(height, width, bands)
+        near = _correlation(positions[chunk], known_xy, length)
+        correction[chunk] = near @ weights
+    return correction

@@ -29,6 +29,7 @@ import numpy as np
 from recon import baselines
 from recon.errors import InputError
 from recon.experiments.sampling import add_rgb_noise, known_spectra_from_mask, whisk_broom_mask
+from recon.image_spectralization.kriging_blend import blend_with_kriging, choose_kriging_weight
 from recon.metrics import relative_error
 from recon.spectralize.prior_choice import choose_prior
 from recon.spectralize.solve import EnergyWeights, spectralize
@@ -72,6 +73,10 @@ def _spectralization(data: SparseInput, p_dyn: float = 0.0, prior: str = "spectr
         prior = choose_prior(
             data.rgb, data.response, data.pixels, data.spectra, p_dyn=p_dyn, **_SPECTRALIZATION
         ).prior
+    return _solve(data, p_dyn, prior)
+
+
+def _solve(data: SparseInput, p_dyn: float, prior: str) -> np.ndarray:
     return spectralize(
         data.rgb,
         data.response,
@@ -80,6 +85,22 @@ def _spectralization(data: SparseInput, p_dyn: float = 0.0, prior: str = "spectr
         p_dyn=p_dyn,
         prior=prior,
         **_SPECTRALIZATION,
+    )
+
+
+def _spectralization_kriged(data: SparseInput) -> np.ndarray:
+    """The chosen prior's spectralization blended with Murakami's kriged estimate by the weight
+    the same folds' held-out spots choose
+    (:mod:`recon.image_spectralization.kriging_blend`)."""
+    choice = choose_prior(data.rgb, data.response, data.pixels, data.spectra, **_SPECTRALIZATION)
+    weight = choose_kriging_weight(data.rgb, data.response, data.pixels, data.spectra, choice)
+    return blend_with_kriging(
+        _solve(data, 0.0, choice.prior),
+        data.rgb,
+        data.response,
+        data.pixels,
+        data.spectra,
+        weight.kriging_weight,
     )
 
 
@@ -102,6 +123,7 @@ METHODS: dict[str, Callable[[SparseInput], np.ndarray]] = {
     "spectralization p_dyn=1": lambda d: _spectralization(d, p_dyn=1.0),
     "spectralization regression prior": lambda d: _spectralization(d, prior="regression"),
     "spectralization chosen prior": lambda d: _spectralization(d, prior="chosen"),
+    "spectralization chosen prior and kriging": _spectralization_kriged,
     "imai": lambda d: baselines.recover(d.rgb, d.response, method="imai"),
     "hardeberg": lambda d: baselines.recover(
         d.rgb, None, method="hardeberg", known_pixels=d.pixels, known_spectra=d.spectra
@@ -113,7 +135,7 @@ METHODS: dict[str, Callable[[SparseInput], np.ndarray]] = {
     "a_plus": lambda d: _a_plus(d, 0.1),
     "a_plus lambda=1e-5": lambda d: _a_plus(d, 1e-5),
 }
-"""The protocols' contenders by name: spectralization in four settings, and the baselines of
+"""The protocols' contenders by name: spectralization in five settings, and the baselines of
 :data:`recon.baselines.RECOVERY_METHODS` under their names there, called through
 :func:`recon.baselines.recover` with what each uses (``"a_plus lambda=1e-5"`` is ``"a_plus"``
 with ``ridge_lambda=1e-5``, thesis Sec. 10.4.4). Imai cannot use the known spectra (section 7),

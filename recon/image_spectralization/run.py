@@ -21,6 +21,10 @@ Steps:
    :mod:`recon.experiments.sparse`) on the same graph, started from the chosen prior's
    reconstruction of the last fold (fewer iterations; the same solution within the solver's
    tolerance). Negative values are clipped to zero.
+5. With the cross-validation, the blend with Murakami 2007's kriged estimate
+   (:mod:`recon.image_spectralization.kriging_blend`): the kriging weight with which the
+   held-out spots are predicted best, 0 (no blend) where the kriged estimate does not help;
+   off with ``kriging=False``.
 
 References
 ----------
@@ -37,6 +41,7 @@ import numpy as np
 
 from recon.errors import InputError
 from recon.image_spectralization.camera_fit import MAX_DEGREE, camera_term
+from recon.image_spectralization.kriging_blend import blend_with_kriging, choose_kriging_weight
 from recon.image_spectralization.spots import SpotSpectra
 from recon.spectra import SampledSpectra, WavelengthGrid, resample
 from recon.spectralize import choose_prior
@@ -44,6 +49,7 @@ from recon.spectralize.solve import EnergyWeights, PointSpectra, neighbour_graph
 
 __all__ = [
     "FOLDS",
+    "MAX_KRIGED_PIXELS",
     "MIN_COVERAGE",
     "ImageSpectralization",
     "solve_grid",
@@ -56,6 +62,9 @@ folds would save a third of its solves but picked the worse prior on 2 of the 13
 ``benchmarks/spectralize_real.py`` (seed 0) where three and five folds picked the better one
 (BENCHMARKS.md, "Spectralizing a user's image")."""
 MIN_SPOTS = 2 * FOLDS
+MAX_KRIGED_PIXELS = 12_000
+"""Most spot pixels blended with the kriged estimate: its system is ``m x m`` (1.2 GB at
+12 000); with more (large ``--mask`` areas) the spectralization is kept alone, with a note."""
 """Fewest spots: two per fold."""
 MIN_COVERAGE = 0.95
 """Share of every channel's response (its integral over wavelength) that the spots' range must
@@ -85,12 +94,15 @@ class ImageSpectralization:
         The prior used (``"spectra"`` or ``"regression"``).
     cross_validated
         Whether the prior was chosen by cross-validation (False: ``fast``).
+    kriging_weight
+        The kriged estimate's weight in the blend with it (0: no blend).
     held_out_errors
-        Per prior, the mean error (Eq. 6.8, %) of the spots predicted while held out; empty
+        Per prior, and for the blend with the kriged estimate (``"kriging"`` alone,
+        ``"blend"``), the mean error (Eq. 6.8, %) of the spots predicted while held out; empty
         without cross-validation.
     spot_errors
-        ``(m,)`` the held-out error (Eq. 6.8, %) of every spot with the prior used, in the
-        order of the spots; None without cross-validation.
+        ``(m,)`` the held-out error (Eq. 6.8, %) of every spot with the prior (and blend)
+        used, in the order of the spots; None without cross-validation.
     gains
         ``(3,)`` the gain per channel fitted to the spots (the mean of the fitted factor,
         :class:`recon.image_spectralization.camera_fit.CameraTerm`).
@@ -106,6 +118,7 @@ class ImageSpectralization:
     grid: WavelengthGrid
     prior: str
     cross_validated: bool
+    kriging_weight: float
     held_out_errors: dict[str, float]
     spot_errors: np.ndarray | None
     gains: np.ndarray
@@ -167,6 +180,7 @@ def spectralize_image(
     response: SampledSpectra,
     *,
     fast: bool = False,
+    kriging: bool = True,
     camera_degree: int = MAX_DEGREE,
     tol: float = 1e-6,
     progress: bool = False,
@@ -182,7 +196,10 @@ def spectralize_image(
     response
         ``(3, K')`` the camera's spectral response, rows R, G, B, any scale.
     fast
-        The thesis's prior without cross-validation (no spot errors).
+        The thesis's prior without cross-validation (no spot errors, no blend).
+    kriging
+        With the cross-validation, blend in the kriged estimate by the weight it chooses
+        (module description, step 5).
     camera_degree
         Highest degree of the camera term's smooth factor per channel
         (:func:`recon.image_spectralization.camera_fit.camera_term`); 0: a gain per channel.
@@ -245,14 +262,31 @@ def spectralize_image(
         **_ENERGY,
     )
     timings["solve"] = time.perf_counter() - started
-    cube = np.clip(result.spectra, 0.0, None).astype(np.float32)
+    spectra_out, held_out = result.spectra, {} if choice is None else dict(choice.held_out_errors)
+    spot_errors = None if choice is None else choice.pixel_errors[prior]
+    weight = 0.0
+    if choice is not None and kriging and pixels.size > MAX_KRIGED_PIXELS:
+        notes.append(
+            f"no blend with the kriged estimate: {pixels.size} spot pixels, above the "
+            f"{MAX_KRIGED_PIXELS} its m x m system is solved for"
+        )
+    elif choice is not None and kriging:
+        started = time.perf_counter()
+        chosen = choose_kriging_weight(rgb, r_cam, pixels, spectra, choice)
+        weight = chosen.kriging_weight
+        held_out |= {key: chosen.held_out_errors[key] for key in ("kriging", "blend")}
+        spot_errors = chosen.pixel_errors
+        spectra_out = blend_with_kriging(spectra_out, rgb, r_cam, pixels, spectra, weight)
+        timings["kriging"] = time.perf_counter() - started
+    cube = np.clip(spectra_out, 0.0, None).astype(np.float32)
     return ImageSpectralization(
         cube=cube,
         grid=grid,
         prior=prior,
         cross_validated=choice is not None,
-        held_out_errors={} if choice is None else dict(choice.held_out_errors),
-        spot_errors=None if choice is None else choice.pixel_errors[prior],
+        kriging_weight=weight,
+        held_out_errors=held_out,
+        spot_errors=spot_errors,
         gains=camera.gains,
         fit_residual_pct=camera.fit_residual_pct,
         timings_s=timings,

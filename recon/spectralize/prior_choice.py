@@ -57,7 +57,9 @@ class PriorChoice:
     pixels, each predicted from the other folds, and the number of ``spots`` (or line
     segments). ``pixel_errors``: per prior, the error (Eq. 6.8, %) of every known pixel
     predicted while its fold was held out, in the order of ``known_pixels``; ``spot_of_pixel``:
-    the spot (or segment) number of every known pixel. ``fold_spectra``: the chosen prior's
+    the spot (or segment) number of every known pixel, which is held out in fold
+    ``spot % folds``. ``held_out_spectra``: per prior, every known pixel's spectrum predicted
+    while its fold was held out, ``(m, K)``. ``fold_spectra``: the chosen prior's
     reconstruction of the last fold at every pixel (the leading shape of ``rgb``, then ``K``),
     a starting guess for the solve from all spots (``initial=`` of
     :func:`~recon.spectralize.solve.reconstruct`), which it leaves fewer iterations to do."""
@@ -65,8 +67,10 @@ class PriorChoice:
     prior: str
     held_out_errors: dict[str, float]
     spots: int
+    folds: int = FOLDS
     pixel_errors: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
     spot_of_pixel: np.ndarray = field(default_factory=lambda: np.empty(0, int), repr=False)
+    held_out_spectra: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
     fold_spectra: np.ndarray | None = field(default=None, repr=False)
 
 
@@ -200,4 +204,6 @@ def choose_prior(
     pixel_errors = {prior: relative_error(predicted[prior], spectra) for prior in PRIORS}
     errors = {prior: float(np.mean(values)) for prior, values in pixel_errors.items()}
     chosen = min(errors, key=errors.__getitem__)
-    return PriorChoice(chosen, errors, count, pixel_errors, spots, estimates[chosen])
+    return PriorChoice(
+        chosen, errors, count, folds, pixel_errors, spots, predicted, estimates[chosen]
+    )

@@ -84,6 +84,14 @@ def spectralize(
             "(by default the prior is chosen by three-fold cross-validation over the spots)."
         ),
     ] = False,
+    kriging: Annotated[
+        bool,
+        typer.Option(
+            help="Blend in Murakami 2007's kriged estimate from the spots by the weight the "
+            "cross-validation finds best (0 where it does not help); --no-kriging: the chosen "
+            "prior alone.",
+        ),
+    ] = True,
     mask: Annotated[
         Path | None,
         typer.Option(
@@ -149,6 +157,7 @@ def spectralize(
         spots,
         curves,
         fast=fast,
+        kriging=kriging,
         camera_degree=0 if gains_only else MAX_DEGREE,
         progress=not as_json,
     )
@@ -166,7 +175,8 @@ def spectralize(
     if as_json:
         print_summary(summary, "spectralization", as_json)
         return
-    shown = ["spots", "bands", "prior", "prior_chosen_by", "cross_validated_error_pct"]
+    shown = ["spots", "bands", "prior", "prior_chosen_by", "kriging_weight"]
+    shown += ["cross_validated_error_pct"]
     shown += [key for key in summary if key.startswith("spot_error_")]
     shown += ["spot_fit_residual_pct"]
     print_summary(

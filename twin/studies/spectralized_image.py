@@ -106,6 +106,7 @@ def write_spectralized_image(
         "spots": int(spots.xy.shape[0]),
         "prior": result.prior,
         "prior_chosen_by": "cross-validation" if result.cross_validated else "fixed (--fast)",
+        "kriging_weight": result.kriging_weight,
         "cross_validated_error_pct": result.held_out_errors,
         **spot_error_summary(result.spot_errors),
         "channel_gains": dict(zip("RGB", result.gains.tolist(), strict=True)),
