@@ -4,9 +4,9 @@ at a megapixel. Prints JSON.
 1. Llanos's real seven-band image (342 x 408, ``recon.measured_data``) made RGB with its own
    Flea3 response, spots at 1 % of the pixels (single pixels on a regular grid), no noise:
    the mean relative error (Eq. 6.8, %) against the true seven bands of the pixels that are not
-   spots, for ``recon.image_spectralization.spectralize_image`` (prior by three-fold
-   cross-validation, and ``fast``), Murakami 2007 and A+ (``recon.baselines``), with the seconds
-   of each; and the cost of the cross-validated path over the plain solve.
+   spots, for ``recon.image_spectralization.spectralize_image`` (prior and kriging weight by
+   three-fold cross-validation, and ``fast``), Murakami 2007 and A+ (``recon.baselines``),
+   with the seconds of each; and the cost of the cross-validated path over the plain solve.
 2. The same at 1000 x 1000 pixels: a mosaic of the real VHREL clothes reflectances (33 bands,
    ``recon.experiments.real_images``) under a measured camera and D65, spots at 1 %: seconds of
    the plain solve (``fast``) and of the cross-validated path, run back to back, and their
@@ -93,6 +93,7 @@ def llanos_case() -> dict:
         "mean_relative_error_pct_off_spots": errors,
         "seconds": seconds,
         "prior": chosen.prior,
+        "kriging_weight": chosen.kriging_weight,
         "cross_validated_error_pct": {k: round(v, 2) for k, v in chosen.held_out_errors.items()},
         "cost_ratio_chosen_over_fast": round(
             seconds["spectralize (cross-validated prior)"] / seconds["spectralize --fast"], 2
@@ -124,6 +125,7 @@ def megapixel_case(side: int) -> dict:
             float(relative_error(result.cube, case.truth)[~mask].mean()), 2
         )
         out[f"{name}_prior"] = result.prior
+        out[f"{name}_kriging_weight"] = result.kriging_weight
         print(f"{side} px {name}: {seconds} s", file=sys.stderr)
     out["cost_ratio"] = round(out["cross-validated_s"] / out["fast_s"], 2)
     out["cpu_cost_ratio"] = round(out["cross-validated_cpu_s"] / out["fast_cpu_s"], 2)

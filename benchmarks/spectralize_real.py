@@ -5,8 +5,10 @@ smooth blend of each real reflectance set under a real camera and D65). Protocol
 spectra on a regular grid, spots of 0.5 % of the image width, Gaussian RGB noise of 1 % of the
 mean (``recon.experiments.sparse.run_protocol``); every method of
 ``recon.experiments.sparse.METHODS``. Per image and seed: the mean relative error (Eq. 6.8, %) of
-every method, the best peer, each spectralization variant's ratio to it, the prior that
-``choose_prior`` picks with its cross-validated errors, and the seconds per method. With
+every method, the best peer, each spectralization variant's ratio to it (the default of
+``spectwin spectralize``: the chosen prior blended with Murakami's kriged estimate, counted
+against the target), the prior that ``choose_prior`` picks with its cross-validated errors,
+and the seconds per method. With
 ``--spot-fractions``, the whisk-broom spot size is also swept on the images where a peer wins.
 
 Also Eq. 10.2 with noisy band images (``recon.experiments.real_images.holder_bar_case``: a 96 px
@@ -41,6 +43,9 @@ from recon.spectralize.solve import EnergyWeights, reconstruct
 VARIANTS = tuple(name for name in METHODS if name.startswith("spectralization"))
 PEERS = tuple(name for name in METHODS if name not in VARIANTS)
 CHOSEN = "spectralization chosen prior"
+DEFAULT = "spectralization chosen prior and kriging"
+"""What ``spectwin spectralize`` does by default; the target (at most 0.7 of the best peer on
+mosaics and real images, at most 1.0 on smooth blends) is counted for it."""
 
 
 def _timed_errors(truth, response, mask, seed) -> tuple[dict, dict, dict]:
@@ -118,7 +123,7 @@ def main() -> None:
                 "cross_validated_error_pct": held_out,
                 "seconds": seconds,
             }
-            if errors[CHOSEN] > 0.7 * errors[best]:
+            if errors[DEFAULT] > 0.7 * errors[best]:
                 entry["spot_fraction_sweep"] = {
                     str(fraction): {
                         key: round(value, 3)
@@ -126,7 +131,7 @@ def main() -> None:
                             case.truth,
                             case.response,
                             whisk_broom_mask(case.truth.shape[:2], spot_fraction=fraction),
-                            methods=(CHOSEN, best),
+                            methods=(DEFAULT, best),
                             seed=seed,
                         ).mean_errors.items()
                     }
@@ -143,7 +148,10 @@ def main() -> None:
                 "protocol": "whisk-broom, 250 spots of 0.5 % of the width, 1 % RGB noise",
                 "images": images,
                 "images_within_target": int(
-                    sum(e["ratio_to_best_peer"][CHOSEN] <= 0.7 for e in images.values())
+                    sum(
+                        e["ratio_to_best_peer"][DEFAULT] <= (1.0 if "blend" in name else 0.7)
+                        for name, e in images.items()
+                    )
                 ),
                 "band_image_floor": _band_image_floor_case(),
                 "seconds": round(time.perf_counter() - started, 1),
