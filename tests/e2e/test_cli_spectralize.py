@@ -13,8 +13,11 @@ import pytest
 from typer.testing import CliRunner
 
 from recon.envi import read_envi
+from recon.experiments.real_images import real_test_image
+from recon.experiments.sampling import whisk_broom_mask
 from recon.measured_data import read_llanos2019_multispectral
 from recon.metrics import relative_error
+from recon.spectra import DEFAULT_GRID
 from recon.spectral_exr import read_spectral_exr
 from twin.cli.app import app
 
@@ -105,6 +108,47 @@ def test_a_gain_per_channel_when_asked(crop, tmp_path):
     assert result.exit_code == 0, result.output
     cube = read_spectral_exr(out / "spectra.exr").cube
     assert float(np.mean(relative_error(cube, truth))) < ERROR_BOUND_PCT
+
+
+def test_on_a_smooth_image_the_kriged_estimate_is_blended_in_unless_switched_off(tmp_path):
+    """A smooth blend of real food reflectances (96 px, Canon EOS R under D65) as a user's
+    16-bit PNG, 250 single-pixel spots and the camera-times-light response as a CSV: by
+    default the folds weight Murakami's kriged estimate in and the cube is closer to the truth
+    than with ``--no-kriging``. Measured (no RGB noise but the PNG's 16 bits): weight 1.0,
+    0.18 % against 1.25 %."""
+    case = real_test_image("vhrel_food blend", side=96, seed=0)
+    rgb = case.truth @ case.response
+    cv2.imwrite(
+        str(tmp_path / "blend.png"), np.round(rgb / rgb.max() * 65535).astype(np.uint16)[..., ::-1]
+    )
+    rows, cols = np.nonzero(whisk_broom_mask(case.truth.shape[:2]))
+    wavelengths = DEFAULT_GRID.wavelengths_nm
+    _write_spots(
+        tmp_path / "spots.csv", np.stack([cols, rows], 1), case.truth[rows, cols], wavelengths
+    )
+    (tmp_path / "camera.csv").write_text(
+        "wavelength_nm,R,G,B\n"
+        + "".join(
+            f"{w:g}," + ",".join(f"{v:.6g}" for v in row) + "\n"
+            for w, row in zip(wavelengths, case.response, strict=True)
+        )
+    )
+    errors, weights = {}, {}
+    for name, switch in (("default", []), ("off", ["--no-kriging"])):
+        out = tmp_path / name
+        result = runner.invoke(
+            app,
+            ["spectralize", str(tmp_path / "blend.png"), "--spectra", str(tmp_path / "spots.csv")]
+            + ["--response", str(tmp_path / "camera.csv"), "--out", str(out), *switch],
+        )
+        assert result.exit_code == 0, result.output
+        summary = json.loads((out / "spots.json").read_text())["summary"]
+        weights[name] = summary["kriging_weight"]
+        errors[name] = float(
+            np.mean(relative_error(read_spectral_exr(out / "spectra.exr").cube, case.truth))
+        )
+    assert weights["default"] >= 0.5 and weights["off"] == 0.0
+    assert errors["default"] < 0.95 * errors["off"]
 
 
 def test_spots_as_areas_of_a_label_image(crop, tmp_path):
