@@ -310,6 +310,8 @@ class _KernelSizes:
     literals, so a table of other sizes reuses the compiled kernels (the same values)."""
 
     def __init__(self, views: int, rows: int, columns: int, bands: int):
+        self.shape = (views, rows, columns, bands)  # the plain numbers, for printing
+
         def opaque(value: int):
             return dr.opaque(mi.UInt32, value)
 
@@ -602,7 +604,8 @@ class SpectralBTF(mi.BSDF):
 
     def to_string(self):
         spectra = self._spectra
-        return f"SpectralBTF[{type(spectra).__name__}, {spectra.height}x{spectra.width}]"
+        _, rows, columns, _ = spectra.sizes.shape
+        return f"SpectralBTF[{type(spectra).__name__}, {rows}x{columns}]"
 
 
 register_once("spectral_btf", mi.register_bsdf, lambda props: SpectralBTF(props))

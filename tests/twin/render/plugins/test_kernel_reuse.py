@@ -8,7 +8,7 @@ import pytest
 from recon.spectra import DEFAULT_GRID, WavelengthGrid
 from twin.render.plugins.btf_bsdf import btf_bsdf, product_table
 from twin.render.plugins.spectral_envmap import SpectralMap, spectral_envmap
-from twin.render.render import render_scene
+from twin.render.render import load_scene, render_scene
 from twin.render.scene import PinholeCamera
 from twin.render.truth import band_passbands
 from twin.rigs.hemisphere import sattler_directions
@@ -67,3 +67,11 @@ def test_other_btf_and_map_sizes_reuse_the_compiled_kernels():
     assert first and second <= first
     # the renders are of the new sizes' data, not the old
     assert np.all(second_image > 0) and not np.allclose(first_image, second_image)
+
+
+def test_the_plugins_print_their_sizes():
+    """The sizes held as opaque values are printed from the plain numbers kept beside them."""
+    scene = load_scene(_scene(map_height=4, texels=5, direction_step=6))
+    (square,) = scene.shapes()
+    assert str(square.bsdf()) == "SpectralBTF[_DecodedSpectra, 5x5]"
+    assert str(scene.environment()) == f"SpectralEnvmapEmitter[4 x 8 x {DEFAULT_GRID.size}]"
