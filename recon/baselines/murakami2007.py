@@ -25,7 +25,13 @@ from recon.baselines.common import (
 )
 from recon.errors import InputError
 
-__all__ = ["murakami"]
+__all__ = ["default_correlation_length", "murakami"]
+
+
+def default_correlation_length(height: int, width: int) -> float:
+    """The correlation length :math:`L` of :func:`murakami` by default, in pixels: a tenth of
+    the image's longer side."""
+    return 0.1 * max(height, width)
 
 
 def murakami(
@@ -83,7 +89,7 @@ def murakami(
         Flat row-major indices into ``(H, W)``: pixel ``i`` is at row ``i // W``, column
         ``i % W``.
     correlation_length
-        :math:`L` in pixels; default ``0.1 * max(H, W)``.
+        :math:`L` in pixels; default ``0.1 * max(H, W)`` (:func:`default_correlation_length`).
     rgb_noise_std
         Standard deviation :math:`\\sigma` of the RGB noise in ``rgb`` units (Wiener step).
     nugget
@@ -119,7 +125,7 @@ def murakami(
     matrix = check_response(response, bands, channels)
     index = check_known_pixels(known_pixels, height * width, len(spectra), (height, width))
     length = (
-        0.1 * max(height, width)
+        default_correlation_length(height, width)
         if correlation_length is None
         else check_positive("correlation_length", correlation_length)
     )
@@ -142,25 +148,25 @@ def murakami(
     projected = covariance @ matrix  # (K, C)
     system = matrix.T @ projected + noise**2 * np.eye(channels)
     gain = np.linalg.pinv(system, hermitian=True) @ projected.T  # (C, K)
-    wiener = mean + (image.reshape(-1, channels)[index] - mean @ matrix) @ gain
+
+    def wiener(values: np.ndarray) -> np.ndarray:
+        return mean + (values - mean @ matrix) @ gain
 
     # 2. Residuals at the known points, metameric black, interpolated by simple kriging.
     black = np.eye(bands) - matrix @ np.linalg.pinv(matrix)
-    residuals = (spectra - wiener) @ black
-    known_xy = np.column_stack(np.divmod(index, width)).astype(np.float64)
+    residuals = (spectra - wiener(image.reshape(-1, channels)[index])) @ black
+    known_xy = _positions(index, width)
     kernel = _correlation(known_xy, known_xy, length)
     kernel[np.diag_indices_from(kernel)] += nugget
     try:
         weights = linalg.solve(kernel, residuals, assume_a="pos")
     except (linalg.LinAlgError, ValueError):
         weights = linalg.lstsq(kernel, residuals)[0]
-    estimate = mean + (flat - mean @ matrix) @ gain
+    estimate = wiener(flat)
     if at_pixels is not None:
-        positions = np.column_stack(np.divmod(targets, width)).astype(np.float64)
-        return estimate + _kriged(positions, known_xy, weights, length)
+        return estimate + _kriged(_positions(targets, width), known_xy, weights, length)
     if grid_step == 1:
-        positions = np.indices((height, width)).reshape(2, -1).T.astype(np.float64)
-        estimate += _kriged(positions, known_xy, weights, length)
+        estimate += _kriged(_positions(np.arange(len(flat)), width), known_xy, weights, length)
         return estimate.reshape(height, width, bands)
     rows, cols = (np.unique(np.r_[np.arange(0, n, grid_step), n - 1]) for n in (height, width))
     coarse = np.stack(np.meshgrid(rows, cols, indexing="ij"), axis=-1).reshape(-1, 2)
@@ -170,6 +176,11 @@ def murakami(
     for row in range(height):
         estimate[row] += interpolate(np.column_stack([np.full(width, row), np.arange(width)]))
     return estimate
+
+
+def _positions(index: np.ndarray, width: int) -> np.ndarray:
+    """``(n, 2)`` float (row, column) of flat row-major pixel indices."""
+    return np.column_stack(np.divmod(index, width)).astype(np.float64)
 
 
 def _correlation(first: np.ndarray, second: np.ndarray, length: float) -> np.ndarray:

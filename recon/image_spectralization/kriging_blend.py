@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from recon import baselines
+from recon.baselines.murakami2007 import default_correlation_length
 from recon.errors import InputError
 from recon.metrics import relative_error
 from recon.spectralize.prior_choice import PriorChoice
@@ -124,7 +125,7 @@ def choose_kriging_weight(
         )
     kriged = np.empty_like(spectra)
     for fold in range(choice.folds):
-        held_out = choice.spot_of_pixel % choice.folds == fold
+        held_out = choice.held_out(fold)
         kriged[held_out] = _kriged(
             images,
             response,
@@ -163,7 +164,7 @@ def blend_with_kriging(
     if kriging_weight == 0.0:
         return spectralized
     images = np.asarray(rgb, dtype=np.float64)
-    length = 0.1 * max(images.shape[:2])  # Murakami's default correlation length
+    length = default_correlation_length(*images.shape[:2])
     kriged = _kriged(
         images,
         response,

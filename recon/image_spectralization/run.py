@@ -62,10 +62,10 @@ folds would save a third of its solves but picked the worse prior on 2 of the 13
 ``benchmarks/spectralize_real.py`` (seed 0) where three and five folds picked the better one
 (BENCHMARKS.md, "Spectralizing a user's image")."""
 MIN_SPOTS = 2 * FOLDS
-MAX_KRIGED_PIXELS = 12_000
-"""Most spot pixels blended with the kriged estimate: its system is ``m x m`` (1.2 GB at
-12 000); with more (large ``--mask`` areas) the spectralization is kept alone, with a note."""
 """Fewest spots: two per fold."""
+MAX_KRIGED_PIXELS = 12_000
+"""Most spots blended with the kriged estimate: its system is ``m x m`` (1.2 GB at 12 000);
+with more the spectralization is kept alone, with a note. (A ``--mask`` area is one spot.)"""
 MIN_COVERAGE = 0.95
 """Share of every channel's response (its integral over wavelength) that the spots' range must
 hold."""
@@ -265,19 +265,20 @@ def spectralize_image(
     spectra_out, held_out = result.spectra, {} if choice is None else dict(choice.held_out_errors)
     spot_errors = None if choice is None else choice.pixel_errors[prior]
     weight = 0.0
-    if choice is not None and kriging and pixels.size > MAX_KRIGED_PIXELS:
-        notes.append(
-            f"no blend with the kriged estimate: {pixels.size} spot pixels, above the "
-            f"{MAX_KRIGED_PIXELS} its m x m system is solved for"
-        )
-    elif choice is not None and kriging:
-        started = time.perf_counter()
-        chosen = choose_kriging_weight(rgb, r_cam, pixels, spectra, choice)
-        weight = chosen.kriging_weight
-        held_out |= {key: chosen.held_out_errors[key] for key in ("kriging", "blend")}
-        spot_errors = chosen.pixel_errors
-        spectra_out = blend_with_kriging(spectra_out, rgb, r_cam, pixels, spectra, weight)
-        timings["kriging"] = time.perf_counter() - started
+    if choice is not None and kriging:
+        if pixels.size > MAX_KRIGED_PIXELS:
+            notes.append(
+                f"no blend with the kriged estimate: {pixels.size} spot pixels, above the "
+                f"{MAX_KRIGED_PIXELS} its m x m system is solved for"
+            )
+        else:
+            started = time.perf_counter()
+            chosen = choose_kriging_weight(rgb, r_cam, pixels, spectra, choice)
+            weight = chosen.kriging_weight
+            held_out |= {key: chosen.held_out_errors[key] for key in ("kriging", "blend")}
+            spot_errors = chosen.pixel_errors
+            spectra_out = blend_with_kriging(spectra_out, rgb, r_cam, pixels, spectra, weight)
+            timings["kriging"] = time.perf_counter() - started
     cube = np.clip(spectra_out, 0.0, None).astype(np.float32)
     return ImageSpectralization(
         cube=cube,

@@ -73,6 +73,15 @@ class PriorChoice:
     held_out_spectra: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
     fold_spectra: np.ndarray | None = field(default=None, repr=False)
 
+    def held_out(self, fold: int) -> np.ndarray:
+        """``(m,)`` bool: the known pixels that fold ``fold`` held out."""
+        return _held_out(self.spot_of_pixel, self.folds, fold)
+
+
+def _held_out(spots: np.ndarray, folds: int, fold: int) -> np.ndarray:
+    """The known pixels of the spots that fold ``fold`` of ``folds`` holds out (:data:`FOLDS`)."""
+    return np.asarray(spots % folds == fold)
+
 
 def _spot_labels(
     pixels: np.ndarray, image_shape: tuple[int, int, int], folds: int = FOLDS
@@ -185,7 +194,7 @@ def choose_prior(
     predicted = {prior: np.empty_like(spectra) for prior in PRIORS}
     with progress_steps("choosing the prior: folds", folds, enabled=progress) as advance:
         for fold in range(folds):
-            held_out = spots % folds == fold
+            held_out = _held_out(spots, folds, fold)
             last = fold == folds - 1  # its whole images are kept as the starting guess
             estimates = reconstruct_priors(
                 images,
