@@ -12,8 +12,12 @@ from recon.baselines import recover
 from recon.errors import InputError
 from recon.experiments.real_images import real_test_image
 from recon.experiments.sampling import add_rgb_noise, known_spectra_from_mask, whisk_broom_mask
+from recon.image_spectralization import run
 from recon.image_spectralization.kriging_blend import blend_with_kriging, choose_kriging_weight
+from recon.image_spectralization.run import spectralize_image
+from recon.image_spectralization.spots import SpotSpectra
 from recon.metrics import relative_error
+from recon.spectra import DEFAULT_GRID, SampledSpectra
 from recon.spectralize import choose_prior
 from recon.spectralize.solve import EnergyWeights, spectralize
 
@@ -74,3 +78,24 @@ def test_on_mosaics_the_spectralization_is_kept_alone(name):
 def test_a_weight_outside_zero_to_one_is_refused():
     with pytest.raises(InputError, match=r"kriging_weight: expected a weight in \[0, 1\]"):
         blend_with_kriging(np.zeros((4, 4, 3)), np.zeros((4, 4, 3)), np.eye(3), [0], [[1, 1, 1]], 2)
+
+
+def test_spectralize_image_blends_unless_there_are_too_many_spots(monkeypatch):
+    """``spectralize_image`` weights the kriged estimate in on a smooth blend (its held-out
+    errors then name the kriged estimate and the blend); above ``MAX_KRIGED_PIXELS`` spots it
+    keeps the spectralization alone and says so."""
+    case = real_test_image("vhrel_food blend", side=48, seed=0)
+    rows, cols = np.nonzero(whisk_broom_mask(case.truth.shape[:2], n_spots=64))
+    spots = SpotSpectra(
+        np.stack([cols, rows], 1), SampledSpectra(DEFAULT_GRID, case.truth[rows, cols]), "test"
+    )
+    per_nm = case.response / DEFAULT_GRID.quadrature_weights()[:, None]
+    response = SampledSpectra(DEFAULT_GRID, per_nm.T, ("R", "G", "B"))
+    rgb = case.truth @ case.response
+    blended = spectralize_image(rgb, spots, response)
+    assert blended.kriging_weight > 0
+    assert {"kriging", "blend"} <= set(blended.held_out_errors)
+    monkeypatch.setattr(run, "MAX_KRIGED_PIXELS", 63)
+    alone = spectralize_image(rgb, spots, response)
+    assert alone.kriging_weight == 0.0 and "blend" not in alone.held_out_errors
+    assert any("no blend with the kriged estimate: 64 spot pixels" in n for n in alone.notes)
