@@ -1,9 +1,30 @@
 """Fixtures shared by the tests and by the docstring examples of twin, recon and hwbridge."""
 
 import importlib
+import os
 
 import numpy as np
 import pytest
+from threadpoolctl import threadpool_limits
+
+THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+"""The variables that size the BLAS and OpenMP thread pools of numpy, scipy and their kin."""
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """Each of several test workers gets its share of the cores for BLAS and OpenMP threads, in
+    this process and in the processes its tests start (notebook kernels, commands), unless the
+    variables are set already. Each worker's library pools are sized for the whole machine
+    otherwise: two workers on two cores ran four BLAS threads, whose spinning cost a sixth of
+    the suite's CPU time (BENCHMARKS.md, "The test suite")."""
+    workers = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))
+    if workers < 2:
+        return
+    threads = max(1, (os.cpu_count() or 1) // workers)
+    for name in THREAD_VARIABLES:
+        os.environ.setdefault(name, str(threads))
+    threadpool_limits(int(os.environ["OPENBLAS_NUM_THREADS"]))
+
 
 NUMPY_DEFAULT_PRINT_OPTIONS = {
     "edgeitems": 3,
