@@ -6,10 +6,10 @@ spectra on a regular grid, spots of 0.5 % of the image width, Gaussian RGB noise
 mean (``recon.experiments.sparse.run_protocol``); every method of
 ``recon.experiments.sparse.METHODS``. Per image and seed: the mean relative error (Eq. 6.8, %) of
 every method, the best peer, each spectralization variant's ratio to it (the default of
-``spectwin spectralize``: the chosen prior blended with Murakami's kriged estimate, counted
-against the target), the prior that ``choose_prior`` picks with its cross-validated errors,
-and the seconds per method. With
-``--spot-fractions``, the whisk-broom spot size is also swept on the images where a peer wins.
+``spectwin spectralize``: the chosen appearance space and prior blended with Murakami's kriged
+estimate, counted against the target), the prior that ``choose_prior`` picks with its
+cross-validated errors, and the seconds per method. With ``--spot-fractions``, the whisk-broom
+spot size is also swept on the images where a peer wins.
 
 Also Eq. 10.2 with noisy band images (``recon.experiments.real_images.holder_bar_case``: a 96 px
 clothes mosaic with a black bar across it, nine 5 %-noisy band images filtered at 2 px, 1 % RGB
@@ -43,7 +43,7 @@ from recon.spectralize.solve import EnergyWeights, reconstruct
 VARIANTS = tuple(name for name in METHODS if name.startswith("spectralization"))
 PEERS = tuple(name for name in METHODS if name not in VARIANTS)
 CHOSEN = "spectralization chosen prior"
-DEFAULT = "spectralization chosen prior and kriging"
+DEFAULT = "spectralization chosen appearance, prior and kriging"
 """What ``spectwin spectralize`` does by default; the target (at most 0.7 of the best peer on
 mosaics and real images, at most 1.0 on smooth blends) is counted for it."""
 

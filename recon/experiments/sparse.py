@@ -31,7 +31,8 @@ from recon.errors import InputError
 from recon.experiments.sampling import add_rgb_noise, known_spectra_from_mask, whisk_broom_mask
 from recon.image_spectralization.kriging_blend import blend_with_kriging, choose_kriging_weight
 from recon.metrics import relative_error
-from recon.spectralize.prior_choice import choose_prior
+from recon.spectralize.appearance_choice import choose_appearance
+from recon.spectralize.prior_choice import PriorChoice, choose_prior
 from recon.spectralize.solve import EnergyWeights, spectralize
 
 __all__ = [
@@ -93,14 +94,34 @@ def _spectralization_kriged(data: SparseInput) -> np.ndarray:
     the same folds' held-out spots choose
     (:mod:`recon.image_spectralization.kriging_blend`)."""
     choice = choose_prior(data.rgb, data.response, data.pixels, data.spectra, **_SPECTRALIZATION)
-    weight = choose_kriging_weight(data.rgb, data.response, data.pixels, data.spectra, choice)
-    return blend_with_kriging(
-        _solve(data, 0.0, choice.prior),
+    return _blended(data, choice, _solve(data, 0.0, choice.prior))
+
+
+def _spectralization_chosen_appearance(data: SparseInput) -> np.ndarray:
+    """As :func:`_spectralization_kriged`, the appearance space (RGBXY or the one learned from
+    the known spectra) chosen with the prior by the same folds
+    (:func:`recon.spectralize.choose_appearance`)."""
+    settings = {key: value for key, value in _SPECTRALIZATION.items() if key != "appearance"}
+    chosen = choose_appearance(data.rgb, data.response, data.pixels, data.spectra, **settings)
+    solved = spectralize(
         data.rgb,
         data.response,
-        data.pixels,
-        data.spectra,
-        weight.kriging_weight,
+        known_pixels=data.pixels,
+        known_spectra=data.spectra,
+        prior=chosen.prior_choice.prior,
+        graph=chosen.graph,
+        **settings,
+        **chosen.energy,
+    )
+    return _blended(data, chosen.prior_choice, solved)
+
+
+def _blended(data: SparseInput, choice: PriorChoice, solved: np.ndarray) -> np.ndarray:
+    """``solved`` blended with Murakami's kriged estimate by the weight ``choice``'s folds'
+    held-out spots choose."""
+    weight = choose_kriging_weight(data.rgb, data.response, data.pixels, data.spectra, choice)
+    return blend_with_kriging(
+        solved, data.rgb, data.response, data.pixels, data.spectra, weight.kriging_weight
     )
 
 
@@ -124,6 +145,7 @@ METHODS: dict[str, Callable[[SparseInput], np.ndarray]] = {
     "spectralization regression prior": lambda d: _spectralization(d, prior="regression"),
     "spectralization chosen prior": lambda d: _spectralization(d, prior="chosen"),
     "spectralization chosen prior and kriging": _spectralization_kriged,
+    "spectralization chosen appearance, prior and kriging": _spectralization_chosen_appearance,
     "imai": lambda d: baselines.recover(d.rgb, d.response, method="imai"),
     "hardeberg": lambda d: baselines.recover(
         d.rgb, None, method="hardeberg", known_pixels=d.pixels, known_spectra=d.spectra
@@ -135,7 +157,7 @@ METHODS: dict[str, Callable[[SparseInput], np.ndarray]] = {
     "a_plus": lambda d: _a_plus(d, 0.1),
     "a_plus lambda=1e-5": lambda d: _a_plus(d, 1e-5),
 }
-"""The protocols' contenders by name: spectralization in five settings, and the baselines of
+"""The protocols' contenders by name: spectralization in six settings, and the baselines of
 :data:`recon.baselines.RECOVERY_METHODS` under their names there, called through
 :func:`recon.baselines.recover` with what each uses (``"a_plus lambda=1e-5"`` is ``"a_plus"``
 with ``ridge_lambda=1e-5``, thesis Sec. 10.4.4). Imai cannot use the known spectra (section 7),

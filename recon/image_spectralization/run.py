@@ -12,15 +12,17 @@ Steps:
    (:func:`recon.image_spectralization.camera_fit.camera_term`), since the exposure, the
    light over the spots and the response's units are unknown. The relative residual of that
    fit says how well the spots and the image agree.
-3. The prior (Eq. 6.3): chosen by :func:`recon.spectralize.choose_prior` with
-   :data:`FOLDS` folds (both priors of each fold in one Kronecker solve, one appearance graph
-   for all solves), or with ``fast=True`` the thesis's prior (``"spectra"``) without
+3. The appearance space and the prior (Eq. 6.3): chosen together by
+   :func:`recon.spectralize.choose_appearance` with :data:`FOLDS` folds (RGBXY and the space
+   learned from the spots, :mod:`recon.spectralize.learned_appearance`; both priors of each
+   fold in one Kronecker solve), or one space given (``appearance``) and only the prior
+   chosen, or with ``fast=True`` the thesis's RGBXY space and prior (``"spectra"``) without
    cross-validation.
-4. The solve of Eq. 6.10 (RGBXY appearance space, three neighbours, equal primed weights of
-   Eq. 6.11, no smoothness term: the settings of the chapter 7 experiments,
-   :mod:`recon.experiments.sparse`) on the same graph, started from the chosen prior's
-   reconstruction of the last fold (fewer iterations; the same solution within the solver's
-   tolerance). Negative values are clipped to zero.
+4. The solve of Eq. 6.10 (three neighbours, equal primed weights of Eq. 6.11, no smoothness
+   term: the settings of the chapter 7 experiments, :mod:`recon.experiments.sparse`) on the
+   chosen space's graph, started from the chosen prior's reconstruction of the last fold (fewer
+   iterations; the same solution within the solver's tolerance). Negative values are clipped
+   to zero.
 5. With the cross-validation, the blend with Murakami 2007's kriged estimate
    (:mod:`recon.image_spectralization.kriging_blend`): the kriging weight with which the
    held-out spots are predicted best, 0 (no blend) where the kriged estimate does not help;
@@ -44,10 +46,13 @@ from recon.image_spectralization.camera_fit import MAX_DEGREE, camera_term
 from recon.image_spectralization.kriging_blend import blend_with_kriging, choose_kriging_weight
 from recon.image_spectralization.spots import SpotSpectra
 from recon.spectra import SampledSpectra, WavelengthGrid, resample
-from recon.spectralize import choose_prior
+from recon.spectralize.appearance_choice import SPACES, choose_appearance
+from recon.spectralize.learned_appearance import LEARNED_SPACES, fitted_on
+from recon.spectralize.prior_choice import graph_options
 from recon.spectralize.solve import EnergyWeights, PointSpectra, neighbour_graph, reconstruct
 
 __all__ = [
+    "APPEARANCES",
     "FOLDS",
     "MAX_KRIGED_PIXELS",
     "MIN_COVERAGE",
@@ -73,8 +78,11 @@ MAX_BANDS = 81
 FINEST_STEP_NM = 5.0
 FAST_PRIOR = "spectra"
 """The prior of ``fast=True``: the thesis's, the spectra themselves held alike (Eq. 6.3)."""
+FAST_APPEARANCE = "rgbxy"
+"""The appearance space of ``fast=True``: the thesis's RGBXY (Eq. 6.5)."""
+APPEARANCES = ("auto", *SPACES)
+"""What ``appearance`` may be: ``"auto"`` (chosen by the cross-validation) or one space."""
 _ENERGY: dict[str, Any] = {
-    "appearance": "rgbxy",
     "weights": EnergyWeights(delta=0.0),
     "neighbours": 3,
 }
@@ -92,6 +100,11 @@ class ImageSpectralization:
         Their wavelengths.
     prior
         The prior used (``"spectra"`` or ``"regression"``).
+    appearance
+        The appearance space used (``"rgbxy"`` or ``"learned"``).
+    appearance_errors
+        Per appearance space tried, the held-out error (Eq. 6.8, %) of its better prior; empty
+        without cross-validation or with one space given.
     cross_validated
         Whether the prior was chosen by cross-validation (False: ``fast``).
     kriging_weight
@@ -117,6 +130,8 @@ class ImageSpectralization:
     cube: np.ndarray
     grid: WavelengthGrid
     prior: str
+    appearance: str
+    appearance_errors: dict[str, float]
     cross_validated: bool
     kriging_weight: float
     held_out_errors: dict[str, float]
@@ -180,6 +195,7 @@ def spectralize_image(
     response: SampledSpectra,
     *,
     fast: bool = False,
+    appearance: str = "auto",
     kriging: bool = True,
     camera_degree: int = MAX_DEGREE,
     tol: float = 1e-6,
@@ -196,7 +212,11 @@ def spectralize_image(
     response
         ``(3, K')`` the camera's spectral response, rows R, G, B, any scale.
     fast
-        The thesis's prior without cross-validation (no spot errors, no blend).
+        The thesis's prior (and, unless ``appearance`` names a space, its RGBXY space) without
+        cross-validation: no spot errors, no blend.
+    appearance
+        ``"auto"``: the appearance space chosen by the cross-validation among
+        :data:`~recon.spectralize.appearance_choice.SPACES`; or one of them.
     kriging
         With the cross-validation, blend in the kriged estimate by the weight it chooses
         (module description, step 5).
@@ -230,24 +250,33 @@ def spectralize_image(
     flat = rgb.reshape(-1, 3)
     camera = camera_term(response, grid, flat[pixels], spectra, max_degree=camera_degree)
     r_cam = camera.matrix
-    started = time.perf_counter()
-    graph = neighbour_graph(rgb, appearance="rgbxy", neighbours=3)
-    timings = {"graph": time.perf_counter() - started}
-    choice = None
-    if not fast:
+    if appearance not in APPEARANCES:
+        raise InputError(f"appearance: expected one of {APPEARANCES}, got {appearance!r}")
+    timings, choice, appearance_errors = {}, None, {}
+    if fast:
         started = time.perf_counter()
-        choice = choose_prior(
+        energy = _ENERGY | {"appearance": FAST_APPEARANCE if appearance == "auto" else appearance}
+        if energy["appearance"] in LEARNED_SPACES:
+            energy = fitted_on(energy, pixels, spectra)
+        graph = neighbour_graph(rgb, **graph_options(energy))
+        timings["graph"] = time.perf_counter() - started
+    else:
+        started = time.perf_counter()
+        spaces = choose_appearance(
             rgb,
             r_cam,
             pixels,
             spectra,
+            spaces=SPACES if appearance == "auto" else (appearance,),
             folds=FOLDS,
-            graph=graph,
             tol=tol,
             progress=progress,
             **_ENERGY,
         )
         timings["cross_validation"] = time.perf_counter() - started
+        choice, energy, graph = spaces.prior_choice, _ENERGY | spaces.energy, spaces.graph
+        if appearance == "auto":
+            appearance_errors = spaces.held_out_errors
     prior = FAST_PRIOR if choice is None else choice.prior
     started = time.perf_counter()
     result = reconstruct(
@@ -259,7 +288,7 @@ def spectralize_image(
         tol=tol,
         initial=None if choice is None else choice.fold_spectra,
         progress=progress,
-        **_ENERGY,
+        **energy,
     )
     timings["solve"] = time.perf_counter() - started
     spectra_out, held_out = result.spectra, {} if choice is None else dict(choice.held_out_errors)
@@ -284,6 +313,8 @@ def spectralize_image(
         cube=cube,
         grid=grid,
         prior=prior,
+        appearance=energy["appearance"],
+        appearance_errors=appearance_errors,
         cross_validated=choice is not None,
         kriging_weight=weight,
         held_out_errors=held_out,

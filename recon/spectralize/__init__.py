@@ -8,6 +8,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
         "appearance": ["appearance_neighbours"],
+        "appearance_choice": ["AppearanceChoice", "choose_appearance"],
         "joint": ["reconstruct_priors"],
         "kronecker": ["solve_kronecker_sum"],
         "prior_choice": ["PriorChoice", "choose_prior"],

@@ -2,13 +2,16 @@
 
 Every pixel :math:`i` of the RGB image :math:`V` is projected into an appearance space by
 :math:`\\pi_{app}` and linked to its :math:`k` nearest neighbours :math:`N_i` there. The prior of
-Eq. 6.3 then asks the spectra of linked pixels to be similar. Three projections of the thesis are
-provided (one function each, registered in :data:`APPEARANCE_SPACES`):
+Eq. 6.3 then asks the spectra of linked pixels to be similar. Three projections of the thesis and a
+learned one are provided (one function each, registered in :data:`APPEARANCE_SPACES`):
 
 - ``"rgb"``: the identity, Eq. 6.4;
 - ``"rgbxy"``: RGB plus scaled pixel coordinates, Eq. 6.5 (the thesis's recommendation);
 - ``"patch"``: the RGB values of the :math:`(2m+1)^2` patch around each pixel with the centre
-  weighted by :math:`\\alpha_{center} = (2m+1)^2 - 1`, Eq. 6.6.
+  weighted by :math:`\\alpha_{center} = (2m+1)^2 - 1`, Eq. 6.6;
+- ``"learned"``: every pixel's spectrum predicted from patch features around it by a map fitted
+  on the known spectra (:mod:`recon.spectralize.learned_appearance`; options ``known_pixels``
+  and ``known_spectra``).
 
 The neighbour search uses a kd-tree (pykdtree, queried in the point order of scipy's
 ``cKDTree``) and enforces the rule of section 6.2,
@@ -41,6 +44,7 @@ from scipy.sparse import csgraph
 from scipy.spatial import cKDTree
 
 from recon.errors import InputError
+from recon.spectralize.learned_appearance import learned_points
 
 __all__ = [
     "APPEARANCE_SPACES",
@@ -92,6 +96,7 @@ APPEARANCE_SPACES: dict[str, Callable[..., np.ndarray]] = {
     "rgb": _rgb,
     "rgbxy": _rgbxy,
     "patch": _patch,
+    "learned": learned_points,
 }
 
 
@@ -104,7 +109,8 @@ def appearance_points(images: np.ndarray, space: str = "rgbxy", **options: Any) 
         ``(n_images, height, width, channels)`` camera values (already scaled by :math:`f_i`
         of Eq. 10.2 where dynamic-range compression is used, as section 10.1 requires).
     space
-        ``"rgb"``, ``"rgbxy"`` (option ``xy_scale``) or ``"patch"`` (option ``patch_radius``).
+        ``"rgb"``, ``"rgbxy"`` (option ``xy_scale``), ``"patch"`` (option ``patch_radius``) or
+        ``"learned"`` (options ``known_pixels``, ``known_spectra`` and ``xy_scale``).
 
     Returns
     -------

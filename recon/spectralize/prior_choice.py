@@ -42,6 +42,7 @@ from recon.errors import InputError
 from recon.metrics import relative_error
 from recon.progress import progress_steps
 from recon.spectralize.joint import reconstruct_priors
+from recon.spectralize.learned_appearance import LEARNED_SPACES, fitted_on
 from recon.spectralize.solve import PRIORS, PointSpectra, neighbour_graph
 
 __all__ = ["PriorChoice", "choose_prior"]
@@ -107,6 +108,12 @@ def _spot_labels(
     return np.unique(segments, return_inverse=True)[1]
 
 
+def graph_options(options: dict[str, Any]) -> dict[str, Any]:
+    """The options of ``options`` that shape the appearance graph."""
+    names = ("appearance", "appearance_options", "neighbours", "p_dyn")
+    return {key: options[key] for key in names if key in options}
+
+
 def choose_prior(
     rgb: np.ndarray,
     response: np.ndarray,
@@ -138,6 +145,11 @@ def choose_prior(
         (``appearance``, ``neighbours``, ``weights``, ``p_dyn``, ``tol``, ...), used for every
         trial solve, among them ``graph`` (:func:`~recon.spectralize.solve.neighbour_graph` of
         these options, found here if not given); ``prior`` is the one option it sets itself.
+        A learned appearance space (:data:`~recon.spectralize.learned_appearance.LEARNED_SPACES`)
+        is refitted in every fold on the spots the fold keeps, and its graph found anew, so
+        that no held-out spectrum shapes the links it is predicted through; its
+        ``known_pixels`` and ``known_spectra`` options and ``graph`` are those of the solve
+        from all spots, which the folds do not use.
 
     Returns
     -------
@@ -183,26 +195,26 @@ def choose_prior(
             f"known_pixels: choose_prior needs at least {folds} separate spots (or lines long "
             f"enough to cut into {2 * folds} segments) to hold one in {folds} out, got {count}"
         )
-    graph_options = {
-        key: options[key]
-        for key in ("appearance", "appearance_options", "neighbours", "p_dyn")
-        if key in options
-    }
     graph = options.pop("graph", None)
-    if graph is None:
-        graph = neighbour_graph(images, **graph_options)
+    learned = options.get("appearance") in LEARNED_SPACES
+    if graph is None and not learned:
+        graph = neighbour_graph(images, **graph_options(options))
     predicted = {prior: np.empty_like(spectra) for prior in PRIORS}
     with progress_steps("choosing the prior: folds", folds, enabled=progress) as advance:
         for fold in range(folds):
             held_out = _held_out(spots, folds, fold)
             last = fold == folds - 1  # its whole images are kept as the starting guess
+            fold_options = options
+            if learned:  # the space refitted without the held-out spots
+                fold_options = fitted_on(options, pixels[~held_out], spectra[~held_out])
+                graph = neighbour_graph(images, **graph_options(fold_options))
             estimates = reconstruct_priors(
                 images,
                 response,
                 point_spectra=PointSpectra(pixels[~held_out], spectra[~held_out]),
                 at_pixels=None if last else pixels[held_out],
                 graph=graph,
-                **options,
+                **fold_options,
             )
             for prior, estimate in estimates.items():
                 rows = (

@@ -83,7 +83,11 @@ def test_spectralize_a_real_crop_and_read_it_back(crop, tmp_path):
     assert error < ERROR_BOUND_PCT
     spots = json.loads((out / "spots.json").read_text())
     assert len(spots["spots"]) == len(xy)
-    assert spots["summary"]["prior_chosen_by"] == "cross-validation"
+    summary = spots["summary"]
+    assert summary["prior_chosen_by"] == "cross-validation"
+    spaces = summary["appearance_cross_validated_error_pct"]
+    assert set(spaces) == {"rgbxy", "learned"}
+    assert summary["appearance"] == min(spaces, key=spaces.__getitem__)
     assert all(spot["cross_validated_error_pct"] >= 0 for spot in spots["spots"])
     preview = cv2.imread(str(out / "preview.png"))
     assert preview.shape == (120, 160, 3)
@@ -114,8 +118,9 @@ def test_on_a_smooth_image_the_kriged_estimate_is_blended_in_unless_switched_off
     """A smooth blend of real food reflectances (96 px, Canon EOS R under D65) as a user's
     16-bit PNG, 250 single-pixel spots and the camera-times-light response as a CSV: by
     default the folds weight Murakami's kriged estimate in and the cube is closer to the truth
-    than with ``--no-kriging``. Measured (no RGB noise but the PNG's 16 bits): weight 1.0,
-    0.18 % against 1.25 %."""
+    than with ``--no-kriging``; they choose the learned appearance space, which alone is
+    closer than RGBXY. Measured (no RGB noise but the PNG's 16 bits): weight 1.0, 0.18 %
+    against 1.05 % without the blend, 1.25 % with RGBXY instead."""
     case = real_test_image("vhrel_food blend", side=96, seed=0)
     rgb = case.truth @ case.response
     cv2.imwrite(
@@ -133,8 +138,13 @@ def test_on_a_smooth_image_the_kriged_estimate_is_blended_in_unless_switched_off
             for w, row in zip(wavelengths, case.response, strict=True)
         )
     )
-    errors, weights = {}, {}
-    for name, switch in (("default", []), ("off", ["--no-kriging"])):
+    errors, weights, spaces = {}, {}, {}
+    runs = (
+        ("default", []),
+        ("off", ["--no-kriging"]),
+        ("rgbxy", ["--no-kriging", "--appearance", "rgbxy"]),
+    )
+    for name, switch in runs:
         out = tmp_path / name
         result = runner.invoke(
             app,
@@ -143,12 +153,14 @@ def test_on_a_smooth_image_the_kriged_estimate_is_blended_in_unless_switched_off
         )
         assert result.exit_code == 0, result.output
         summary = json.loads((out / "spots.json").read_text())["summary"]
-        weights[name] = summary["kriging_weight"]
+        weights[name], spaces[name] = summary["kriging_weight"], summary["appearance"]
         errors[name] = float(
             np.mean(relative_error(read_spectral_exr(out / "spectra.exr").cube, case.truth))
         )
     assert weights["default"] >= 0.5 and weights["off"] == 0.0
     assert errors["default"] < 0.95 * errors["off"]
+    assert spaces == {"default": "learned", "off": "learned", "rgbxy": "rgbxy"}
+    assert errors["off"] < 0.9 * errors["rgbxy"]
 
 
 def test_spots_as_areas_of_a_label_image(crop, tmp_path):

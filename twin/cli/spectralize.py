@@ -25,6 +25,14 @@ __all__ = ["register"]
 _SHOWN_SPOTS = 24  # more spots: the summary and the worst five
 
 
+class Appearance(StrEnum):
+    """``recon.image_spectralization.APPEARANCES``: chosen, or one space."""
+
+    auto = "auto"
+    rgbxy = "rgbxy"
+    learned = "learned"
+
+
 class Interleave(StrEnum):
     """Layouts of ``recon.envi.ENVI_INTERLEAVES``."""
 
@@ -80,10 +88,19 @@ def spectralize(
     fast: Annotated[
         bool,
         typer.Option(
-            help="The thesis's prior without cross-validation: one solve, no per-spot errors "
-            "(by default the prior is chosen by three-fold cross-validation over the spots)."
+            help="The thesis's prior (and its rgbxy space unless --appearance names one) "
+            "without cross-validation: one solve, no per-spot errors (by default both are "
+            "chosen by three-fold cross-validation over the spots)."
         ),
     ] = False,
+    appearance: Annotated[
+        Appearance,
+        typer.Option(
+            help="Which pixels the prior links: rgbxy (like colour nearby, the thesis's), "
+            "learned (like spectra predicted from the patch around each pixel by a map fitted "
+            "on the spots) or auto (the one the cross-validation finds better).",
+        ),
+    ] = Appearance.auto,
     kriging: Annotated[
         bool,
         typer.Option(
@@ -157,6 +174,7 @@ def spectralize(
         spots,
         curves,
         fast=fast,
+        appearance=appearance.value,
         kriging=kriging,
         camera_degree=0 if gains_only else MAX_DEGREE,
         progress=not as_json,
@@ -175,7 +193,7 @@ def spectralize(
     if as_json:
         print_summary(summary, "spectralization", as_json)
         return
-    shown = ["spots", "bands", "prior", "prior_chosen_by", "kriging_weight"]
+    shown = ["spots", "bands", "appearance", "prior", "prior_chosen_by", "kriging_weight"]
     shown += ["cross_validated_error_pct"]
     shown += [key for key in summary if key.startswith("spot_error_")]
     shown += ["spot_fit_residual_pct"]

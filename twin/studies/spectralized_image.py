@@ -104,6 +104,8 @@ def write_spectralized_image(
         "bands": bands,
         "grid_nm": [float(w) for w in result.grid.wavelengths_nm],
         "spots": int(spots.xy.shape[0]),
+        "appearance": result.appearance,
+        "appearance_cross_validated_error_pct": result.appearance_errors,
         "prior": result.prior,
         "prior_chosen_by": "cross-validation" if result.cross_validated else "fixed (--fast)",
         "kriging_weight": result.kriging_weight,
