@@ -15,9 +15,7 @@ from recon.experiments.sampling import add_rgb_noise, known_spectra_from_mask, w
 from recon.image_spectralization import run
 from recon.image_spectralization.kriging_blend import blend_with_kriging, choose_kriging_weight
 from recon.image_spectralization.run import spectralize_image
-from recon.image_spectralization.spots import SpotSpectra
 from recon.metrics import relative_error
-from recon.spectra import DEFAULT_GRID, SampledSpectra
 from recon.spectralize import choose_prior
 from recon.spectralize.solve import EnergyWeights, spectralize
 
@@ -80,18 +78,11 @@ def test_a_weight_outside_zero_to_one_is_refused():
         blend_with_kriging(np.zeros((4, 4, 3)), np.zeros((4, 4, 3)), np.eye(3), [0], [[1, 1, 1]], 2)
 
 
-def test_spectralize_image_blends_unless_there_are_too_many_spots(monkeypatch):
+def test_spectralize_image_blends_unless_there_are_too_many_spots(monkeypatch, small_blend_image):
     """``spectralize_image`` weights the kriged estimate in on a smooth blend (its held-out
     errors then name the kriged estimate and the blend); above ``MAX_KRIGED_PIXELS`` spots it
     keeps the spectralization alone and says so."""
-    case = real_test_image("vhrel_food blend", side=48, seed=0)
-    rows, cols = np.nonzero(whisk_broom_mask(case.truth.shape[:2], n_spots=64))
-    spots = SpotSpectra(
-        np.stack([cols, rows], 1), SampledSpectra(DEFAULT_GRID, case.truth[rows, cols]), "test"
-    )
-    per_nm = case.response / DEFAULT_GRID.quadrature_weights()[:, None]
-    response = SampledSpectra(DEFAULT_GRID, per_nm.T, ("R", "G", "B"))
-    rgb = case.truth @ case.response
+    rgb, spots, response = small_blend_image
     blended = spectralize_image(rgb, spots, response)
     assert blended.kriging_weight > 0
     assert {"kriging", "blend"} <= set(blended.held_out_errors)

@@ -11,9 +11,7 @@ from recon.errors import InputError
 from recon.experiments.real_images import real_test_image
 from recon.experiments.sampling import add_rgb_noise, known_spectra_from_mask, whisk_broom_mask
 from recon.image_spectralization.run import spectralize_image
-from recon.image_spectralization.spots import SpotSpectra
 from recon.metrics import relative_error
-from recon.spectra import DEFAULT_GRID, SampledSpectra
 from recon.spectralize import choose_appearance, choose_prior
 from recon.spectralize.appearance import appearance_points
 from recon.spectralize.learned_appearance import patch_features
@@ -134,18 +132,11 @@ def test_choose_appearance_refuses_what_it_sets_and_unknown_spaces():
         choose_appearance(rgb, response, [0, 9, 18], np.ones((3, 3)), spaces=("hsv",))
 
 
-def test_spectralize_image_takes_one_space_when_told():
+def test_spectralize_image_takes_one_space_when_told(small_blend_image):
     """``spectralize_image``: by default the space is chosen (both spaces' held-out errors
     reported); one space given is used as it is, ``fast`` too (without cross-validation); an
     unknown one is refused."""
-    case = real_test_image("vhrel_food blend", side=48, seed=0)
-    rows, cols = np.nonzero(whisk_broom_mask(case.truth.shape[:2], n_spots=64))
-    spots = SpotSpectra(
-        np.stack([cols, rows], 1), SampledSpectra(DEFAULT_GRID, case.truth[rows, cols]), "test"
-    )
-    per_nm = case.response / DEFAULT_GRID.quadrature_weights()[:, None]
-    response = SampledSpectra(DEFAULT_GRID, per_nm.T, ("R", "G", "B"))
-    rgb = case.truth @ case.response
+    rgb, spots, response = small_blend_image
     chosen = spectralize_image(rgb, spots, response, kriging=False)
     assert set(chosen.appearance_errors) == {"rgbxy", "learned"}
     assert chosen.appearance == min(chosen.appearance_errors, key=chosen.appearance_errors.get)
