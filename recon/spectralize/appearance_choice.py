@@ -26,7 +26,11 @@ import numpy as np
 from recon.errors import InputError
 from recon.progress import progress_steps
 from recon.spectralize.appearance import APPEARANCE_SPACES, NeighbourGraph
-from recon.spectralize.learned_appearance import LEARNED_SPACES, fitted_on
+from recon.spectralize.learned_appearance import (
+    LEARNED_SPACES,
+    fitted_on,
+    standardized_features,
+)
 from recon.spectralize.prior_choice import FOLDS, PriorChoice, choose_prior, graph_options
 from recon.spectralize.solve import neighbour_graph
 
@@ -111,6 +115,10 @@ def choose_appearance(
             }
             if space in LEARNED_SPACES:
                 energy = fitted_on(energy, np.asarray(known_pixels), np.asarray(known_spectra))
+                if not options.get("p_dyn"):  # the features of every fold's fit, found once
+                    energy["appearance_options"]["features"] = standardized_features(
+                        images if images.ndim == 4 else images[None]
+                    )
             graph = neighbour_graph(images, **graph_options(options | energy))
             choice = choose_prior(
                 images,

@@ -31,7 +31,13 @@ from scipy import ndimage
 
 from recon.errors import InputError
 
-__all__ = ["LEARNED_SPACES", "fitted_on", "learned_points", "patch_features"]
+__all__ = [
+    "LEARNED_SPACES",
+    "fitted_on",
+    "learned_points",
+    "patch_features",
+    "standardized_features",
+]
 
 LEARNED_SPACES = frozenset({"learned"})
 """Appearance spaces whose points depend on the known spectra (options ``known_pixels`` and
@@ -99,11 +105,22 @@ def _ridge_fit(design: np.ndarray, targets: np.ndarray) -> np.ndarray:
     return np.asarray(right.T @ (shrink[:, None] * projected))
 
 
+def standardized_features(images: np.ndarray) -> np.ndarray:
+    """:func:`patch_features` of ``images``, each column shifted and scaled to zero mean and
+    unit standard deviation over the pixels (so that the ridge penalty weighs them alike), as
+    float32: the ``features`` option of :func:`learned_points`, found once per image."""
+    features = patch_features(images)
+    features -= features.mean(axis=0)
+    features /= features.std(axis=0) + 1e-12
+    return features.astype(np.float32)
+
+
 def learned_points(
     images: np.ndarray,
     *,
     known_pixels: np.ndarray | None = None,
     known_spectra: np.ndarray | None = None,
+    features: np.ndarray | None = None,
     xy_scale: float = 0.25,
     **_: object,
 ) -> np.ndarray:
@@ -116,6 +133,9 @@ def learned_points(
         ``(n_images, height, width, channels)`` camera values.
     known_pixels, known_spectra
         Flat pixel indices and their ``(m, K)`` spectra: where the map is fitted.
+    features
+        :func:`standardized_features` of ``images`` where already found (several fits on one
+        image); found here if not given.
     xy_scale
         Position weight: coordinates scaled to ``xy_scale`` times the mean spread of the first
         three predicted coefficients per image side (as RGBXY scales them to the RGB spread).
@@ -138,14 +158,15 @@ def learned_points(
             f"shapes {pixels.shape} and {spectra.shape}"
         )
     count, height, width, _ = images.shape
-    features = patch_features(images)
-    standardized = (features - features.mean(axis=0)) / (features.std(axis=0) + 1e-12)
-    design = np.column_stack([standardized, np.ones(len(standardized))])
+    if features is None:
+        features = standardized_features(images)
     centred = spectra - spectra.mean(axis=0)
     singular, directions = np.linalg.svd(centred, full_matrices=False)[1:]
     rank = int(np.sum(singular > _RANK_TOLERANCE * singular[0])) if singular[0] > 0 else 1
     directions = directions[: min(COMPONENTS, rank)]
-    predicted = design @ _ridge_fit(design[pixels], centred @ directions.T)
+    at_known = np.column_stack([features[pixels], np.ones(pixels.size)])
+    projection = _ridge_fit(at_known, centred @ directions.T)
+    predicted = features @ projection[:-1].astype(np.float32) + projection[-1].astype(np.float32)
     spread = float(np.mean(np.std(predicted[:, :3], axis=0))) or 1.0
     rows, cols = np.mgrid[0:height, 0:width]
     xy = np.stack([cols, rows], axis=-1).reshape(-1, 2) * (xy_scale * spread / max(height, width))
@@ -154,6 +175,7 @@ def learned_points(
 
 def fitted_on(options: dict[str, Any], pixels: np.ndarray, spectra: np.ndarray) -> dict[str, Any]:
     """Energy ``options`` with the appearance space fitted on the known ``pixels`` and their
-    ``spectra`` (its ``appearance_options`` ``known_pixels`` and ``known_spectra``)."""
+    ``spectra`` (its ``appearance_options`` ``known_pixels`` and ``known_spectra``; any others,
+    such as ``features``, kept)."""
     fitted = {"known_pixels": pixels, "known_spectra": spectra}
     return options | {"appearance_options": (options.get("appearance_options") or {}) | fitted}
