@@ -239,6 +239,8 @@ def spectralize_image(
         raise InputError(
             f"response: expected three channels R, G, B, got {response.values.shape[0]}"
         )
+    if appearance not in APPEARANCES:
+        raise InputError(f"appearance: expected one of {APPEARANCES}, got {appearance!r}")
     pixels = spots.flat_pixels(rgb.shape[:2])
     if pixels.size < MIN_SPOTS:
         raise InputError(
@@ -250,8 +252,6 @@ def spectralize_image(
     flat = rgb.reshape(-1, 3)
     camera = camera_term(response, grid, flat[pixels], spectra, max_degree=camera_degree)
     r_cam = camera.matrix
-    if appearance not in APPEARANCES:
-        raise InputError(f"appearance: expected one of {APPEARANCES}, got {appearance!r}")
     timings, choice, appearance_errors = {}, None, {}
     if fast:
         started = time.perf_counter()
@@ -262,7 +262,7 @@ def spectralize_image(
         timings["graph"] = time.perf_counter() - started
     else:
         started = time.perf_counter()
-        spaces = choose_appearance(
+        chosen = choose_appearance(
             rgb,
             r_cam,
             pixels,
@@ -274,9 +274,9 @@ def spectralize_image(
             **_ENERGY,
         )
         timings["cross_validation"] = time.perf_counter() - started
-        choice, energy, graph = spaces.prior_choice, _ENERGY | spaces.energy, spaces.graph
+        choice, energy, graph = chosen.prior_choice, _ENERGY | chosen.energy, chosen.graph
         if appearance == "auto":
-            appearance_errors = spaces.held_out_errors
+            appearance_errors = chosen.held_out_errors
     prior = FAST_PRIOR if choice is None else choice.prior
     started = time.perf_counter()
     result = reconstruct(
@@ -302,10 +302,10 @@ def spectralize_image(
             )
         else:
             started = time.perf_counter()
-            chosen = choose_kriging_weight(rgb, r_cam, pixels, spectra, choice)
-            weight = chosen.kriging_weight
-            held_out |= {key: chosen.held_out_errors[key] for key in ("kriging", "blend")}
-            spot_errors = chosen.pixel_errors
+            kriging_choice = choose_kriging_weight(rgb, r_cam, pixels, spectra, choice)
+            weight = kriging_choice.kriging_weight
+            held_out |= {key: kriging_choice.held_out_errors[key] for key in ("kriging", "blend")}
+            spot_errors = kriging_choice.pixel_errors
             spectra_out = blend_with_kriging(spectra_out, rgb, r_cam, pixels, spectra, weight)
             timings["kriging"] = time.perf_counter() - started
     cube = np.clip(spectra_out, 0.0, None).astype(np.float32)
