@@ -48,8 +48,7 @@ from recon.image_spectralization.spots import SpotSpectra
 from recon.spectra import SampledSpectra, WavelengthGrid, resample
 from recon.spectralize.appearance_choice import SPACES, choose_appearance
 from recon.spectralize.learned_appearance import LEARNED_SPACES, fitted_on
-from recon.spectralize.prior_choice import graph_options
-from recon.spectralize.solve import EnergyWeights, PointSpectra, neighbour_graph, reconstruct
+from recon.spectralize.solve import EnergyWeights, PointSpectra, graph_for, reconstruct
 
 __all__ = [
     "APPEARANCES",
@@ -258,7 +257,7 @@ def spectralize_image(
         energy = _ENERGY | {"appearance": FAST_APPEARANCE if appearance == "auto" else appearance}
         if energy["appearance"] in LEARNED_SPACES:
             energy = fitted_on(energy, pixels, spectra)
-        graph = neighbour_graph(rgb, **graph_options(energy))
+        graph = graph_for(rgb, energy)
         timings["graph"] = time.perf_counter() - started
     else:
         started = time.perf_counter()

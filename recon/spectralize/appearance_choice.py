@@ -31,8 +31,8 @@ from recon.spectralize.learned_appearance import (
     fitted_on,
     standardized_features,
 )
-from recon.spectralize.prior_choice import FOLDS, PriorChoice, choose_prior, graph_options
-from recon.spectralize.solve import neighbour_graph
+from recon.spectralize.prior_choice import FOLDS, PriorChoice, choose_prior
+from recon.spectralize.solve import graph_for
 
 __all__ = ["SPACES", "AppearanceChoice", "choose_appearance"]
 
@@ -119,7 +119,7 @@ def choose_appearance(
                     energy["appearance_options"]["features"] = standardized_features(
                         images if images.ndim == 4 else images[None]
                     )
-            graph = neighbour_graph(images, **graph_options(options | energy))
+            graph = graph_for(images, options | energy)
             choice = choose_prior(
                 images,
                 response,

@@ -43,7 +43,7 @@ from recon.metrics import relative_error
 from recon.progress import progress_steps
 from recon.spectralize.joint import reconstruct_priors
 from recon.spectralize.learned_appearance import LEARNED_SPACES, fitted_on
-from recon.spectralize.solve import PRIORS, PointSpectra, neighbour_graph
+from recon.spectralize.solve import PRIORS, PointSpectra, graph_for
 
 __all__ = ["PriorChoice", "choose_prior"]
 
@@ -106,12 +106,6 @@ def _spot_labels(
         rank = np.argsort(np.argsort(along, kind="stable"), kind="stable")
         segments[members] = spot * 2 * folds + rank * 2 * folds // members.size
     return np.unique(segments, return_inverse=True)[1]
-
-
-def graph_options(options: dict[str, Any]) -> dict[str, Any]:
-    """The options of ``options`` that shape the appearance graph."""
-    names = ("appearance", "appearance_options", "neighbours", "p_dyn")
-    return {key: options[key] for key in names if key in options}
 
 
 def choose_prior(
@@ -198,7 +192,7 @@ def choose_prior(
     graph = options.pop("graph", None)
     learned = options.get("appearance") in LEARNED_SPACES
     if graph is None and not learned:
-        graph = neighbour_graph(images, **graph_options(options))
+        graph = graph_for(images, options)
     predicted = {prior: np.empty_like(spectra) for prior in PRIORS}
     with progress_steps("choosing the prior: folds", folds, enabled=progress) as advance:
         for fold in range(folds):
@@ -207,7 +201,7 @@ def choose_prior(
             fold_options = options
             if learned:  # the space refitted without the held-out spots
                 fold_options = fitted_on(options, pixels[~held_out], spectra[~held_out])
-                graph = neighbour_graph(images, **graph_options(fold_options))
+                graph = graph_for(images, fold_options)
             estimates = reconstruct_priors(
                 images,
                 response,

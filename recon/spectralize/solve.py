@@ -46,7 +46,7 @@ References
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -485,6 +485,14 @@ def neighbour_graph(
     scaled = images * scale.reshape(*images.shape[:3], 1)
     points = appearance_points(scaled, appearance, **(appearance_options or {}))
     return appearance_neighbours(points, k=neighbours)
+
+
+def graph_for(rgb: np.ndarray, options: Mapping[str, Any]) -> NeighbourGraph:
+    """:func:`neighbour_graph` of ``rgb`` with the options among ``options`` (energy and solver
+    options of :func:`reconstruct`) that shape the graph: ``appearance``,
+    ``appearance_options``, ``neighbours`` and ``p_dyn``."""
+    names = ("appearance", "appearance_options", "neighbours", "p_dyn")
+    return neighbour_graph(rgb, **{key: options[key] for key in names if key in options})
 
 
 def build_problem(
