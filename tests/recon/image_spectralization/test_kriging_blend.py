@@ -10,23 +10,20 @@ import pytest
 
 from recon.baselines import recover
 from recon.errors import InputError
-from recon.experiments.real_images import real_test_image
-from recon.experiments.sampling import add_rgb_noise, known_spectra_from_mask, whisk_broom_mask
 from recon.image_spectralization import run
 from recon.image_spectralization.kriging_blend import blend_with_kriging, choose_kriging_weight
 from recon.image_spectralization.run import spectralize_image
 from recon.metrics import relative_error
 from recon.spectralize import choose_prior
 from recon.spectralize.solve import EnergyWeights, spectralize
+from tests.recon.whisk_broom import whisk_broom_case
 
 SETTINGS = {"appearance": "rgbxy", "weights": EnergyWeights(delta=0.0), "tol": 1e-8}
 
 
 def _case(name: str):
     """Chapter 7's whisk-broom protocol at 96 px, seed 0: 250 spots, 1 % RGB noise."""
-    case = real_test_image(name, side=96, seed=0)
-    pixels, spectra = known_spectra_from_mask(case.truth, whisk_broom_mask(case.truth.shape[:2]))
-    rgb = add_rgb_noise(case.truth @ case.response, 0.01, np.random.default_rng(0))
+    case, rgb, pixels, spectra = whisk_broom_case(name, 96)
     choice = choose_prior(rgb, case.response, pixels, spectra, folds=3, **SETTINGS)
     chosen = choose_kriging_weight(rgb, case.response, pixels, spectra, choice)
     alone = spectralize(

@@ -8,24 +8,15 @@ import numpy as np
 import pytest
 
 from recon.errors import InputError
-from recon.experiments.real_images import real_test_image
-from recon.experiments.sampling import add_rgb_noise, known_spectra_from_mask, whisk_broom_mask
 from recon.image_spectralization.run import spectralize_image
 from recon.metrics import relative_error
 from recon.spectralize import choose_appearance, choose_prior
 from recon.spectralize.appearance import appearance_points
 from recon.spectralize.learned_appearance import patch_features
 from recon.spectralize.solve import EnergyWeights, spectralize
+from tests.recon.whisk_broom import whisk_broom_case
 
 SETTINGS = {"weights": EnergyWeights(delta=0.0), "tol": 1e-8}
-
-
-def _case(name: str, side: int = 96):
-    """Chapter 7's whisk-broom protocol, seed 0: 250 spots, 1 % RGB noise."""
-    case = real_test_image(name, side=side, seed=0)
-    pixels, spectra = known_spectra_from_mask(case.truth, whisk_broom_mask(case.truth.shape[:2]))
-    rgb = add_rgb_noise(case.truth @ case.response, 0.01, np.random.default_rng(0))
-    return case, rgb, pixels, spectra
 
 
 def test_patch_features_are_the_values_local_means_and_gradients():
@@ -76,7 +67,7 @@ def test_a_held_out_spot_does_not_shape_the_graph_it_is_predicted_through():
     spot's spectrum changed (the spot's own data then differs, the rest not) leaves its
     held-out prediction bit for bit as it was; fitted once on all spots, the map would carry
     the changed spectrum into the fold's graph."""
-    case, rgb, pixels, spectra = _case("vhrel_food blend", side=48)
+    case, rgb, pixels, spectra = whisk_broom_case("vhrel_food blend", 48)
     options = {"appearance": "learned", "folds": 3, **SETTINGS}
     before = choose_prior(rgb, case.response, pixels, spectra, **options)
     spot = before.spot_of_pixel == 7
@@ -102,7 +93,7 @@ def test_the_space_the_held_out_spots_choose_is_the_better_one_against_the_truth
     learned 1.70 % against RGBXY 2.53 % (held out 2.33 against 2.75), clothes blend 2.49
     against 4.29 (3.40 against 4.07); the clothes mosaic, where the RGB noise is all that
     separates neighbours of one material, RGBXY 2.34 against 3.24 (3.73 against 5.03)."""
-    case, rgb, pixels, spectra = _case(name)
+    case, rgb, pixels, spectra = whisk_broom_case(name, 96)
     choice = choose_appearance(rgb, case.response, pixels, spectra, folds=3, **SETTINGS)
     assert choice.appearance == better
     assert choice.held_out_errors[better] == min(choice.held_out_errors.values())
