@@ -64,6 +64,7 @@ from recon.spectralize.solve import BandImage, reconstruct
 
 __all__ = [
     "P_DYN",
+    "SOLVER_TOLERANCE",
     "TARGET_RELATIVE_NOISE",
     "DomeProcessing",
     "band_sigma_px",
@@ -93,6 +94,14 @@ TARGET_RELATIVE_NOISE = 0.04
 thesis found smaller ones often suffice, the prior of Eq. 10.12 smoothing what is left: on the
 capture of :data:`P_DYN` filters for 0.04 (half as wide as for 0.02) took the diffuse fields
 from 10.8 % to 9.1 %; narrower ones changed little (8.9 % for 0.08, 9.2 % without filters)."""
+
+SOLVER_TOLERANCE = 1e-5
+"""LSMR's stopping tolerance for a group's joint solve (``atol = btol`` of
+:func:`recon.spectralize.reconstruct`, whose own default is 1e-6). On a 32-texel capture of 2
+stage positions x 5 LEDs x 3 RGB cameras (``tests/integration/test_dome_processing.py``'s) the
+colour checker's and the Lego's BTFs came out 0.23 % and 1.4 % of their largest value from the
+1e-6 solution at most, their mean Eq. 6.8 against the twin's truth 9.182 % and 53.90 % against
+9.185 % and 53.88 %, in 17-22 % less time (at 1e-4: 9.23 % and 54.02 %)."""
 
 _MAX_SIGMA_FRACTION = 0.25  # of the texture's side
 
@@ -407,8 +416,8 @@ def process_dome(
     show_progress
         Progress bars.
     solver
-        Options of :func:`recon.spectralize.reconstruct` (``tol``, ``max_iterations``,
-        ``solver``, ``appearance``, ...).
+        Options of :func:`recon.spectralize.reconstruct` (``tol``, default
+        :data:`SOLVER_TOLERANCE`, ``max_iterations``, ``solver``, ``appearance``, ...).
     band_partner
         The RGB camera whose images take the band data (default: the one whose view lies
         nearest the spectral camera's, :func:`spectral_partner`). Another camera moves the
@@ -471,7 +480,9 @@ def process_dome(
     steps = 2 * sum(len(group) for group in groups)  # reading the images, then solving them
     with progress_steps("process (read, solve)", steps, enabled=show_progress) as advance:
         for group in groups:
-            _solve_group(work, store, btf, group, dict(solver or {}), advance)
+            _solve_group(
+                work, store, btf, group, {"tol": SOLVER_TOLERANCE, **(solver or {})}, advance
+            )
     registrations = {f"{camera}_view{view}": r for (camera, view), r in work.registrations.items()}
     btf.set_attribute("unregistered_pairs", [])
     btf.set_attribute("coarse_corner_pairs", [])
