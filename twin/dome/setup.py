@@ -156,13 +156,17 @@ def dome_setup(
     texel_px: int | None = None,
     longest_band_s: float = THESIS_LONGEST_BAND_S,
     target_relative_noise: float = _TARGET_RELATIVE_NOISE,
+    dark_frames: int = DARK_FRAMES_PER_TIME,
     seed: int = 0,
 ) -> DomeSetup:
     """Calibrate the twin dome and plan its spectral exposures (module description);
     ``texels``, ``sample_size_m`` and ``texel_px`` size the cameras
-    (:func:`twin.dome.capture.dome_cameras`)."""
+    (:func:`twin.dome.capture.dome_cameras`); ``dark_frames`` spectral-camera dark frames are
+    averaged at each of the calibration's eight exposure times."""
     if not longest_band_s > 0:
         raise InputError(f"longest_band_s: expected a positive time, got {longest_band_s}")
+    if dark_frames < 1:
+        raise InputError(f"dark_frames: expected at least 1 per exposure time, got {dark_frames}")
     rng = np.random.default_rng(seed)
     cameras = dome_cameras(texels, sample_size_m=sample_size_m, texel_px=texel_px)
     led = np.interp(THESIS_BANDS_NM, FINE_GRID.wavelengths_nm, cameras.led.values)
@@ -190,7 +194,7 @@ def dome_setup(
     longest = max(_LONGEST_DARK_S, longest_band_s, white_t.max(), series_t.max())
     dark_times = np.geomspace(0.01, longest, 8)
     spectral = calibrate_spectral_camera(
-        *cameras.dark_frames(dark_times, DARK_FRAMES_PER_TIME, rng),
+        *cameras.dark_frames(dark_times, dark_frames, rng),
         series,
         series_t,
         _band_frames_of_white(cameras, white_band_rate, white_t, rng),

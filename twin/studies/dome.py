@@ -55,6 +55,7 @@ from twin.dome.exposure_plan import band_schedules
 from twin.dome.setup import (
     BAND_GRID,
     CALIBRATION_LIGHT,
+    DARK_FRAMES_PER_TIME,
     SPECTRAL_VIEW,
     THESIS_BANDS_NM,
     DomeSetup,
@@ -400,6 +401,7 @@ def run_dome_study(
     texels: int = 32,
     materials: Sequence[str] = DOME_MATERIALS,
     seed: int = 0,
+    dark_frames: int = DARK_FRAMES_PER_TIME,
     analytic: bool = True,
     store_metrics: Callable[[], dict] | None = None,
     step: Callable[[str], None] = lambda name: None,
@@ -407,8 +409,9 @@ def run_dome_study(
     """Run the experiments of :mod:`twin.studies.dome`, write the JSON and figures to ``out``.
 
     ``analytic``: the experiments on frames computed from the texture truth (module
-    description). ``store_metrics``: the same chapter's 10.4.2 multi-image experiment and 10.5
-    exposure totals from dome capture stores, processed by :mod:`recon.dome`
+    description), whose dome calibrations average ``dark_frames`` dark frames per exposure
+    time (thesis 10.3: 200). ``store_metrics``: the same chapter's 10.4.2 multi-image
+    experiment and 10.5 exposure totals from dome capture stores, processed by :mod:`recon.dome`
     (:func:`twin.studies.dome_stores.store_study` with its arguments bound), run after the
     analytic path and reported under ``"stores"`` next to the analytic path's numbers for the
     same images; ``None`` skips them.
@@ -424,7 +427,7 @@ def run_dome_study(
         raise InputError("analytic, capture: expected the analytic path, stores or both")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    metrics = _analytic_study(out, texels, materials, seed, step) if analytic else {}
+    metrics = _analytic_study(out, texels, materials, seed, dark_frames, step) if analytic else {}
     if store_metrics is not None:
         metrics["stores"] = store_metrics()
         dome_figures.write_store_comparison(metrics["stores"], out / "stores_vs_analytic.png")
@@ -433,7 +436,12 @@ def run_dome_study(
 
 
 def _analytic_study(
-    out: Path, texels: int, materials: Sequence[str], seed: int, step: Callable[[str], None]
+    out: Path,
+    texels: int,
+    materials: Sequence[str],
+    seed: int,
+    dark_frames: int,
+    step: Callable[[str], None],
 ) -> dict:
     """The experiments on the analytic path, their figures written to ``out``."""
     rng = np.random.default_rng(seed)
@@ -443,14 +451,21 @@ def _analytic_study(
         size = load_material(material).size_m
         if size not in setups:
             step(f"calibrating the dome for {size * 100:.2f} cm samples")
-            setups[size] = dome_setup(texels, sample_size_m=size, seed=seed)
+            setups[size] = dome_setup(
+                texels, sample_size_m=size, dark_frames=dark_frames, seed=seed
+            )
         return setups[size]
 
     first = setup_for(materials[0])
     step("calibrating the dome at one Bayer quad per texel")
-    per_pixel = dome_setup(texels, texel_px=PER_PIXEL_TEXEL_PX, seed=seed)
+    per_pixel = dome_setup(texels, texel_px=PER_PIXEL_TEXEL_PX, dark_frames=dark_frames, seed=seed)
     plans = schedules(first)
-    metrics: dict = {"texels": texels, "schedules": plans, "materials": {}}
+    metrics: dict = {
+        "texels": texels,
+        "dark_frames_per_time": dark_frames,
+        "schedules": plans,
+        "materials": {},
+    }
     singles, multis = {}, {}
     for material in materials:
         setup = setup_for(material)

@@ -8,11 +8,16 @@ import json
 
 import numpy as np
 import pytest
+from typer.main import get_command
 from typer.testing import CliRunner
 
 from recon.scheduling.dome_schedule import THESIS_RGB_EXPOSURES_S
 from twin.cli.app import app
+from twin.dome.setup import DARK_FRAMES_PER_TIME
 
+# Dark frames per exposure time of the study's dome calibrations: 20, a tenth of the thesis's
+# 200 (the 1 px per texel setup's 1600 dark frames of 416 x 416 px took 11 s of the test's 45 s).
+DARK_FRAMES = 20
 FIGURES = (
     "fig10_5_plan.png",
     "fig10_7_single_image_errors.png",
@@ -36,6 +41,8 @@ def test_dome_study_prints_its_metrics_as_json(tmp_path):
             "--material",
             "colorchecker16",
             "--analytic-only",
+            "--dark-frames",
+            str(DARK_FRAMES),
             "--json",
         ],
         catch_exceptions=False,
@@ -45,6 +52,7 @@ def test_dome_study_prints_its_metrics_as_json(tmp_path):
     assert printed == json.loads((tmp_path / "dome_study.json").read_text())
     for name in FIGURES:
         assert (tmp_path / name).stat().st_size > 10_000, name
+    assert printed["dark_frames_per_time"] == DARK_FRAMES
     exposure = printed["exposure_10_5"]
     assert exposure["pixels_per_texel"] == 2
     # Exposure totals against quantities known without the study: the thesis's HDR RGB set
@@ -65,3 +73,11 @@ def test_dome_study_prints_its_metrics_as_json(tmp_path):
     np.testing.assert_allclose(
         exposure["spectral_only_totals_s"], reference_s / np.array([1, 4, 16, 64]), rtol=1e-12
     )
+
+
+def test_the_dark_frames_default_is_the_thesis_count():
+    """``--dark-frames`` defaults to the thesis's 200 per exposure time (10.3)."""
+    option = next(
+        p for p in get_command(app).commands["dome-study"].params if p.name == "dark_frames"
+    )
+    assert option.default == DARK_FRAMES_PER_TIME == 200
