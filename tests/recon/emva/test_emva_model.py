@@ -1,11 +1,14 @@
-"""EMVA 1288 pieces of recon.emva: the OECF knee the fit and the twin share, and descriptors
-written and read back."""
+"""EMVA 1288 pieces of recon.emva: the OECF knee the fit and the twin share, descriptors
+written and read back, and what the fit takes to clip first."""
+
+import math
 
 import numpy as np
 import pytest
 
+from recon.emva import fit
 from recon.emva.descriptor import read_descriptor, read_frame
-from recon.emva.linear_model import knee_oecf, knee_oecf_slope
+from recon.emva.linear_model import knee_oecf, knee_oecf_slope, predicted_saturation_e
 
 
 @pytest.mark.parametrize("strength", [0.0, 0.022, 0.3])
@@ -53,3 +56,41 @@ def test_the_official_set_002_descriptor_reads_with_its_exposure_0_steps(
     ]
     # A camera makes the 0 ns steps at its shortest exposure: they leave the range it needs.
     assert read.exposure_range_s == pytest.approx((40e-9, 3960e-9))
+
+
+def _cmos8_model():
+    """The fit's model of an 8-bit camera whose ADC clips first: 0.033 DN/e-, 0.2 DN read
+    noise, 1.5 % PRNU, 248.7 DN above the offset (7536 e-; the twin's reference set 002 camera,
+    ``scripts/emva1288_reference_sets.py``)."""
+    return fit._Model(
+        gain=0.033,
+        responsivity=0.0165,
+        knee=0.0,
+        dark_rate=0.0,
+        read_dn=0.2,
+        offset=6.3,
+        top=248.7,
+        offset_sigma=0.25,
+        prnu=0.015,
+        max_dn=255,
+    )
+
+
+def test_a_variance_peak_measured_one_step_early_is_still_the_adcs():
+    """Of two plan steps that straddle the predicted ADC peak, either may measure the larger
+    variance (the curve is flat at its top): the ADC is found clipping first from both, a full
+    well only from a peak two steps early, which it then puts at that step."""
+    model = _cmos8_model()
+    peak_e = predicted_saturation_e(
+        math.inf, gain_dn_per_e=0.033, read_noise_dn=0.2, prnu=0.015, adc_top_dn=248.7
+    )
+    steps_e = peak_e + 120.0 * np.arange(-4, 4) - 10.0  # the peak 10 e- above a step
+    for measured in (steps_e[4], steps_e[3]):  # the step below the peak and the one before it
+        full_well, saturated_by = fit._saturation(model, steps_e, float(measured), "test")
+        assert saturated_by == "ADC"
+        assert full_well == pytest.approx(7536.4 + 5 * math.sqrt(7536.4), rel=1e-4)
+    full_well, saturated_by = fit._saturation(model, steps_e, float(steps_e[2]), "test")
+    assert saturated_by == "full well"
+    assert predicted_saturation_e(
+        full_well, gain_dn_per_e=0.033, read_noise_dn=0.2, prnu=0.015, adc_top_dn=248.7
+    ) == pytest.approx(steps_e[2], abs=0.01)

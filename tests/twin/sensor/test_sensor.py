@@ -161,6 +161,21 @@ def test_dark_frames_show_the_shift_direction_gradient_and_hot_pixels():
     assert hot_fraction == pytest.approx(sensor.config.fixed_pattern.hot_pixel_fraction, rel=0.3)
 
 
+def test_a_window_sees_the_sensors_fixed_patterns_whatever_its_size():
+    """The fixed patterns belong to the sensor's pixels (seeded by the serial): a small window
+    holds the top-left pixels' values of a larger one, the same serial gives them again, and
+    another serial other ones."""
+    small, large = Sensor("svs_vistek_4022", roi=(16, 24)), Sensor("svs_vistek_4022")
+    for name in ("photo_response", "dark_factor", "offset_dn"):
+        window = large._fixed_pattern[name][:16, :24]
+        np.testing.assert_array_equal(small._fixed_pattern[name], window)
+    np.testing.assert_array_equal(small.defect_pixels(), large.defect_pixels()[:16, :24])
+    again = Sensor("svs_vistek_4022", roi=(16, 24))
+    np.testing.assert_array_equal(again.mean_dark_electrons(1.0), small.mean_dark_electrons(1.0))
+    other = Sensor(small.config.model_copy(update={"serial": "another"}), roi=(16, 24))
+    assert not np.array_equal(other.mean_dark_electrons(1.0), small.mean_dark_electrons(1.0))
+
+
 def test_hmi_flicker_spreads_frames_unless_the_exposure_is_a_multiple_of_1_15_s():
     sensor = Sensor("coolsnap_k4", roi=(32, 32))
     lamp = HMILamp()
