@@ -299,7 +299,8 @@ class Sensor:
         serial always has the same patterns, as a real camera does. A generator fills the
         window's rows at the sensor's full width, row by row, so a pixel's values do not depend
         on the window, and a small window of a large sensor costs a small draw (the whole
-        2448 x 2048 sensor's patterns took 0.5 s for every camera made).
+        2448 x 2048 sensor's patterns took 0.5 s for every camera made). A camera without
+        offsets or defects has the same other patterns as with them.
         """
         pattern = self.config.fixed_pattern
         seeds = np.random.SeedSequence(zlib.crc32(self.config.serial.encode())).spawn(5)

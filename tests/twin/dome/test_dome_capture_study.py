@@ -209,6 +209,11 @@ def test_pixels_per_texel_must_be_whole_bayer_quads():
         dome_setup(TEXELS, texel_px=3)
 
 
+def test_a_calibration_needs_a_dark_frame_per_exposure_time():
+    with pytest.raises(InputError, match="dark_frames: expected at least 1 per exposure time"):
+        dome_setup(TEXELS, dark_frames=0)
+
+
 def test_calibration_cross_check_fig_10_4(setup):
     """RGB predicted from the calibrated spectral image matches the measured RGB per field."""
     check = cross_check(setup, np.random.default_rng(9))
