@@ -162,6 +162,17 @@ class _Model:
             "s2_ydark": dark_variance,
         }
 
+    def saturation_e(self, full_well_e: float) -> float:
+        """The charge at which the variance of this model with ``full_well_e`` peaks (EMVA
+        1288's saturation; :func:`recon.emva.linear_model.predicted_saturation_e`)."""
+        return predicted_saturation_e(
+            full_well_e,
+            gain_dn_per_e=self.gain,
+            read_noise_dn=self.read_dn,
+            prnu=self.prnu,
+            adc_top_dn=self.top,
+        )
+
     def _digital(self, linear_dn: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Mean and temporal variance of the digital value of a linear signal above the offset:
         shot and read noise through the knee's slope (EMVA 1288's linear model), quantized."""
@@ -279,21 +290,15 @@ def _saturation(
     end at saturation).
     """
 
-    def peak_e(full_well_e: float) -> float:
-        return predicted_saturation_e(
-            full_well_e,
-            gain_dn_per_e=model.gain,
-            read_noise_dn=model.read_dn,
-            prnu=model.prnu,
-            adc_top_dn=model.top,
-        )
-
     top_e = model.top / model.gain
-    if saturation_e >= top_e or peak_e(math.inf) <= _seen_until(step_e, saturation_e):
+    if saturation_e >= top_e or model.saturation_e(math.inf) <= _seen_until(step_e, saturation_e):
         return top_e + _FULL_WELL_MARGIN_SIGMAS * math.sqrt(top_e), "ADC"
     try:
         full_well = optimize.brentq(
-            lambda full_well_e: peak_e(full_well_e) - saturation_e, saturation_e, top_e, xtol=1e-3
+            lambda full_well_e: model.saturation_e(full_well_e) - saturation_e,
+            saturation_e,
+            top_e,
+            xtol=1e-3,
         )
     except ValueError as error:
         raise InputError(

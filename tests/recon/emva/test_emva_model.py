@@ -81,17 +81,10 @@ def test_a_variance_peak_measured_one_step_early_is_still_the_adcs():
     variance (the curve is flat at its top): the ADC is found clipping first from both, a full
     well only from a peak two steps early, which it then puts at that step."""
     model = _cmos8_model()
-
-    def peak_of(full_well_e: float) -> float:
-        return predicted_saturation_e(
-            full_well_e,
-            gain_dn_per_e=model.gain,
-            read_noise_dn=model.read_dn,
-            prnu=model.prnu,
-            adc_top_dn=model.top,
-        )
-
-    peak_e = peak_of(math.inf)
+    peak_e = predicted_saturation_e(
+        math.inf, gain_dn_per_e=0.033, read_noise_dn=0.2, prnu=0.015, adc_top_dn=248.7
+    )
+    assert model.saturation_e(math.inf) == peak_e
     steps_e = peak_e + 120.0 * np.arange(-4, 4) - 10.0  # the peak 10 e- above a step
     for measured in (steps_e[4], steps_e[3]):  # the step below the peak and the one before it
         full_well, saturated_by = fit._saturation(model, steps_e, float(measured), "test")
@@ -100,4 +93,4 @@ def test_a_variance_peak_measured_one_step_early_is_still_the_adcs():
         assert full_well == pytest.approx(top_e + 5 * math.sqrt(top_e), rel=1e-9)
     full_well, saturated_by = fit._saturation(model, steps_e, float(steps_e[2]), "test")
     assert saturated_by == "full well"
-    assert peak_of(full_well) == pytest.approx(steps_e[2], abs=0.01)
+    assert model.saturation_e(full_well) == pytest.approx(steps_e[2], abs=0.01)
