@@ -478,11 +478,10 @@ def process_dome(
         if any(image * cameras + c in pending for image in group for c in range(cameras))
     ]
     steps = 2 * sum(len(group) for group in groups)  # reading the images, then solving them
+    options = {"tol": SOLVER_TOLERANCE, **(solver or {})}
     with progress_steps("process (read, solve)", steps, enabled=show_progress) as advance:
         for group in groups:
-            _solve_group(
-                work, store, btf, group, {"tol": SOLVER_TOLERANCE, **(solver or {})}, advance
-            )
+            _solve_group(work, store, btf, group, options, advance)
     registrations = {f"{camera}_view{view}": r for (camera, view), r in work.registrations.items()}
     btf.set_attribute("unregistered_pairs", [])
     btf.set_attribute("coarse_corner_pairs", [])
