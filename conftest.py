@@ -10,8 +10,36 @@ from threadpoolctl import threadpool_limits
 THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 """The variables that size the BLAS and OpenMP thread pools of numpy, scipy and their kin."""
 
+MALLOC_SETTINGS = {
+    "MALLOC_MMAP_THRESHOLD_": str(32 * 2**20),
+    "MALLOC_TRIM_THRESHOLD_": str(16 * 2**30),
+    "MALLOC_TOP_PAD_": str(512 * 2**20),
+}
+"""glibc's allocator kept from handing freed memory back to the system: arrays up to 32 MiB
+from the heap (not each from its own ``mmap``), the heap not trimmed, grown 512 MiB at a time."""
+
 
 def pytest_configure(config: pytest.Config) -> None:
+    """Settings for the processes the suite starts (its workers, the commands and notebook
+    kernels of its tests), then the workers' thread pools (:func:`_share_the_cores`)."""
+    _keep_freed_memory()
+    _share_the_cores()
+
+
+def _keep_freed_memory() -> None:
+    """:data:`MALLOC_SETTINGS` for every process started from here on, unless set already.
+
+    The tests allocate and free arrays of megabytes by the thousand; freed, glibc returns them
+    to the system and the next array faults its pages in again. On a virtual machine each such
+    page fault is expensive: kept, the suite's page faults fell from 10.2 to 4.2 million and its
+    system CPU time from 147 to 103 s (BENCHMARKS.md, "The test suite"). The variables are read
+    when a process starts, so this process keeps its own allocator's settings.
+    """
+    for name, value in MALLOC_SETTINGS.items():
+        os.environ.setdefault(name, value)
+
+
+def _share_the_cores() -> None:
     """Each of several test workers gets its share of the cores for BLAS and OpenMP threads, in
     this process and in the processes its tests start (notebook kernels, commands), unless the
     variables are set already. Each worker's library pools are sized for the whole machine

@@ -68,6 +68,7 @@ def reduce_linear(raw: np.ndarray, pattern: str, shape: tuple[int, int]) -> np.n
     interpolated = _interpolated_rows(raw.shape[0], shape[0])
     reduced = np.empty(shape, np.float32)
     low, high = np.inf, -np.inf
+    blurred_plane = np.zeros(raw.shape, np.float32)  # zero but on the rows a plane blurs
     for index, plane in enumerate(_demosaiced_planes(raw, pattern)):
         low, high = min(low, np.nanmin(plane)), max(high, np.nanmax(plane))
         mine = reduced_channel == index
@@ -80,9 +81,9 @@ def reduce_linear(raw: np.ndarray, pattern: str, shape: tuple[int, int]) -> np.n
             selected = plane[rows]
         if along_rows > 1e-15:
             selected = ndimage.gaussian_filter1d(selected, along_rows, axis=1, mode="mirror")
-        blurred_plane = np.zeros_like(plane)
         blurred_plane[rows] = selected
         small = ndimage.zoom(blurred_plane, 1 / factors, order=1, mode="mirror", grid_mode=True)
+        blurred_plane[rows] = 0
         reduced[mine] = small[mine]
     return np.clip(reduced, low, high)
 

@@ -103,7 +103,10 @@ def test_a_capture_on_two_workers_is_bit_identical_to_the_serial_one(captures):
 
 
 @pytest.mark.render
-def test_process_on_two_workers_from_the_command_line_equals_the_serial_btf(captures):
+def test_process_on_two_workers_from_the_command_line_equals_the_serial_btf(client, captures):
+    """``spectwin process --scheduler`` on the module's running cluster (whose workers have
+    imported the renderer and processing already; ``--workers N`` opens a ``LocalCluster``
+    through the same :func:`dask_client` as the module's cluster)."""
     root, stores = captures
     calibration = GonioCalibration.identity(EXPOSURES_S, BANDS_NM, HMI_FLICKER_PERIOD_S)
     calibration.save(root / "cal.json")
@@ -119,14 +122,14 @@ def test_process_on_two_workers_from_the_command_line_equals_the_serial_btf(capt
             str(root / "cluster.btf.zarr"),
             "--texels",
             "32",
-            "--workers",
-            "2",
+            "--scheduler",
+            client.scheduler.address,
             "--json",
         ],
     )
     assert result.exit_code == 0, result.output
     summary = json.loads(result.output)
-    assert summary["complete"] and summary["cluster"].endswith("(2 workers)")
+    assert summary["complete"] and summary["cluster"] == f"{client.scheduler.address} (2 workers)"
     cluster = BTFStore.open(root / "cluster.btf.zarr")
     np.testing.assert_array_equal(cluster.reflectance(), serial.reflectance())
     np.testing.assert_array_equal(cluster.corners_xy(), serial.corners_xy())
