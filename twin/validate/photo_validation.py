@@ -350,6 +350,11 @@ def validate_photo(
     step
         Called with the name of each stage as it starts (progress display).
     """
+    if exposure is not None and not exposure > 0:  # before the renders, not after them
+        raise InputError(
+            f"--exposure: {exposure:g}; expected a positive factor (the photograph's value of a "
+            "unit of the renderings')"
+        )
     btf = BTFStore.open(btf_path)
     if compressed and not btf.has_compressed:
         raise InputError(f"{btf_path}: no compressed form stored; run spectwin compress first")
@@ -385,8 +390,8 @@ def validate_photo(
         exposure = float(photo_y @ render_y / (render_y @ render_y))
     if not exposure > 0:
         raise InputError(
-            f"--exposure: {exposure:g}; expected a positive factor (the photograph is dark "
-            "where the sample's rendering is bright: check --sample-corners)"
+            f"the fitted exposure is {exposure:g}; expected a positive factor (the photograph "
+            "is dark where the sample's rendering is bright: check --sample-corners)"
         )
     white = paths.film_to_xyz @ diffuse_white(
         inputs.environment, paths.film_on(inputs.environment.grid)
