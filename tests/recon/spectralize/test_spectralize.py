@@ -290,6 +290,25 @@ def test_noisy_band_images_with_filter_beat_the_raw_band_images(mosaic):
     assert recovered < 0.5 * raw, (recovered, raw)
 
 
+def test_band_images_start_lsmr_from_their_regression_toward_the_same_minimum(mosaic):
+    """Without ``initial``, LSMR starts from the band images' regression (per band, the filtered
+    camera values' least-squares map to the filtered band values, applied to every pixel): the
+    minimum found from zero, in fewer iterations. Two images solved jointly, the band images of
+    the first only, as the dome's (measured: 252 iterations against 293 from zero)."""
+    image, _, response = mosaic
+    rng = np.random.default_rng(6)
+    noisy = image + 0.1 * image.mean() * rng.standard_normal(image.shape)
+    rgb = np.stack([image, 0.6 * image[::-1]]) @ response  # another view, dimmer
+    bands = [BandImage(0, b, noisy[..., b], 1.0) for b in range(image.shape[-1])]
+    options = {"band_images": bands, "tol": 1e-8, "max_iterations": 3000}
+    started = reconstruct(rgb, response, **options)
+    from_zero = reconstruct(rgb, response, initial=np.zeros((2, *image.shape)), **options)
+    assert started.converged and from_zero.converged
+    assert started.iterations < 0.9 * from_zero.iterations
+    np.testing.assert_allclose(started.spectra, from_zero.spectra, atol=1e-4 * image.max())
+    assert started.energy == pytest.approx(from_zero.energy, rel=1e-6)
+
+
 def test_device_integrals_equal_point_spectra_for_single_pixel_readings(mosaic):
     image, _, response = mosaic
     flat = image.reshape(-1, image.shape[-1])
