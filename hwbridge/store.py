@@ -168,6 +168,10 @@ class CaptureStore:
         # Steps this writer has not seen done. Reading the progress flags touches one chunk per
         # step, so mark_done consults this set and re-reads the flags only when it runs empty.
         self._unseen: set[int] | None = None
+        # The index fields of a complete store as read, per (camera, field): a calibration
+        # selects frames by kind and band a dozen times, and a real capture's index holds one
+        # chunk per frame and field, so each read touches every frame's chunk.
+        self._complete_index: dict[tuple[str, str], np.ndarray] = {}
 
     @classmethod
     def create(
@@ -373,6 +377,7 @@ class CaptureStore:
     def write_index(self, steps: Sequence[int], records: Sequence[FrameRecord]) -> None:
         """Write the index of ``steps`` (one Zarr call per field and run of consecutive slots).
         One writer only: a chunk holds the index of :data:`INDEX_CHUNK_FRAMES` frames."""
+        self._complete_index.clear()
         for camera, positions, slots in self._runs(steps):
             index = group_at(self._group, f"index/{camera}")
             chosen = [records[position] for position in positions]
@@ -491,7 +496,18 @@ class CaptureStore:
         chunk per frame, so reading fewer is proportionally faster)."""
         group = group_at(self._group, f"index/{camera}")
         names = list(group.array_keys()) if fields is None else list(fields)
-        return {name: self._read(array_at(group, name)) for name in names}
+        return {name: self._index_field(group, camera, name) for name in names}
+
+    def _index_field(self, group: zarr.Group, camera: str, name: str) -> np.ndarray:
+        """One field of ``camera``'s index; read once while the store is complete (a copy each
+        time: the caller may change it)."""
+        kept = self._complete_index.get((camera, name))
+        if kept is None:
+            kept = self._read(array_at(group, name))
+            if not self.complete:
+                return kept
+            self._complete_index[camera, name] = kept
+        return kept.copy()
 
     def read_frames(self, camera: str, slots: Sequence[int] | np.ndarray) -> np.ndarray:
         """The frames ``(n, H, W)`` of ``camera`` at ``slots``; a frame whose chunk is missing
