@@ -98,6 +98,28 @@ def test_redoing_a_step_overwrites_instead_of_duplicating(tmp_path):
     assert [int(frame.max()) for frame in store.frames("k4")] == [1, 3]
 
 
+def test_a_complete_stores_index_is_read_once_and_handed_out_as_copies(tmp_path, monkeypatch):
+    """Calibrations select frames by their index many times over; a complete store reads each
+    field once. Each caller gets its own copy, and writing the index again is read again."""
+    store = _new(tmp_path)
+    for step, camera in enumerate(step["camera"] for step in PLAN):
+        store.write_frame(step, _frame(CAMERAS[camera], step), FrameRecord("sample", 0.1, 2.0))
+        store.mark_done(step)
+    assert store.complete
+    reads = []
+    read = CaptureStore._read
+    monkeypatch.setattr(
+        CaptureStore, "_read", lambda self, array: reads.append(1) or read(self, array)
+    )
+    first = store.index("k4", ["kind", "exposure_s"])
+    first["exposure_s"][:] = -1.0  # the caller's copy
+    second = store.index("k4", ["kind", "exposure_s"])
+    assert len(reads) == 2 and second["exposure_s"].tolist() == [0.1, 0.1]
+    store.write_frame(2, _frame((8, 6), 9), FrameRecord("dark", 0.5, 3.0))
+    assert store.index("k4", ["exposure_s"])["exposure_s"].tolist() == [0.1, 0.5]
+    assert len(reads) == 3
+
+
 def test_bad_input_is_refused_and_nothing_is_overwritten(tmp_path):
     store = _new(tmp_path)
     store.write_frame(0, _frame((8, 6), 9), FrameRecord("dark", 0.1, 1.0))
