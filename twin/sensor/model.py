@@ -290,47 +290,69 @@ class Sensor:
 
     # -- fixed patterns ----------------------------------------------------------------------
 
-    @cached_property
-    def _fixed_pattern(self) -> dict[str, np.ndarray]:
-        """PRNU, DSNU (with hot pixels), the transfer gradient, the per-pixel offsets and the
-        defect pixels of the window (the sensor's top-left ``height x width`` pixels).
+    def _pattern_generator(self, pattern: int) -> np.random.Generator:
+        """The generator of fixed pattern ``pattern`` (0 PRNU, 1 DSNU, 2 hot pixels, 3 offsets,
+        4 defect pixels) of the window (the sensor's top-left ``height x width`` pixels).
 
         Each pattern is drawn from its own generator, seeded by the camera serial: the same
         serial always has the same patterns, as a real camera does. A generator fills the
         window's rows at the sensor's full width, row by row, so a pixel's values do not depend
         on the window, and a small window of a large sensor costs a small draw (the whole
         2448 x 2048 sensor's patterns took 0.5 s for every camera made). A camera without
-        offsets or defects has the same other patterns as with them.
+        offsets or defects has the same other patterns as with them. Each pattern is drawn when
+        first used (the ``cached_property`` below): the dark signal alone needs neither the PRNU
+        nor the offsets.
         """
-        pattern = self.config.fixed_pattern
         seeds = np.random.SeedSequence(zlib.crc32(self.config.serial.encode())).spawn(5)
-        photo, dark, hot_pixels, offsets, defect_pixels = (np.random.default_rng(s) for s in seeds)
-        rows = (self.height, self.config.width)
-        columns = slice(0, self.width)
-        photo_response = 1 + pattern.prnu_sigma * photo.standard_normal(rows, np.float32)
+        return np.random.default_rng(seeds[pattern])
+
+    @property
+    def _pattern_rows(self) -> tuple[int, int]:
+        """The shape a pattern is drawn in: the window's rows at the sensor's full width."""
+        return self.height, self.config.width
+
+    @cached_property
+    def _photo_response(self) -> np.ndarray:
+        prnu = self.config.fixed_pattern.prnu_sigma
+        draw = self._pattern_generator(0).standard_normal(self._pattern_rows, np.float32)
+        return np.clip(1 + prnu * draw[:, : self.width], 0, None)
+
+    @cached_property
+    def _dark_factor(self) -> np.ndarray:
+        pattern = self.config.fixed_pattern
         # Log-normal with unit mean: the mean dark current stays the configured one.
         sigma = pattern.dsnu_sigma
-        dark_factor = np.exp(sigma * dark.standard_normal(rows, np.float32) - sigma**2 / 2)
-        hot = hot_pixels.random(rows, np.float32) < pattern.hot_pixel_fraction
-        dark_factor[hot] *= pattern.hot_pixel_factor
+        draw = self._pattern_generator(1).standard_normal(self._pattern_rows, np.float32)
+        dark_factor = np.exp(sigma * draw - sigma**2 / 2)
+        hot = self._pattern_generator(2).random(self._pattern_rows, np.float32)
+        dark_factor[hot < pattern.hot_pixel_fraction] *= pattern.hot_pixel_factor
+        return dark_factor[:, : self.width].astype(np.float32)
+
+    @cached_property
+    def _transfer_e(self) -> np.ndarray:
         row_index = np.arange(self.height, dtype=np.float32)[:, None]
-        transfer = pattern.transfer_dark_e * row_index / max(self.config.height - 1, 1)
+        return (
+            self.config.fixed_pattern.transfer_dark_e * row_index / max(self.config.height - 1, 1)
+        )
+
+    @cached_property
+    def _offsets_and_defects(self) -> tuple[np.ndarray, np.ndarray]:
+        pattern = self.config.fixed_pattern
+        rows = self._pattern_rows
         if pattern.offset_sigma_dn > 0:
-            offset = pattern.offset_sigma_dn * offsets.standard_normal(rows, np.float32)
+            offset = pattern.offset_sigma_dn * self._pattern_generator(3).standard_normal(
+                rows, np.float32
+            )
         else:
             offset = np.zeros((self.height, 1), np.float32)  # broadcasts over columns
         defects = np.zeros((self.height, 1), bool)  # broadcasts over columns
         if pattern.defect_pixel_fraction > 0:
-            defects = defect_pixels.random(rows, np.float32) < pattern.defect_pixel_fraction
+            draw = self._pattern_generator(4).random(rows, np.float32)
+            defects = draw < pattern.defect_pixel_fraction
             offset = np.broadcast_to(offset, rows).copy()
             offset[defects] += np.float32(pattern.defect_offset_dn)
-        return {
-            "photo_response": np.clip(photo_response[:, columns], 0, None),
-            "dark_factor": dark_factor[:, columns].astype(np.float32),
-            "transfer_e": transfer,
-            "offset_dn": offset[:, columns] + np.float32(self.config.adc_offset_dn),
-            "defects": defects[:, columns],
-        }
+        columns = slice(0, self.width)
+        return offset[:, columns] + np.float32(self.config.adc_offset_dn), defects[:, columns]
 
     @cached_property
     def _mosaic_index(self) -> np.ndarray:
@@ -343,15 +365,12 @@ class Sensor:
     def defect_pixels(self) -> np.ndarray:
         """``(H, W)`` bool: the defect pixels (``defect_pixel_fraction``), whose offset is
         ``defect_offset_dn`` higher at every exposure."""
-        return np.broadcast_to(self._fixed_pattern["defects"], (self.height, self.width))
+        return np.broadcast_to(self._offsets_and_defects[1], (self.height, self.width))
 
     def mean_dark_electrons(self, exposure_s: float) -> np.ndarray:
         """Expected dark electrons per pixel, ``(H, W)``: dark current x time x DSNU + transfer."""
         self.check_exposure(exposure_s)
-        pattern = self._fixed_pattern
-        return (
-            self.dark_current_e_per_s * exposure_s * pattern["dark_factor"] + pattern["transfer_e"]
-        )
+        return self.dark_current_e_per_s * exposure_s * self._dark_factor + self._transfer_e
 
     # -- capture -----------------------------------------------------------------------------
 
@@ -377,7 +396,7 @@ class Sensor:
         )
         if self.is_colour:  # each pixel's own channel (mosaic_channels), by a cached index
             electrons = np.take(electrons.reshape(-1), self._mosaic_index)
-        mean = np.multiply(electrons, self._fixed_pattern["photo_response"], dtype=np.float32)
+        mean = np.multiply(electrons, self._photo_response, dtype=np.float32)
         mean += self.mean_dark_electrons(exposure_s)
         blocks = np.array_split(np.arange(self.height), _ROW_BLOCKS)
         generators = rng.spawn(_ROW_BLOCKS)
@@ -386,7 +405,7 @@ class Sensor:
         def convert(block: int) -> None:
             rows = slice(blocks[block][0], blocks[block][-1] + 1) if blocks[block].size else None
             if rows is not None:
-                offset_dn = self._fixed_pattern["offset_dn"][rows]
+                offset_dn = self._offsets_and_defects[0][rows]
                 frame[rows] = self._digitize(mean[rows], offset_dn, generators[block])
 
         if self.height * self.width < _POOL_MIN_PIXELS:

@@ -166,9 +166,12 @@ def test_a_window_sees_the_sensors_fixed_patterns_whatever_its_size():
     holds the top-left pixels' values of a larger one, the same serial gives them again, and
     another serial other ones."""
     small, large = Sensor("svs_vistek_4022", roi=(16, 24)), Sensor("svs_vistek_4022")
-    for name in ("photo_response", "dark_factor", "offset_dn"):
-        window = large._fixed_pattern[name][:16, :24]
-        np.testing.assert_array_equal(small._fixed_pattern[name], window)
+    for pattern in (
+        lambda sensor: sensor._photo_response,
+        lambda sensor: sensor._dark_factor,
+        lambda sensor: sensor._offsets_and_defects[0],
+    ):
+        np.testing.assert_array_equal(pattern(small), pattern(large)[:16, :24])
     np.testing.assert_array_equal(small.defect_pixels(), large.defect_pixels()[:16, :24])
     again = Sensor("svs_vistek_4022", roi=(16, 24))
     np.testing.assert_array_equal(again.mean_dark_electrons(1.0), small.mean_dark_electrons(1.0))
