@@ -303,8 +303,12 @@ class Sensor:
         first used (the ``cached_property`` below): the dark signal alone needs neither the PRNU
         nor the offsets.
         """
-        seeds = np.random.SeedSequence(zlib.crc32(self.config.serial.encode())).spawn(5)
-        return np.random.default_rng(seeds[pattern])
+        return np.random.default_rng(self._pattern_seeds[pattern])
+
+    @cached_property
+    def _pattern_seeds(self) -> list[np.random.SeedSequence]:
+        """The seeds of the five patterns' generators, spawned from the camera serial."""
+        return np.random.SeedSequence(zlib.crc32(self.config.serial.encode())).spawn(5)
 
     @property
     def _pattern_rows(self) -> tuple[int, int]:
