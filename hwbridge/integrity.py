@@ -10,7 +10,8 @@ chunks before its flag. Two kinds of damage escape Zarr on its own:
   the bytes still decompress, into wrong numbers.
 
 So every array these stores create ends its codec chain with the ``crc32c`` codec, after Zstd
-(:func:`checksummed_compressors`): a chunk altered on disk raises on read instead of decoding.
+(:func:`checksummed_compressors`) or alone for the small per-unit arrays (index fields, flags:
+:func:`checksum_only`): a chunk altered on disk raises on read instead of decoding.
 :class:`ChunkChecker` checks a unit's chunks without decompressing them (the checksum covers the
 compressed bytes): the chunk file must exist and, where the array has checksums, its last four
 bytes must be the CRC-32C of the rest. Arrays made before checksums are checked by decoding
@@ -58,6 +59,7 @@ __all__ = [
     "SEAL_DTYPE",
     "Seal",
     "array_at",
+    "checksum_only",
     "checksum_state",
     "checksummed_compressors",
     "chunk_key",
@@ -80,6 +82,14 @@ def checksummed_compressors(level: int = 0) -> tuple[ZstdCodec, Crc32cCodec]:
     3), then CRC-32C over the compressed bytes
     (``create_array(..., compressors=checksummed_compressors())``)."""
     return ZstdCodec(level=level, checksum=False), Crc32cCodec()
+
+
+def checksum_only() -> tuple[Crc32cCodec]:
+    """The bytes-to-bytes codecs of the small per-unit arrays (index fields, progress and
+    written flags): CRC-32C alone. A chunk of a few bytes does not compress (Zstd's frame
+    header is longer than a flag), and Zstd's codec hands every chunk to a thread, which cost
+    more than the chunk's read or write (BENCHMARKS.md, "Capture store I/O")."""
+    return (Crc32cCodec(),)
 
 
 def array_at(group: zarr.Group, key: str) -> zarr.Array[Any]:

@@ -79,6 +79,7 @@ from hwbridge.integrity import (
     IntegrityReport,
     Seal,
     array_at,
+    checksum_only,
     checksum_state,
     checksummed_compressors,
     chunk_key,
@@ -90,6 +91,7 @@ from hwbridge.integrity import (
     stored_arrays,
     with_empty_chunks,
 )
+from hwbridge.local_store import open_local_group
 from hwbridge.schema import (
     FRAME_KINDS,
     NO_LIGHT,
@@ -172,6 +174,8 @@ class CaptureStore:
         # selects frames by kind and band a dozen times, and a real capture's index holds one
         # chunk per frame and field, so each read touches every frame's chunk.
         self._complete_index: dict[tuple[str, str], np.ndarray] = {}
+        # The arrays as opened, by key (their metadata read once; chunks are read on access).
+        self._arrays: dict[str, zarr.Array[Any]] = {}
 
     @classmethod
     def create(
@@ -224,7 +228,7 @@ class CaptureStore:
         # progress exist: a session killed while creating leaves no half-made store behind.
         building = path.with_name(f".{path.name}.creating")
         shutil.rmtree(building, ignore_errors=True)
-        group = zarr.open_group(str(building), mode="w-", zarr_format=3)
+        group = open_local_group(building, mode="w-", zarr_format=3)
         per_chunk = INDEX_CHUNK_FRAMES if backend == "sim" else 1
         frame_level = _SIMULATED_FRAME_LEVEL if backend == "sim" else 0
         for camera, (height, width) in cameras.items():
@@ -245,7 +249,7 @@ class CaptureStore:
                     chunks=(block,),
                     dtype=str,
                     fill_value="",
-                    compressors=checksummed_compressors(),
+                    compressors=checksum_only(),
                 )
             for name, dtype in _NUMERIC_FIELDS.items():
                 fill = -1 if dtype.startswith("int") else np.nan
@@ -255,7 +259,7 @@ class CaptureStore:
                     chunks=(block,),
                     dtype=dtype,
                     fill_value=fill,
-                    compressors=checksummed_compressors(),
+                    compressors=checksum_only(),
                 )
             group.create_array(
                 f"{index}/seal",
@@ -263,7 +267,7 @@ class CaptureStore:
                 chunks=(block,),
                 dtype=SEAL_DTYPE,
                 fill_value=0,
-                compressors=checksummed_compressors(),
+                compressors=checksum_only(),
             )
             group.create_array(
                 f"{index}/pose",
@@ -271,7 +275,7 @@ class CaptureStore:
                 chunks=(block, 6),
                 dtype="float64",
                 fill_value=np.nan,
-                compressors=checksummed_compressors(),
+                compressors=checksum_only(),
             )
             if monitor_samples:
                 group.create_array(
@@ -280,7 +284,7 @@ class CaptureStore:
                     chunks=(block, monitor_samples),
                     dtype="float32",
                     fill_value=np.nan,
-                    compressors=checksummed_compressors(),
+                    compressors=checksum_only(),
                 )
         group.create_array(
             "progress",
@@ -288,7 +292,7 @@ class CaptureStore:
             chunks=(min(len(plan), per_chunk),),
             dtype="bool",
             fill_value=False,
-            compressors=checksummed_compressors(),
+            compressors=checksum_only(),
         )
         # The attributes last and in one write: the plan of a full campaign is tens of MB of
         # JSON, which Zarr writes out again for every attribute set. A plan step keeps the
@@ -300,7 +304,7 @@ class CaptureStore:
         )
         group.update_attributes(stored)
         building.rename(path)
-        return cls(zarr.open_group(str(path), mode="r+"), path)
+        return cls(open_local_group(path, mode="r+"), path)
 
     @classmethod
     def open(cls, path: str | Path) -> CaptureStore:
@@ -316,7 +320,7 @@ class CaptureStore:
                 "is gone, so no frame can be placed; restore the store from a copy or capture again"
             )
         try:
-            group = zarr.open_group(str(path), mode="r+")
+            group = open_local_group(path, mode="r+")
         except (OSError, ValueError) as error:
             raise InputError(f"{path} is not a capture store (not a Zarr group: {error})") from None
         if "plan" not in group.attrs:
@@ -365,7 +369,7 @@ class CaptureStore:
         consecutive slots of one camera is one Zarr call, which writes its chunks concurrently.
         Frames have one chunk each, so writers of disjoint steps never share a chunk."""
         for camera, positions, slots in self._runs(steps):
-            array = array_at(self._group, f"frames/{camera}")
+            array = self.frames(camera)
             stack = np.stack([np.asarray(frames[position]) for position in positions])
             if stack.shape[1:] != array.shape[1:] or stack.dtype != np.uint16:
                 raise InputError(
@@ -379,15 +383,15 @@ class CaptureStore:
         One writer only: a chunk holds the index of :data:`INDEX_CHUNK_FRAMES` frames."""
         self._complete_index.clear()
         for camera, positions, slots in self._runs(steps):
-            index = group_at(self._group, f"index/{camera}")
+            index = f"index/{camera}"
             chosen = [records[position] for position in positions]
             for name in (*_STRING_FIELDS, *_NUMERIC_FIELDS):
                 values = np.array([getattr(record, name) for record in chosen])
-                array_at(index, name)[slots] = values
+                self._array(f"{index}/{name}")[slots] = values
             poses = np.array([record.pose for record in chosen], np.float64)
-            array_at(index, "pose")[slots] = poses
+            self._array(f"{index}/pose")[slots] = poses
             frames = self.frames(camera)
-            array_at(index, "seal")[slots] = np.array(
+            self._array(f"{index}/seal")[slots] = np.array(
                 [
                     self._seal.chunk_on_disk(self.path, frames, (slot, 0, 0))
                     for slot in range(slots.start, slots.stop)
@@ -397,10 +401,13 @@ class CaptureStore:
             monitored = [i for i, record in enumerate(chosen) if record.lamp_monitor is not None]
             if not monitored:
                 continue
-            if "lamp_monitor" not in index:
-                raise InputError("lamp_monitor: this store was created without monitor samples")
+            try:
+                lamp_monitor = self._array(f"{index}/lamp_monitor")
+            except KeyError:
+                raise InputError(
+                    "lamp_monitor: this store was created without monitor samples"
+                ) from None
             spectra = np.array([chosen[i].lamp_monitor for i in monitored], np.float32)
-            lamp_monitor = array_at(index, "lamp_monitor")
             if len(monitored) == slots.stop - slots.start:
                 lamp_monitor[slots] = spectra
             else:
@@ -438,7 +445,7 @@ class CaptureStore:
             self._camera_and_slot(step)
         flags = np.ones(len(steps), bool)
         ordered = sorted(steps)
-        progress = array_at(self._group, "progress")
+        progress = self._array("progress")
         if ordered and ordered == list(range(ordered[0], ordered[-1] + 1)):
             progress[ordered[0] : ordered[-1] + 1] = flags
         elif steps:
@@ -489,21 +496,23 @@ class CaptureStore:
         return parse(model, self._group.attrs.get("rig"), f"{self.path}: rig attribute")
 
     def frames(self, camera: str) -> zarr.Array[Any]:
-        return array_at(self._group, f"frames/{camera}")
+        return self._array(f"frames/{camera}")
 
     def index(self, camera: str, fields: Sequence[str] | None = None) -> dict[str, np.ndarray]:
         """The index of ``camera``'s frames: every field, or only ``fields`` (each field is one
         chunk per frame, so reading fewer is proportionally faster)."""
-        group = group_at(self._group, f"index/{camera}")
-        names = list(group.array_keys()) if fields is None else list(fields)
-        return {name: self._index_field(group, camera, name) for name in names}
+        if fields is None:
+            names = list(group_at(self._group, f"index/{camera}").array_keys())
+        else:
+            names = list(fields)
+        return {name: self._index_field(camera, name) for name in names}
 
-    def _index_field(self, group: zarr.Group, camera: str, name: str) -> np.ndarray:
+    def _index_field(self, camera: str, name: str) -> np.ndarray:
         """One field of ``camera``'s index; read once while the store is complete (a copy each
         time: the caller may change it)."""
         kept = self._complete_index.get((camera, name))
         if kept is None:
-            kept = self._read(array_at(group, name))
+            kept = self._read(self._array(f"index/{camera}/{name}"))
             if not self.complete:
                 return kept
             self._complete_index[camera, name] = kept
@@ -658,7 +667,7 @@ class CaptureStore:
     def _seals(self, camera: str, slots: np.ndarray | None = None) -> np.ndarray:
         """The seals of ``camera``'s frames at ``slots`` (all: ``None``); 0 where none is
         recorded, and everywhere when they cannot be read (:meth:`check` names the chunk)."""
-        seal = array_at(self._group, f"index/{camera}/seal")
+        seal = self._array(f"index/{camera}/seal")
         try:
             values = seal[:] if slots is None else seal.get_orthogonal_selection(slots)
             return np.asarray(values, np.uint64)
@@ -671,13 +680,21 @@ class CaptureStore:
 
     def _flags(self) -> np.ndarray:
         """The progress flags; a corrupt flag chunk raises, naming it."""
-        progress = array_at(self._group, "progress")
+        progress = self._array("progress")
         try:
             return np.asarray(progress[:], dtype=bool)
         except (ValueError, RuntimeError) as error:
             _, problems = read_flags(ChunkChecker(self.path), progress, self._step_name)
             first = problems[0] if problems else f"progress cannot be read ({error})"
             raise DamagedDataError(f"{self.path}: damaged capture store: {first}") from None
+
+    def _array(self, key: str) -> zarr.Array[Any]:
+        """The array at ``key``, opened once per store object: an open is a metadata read, and
+        a capture writes and reads each step through a dozen arrays."""
+        array = self._arrays.get(key)
+        if array is None:
+            array = self._arrays[key] = array_at(self._group, key)
+        return array
 
     def _read(self, array: zarr.Array[Any]) -> np.ndarray:
         try:

@@ -80,8 +80,8 @@ HWBRIDGE_LAYERS = (
             "recon/calibration/gonio.py",
             "import hwbridge.session",
             "recon reads capture stores: of hwbridge it imports the store, its metadata models, "
-            "its integrity checks, the dome's store layout and (recon.errors) the errors, "
-            "nothing else",
+            "its integrity checks and local file store, the dome's store layout and "
+            "(recon.errors) the errors, nothing else",
         ),
         ("hwbridge/store.py", "import hwbridge.drivers", HWBRIDGE_LAYERS),
         ("recon/emva/fit.py", "import recon.dome", RECON_LAYERS),

@@ -69,6 +69,7 @@ from hwbridge.integrity import (
     ChunkProblem,
     IntegrityReport,
     Seal,
+    checksum_only,
     checksum_state,
     checksummed_compressors,
     chunk_key,
@@ -80,6 +81,7 @@ from hwbridge.integrity import (
     stored_arrays,
     with_empty_chunks,
 )
+from hwbridge.local_store import open_local_group
 from hwbridge.schema import parse, refuse_other_version
 from recon.btf.schema import (
     BTF_FORMAT,
@@ -189,6 +191,8 @@ class BTFStore:
         self._group = group
         self.path = path
         self.writable = writable
+        # The arrays as opened (their metadata read once; their chunks are read on each access).
+        self._arrays: dict[str, zarr.Array[Any]] = {}
         attrs = group.attrs
         if attrs.get("format") != BTF_FORMAT:
             raise InputError(
@@ -338,7 +342,7 @@ class BTFStore:
         )
         n_pairs, n_bands = light_dirs.shape[0], grid.size
 
-        group = zarr.open_group(str(path), mode="w-", zarr_format=3)
+        group = open_local_group(path, mode="w-", zarr_format=3)
         group.attrs.update(attrs.model_dump(mode="json", exclude_unset=True))
         group.create_array(
             "reflectance",
@@ -374,7 +378,7 @@ class BTFStore:
             dtype="float64",
             fill_value=np.nan,
             attributes={"units": "px", "meaning": "registered image corners of the texture square"},
-            compressors=checksummed_compressors(),
+            compressors=checksum_only(),
         )
         # Created last: a store whose creation was interrupted lacks it and does not open. A
         # pair's flag is the seal of its reflectance chunk (0: pending).
@@ -384,7 +388,7 @@ class BTFStore:
             chunks=(1,),
             dtype=SEAL_DTYPE,
             fill_value=0,
-            compressors=checksummed_compressors(),
+            compressors=checksum_only(),
         )
         stored = attrs.model_dump(mode="json", exclude_unset=True)
         settings = _sealed_settings(stored, light_dirs, view_dirs, grid.wavelengths_nm)
@@ -410,7 +414,7 @@ class BTFStore:
                 "calibration, complete) is gone; process the capture again"
             )
         try:
-            group = zarr.open_group(str(path), mode="r+" if writable else "r", zarr_format=3)
+            group = open_local_group(path, mode="r+" if writable else "r", zarr_format=3)
         except (OSError, ValueError, TypeError) as error:
             raise InputError(
                 f"{path}: not a BTF store (not a Zarr v3 group: {error})", remedy=Remedy.process
@@ -829,7 +833,12 @@ class BTFStore:
         return f"pair {pair}"
 
     def _array(self, name: str) -> zarr.Array[Any]:
-        return _array_in(self._group, name, self.path)
+        """The array ``name``, opened once per store object: an open is a metadata read, and a
+        rendering reads each texture through several arrays."""
+        array = self._arrays.get(name)
+        if array is None:
+            array = self._arrays[name] = _array_in(self._group, name, self.path)
+        return array
 
     def _compressed_group(self) -> zarr.Group:
         group = self._group[COMPRESSED_GROUP]
@@ -913,7 +922,7 @@ class BTFStore:
 
     def _fresh_attrs(self) -> Mapping[str, Any]:
         """The group's attributes re-read from disk (another writer may have changed them)."""
-        return zarr.open_group(str(self.path), mode="r", zarr_format=3).attrs
+        return open_local_group(self.path, mode="r", zarr_format=3).attrs
 
     def _set_complete(self, value: bool) -> None:
         self._group.attrs["complete"] = bool(value)

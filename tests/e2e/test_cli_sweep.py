@@ -1,6 +1,7 @@
 """``spectwin sweep`` end to end at tiny size: the table, the front and the page; a sweep killed
 (SIGKILL to its process group) at three seeded random moments within its points and continued
-ends with the uninterrupted sweep's table, and no point is finished twice."""
+ends with the uninterrupted sweep's table, and no point is finished twice. A dome sweep on a
+cluster's workers: tests/twin/devices/test_cluster.py."""
 
 from __future__ import annotations
 
@@ -30,11 +31,6 @@ TINY = {
 # Measures that are the same whenever the same design is run: everything but the wall time and
 # the compressed size of the stores (their index holds wall-clock timestamps).
 _TIMING = ("point_s", "storage_mb")
-# The dome sweep's renders at 4 samples per pixel (the capture's 16 by default; fewer render 4
-# as well, twin.render.spectra.rendered_spp), of one RGB camera: errors 11.4 and 7.8 % (10.4 and
-# 7.5 % at 16 spp; 22.9 and 21.7 % with two RGB cameras, which take half as much CPU time again).
-SPP_DOME = 4
-RGB_CAMERAS_DOME = 1
 
 
 def _start(sweep: Path, out: Path, *extra: str) -> subprocess.Popen:
@@ -156,39 +152,3 @@ def test_a_sweep_killed_three_times_resumes_to_the_uninterrupted_table(uninterru
     # The kills did cut points short: some point was started more than once.
     starts = _counts(out, "started")
     assert sum(starts.values()) > len(starts)
-
-
-def test_a_dome_sweep_of_t_base_doubles_the_spectral_exposure(tmp_path):
-    """Two dome designs that differ only in the weakest band's exposure, run on a LocalCluster of
-    two workers: t_lambda = t_base / sqrt(E L) (thesis 10.4) doubles every band exposure with
-    t_base, the RGB sets stay."""
-    sweep = tmp_path / "dome.yaml"
-    sweep.write_text(
-        yaml.safe_dump(
-            {
-                "name": "tiny dome t_base sweep",
-                "rig": "dome",
-                "plan": {
-                    "stage_positions": 1,
-                    "leds": 4,
-                    "rgb_cameras": RGB_CAMERAS_DOME,
-                    "texels": 32,
-                    "spp": SPP_DOME,
-                    "dark_frames": 4,
-                    "schedule_images": 4,
-                },
-                "parameters": {"plan.longest_band_s": [2.0, 4.0]},
-            },
-            sort_keys=False,
-        )
-    )
-    process = _start(sweep, tmp_path / "out", "--workers", "2")  # as Dask tasks on 2 workers
-    stdout, stderr = process.communicate(timeout=600)
-    assert process.returncode == 0, stderr
-    assert json.loads(stdout)["workers"] == 2
-    short, long = (row["measures"] for row in json.loads((tmp_path / "out/table.json").read_text()))
-    assert long["spectral_exposure_h"] / short["spectral_exposure_h"] == pytest.approx(2, rel=1e-6)
-    assert long["rgb_exposure_h"] == short["rgb_exposure_h"]
-    assert long["capture_time_h"] > short["capture_time_h"]
-    for measures in (short, long):
-        assert measures["pairs"] == 4 * RGB_CAMERAS_DOME and 0 < measures["error_pct"] < 30
