@@ -181,7 +181,9 @@ def test_the_light_from_a_mirror_sphere(inputs, tmp_path):
     assert "mirror sphere" in metrics["environment_note"]
 
 
-@pytest.mark.parametrize("material", ["lego", "wallpaper", "red_fabric", "colorchecker16"])
+# The Lego bricks (relief: shading and occlusion in the photograph) and the colour chart (flat,
+# and its per-field figures); the flat wallpaper and red fabric go through the chart's steps.
+@pytest.mark.parametrize("material", ["lego", "colorchecker16"])
 def test_the_file_path_gives_the_twin_paths_delta_e(inputs, tmp_path, material):
     store = _store(
         tmp_path / f"{material}.btf.zarr",
