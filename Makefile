@@ -8,6 +8,11 @@ bootstrap:
 demo: bootstrap
 	$(VENV_BIN)/spectwin demo --out out/demo
 
+# The suite's processes (workers, commands, notebook kernels: about 150 that import the
+# packages) keep Python's bytecode caches even where the environment turns them off
+# (PYTHONDONTWRITEBYTECODE=1, as in many container images): compiled once, not in every process.
+test test-fast: export PYTHONDONTWRITEBYTECODE :=
+
 # The suite on every core (test files spread over worker processes), the 20 slowest shown.
 test: bootstrap
 	$(VENV_BIN)/python -m pytest -q -n auto --dist loadfile --durations=20
