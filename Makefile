@@ -13,9 +13,10 @@ demo: bootstrap
 # (PYTHONDONTWRITEBYTECODE=1, as in many container images): compiled once, not in every process.
 test test-fast: export PYTHONDONTWRITEBYTECODE :=
 
-# The suite on every core (test files spread over worker processes), the 20 slowest shown.
+# The suite on every core (test files spread over worker processes in the order collected: the
+# rendering files first, conftest.py), the 20 slowest shown.
 test: bootstrap
-	$(VENV_BIN)/python -m pytest -q -n auto --dist loadfile --durations=20
+	$(VENV_BIN)/python -m pytest -q -n auto --dist loadfile --no-loadscope-reorder --durations=20
 
 # The inner loop: the libraries' unit tests and the architecture and error checks, no renders.
 test-fast: bootstrap

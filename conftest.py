@@ -30,6 +30,45 @@ def pytest_configure(config: pytest.Config) -> None:
     _share_the_cores()
 
 
+FILE_SECONDS_KEY = "spectwin/file_seconds"
+"""pytest's cache entry: each test file's seconds (setup, call, teardown) in the last run."""
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """The longest test files first, each file's tests together and in their order: spread over
+    the workers file by file in this order (``make test``), the long files start early and the
+    short ones fill in at the end, so that the workers finish together. The lengths are those of
+    the last run (pytest's cache); without them, the files that render (``render`` mark) first.
+    """
+    cache = getattr(config, "cache", None)  # None with -p no:cacheprovider
+    seconds: dict[str, float] = cache.get(FILE_SECONDS_KEY, {}) if cache else {}
+    rendering = {item.path for item in items if item.get_closest_marker("render")}
+
+    def longest_first(item: pytest.Item) -> tuple[float, bool]:
+        return -seconds.get(item.nodeid.partition("::")[0], 0.0), item.path not in rendering
+
+    items.sort(key=longest_first)
+
+
+def pytest_runtest_logreport(report: pytest.TestReport) -> None:
+    """Each test file's seconds, for the next run's order (the controlling process sees the
+    reports of every worker)."""
+    file = report.nodeid.partition("::")[0]
+    _FILE_SECONDS[file] = _FILE_SECONDS.get(file, 0.0) + report.duration
+
+
+_FILE_SECONDS: dict[str, float] = {}
+
+
+def pytest_sessionfinish(session: pytest.Session) -> None:
+    """The seconds of the files run, kept for the next run with those of the others."""
+    cache = getattr(session.config, "cache", None)
+    if cache is None or hasattr(session.config, "workerinput") or not _FILE_SECONDS:
+        return
+    known: dict[str, float] = cache.get(FILE_SECONDS_KEY, {})
+    cache.set(FILE_SECONDS_KEY, known | {file: round(s, 2) for file, s in _FILE_SECONDS.items()})
+
+
 def pytest_sessionstart(session: pytest.Session) -> None:
     """The old sessions' temporary folders removed while this session runs
     (:func:`_remove_old_temporary_folders`)."""
