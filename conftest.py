@@ -90,6 +90,8 @@ def _remove_old_temporary_folders(config: pytest.Config) -> None:
     if factory is None or config.getini("tmp_path_retention_policy") == "none":
         return
     current = factory.getbasetemp()
+    if not current.name.rpartition("-")[2].isdigit():
+        return
     keep = int(config.getini("tmp_path_retention_count"))
     root, number = current.parent, int(current.name.rpartition("-")[2])
     old = [
@@ -102,7 +104,10 @@ def _remove_old_temporary_folders(config: pytest.Config) -> None:
     doomed: list[Path] = list(root.glob(".removing-*"))  # left by a session stopped early
     for folder in old:
         target = root / f".removing-{folder.name}-{uuid.uuid4().hex[:8]}"
-        folder.rename(target)
+        try:
+            folder.rename(target)
+        except OSError:  # moved or removed by another session starting at the same time
+            continue
         doomed.append(target)
     if doomed:
         subprocess.Popen(
