@@ -8,13 +8,14 @@ bootstrap:
 demo: bootstrap
 	$(VENV_BIN)/spectwin demo --out out/demo
 
-# The suite's processes (workers, commands, notebook kernels: about 150 that import the
+# The suite's processes (workers, commands, notebook kernels, Dask workers: each imports the
 # packages) keep Python's bytecode caches even where the environment turns them off
-# (PYTHONDONTWRITEBYTECODE=1, as in many container images): compiled once, not in every process.
+# (PYTHONDONTWRITEBYTECODE=1, as in many container images): compiled once, not in every process
+# (the suite's collection 15.6 s without them, 8.5 s with them; BENCHMARKS.md, "The test suite").
 test test-fast: export PYTHONDONTWRITEBYTECODE :=
 
 # The suite on every core (test files spread over worker processes in the order collected: the
-# rendering files first, conftest.py), the 20 slowest shown.
+# longest first, conftest.py), the 20 slowest shown.
 test: bootstrap
 	$(VENV_BIN)/python -m pytest -q -n auto --dist loadfile --no-loadscope-reorder --durations=20
 
