@@ -36,6 +36,9 @@ batches (:meth:`CaptureStore.write_index`, :meth:`CaptureStore.mark_done`): Zarr
 millisecond on every chunk it writes, which one chunk per frame and field made the largest cost
 of a small simulated frame. Stores made before hold the index and the flags in one chunk per
 frame (or ``kind`` and ``status`` in one chunk per camera); they are read and resumed alike.
+The stores open their groups through :mod:`hwbridge.local_store` (small files read and written
+without a thread hand-over), and the index fields and flags carry a checksum but no Zstd (a few
+bytes per chunk do not compress); stores made before keep Zstd there and read alike.
 
 A step's frame slot is fixed by the plan, so redoing a step after a crash overwrites the same
 slot: an interrupted session resumes without losing or duplicating a frame, and ``complete``
