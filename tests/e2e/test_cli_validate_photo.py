@@ -90,6 +90,7 @@ def inputs(tmp_path_factory) -> Path:
     square = polygon_mask(exact, WIDTH, HEIGHT)
     photograph = np.where(square[..., None], 0.5 * SKY_SRGB, SKY_SRGB)
     write_rgb_exr(root / "photo.exr", photograph)
+    write_rgb_exr(root / "black.exr", np.zeros_like(photograph))  # no exposure fits it
     (root / "corners.txt").write_text(";".join(f"{x!r},{y!r}" for x, y in exact))
     grey = np.ones(DEFAULT_GRID.size)
     _store(root / "grey50.btf.zarr", 0.5 * grey, "user_sample")
@@ -272,6 +273,7 @@ BAD = {
     ),
     "two lights": (("--mirror-sphere", "{inputs}/sphere.exr"), "one light"),
     "negative exposure": (("--exposure", "-1"), "expected a positive factor"),
+    "black photograph": (("--photo", "{inputs}/black.exr"), "the fitted exposure is 0;"),
 }
 
 
