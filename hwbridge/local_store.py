@@ -15,6 +15,7 @@ instead of 33-35 (``benchmarks/store_io.py``; BENCHMARKS.md, "Capture store I/O"
 from __future__ import annotations
 
 import os
+import stat
 import uuid
 from pathlib import Path
 from typing import Any, Literal
@@ -54,10 +55,10 @@ class LocalFileStore(LocalStore):
         if byte_range is None:
             path = self.root / key
             try:
-                size = path.stat().st_size
+                found = path.stat()
             except (FileNotFoundError, NotADirectoryError):
                 return None
-            if size <= IN_PLACE_BYTES and path.is_file():
+            if found.st_size <= IN_PLACE_BYTES and stat.S_ISREG(found.st_mode):
                 if not self._is_open:
                     await self._open()
                 buffer = (prototype or default_buffer_prototype()).buffer
