@@ -58,7 +58,6 @@ from recon.dome.images import (
 from recon.dome.run import DomeRun, joint_groups, open_dome_run
 from recon.errors import InputError, Remedy
 from recon.progress import progress_steps
-from recon.registration.border import extract_texture
 from recon.scheduling.dome_schedule import FILTER_SIZE_PER_SIGMA, filter_sizes
 from recon.spectralize.solve import BandImage, reconstruct
 
@@ -243,7 +242,7 @@ class DomeProcessing:
                 )
                 if camera in (self.partner, SPECTRAL_CAMERA):
                     corners = self.registrations[camera, view].corners_xy
-                    textures[camera, view] = extract_texture(image, corners, resolution=self.texels)
+                    textures[camera, view] = self.grid(view).texture(image, corners)
         for view in self.run.views:
             self.band_shift[view] = parallax_shift(
                 textures[self.partner, view], textures[SPECTRAL_CAMERA, view]

@@ -429,10 +429,13 @@ def detect_corners(
 
 
 def extract_texture(
-    image: np.ndarray, corners_xy: np.ndarray, *, resolution: int = 256
+    image: np.ndarray, corners_xy: np.ndarray, *, resolution: int = 256, footprint: int = 1
 ) -> np.ndarray:
     """Texture of the sample area: every texel of ``[0, 1]^2`` mapped to the frame with
-    :math:`H^{-1}` and interpolated bilinearly.
+    :math:`H^{-1}` and interpolated bilinearly; with ``footprint`` above 1 each texel is the mean
+    of ``footprint x footprint`` such samples spread evenly over its square, the frame averaged
+    over the texel's footprint (a texel covering many pixels then takes no more of its
+    neighbours than the pixels at its border hold).
 
     Parameters
     ----------
@@ -443,6 +446,8 @@ def extract_texture(
         ``(4, 2)`` corners in texture order.
     resolution
         Texels per side (the thesis: freely chosen, at most about 800 for its frontal views).
+    footprint
+        Samples per side of each texel's square (1: its centre only).
 
     Returns
     -------
@@ -461,10 +466,22 @@ def extract_texture(
     >>> frame = np.tile(np.arange(8.0), (8, 1))  # value = column index
     >>> extract_texture(frame, np.array([[2.0, 2], [6, 2], [6, 6], [2, 6]]), resolution=4)[0]
     array([2., 3., 4., 5.])
+    >>> edge = np.repeat([[0.0] * 8 + [1.0] * 8], 16, axis=0)  # pixels 0-7 dark, 8-15 bright
+    >>> square = np.array([[3.0, 3], [11, 3], [11, 11], [3, 11]])  # texels over x 3-7, 7-11
+    >>> extract_texture(edge, square, resolution=2)[0]  # the second texel's centre is bright
+    array([0., 1.])
+    >>> extract_texture(edge, square, resolution=2, footprint=4)[0]  # a quarter of it is dark
+    array([0.  , 0.75])
     """
     array = validate_frame(image)
     if not (isinstance(resolution, (int, np.integer)) and resolution >= 1):
         raise InputError(f"resolution: expected a positive integer, got {resolution!r}")
+    if not (isinstance(footprint, (int, np.integer)) and footprint >= 1):
+        raise InputError(f"footprint: expected a positive integer, got {footprint!r}")
+    if footprint > 1:
+        fine = extract_texture(array, corners_xy, resolution=resolution * footprint)
+        blocks = fine.reshape(resolution, footprint, resolution, footprint, *fine.shape[2:])
+        return blocks.mean(axis=(1, 3))
     to_image = texture_transform(corners_xy).inverse.params
     texel_to_texture = np.array(
         [[1 / resolution, 0, 0.5 / resolution], [0, 1 / resolution, 0.5 / resolution], [0, 0, 1]]

@@ -201,6 +201,41 @@ def test_checkerboard_warped_by_a_known_homography_is_extracted_back(rng):
     assert np.isnan(outside).any() and np.isfinite(outside).any()
 
 
+def test_texel_footprint_averages_the_frame_over_each_texel():
+    """A checkerboard of 8 x 8 squares seen through a homography (about 15-19 px a square),
+    resampled to 10 x 10 texels, so that most texels straddle the squares' edges: averaged
+    over each texel's footprint (``footprint``) the texture is the board's mean over the texel
+    (the truth, from 48 x 48 points a texel in texture space), where the texel's centre alone
+    reads the square it falls in. Measured: mean absolute difference 0.004 (largest 0.020)
+    over the footprint at 8 x 8 samples, 0.154 at the centre."""
+    squares, texels = 8, 10
+    texture_to_image = np.array([[150.0, 22.0, 30.0], [-12.0, 120.0, 30.0], [0.15, -0.1, 1.0]])
+    image_to_texture = np.linalg.inv(texture_to_image)
+    supersample, height, width = 6, 200, 220
+    rows, columns = np.mgrid[0 : height * supersample, 0 : width * supersample]
+    points = np.stack([columns + 0.5, rows + 0.5, np.full(columns.shape, supersample)], axis=-1)
+    mapped = (points / supersample) @ image_to_texture.T
+    u, v = mapped[..., 0] / mapped[..., 2], mapped[..., 1] / mapped[..., 2]
+    board = ((np.floor(u * squares) + np.floor(v * squares)) % 2).astype(np.float64)
+    image = board.reshape(height, supersample, width, supersample).mean(axis=(1, 3))
+    corners = TEXTURE_CORNERS_UV @ texture_to_image[:2, :2].T + texture_to_image[:2, 2]
+    corners /= (TEXTURE_CORNERS_UV @ texture_to_image[2, :2] + 1.0)[:, None]
+    fine = (np.arange(texels * 48) + 0.5) / (texels * 48)
+    fu, fv = np.meshgrid(fine, fine)
+    truth = (
+        ((np.floor(fu * squares) + np.floor(fv * squares)) % 2)
+        .reshape(texels, 48, texels, 48)
+        .mean(axis=(1, 3))
+    )
+    centre = extract_texture(image, corners, resolution=texels)
+    averaged = extract_texture(image, corners, resolution=texels, footprint=8)
+    assert np.abs(averaged - truth).mean() < 0.01
+    assert np.abs(averaged - truth).max() < 0.05
+    assert np.abs(centre - truth).mean() > 0.1
+    with pytest.raises(InputError, match="footprint"):
+        extract_texture(image, corners, resolution=texels, footprint=0)
+
+
 def test_manual_corner_file_is_used_for_frames_detection_cannot_handle(frames, tmp_path):
     rates, truth = frames["near_frontal"]
     washed_out = np.full(rates.shape[:2], 7.0)  # e.g. Fresnel reflection: no border visible

@@ -54,6 +54,14 @@ def dome_study(
     stores_only: Annotated[
         bool, typer.Option(help="Only the dome captures' experiments (10.4.2, 10.5).")
     ] = False,
+    error_budget: Annotated[
+        bool,
+        typer.Option(
+            help="Per material, where the stores' errors come from: the reconstruction, the "
+            "cameras' sampling, noise and rendering, registration (each rung solved again; "
+            "about 4 more minutes a material at 64 texels)."
+        ),
+    ] = False,
     as_json: JsonFlag = False,
 ) -> None:
     """Exposure plan, band schedules, low-SNR calibration, virtual dome captures and their
@@ -73,6 +81,8 @@ def dome_study(
         fail(f"--texels {texels}: expected a multiple of 4")
     if analytic_only and stores_only:
         fail("--analytic-only, --stores-only: expected one of them at most")
+    if analytic_only and error_budget:
+        fail("--analytic-only, --error-budget: the error budget is the dome stores'")
     require_output_folder(out)
     chosen = tuple(dict.fromkeys(m.value for m in materials)) if materials else DOME_MATERIALS
     capture = replace(STORE_CAPTURE, leds=leds, texels=capture_texels)
@@ -96,6 +106,7 @@ def dome_study(
                 capture,
                 seed=seed,
                 step=step,
+                error_budget=error_budget,
             ),
             step=step,
         )
@@ -150,6 +161,12 @@ def _store_summary(stores: dict) -> dict[str, str]:
             )
             summary[f"{material} same view, edge-free: with / without bands ({source})"] = (
                 _same_view(result["view_fixed_shift"][source]["edge_free"])
+            )
+        if "error_budget" in result:
+            budget = result["error_budget"]
+            summary[f"{material} error budget, with / without bands"] = ", ".join(
+                f"{rung.replace('_', ' ')} {_with_without(budget[rung])}"
+                for rung in budget["rungs"]
             )
     ratio = stores["exposure_10_5"]
     summary["10.5 from the stores"] = (

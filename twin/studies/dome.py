@@ -431,6 +431,7 @@ def run_dome_study(
     if store_metrics is not None:
         metrics["stores"] = store_metrics()
         dome_figures.write_store_comparison(metrics["stores"], out / "stores_vs_analytic.png")
+        dome_figures.write_error_budget(metrics["stores"], out / "error_budget.png")
     (out / "dome_study.json").write_text(dumps(metrics))
     return metrics
 

@@ -5,7 +5,8 @@ sizes, the 10-image schedule), ``fig10_7_single_image_errors.png`` (relative err
 histograms), ``fig10_9_spectra.png`` (true, reconstructed and noisy band values of selected
 texels), ``fig10_13_multi_image.png`` (with and without spectral data),
 ``fig10_23_comparison.png`` (Dong 2016, Spectral A+), ``fig10_4_cross_check.png``,
-``exposure_vs_error.png`` (10.5) and ``stores_vs_analytic.png`` (the store path). Each figure is
+``exposure_vs_error.png`` (10.5), ``stores_vs_analytic.png`` (the store path) and
+``error_budget.png`` (where the store path's errors come from). Each figure is
 a :class:`matplotlib.figure.Figure` of its own: nothing here touches pyplot's global state.
 """
 
@@ -25,6 +26,7 @@ from twin.dome.setup import DomeSetup
 __all__ = [
     "write_comparison",
     "write_cross_check",
+    "write_error_budget",
     "write_error_histograms",
     "write_measured_spectra",
     "write_exposure_vs_error",
@@ -227,6 +229,42 @@ def write_store_comparison(stores: dict, path: Path) -> None:
         fontsize=9,
     )
     panels[0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+
+
+def write_error_budget(stores: dict, path: Path) -> None:
+    """Per material the error budget's rungs (:mod:`twin.studies.dome_budget`), mean relative
+    error with and without spectral data, next to the analytic path on the same images; no
+    figure where no material has a budget."""
+    budgets = {m: r["error_budget"] for m, r in stores["materials"].items() if "error_budget" in r}
+    if not budgets:
+        return
+    rungs = next(iter(budgets.values()))["rungs"]
+    fig = Figure(figsize=(12, 3.8))
+    panels = fig.subplots(1, 2, sharey=True)
+    width = 0.8 / (len(rungs) + 1)
+    for axis, group in zip(panels, ("with_spectral_data", "without_spectral_data"), strict=True):
+        for offset, rung in enumerate(rungs):
+            axis.bar(
+                np.arange(len(budgets)) + width * (offset - len(rungs) / 2),
+                [budget[rung][group]["mean_relative_error_pct"] for budget in budgets.values()],
+                width,
+                label=rung.replace("_", " "),
+            )
+        axis.bar(
+            np.arange(len(budgets)) + width * len(rungs) / 2,
+            [stores["materials"][m]["analytic"][group]["mean_relative_error_pct"] for m in budgets],
+            width,
+            label="analytic path (noise only)",
+            color="grey",
+        )
+        axis.set_xticks(np.arange(len(budgets)), list(budgets))
+        axis.set_yscale("log")
+        axis.set_title(group.replace("_", " "), fontsize=9)
+    panels[0].set_ylabel("mean relative error (%)")
+    panels[0].legend(fontsize=7)
+    fig.suptitle("error budget of the dome stores: each rung adds one source of error", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=90)
 

@@ -50,6 +50,7 @@ from twin.dome.programs import DomeCaptureSize, dome_calibration_program, dome_r
 from twin.dome.setup import BAND_GRID, DomeSetup, dome_setup
 from twin.materials import load_material
 from twin.render.truth import texture_truth
+from twin.studies.dome_budget import error_budget as dome_error_budget
 from twin.validate.dome_evaluation import chart_field_errors
 
 __all__ = [
@@ -199,6 +200,18 @@ class SameImages:
     projected_marks: list[str]
     p_dyn: float = P_DYN
 
+    def groups(self) -> dict[str, list[int]]:
+        """The pairs of each group the summaries take: ``with_spectral_data`` (the band
+        partner's images), ``without_spectral_data`` (the other cameras') and each camera's."""
+
+        def pairs(keep) -> list[int]:
+            return [i for i, camera in enumerate(self.cameras) if keep(camera)]
+
+        return {
+            "with_spectral_data": pairs(lambda camera: camera == self.partner),
+            "without_spectral_data": pairs(lambda camera: camera != self.partner),
+        } | {name: pairs(lambda camera, name=name: camera == name) for name in self.cameras}
+
     def summary(self) -> dict:
         """Errors of both paths (:class:`twin.dome.capture_study.ReconstructionErrors`) with and
         without spectral data and per RGB camera, over the material texels, under
@@ -210,13 +223,7 @@ class SameImages:
         little. ``"edge_free_texels"``: per group the share of the material texels kept and
         their number (none: the group's errors are ``None``)."""
 
-        def pairs(keep) -> list[int]:
-            return [i for i, camera in enumerate(self.cameras) if keep(camera)]
-
-        groups = {
-            "with_spectral_data": pairs(lambda camera: camera == self.partner),
-            "without_spectral_data": pairs(lambda camera: camera != self.partner),
-        } | {name: pairs(lambda camera, name=name: camera == name) for name in self.cameras}
+        groups = self.groups()
         material = load_material(self.material)
         chart = any(part.name.startswith("field_") for part in material.parts)
         errors = {
@@ -389,12 +396,23 @@ def store_study(
     *,
     seed: int,
     step: Callable[[str], None] = lambda name: None,
+    error_budget: bool = False,
+    texels: int | None = None,
 ) -> dict:
     """The store path of the dome study (module description): per material its ``dome-run``
     store, one calibration store, the multi-image experiment (processed twice: with the band
     data on the RGB camera nearest the spectral camera and on the top camera, for
-    :func:`view_fixed_shift`), and the 10.5 exposure totals."""
-    setup = dome_setup(size.texels, texel_px=2, seed=seed)
+    :func:`view_fixed_shift`), and the 10.5 exposure totals; with ``error_budget`` per material
+    under ``"error_budget"`` where its errors come from
+    (:func:`twin.studies.dome_budget.error_budget`). The runs are processed at ``texels``
+    (default the captures' own, a Bayer quad a texel at the top camera; fewer: each texel
+    spans more of every camera's pixels)."""
+    processed = size.texels if texels is None else texels
+    if not 4 <= processed <= size.texels:
+        raise InputError(
+            f"texels: expected 4 to the captures' {size.texels} texels, got {processed}"
+        )
+    setup = dome_setup(processed, texel_px=2, seed=seed)
     rng = np.random.default_rng(seed)
     result: dict = {"capture": size.__dict__, "folder": str(folder), "materials": {}}
     calibration = None
@@ -406,6 +424,11 @@ def store_study(
         step(f"{material}: processing the run store")
         nearest = same_images(setup, run_store, calibration, folder / f"{material}.btf.zarr", rng)
         summary = nearest.summary()
+        if error_budget:
+            step(f"{material}: the error budget")
+            summary["error_budget"] = dome_error_budget(
+                setup, run_store, calibration, nearest, folder
+            )
         moved_to = top_camera(nearest)
         step(f"{material}: processing the run store with the band data on {moved_to}")
         moved = same_images(
