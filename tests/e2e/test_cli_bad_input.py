@@ -283,6 +283,16 @@ PROBES: list[tuple[list[str], int, str]] = [
     (["dome-study", "--texels", "10"], 2, "--texels 10: expected a multiple of 4"),
     (["dome-study", "--texels", "4"], 2, "'--texels'"),
     (["dome-study", "--material", "nosuch"], 2, "'lego'"),
+    (
+        ["dome-study", "--capture-texels", "32", "--store-texels", "64"],
+        2,
+        "--store-texels 64: expected at most --capture-texels 32",
+    ),
+    (
+        ["dome-study", "--analytic-only", "--error-budget"],
+        2,
+        "--analytic-only, --error-budget: the error budget is the dome stores'",
+    ),
     (["dome-study", "--out", "@PLAIN"], 2, "is a file; expected a folder"),
     # demo
     (["demo", "--out", "@PLAIN"], 2, "is a file; expected a folder"),

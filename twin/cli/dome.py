@@ -48,6 +48,15 @@ def dome_study(
     capture_texels: Annotated[
         int, typer.Option(min=8, max=128, help="Texels of the study's dome captures.")
     ] = 32,
+    store_texels: Annotated[
+        int | None,
+        typer.Option(
+            min=4,
+            max=128,
+            help="Texels the dome captures are processed at (default: --capture-texels; "
+            "fewer give each texel more of the cameras' pixels).",
+        ),
+    ] = None,
     analytic_only: Annotated[
         bool, typer.Option(help="Skip the dome captures: frames from the analytic path only.")
     ] = False,
@@ -86,6 +95,8 @@ def dome_study(
     require_output_folder(out)
     chosen = tuple(dict.fromkeys(m.value for m in materials)) if materials else DOME_MATERIALS
     capture = replace(STORE_CAPTURE, leds=leds, texels=capture_texels)
+    if store_texels is not None and store_texels > capture_texels:
+        fail(f"--store-texels {store_texels}: expected at most --capture-texels {capture_texels}")
     if not analytic_only:
         capture.check(load_rig("dome"))  # before any work
     with console.status("dome study") as status:
@@ -107,6 +118,7 @@ def dome_study(
                 seed=seed,
                 step=step,
                 error_budget=error_budget,
+                texels=store_texels,
             ),
             step=step,
         )
