@@ -39,14 +39,13 @@ from typing import Any
 
 import numpy as np
 from scipy import ndimage
-from skimage.registration import phase_cross_correlation
 
 from hwbridge.dome_layout import SPECTRAL_CAMERA
 from hwbridge.store import CaptureStore
 from recon.btf.inputs import InputDigests, require_same_inputs
 from recon.btf.store import BTFStore
 from recon.calibration.dome_capture import DomeCalibration
-from recon.calibration.dome_geometric import stage_rotation
+from recon.calibration.dome_geometric import CameraGeometry, stage_rotation
 from recon.dome.images import (
     Registration,
     TexelGrid,
@@ -58,6 +57,7 @@ from recon.dome.images import (
 from recon.dome.run import DomeRun, joint_groups, open_dome_run
 from recon.errors import InputError, Remedy
 from recon.progress import progress_steps
+from recon.registration.corners import texture_transform
 from recon.scheduling.dome_schedule import FILTER_SIZE_PER_SIGMA, filter_sizes
 from recon.spectralize.solve import BandImage, reconstruct
 
@@ -69,6 +69,9 @@ __all__ = [
     "band_sigma_px",
     "check_dome_run",
     "dome_directions",
+    "PARALLAX_HEIGHTS_M",
+    "ParallaxLine",
+    "parallax_line",
     "parallax_shift",
     "process_dome",
     "spectral_partner",
@@ -170,16 +173,93 @@ def dome_directions(run: DomeRun, calibration: DomeCalibration) -> tuple[np.ndar
     )
 
 
-def parallax_shift(partner: np.ndarray, spectral: np.ndarray) -> np.ndarray:
+PARALLAX_HEIGHTS_M = (-0.005, 0.02)
+"""Heights of the sample's surface above the plate (m) over which :func:`parallax_shift`
+searches: 5 mm below (a recessed sample) to 20 mm above (the twin's Lego bricks stand 9.6 mm
+on their plate)."""
+
+_PARALLAX_STEP_TEXELS = 0.05  # spacing of the shifts tried along the parallax line
+
+
+@dataclass(frozen=True)
+class ParallaxLine:
     """The shift ``(rows, columns)`` in texels that carries the spectral camera's texture onto
-    the partner's (both of the alignment frames, every LED on): cross-correlation to a tenth of
-    a texel (``skimage.registration.phase_cross_correlation``). The texture lies on the plate,
-    and what rises above it moves with the view (a 9.6 mm Lego brick's top by 3 texels at 32
-    texels between the spectral camera and the 37.5 degree RGB camera); thesis 10.1 registers
-    the spectral images to the RGB images "using markers or other methods like optical
-    flow"."""
-    shift, _, _ = phase_cross_correlation(partner, spectral, upsample_factor=10, normalization=None)
-    return shift
+    its partner's where the sample's surface lies at height :math:`h` above the plate:
+    ``offset + h * per_metre`` (both textures are rectified on the plate, :math:`h = 0`, so a
+    surface above it moves with the view; ``offset``: what the two cameras' registrations
+    leave at the plate itself)."""
+
+    offset: np.ndarray
+    per_metre: np.ndarray
+
+    def shift(self, height_m: float) -> np.ndarray:
+        return self.offset + height_m * self.per_metre
+
+
+def parallax_line(
+    cameras: Mapping[str, tuple[CameraGeometry, np.ndarray]], partner: str, texels: int
+) -> ParallaxLine:
+    """:class:`ParallaxLine` of the sample's centre from the calibrated ``partner`` and spectral
+    camera, each with the image corners of its texture (``cameras``: camera -> (geometry,
+    corners)), at ``texels`` texels: where each camera's rectification puts the centre lifted
+    to 0 and to 1 mm (the stage turns about the centre, so its angle does not enter)."""
+
+    def texel_rows_columns(camera: str, height_m: float) -> np.ndarray:
+        geometry, corners = cameras[camera]
+        image = geometry.project(np.array([[0.0, 0.0, height_m]])) + 0.5
+        u, v = texture_transform(corners)(image)[0]
+        return np.array([v, u]) * texels - 0.5
+
+    def shift(height_m: float) -> np.ndarray:
+        return texel_rows_columns(partner, height_m) - texel_rows_columns(SPECTRAL_CAMERA, height_m)
+
+    return ParallaxLine(shift(0.0), (shift(1e-3) - shift(0.0)) / 1e-3)
+
+
+def parallax_shift(
+    partner: np.ndarray,
+    spectral: np.ndarray,
+    line: ParallaxLine,
+    heights_m: tuple[float, float] = PARALLAX_HEIGHTS_M,
+) -> np.ndarray:
+    """The shift ``(rows, columns)`` in texels that carries the spectral camera's texture onto
+    the partner's (both of the alignment frames, every LED on): the point of ``line`` within
+    ``heights_m`` whose shifted texture correlates best with the partner's (normalized
+    cross-correlation over the texels no tried shift moves in from the border; shifts
+    :data:`_PARALLAX_STEP_TEXELS` apart, the best refined by a parabola through its
+    neighbours). What rises above the plate moves with the view (a 9.6 mm Lego brick's top by 3
+    texels at 32 texels between the spectral camera and the 37.5 degree RGB camera); thesis
+    10.1 registers the spectral images to the RGB images "using markers or other methods like
+    optical flow". The search follows the line the view directions allow, not every shift: a
+    texture that repeats (a weave, a printed pattern) correlates as well a period away, which
+    an unconstrained peak (``skimage.registration.phase_cross_correlation``, the earlier way)
+    took on the twin's red fabric at 64 texels: 11 texels off in columns (BENCHMARKS.md "Dome
+    study from capture stores")."""
+    ends = [line.shift(height) for height in heights_m]
+    count = int(np.ceil(np.abs(ends[1] - ends[0]).max() / _PARALLAX_STEP_TEXELS)) + 1
+    heights = np.linspace(*heights_m, count)
+    margin = int(np.ceil(np.abs(np.stack(ends)).max())) + 1
+    if 2 * margin >= min(partner.shape):
+        raise InputError(
+            f"texture of {partner.shape[0]} texels: expected more than twice the largest "
+            f"parallax searched ({margin} texels)"
+        )
+    inner = (slice(margin, -margin), slice(margin, -margin))
+    reference = partner[inner] - partner[inner].mean()
+
+    def correlation(height: float) -> float:
+        moved = ndimage.shift(spectral, line.shift(height), order=1, mode="nearest")[inner]
+        moved = moved - moved.mean()
+        return float((reference * moved).sum() / np.sqrt((reference**2).sum() * (moved**2).sum()))
+
+    scores = np.array([correlation(height) for height in heights])
+    best = int(np.argmax(scores))
+    if 0 < best < count - 1:
+        left, centre, right = scores[best - 1 : best + 2]
+        curvature = left - 2 * centre + right
+        vertex = 0.5 * (left - right) / curvature if curvature < 0 else 0.0
+        return line.shift(heights[best] + vertex * (heights[1] - heights[0]))
+    return line.shift(heights[best])
 
 
 def spectral_partner(run: DomeRun, calibration: DomeCalibration) -> str:
@@ -244,8 +324,19 @@ class DomeProcessing:
                     corners = self.registrations[camera, view].corners_xy
                     textures[camera, view] = self.grid(view).texture(image, corners)
         for view in self.run.views:
+            line = parallax_line(
+                {
+                    camera: (
+                        self.calibration.geometry[camera].geometry,
+                        self.registrations[camera, view].corners_xy,
+                    )
+                    for camera in (self.partner, SPECTRAL_CAMERA)
+                },
+                self.partner,
+                self.texels,
+            )
             self.band_shift[view] = parallax_shift(
-                textures[self.partner, view], textures[SPECTRAL_CAMERA, view]
+                textures[self.partner, view], textures[SPECTRAL_CAMERA, view], line
             )
 
     def rgb(self, store: CaptureStore, image: int, camera: str) -> np.ndarray:

@@ -166,8 +166,9 @@ def test_homography_maps_corners_to_the_texture_square_and_back(rng):
         assert abs(diagonal[0] * offset[1] - diagonal[1] * offset[0]) < 1e-8 * diagonal @ diagonal
 
 
-def test_checkerboard_warped_by_a_known_homography_is_extracted_back(rng):
-    squares = 8
+def _warped_checkerboard(squares: int) -> tuple[np.ndarray, np.ndarray]:
+    """A checkerboard of ``squares x squares`` seen through a known homography (a 200 x 220
+    frame, each pixel the board's mean over 6 x 6 points), and the board's corners in it."""
     texture_to_image = np.array([[150.0, 22.0, 30.0], [-12.0, 120.0, 30.0], [0.15, -0.1, 1.0]])
     image_to_texture = np.linalg.inv(texture_to_image)
     supersample, height, width = 6, 200, 220
@@ -179,6 +180,12 @@ def test_checkerboard_warped_by_a_known_homography_is_extracted_back(rng):
     image = board.reshape(height, supersample, width, supersample).mean(axis=(1, 3))
     corners = TEXTURE_CORNERS_UV @ texture_to_image[:2, :2].T + texture_to_image[:2, 2]
     corners /= (TEXTURE_CORNERS_UV @ texture_to_image[2, :2] + 1.0)[:, None]
+    return image, corners
+
+
+def test_checkerboard_warped_by_a_known_homography_is_extracted_back(rng):
+    squares = 8
+    image, corners = _warped_checkerboard(squares)
     resolution = 128
     extracted = extract_texture(
         np.stack([image, 1 - image], axis=-1), corners, resolution=resolution
@@ -209,17 +216,7 @@ def test_texel_footprint_averages_the_frame_over_each_texel():
     reads the square it falls in. Measured: mean absolute difference 0.004 (largest 0.020)
     over the footprint at 8 x 8 samples, 0.154 at the centre."""
     squares, texels = 8, 10
-    texture_to_image = np.array([[150.0, 22.0, 30.0], [-12.0, 120.0, 30.0], [0.15, -0.1, 1.0]])
-    image_to_texture = np.linalg.inv(texture_to_image)
-    supersample, height, width = 6, 200, 220
-    rows, columns = np.mgrid[0 : height * supersample, 0 : width * supersample]
-    points = np.stack([columns + 0.5, rows + 0.5, np.full(columns.shape, supersample)], axis=-1)
-    mapped = (points / supersample) @ image_to_texture.T
-    u, v = mapped[..., 0] / mapped[..., 2], mapped[..., 1] / mapped[..., 2]
-    board = ((np.floor(u * squares) + np.floor(v * squares)) % 2).astype(np.float64)
-    image = board.reshape(height, supersample, width, supersample).mean(axis=(1, 3))
-    corners = TEXTURE_CORNERS_UV @ texture_to_image[:2, :2].T + texture_to_image[:2, 2]
-    corners /= (TEXTURE_CORNERS_UV @ texture_to_image[2, :2] + 1.0)[:, None]
+    image, corners = _warped_checkerboard(squares)
     fine = (np.arange(texels * 48) + 0.5) / (texels * 48)
     fu, fv = np.meshgrid(fine, fine)
     truth = (

@@ -230,15 +230,8 @@ def error_budget(
     true_marks = nominal_marks(run, work)
     btf_path = folder / f"{run.material}.true-marks.btf.zarr"
     shutil.rmtree(btf_path, ignore_errors=True)
-    btf = process_dome(
-        store,
-        calibration,
-        btf_path,
-        texels=texels,
-        manual_corners=true_marks,
-        band_partner=found.partner,
-        p_dyn=found.p_dyn,
-    )
+    options = {"band_partner": found.partner, "p_dyn": found.p_dyn, "texels": texels}
+    btf = process_dome(store, calibration, btf_path, manual_corners=true_marks, **options)
     marked = DomeProcessing(
         run, calibration, texels, found.partner, manual_corners=true_marks, p_dyn=found.p_dyn
     )
@@ -246,7 +239,7 @@ def error_budget(
     cubes = {
         "reconstruction": _solve(images, images.v_true, images.band_truth),
         "camera_sampling": _solve(images, sampled_v, sampled_bands),
-        "stores_true_marks": np.pi * np.stack([btf.read_pair(p) for p in range(btf.n_pairs)]),
+        "stores_true_marks": np.pi * btf.read(),
         "stores": found.stored,
     }
     inputs = {

@@ -309,7 +309,7 @@ def same_images(
     light_dirs, view_dirs = dome_directions(run, calibration)
     truth = texture_truth(run.material, light_dirs, view_dirs, texels=texels)
     analytic = simulate_capture(setup, truth, light_dirs, bands, rng)
-    stored = np.pi * np.stack([btf.read_pair(pair) for pair in range(btf.n_pairs)])
+    stored = np.pi * btf.read()
     return SameImages(
         stored.astype(np.float64),
         reconstruct_capture(setup, analytic, p_dyn=p_dyn),
