@@ -224,26 +224,29 @@ def parallax_shift(
 ) -> np.ndarray:
     """The shift ``(rows, columns)`` in texels that carries the spectral camera's texture onto
     the partner's (both of the alignment frames, every LED on): the point of ``line`` within
-    ``heights_m`` whose shifted texture correlates best with the partner's (normalized
-    cross-correlation over the texels no tried shift moves in from the border; shifts
-    :data:`_PARALLAX_STEP_TEXELS` apart, the best refined by a parabola through its
-    neighbours). What rises above the plate moves with the view (a 9.6 mm Lego brick's top by 3
-    texels at 32 texels between the spectral camera and the 37.5 degree RGB camera); thesis
-    10.1 registers the spectral images to the RGB images "using markers or other methods like
-    optical flow". The search follows the line the view directions allow, not every shift: a
-    texture that repeats (a weave, a printed pattern) correlates as well a period away, which
-    an unconstrained peak (``skimage.registration.phase_cross_correlation``, the earlier way)
-    took on the twin's red fabric at 64 texels: 11 texels off in columns (BENCHMARKS.md "Dome
-    study from capture stores")."""
+    ``heights_m`` whose shifted texture correlates best with the partner's.
+
+    Normalized cross-correlation over the texels no tried shift moves in from the border;
+    shifts :data:`_PARALLAX_STEP_TEXELS` apart and at most a quarter of the texture's side (half
+    of it is compared), the best refined by a parabola through its neighbours (none that short:
+    the line's shift at the plate). What rises above the plate moves with the view (a 9.6 mm
+    Lego brick's top by 3 texels at 32 texels between the spectral camera and the 37.5 degree
+    RGB camera); thesis 10.1 registers the spectral images to the RGB images "using markers or
+    other methods like optical flow". The search follows the line the view directions allow,
+    not every shift: a texture that repeats (a weave, a printed pattern) correlates as well a
+    period away, which an unconstrained peak (``skimage.registration.phase_cross_correlation``,
+    the earlier way) took on the twin's red fabric at 64 texels: 11 texels off in columns
+    (BENCHMARKS.md "Dome study from capture stores").
+    """
     ends = [line.shift(height) for height in heights_m]
     count = int(np.ceil(np.abs(ends[1] - ends[0]).max() / _PARALLAX_STEP_TEXELS)) + 1
     heights = np.linspace(*heights_m, count)
-    margin = int(np.ceil(np.abs(np.stack(ends)).max())) + 1
-    if 2 * margin >= min(partner.shape):
-        raise InputError(
-            f"texture of {partner.shape[0]} texels: expected more than twice the largest "
-            f"parallax searched ({margin} texels)"
-        )
+    largest = np.abs(line.offset + heights[:, None] * line.per_metre).max(axis=1)
+    short = largest <= min(partner.shape) / 4  # an interval: the shift's size is convex in h
+    if not short.any():
+        return line.shift(0.0)
+    heights, count = heights[short], int(short.sum())
+    margin = int(np.ceil(largest[short].max())) + 1
     inner = (slice(margin, -margin), slice(margin, -margin))
     reference = partner[inner] - partner[inner].mean()
 

@@ -93,6 +93,15 @@ def test_parallax_shift_recovers_a_translation_along_the_line(rng):
     np.testing.assert_allclose(found, LINE.shift(0.005), atol=0.05)
 
 
+def test_parallax_shift_on_a_small_texture_tries_the_shorter_shifts(rng):
+    """At 16 texels the line's shifts up to 20 mm reach 8 texels: only those up to a quarter of
+    the side (4 texels) are tried, so that half the texture is compared; the surface 2 mm up
+    (-0.7, 0.4 texels) is found."""
+    texture = ndimage.gaussian_filter(rng.random((16, 16)), 1.0)
+    spectral = ndimage.shift(texture, -LINE.shift(0.002), order=3, mode="wrap")
+    np.testing.assert_allclose(parallax_shift(texture, spectral, LINE), [-0.7, 0.4], atol=0.1)
+
+
 def test_parallax_shift_is_not_fooled_by_a_repeating_texture():
     """A weave-like texture that repeats every 5 texels across and 16 down, each view with
     its own small detail (shading, noise): shifted by (-1.2, 1.0) it correlates about as well
