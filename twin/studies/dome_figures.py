@@ -256,7 +256,7 @@ def write_error_budget(stores: dict, path: Path) -> None:
             np.arange(len(budgets)) + width * len(rungs) / 2,
             [stores["materials"][m]["analytic"][group]["mean_relative_error_pct"] for m in budgets],
             width,
-            label="analytic path (noise only)",
+            label="analytic path, same images",
             color="grey",
         )
         axis.set_xticks(np.arange(len(budgets)), list(budgets))
