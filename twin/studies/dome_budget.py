@@ -168,7 +168,9 @@ def _solve(images: _Images, v: np.ndarray, bands: np.ndarray) -> np.ndarray:
     ).spectra
 
 
-def _camera_sampled(images: _Images, fine_v: np.ndarray, fine_bands: np.ndarray):
+def _camera_sampled(
+    images: _Images, fine_v: np.ndarray, fine_bands: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Rung 2's inputs: every pair's V through its RGB camera, the partner pairs' bands through
     the spectral camera (:func:`camera_sampled_texture`)."""
     run, work = images.run, images.work
@@ -266,8 +268,8 @@ def error_budget(
             }
     names = {key: f"{key[0]}_view{key[1]}" for key in work.registrations}
     budget["marks_offset_from_nominal_px"] = {
-        names[key]: float(np.linalg.norm(found.marks_xy - true_marks[names[key]], axis=1).max())
-        for key, found in work.registrations.items()
+        names[key]: float(np.linalg.norm(marks.marks_xy - true_marks[names[key]], axis=1).max())
+        for key, marks in work.registrations.items()
     }
     shutil.rmtree(btf_path, ignore_errors=True)
     return budget
