@@ -68,7 +68,7 @@ def dome_study(
         typer.Option(
             help="Per material, where the stores' errors come from: the reconstruction, the "
             "cameras' sampling, noise and rendering, registration (each rung solved again; "
-            "about 4 more minutes a material at 64 texels)."
+            "4-8 more minutes a material at 64 texels on 2 cores)."
         ),
     ] = False,
     as_json: JsonFlag = False,
