@@ -241,28 +241,28 @@ def parallax_shift(
     ends = [line.shift(height) for height in heights_m]
     count = int(np.ceil(np.abs(ends[1] - ends[0]).max() / _PARALLAX_STEP_TEXELS)) + 1
     heights = np.linspace(*heights_m, count)
-    largest = np.abs(line.offset + heights[:, None] * line.per_metre).max(axis=1)
-    short = largest <= min(partner.shape) / 4  # an interval: the shift's size is convex in h
+    shifts = line.offset + heights[:, None] * line.per_metre
+    short = np.abs(shifts).max(axis=1) <= min(partner.shape) / 4  # an interval of heights
     if not short.any():
         return line.shift(0.0)
-    heights, count = heights[short], int(short.sum())
-    margin = int(np.ceil(largest[short].max())) + 1
+    heights, shifts = heights[short], shifts[short]
+    margin = int(np.ceil(np.abs(shifts).max())) + 1
     inner = (slice(margin, -margin), slice(margin, -margin))
     reference = partner[inner] - partner[inner].mean()
 
-    def correlation(height: float) -> float:
-        moved = ndimage.shift(spectral, line.shift(height), order=1, mode="nearest")[inner]
+    def correlation(shift: np.ndarray) -> float:
+        moved = ndimage.shift(spectral, shift, order=1, mode="nearest")[inner]
         moved = moved - moved.mean()
         return float((reference * moved).sum() / np.sqrt((reference**2).sum() * (moved**2).sum()))
 
-    scores = np.array([correlation(height) for height in heights])
+    scores = np.array([correlation(shift) for shift in shifts])
     best = int(np.argmax(scores))
-    if 0 < best < count - 1:
+    if 0 < best < len(scores) - 1:
         left, centre, right = scores[best - 1 : best + 2]
         curvature = left - 2 * centre + right
         vertex = 0.5 * (left - right) / curvature if curvature < 0 else 0.0
         return line.shift(heights[best] + vertex * (heights[1] - heights[0]))
-    return line.shift(heights[best])
+    return shifts[best]
 
 
 def spectral_partner(run: DomeRun, calibration: DomeCalibration) -> str:

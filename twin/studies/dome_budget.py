@@ -43,6 +43,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+from skimage import transform
 
 from hwbridge.dome_layout import SPECTRAL_CAMERA
 from hwbridge.store import CaptureStore
@@ -62,6 +63,7 @@ from recon.spectralize.solve import BandImage, reconstruct
 from twin.dome.capture_study import ReconstructionErrors
 from twin.dome.setup import DomeSetup
 from twin.render.truth import texture_truth
+from twin.sensor.model import bayer_channel_index, mosaic_channels
 
 if TYPE_CHECKING:
     from twin.studies.dome_stores import SameImages
@@ -103,19 +105,28 @@ def camera_sampled_texture(
     low = np.floor(corners_xy.min(axis=0)).astype(int) - 4
     low -= low % 2  # the mosaic's phase: RGGB from even rows and columns, as the frames
     width, height = np.ceil(corners_xy.max(axis=0)).astype(int) + 4 - low
-    to_texture = texture_transform(corners_xy)
-    rows, columns = np.mgrid[0:height, 0:width]
-    image = np.zeros((height, width, fine.shape[-1]))
-    for dy in (np.arange(_SUBPIXELS) + 0.5) / _SUBPIXELS:
-        for dx in (np.arange(_SUBPIXELS) + 0.5) / _SUBPIXELS:
-            points = np.stack([(columns + low[0] + dx).ravel(), (rows + low[1] + dy).ravel()], 1)
-            uv = np.clip((to_texture(points) * side).astype(int), 0, side - 1)
-            image += fine[uv[:, 1], uv[:, 0]].reshape(height, width, -1)
-    image /= _SUBPIXELS**2
+    # output (sub-pixel index) -> frame point -> texture (u, v) -> fine texel index
+    to_frame = np.array(
+        [
+            [1 / _SUBPIXELS, 0, low[0] + 0.5 / _SUBPIXELS],
+            [0, 1 / _SUBPIXELS, low[1] + 0.5 / _SUBPIXELS],
+            [0, 0, 1],
+        ]
+    )
+    to_fine = np.array([[side, 0, -0.5], [0, side, -0.5], [0, 0, 1]])
+    points = transform.warp(
+        fine,
+        transform.ProjectiveTransform(
+            matrix=to_fine @ texture_transform(corners_xy).params @ to_frame
+        ),
+        output_shape=(height * _SUBPIXELS, width * _SUBPIXELS),
+        order=0,
+        mode="edge",
+        preserve_range=True,
+    )
+    image = points.reshape(height, _SUBPIXELS, width, _SUBPIXELS, -1).mean(axis=(1, 3))
     if mosaic:
-        raw = np.empty((height, width))
-        for (row, column), channel in {(0, 0): 0, (0, 1): 1, (1, 0): 1, (1, 1): 2}.items():
-            raw[row::2, column::2] = image[row::2, column::2, channel]
+        raw = mosaic_channels(image, bayer_channel_index(height, width, "RGGB"))
         image = demosaic(raw, method="Malvar2004")
     return grid.texture(image, corners_xy - low)
 
