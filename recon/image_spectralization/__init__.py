@@ -2,8 +2,9 @@
 (``rgb_image``), the spot spectra at pixel coordinates (``spots``), the camera's response by
 name or from a CSV (``responses``), the camera term fitted to the spots (``camera_fit``), tables
 of spectra by wavelength (``wavelength_table``),
-the reconstruction with its cross-validated error per spot (``run``) and its blend with
-Murakami's kriged estimate weighted by the same folds (``kriging_blend``).
+the reconstruction with its cross-validated error per spot (``run``), the window a large image
+is cross-validated in (``window``) and the blend with Murakami's kriged estimate weighted by
+the same folds (``kriging_blend``).
 """
 
 import lazy_loader
@@ -18,5 +19,6 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "wavelength_table": ["read_wavelength_table"],
         "run": ["ImageSpectralization", "spectralize_image"],
         "spots": ["SpotSpectra", "read_spot_mask", "read_spots_csv"],
+        "window": ["Window", "cross_validation_window"],
     },
 )

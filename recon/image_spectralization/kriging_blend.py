@@ -75,6 +75,8 @@ def choose_kriging_weight(
     known_pixels: np.ndarray,
     known_spectra: np.ndarray,
     choice: PriorChoice,
+    *,
+    correlation_length: float | None = None,
 ) -> KrigingWeight:
     """Choose the blend's weight from the spots held out by ``choice``'s folds.
 
@@ -87,6 +89,10 @@ def choose_kriging_weight(
         The spots' flat pixel indices and ``(m, K)`` spectra, as given to it.
     choice
         Its result: the folds, and the chosen prior's held-out predictions.
+    correlation_length
+        Of the kriged estimate, pixels; by default that of ``rgb``'s size
+        (:func:`recon.baselines.murakami2007.default_correlation_length`). A window of a
+        larger image passes the image's, which its solve from all spots uses.
 
     Returns
     -------
@@ -132,6 +138,7 @@ def choose_kriging_weight(
             pixels[~held_out],
             spectra[~held_out],
             at_pixels=pixels[held_out],
+            correlation_length=correlation_length,
         )
     errors = [relative_error((1.0 - w) * spectralized + w * kriged, spectra) for w in WEIGHTS]
     means = np.array([float(np.mean(e)) for e in errors])

@@ -17,12 +17,15 @@ Steps:
    learned from the spots, :mod:`recon.spectralize.learned_appearance`; both priors of each
    fold in one Kronecker solve), or one space given (``appearance``) and only the prior
    chosen, or with ``fast=True`` the thesis's RGBXY space and prior (``"spectra"``) without
-   cross-validation.
+   cross-validation. An image of more than :data:`CROSS_VALIDATION_PIXELS` pixels is
+   cross-validated in a central window of about that many at full resolution
+   (:mod:`recon.image_spectralization.window`), its spots held out; the chosen space's graph
+   is then found for the whole image.
 4. The solve of Eq. 6.10 (three neighbours, equal primed weights of Eq. 6.11, no smoothness
    term: the settings of the chapter 7 experiments, :mod:`recon.experiments.sparse`) on the
-   chosen space's graph, started from the chosen prior's reconstruction of the last fold (fewer
-   iterations; the same solution within the solver's tolerance). Negative values are clipped
-   to zero.
+   chosen space's graph, started from the chosen prior's reconstruction of the last fold where
+   the whole image was cross-validated (fewer iterations; the same solution within the
+   solver's tolerance). Negative values are clipped to zero.
 5. With the cross-validation, the blend with Murakami 2007's kriged estimate
    (:mod:`recon.image_spectralization.kriging_blend`): the kriging weight with which the
    held-out spots are predicted best, 0 (no blend) where the kriged estimate does not help;
@@ -41,10 +44,12 @@ from typing import Any
 
 import numpy as np
 
+from recon.baselines.murakami2007 import default_correlation_length
 from recon.errors import InputError
 from recon.image_spectralization.camera_fit import MAX_DEGREE, camera_term
 from recon.image_spectralization.kriging_blend import blend_with_kriging, choose_kriging_weight
 from recon.image_spectralization.spots import SpotSpectra
+from recon.image_spectralization.window import CROSS_VALIDATION_PIXELS, cross_validation_window
 from recon.spectra import SampledSpectra, WavelengthGrid, resample
 from recon.spectralize.appearance_choice import SPACES, choose_appearance
 from recon.spectralize.learned_appearance import LEARNED_SPACES, fitted_on
@@ -114,7 +119,8 @@ class ImageSpectralization:
         without cross-validation.
     spot_errors
         ``(m,)`` the held-out error (Eq. 6.8, %) of every spot with the prior (and blend)
-        used, in the order of the spots; None without cross-validation.
+        used, in the order of the spots, NaN for spots outside the cross-validation's window;
+        None without cross-validation.
     gains
         ``(3,)`` the gain per channel fitted to the spots (the mean of the fitted factor,
         :class:`recon.image_spectralization.camera_fit.CameraTerm`).
@@ -139,6 +145,14 @@ class ImageSpectralization:
     fit_residual_pct: np.ndarray
     timings_s: dict[str, float]
     notes: tuple[str, ...] = field(default_factory=tuple)
+
+
+def _in_window(errors: np.ndarray, inside: np.ndarray) -> np.ndarray:
+    """Held-out ``errors`` of the spot pixels ``inside`` the cross-validation's window, in the
+    order of all spot pixels, NaN for those outside it."""
+    every = np.full(inside.shape, np.nan)
+    every[inside] = errors
+    return every
 
 
 def _channel_integrals(response: SampledSpectra, low: float, high: float) -> np.ndarray:
@@ -198,6 +212,7 @@ def spectralize_image(
     kriging: bool = True,
     camera_degree: int = MAX_DEGREE,
     tol: float = 1e-6,
+    cross_validation_pixels: int | None = CROSS_VALIDATION_PIXELS,
     progress: bool = False,
 ) -> ImageSpectralization:
     """Spectralize ``rgb`` from the spot spectra (module description).
@@ -224,6 +239,10 @@ def spectralize_image(
         (:func:`recon.image_spectralization.camera_fit.camera_term`); 0: a gain per channel.
     tol
         Relative residual of the solves (:func:`recon.spectralize.solve.reconstruct`).
+    cross_validation_pixels
+        An image of more pixels is cross-validated in a central window of about this many
+        (:func:`recon.image_spectralization.window.cross_validation_window`; module
+        description, step 3); ``None``: the whole image.
     progress
         Show progress bars.
 
@@ -251,7 +270,7 @@ def spectralize_image(
     flat = rgb.reshape(-1, 3)
     camera = camera_term(response, grid, flat[pixels], spectra, max_degree=camera_degree)
     r_cam = camera.matrix
-    timings, choice, appearance_errors = {}, None, {}
+    timings, choice, appearance_errors, warm_start = {}, None, {}, None
     if fast:
         started = time.perf_counter()
         energy = _ENERGY | {"appearance": FAST_APPEARANCE if appearance == "auto" else appearance}
@@ -261,11 +280,13 @@ def spectralize_image(
         timings["graph"] = time.perf_counter() - started
     else:
         started = time.perf_counter()
+        window = cross_validation_window(rgb.shape[:2], pixels, cross_validation_pixels)
+        inside = window.inside(pixels)
         chosen = choose_appearance(
-            rgb,
+            rgb[window.slices],
             r_cam,
-            pixels,
-            spectra,
+            window.local(pixels[inside]),
+            spectra[inside],
             spaces=SPACES if appearance == "auto" else (appearance,),
             folds=FOLDS,
             tol=tol,
@@ -273,9 +294,23 @@ def spectralize_image(
             **_ENERGY,
         )
         timings["cross_validation"] = time.perf_counter() - started
-        choice, energy, graph = chosen.prior_choice, _ENERGY | chosen.energy, chosen.graph
+        choice, energy = chosen.prior_choice, _ENERGY | chosen.energy
         if appearance == "auto":
             appearance_errors = chosen.held_out_errors
+        if window.whole:
+            graph, warm_start = chosen.graph, choice.fold_spectra
+        else:
+            started = time.perf_counter()
+            energy = _ENERGY | {"appearance": chosen.appearance}
+            if chosen.appearance in LEARNED_SPACES:
+                energy = fitted_on(energy, pixels, spectra)
+            graph = graph_for(rgb, energy)
+            timings["graph"] = time.perf_counter() - started
+            notes.append(
+                f"space, prior and kriging weight chosen by the cross-validation of "
+                f"{window.describe()} ({int(inside.sum())} of {pixels.size} spot pixels, "
+                f"the others without a held-out error)"
+            )
     prior = FAST_PRIOR if choice is None else choice.prior
     started = time.perf_counter()
     result = reconstruct(
@@ -285,13 +320,13 @@ def spectralize_image(
         prior=prior,
         graph=graph,
         tol=tol,
-        initial=None if choice is None else choice.fold_spectra,
+        initial=warm_start,
         progress=progress,
         **energy,
     )
     timings["solve"] = time.perf_counter() - started
     spectra_out, held_out = result.spectra, {} if choice is None else dict(choice.held_out_errors)
-    spot_errors = None if choice is None else choice.pixel_errors[prior]
+    spot_errors = None if choice is None else _in_window(choice.pixel_errors[prior], inside)
     weight = 0.0
     if choice is not None and kriging:
         if pixels.size > MAX_KRIGED_PIXELS:
@@ -301,10 +336,17 @@ def spectralize_image(
             )
         else:
             started = time.perf_counter()
-            kriging_choice = choose_kriging_weight(rgb, r_cam, pixels, spectra, choice)
+            kriging_choice = choose_kriging_weight(
+                rgb[window.slices],
+                r_cam,
+                window.local(pixels[inside]),
+                spectra[inside],
+                choice,
+                correlation_length=default_correlation_length(*rgb.shape[:2]),
+            )
             weight = kriging_choice.kriging_weight
             held_out |= {key: kriging_choice.held_out_errors[key] for key in ("kriging", "blend")}
-            spot_errors = kriging_choice.pixel_errors
+            spot_errors = _in_window(kriging_choice.pixel_errors, inside)
             spectra_out = blend_with_kriging(spectra_out, rgb, r_cam, pixels, spectra, weight)
             timings["kriging"] = time.perf_counter() - started
     cube = np.clip(spectra_out, 0.0, None).astype(np.float32)

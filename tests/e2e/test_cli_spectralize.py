@@ -114,6 +114,41 @@ def test_a_gain_per_channel_when_asked(crop, tmp_path):
     assert float(np.mean(relative_error(cube, truth))) < ERROR_BOUND_PCT
 
 
+def test_a_large_image_is_cross_validated_in_a_central_window_unless_told(
+    crop, tmp_path, monkeypatch
+):
+    """With the window made a quarter of the crop (80 x 60 px, grown to 100 x 75 px to hold
+    100 spots: 165 of the 391), only the spots in it get a held-out error (the others none in spots.json, left out of the table and the summary), and
+    the note says so; ``--whole-image-cross-validation`` holds every spot out. Both
+    reconstruct the crop within the bound of the whole image's test."""
+    monkeypatch.setattr(
+        "recon.image_spectralization.window.CROSS_VALIDATION_PIXELS", 120 * 160 // 4
+    )
+    folder, truth, xy = crop
+    runs = {}
+    for name, extra in (("window", []), ("whole", ["--whole-image-cross-validation"])):
+        out = tmp_path / name
+        result = runner.invoke(
+            app,
+            ["spectralize", str(folder / "crop.png"), "--spectra", str(folder / "spots.csv")]
+            + ["--response", str(folder / "flea3.csv"), "--out", str(out), *extra],
+        )
+        assert result.exit_code == 0, result.output
+        cube = read_spectral_exr(out / "spectra.exr").cube
+        assert float(np.mean(relative_error(cube, truth))) < ERROR_BOUND_PCT
+        runs[name] = result.output, json.loads((out / "spots.json").read_text())
+    output, spots = runs["window"]
+    errors = [spot["cross_validated_error_pct"] for spot in spots["spots"]]
+    held = [error for error in errors if error is not None]
+    assert len(held) == 165
+    assert "worst five spots" in output and "nan" not in output
+    assert "chosen by the cross-validation of the central 100 x 75 px" in " ".join(output.split())
+    assert spots["summary"]["spot_error_max_pct"] == pytest.approx(max(held))
+    output, spots = runs["whole"]
+    assert all(spot["cross_validated_error_pct"] is not None for spot in spots["spots"])
+    assert "central" not in output
+
+
 def test_on_a_smooth_image_the_kriged_estimate_is_blended_in_unless_switched_off(tmp_path):
     """A smooth blend of real food reflectances (96 px, Canon EOS R under D65) as a user's
     16-bit PNG, 250 single-pixel spots and the camera-times-light response as a CSV: by

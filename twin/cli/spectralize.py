@@ -41,9 +41,12 @@ class Interleave(StrEnum):
 
 
 def _spot_table(xy: np.ndarray, errors: np.ndarray) -> Table:
-    """The spots' held-out errors, one decimal: all of them, or the worst five."""
-    order = np.arange(errors.size) if errors.size <= _SHOWN_SPOTS else np.argsort(errors)[-5:][::-1]
-    title = "held-out error per spot" if errors.size <= _SHOWN_SPOTS else "worst five spots"
+    """The spots' held-out errors, one decimal: all of them, or the worst five (spots without
+    one, outside a large image's cross-validation window, are left out)."""
+    held_out = np.flatnonzero(np.isfinite(errors))
+    few = held_out.size <= _SHOWN_SPOTS
+    order = held_out if few else held_out[np.argsort(errors[held_out])[-5:][::-1]]
+    title = "held-out error per spot" if few else "worst five spots"
     table = Table("x", "y", "error (%)", title=f"{title} (Eq. 6.8, cross-validated)")
     for index in order:
         table.add_row(str(xy[index, 0]), str(xy[index, 1]), f"{errors[index]:.1f}")
@@ -109,6 +112,15 @@ def spectralize(
             "prior alone.",
         ),
     ] = True,
+    whole_image_cross_validation: Annotated[
+        bool,
+        typer.Option(
+            "--whole-image-cross-validation",
+            help="Cross-validate a large image whole (by default an image of more than a "
+            "quarter megapixel is cross-validated in a central window of that size at full "
+            "resolution, and only its spots get a held-out error).",
+        ),
+    ] = False,
     mask: Annotated[
         Path | None,
         typer.Option(
@@ -152,6 +164,7 @@ def spectralize(
         spectralize_image,
     )
     from recon.image_spectralization.camera_fit import MAX_DEGREE
+    from recon.image_spectralization.window import CROSS_VALIDATION_PIXELS
     from twin.studies.spectralized_image import OUTPUTS, write_spectralized_image
 
     started = time.perf_counter()
@@ -177,6 +190,7 @@ def spectralize(
         appearance=appearance.value,
         kriging=kriging,
         camera_degree=0 if gains_only else MAX_DEGREE,
+        cross_validation_pixels=None if whole_image_cross_validation else CROSS_VALIDATION_PIXELS,
         progress=not as_json,
     )
     inputs = {

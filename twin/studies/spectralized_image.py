@@ -35,14 +35,17 @@ OUTPUTS = ("spectra.exr", "spectra.hdr", "spectra.raw", "preview.png", "spots.js
 
 
 def spot_error_summary(errors: np.ndarray | None) -> dict[str, float]:
-    """Mean, median, 90th percentile and largest held-out error of the spots (Eq. 6.8, %)."""
+    """Mean, median, 90th percentile and largest held-out error of the spots (Eq. 6.8, %),
+    over those that have one (a large image's spots outside its cross-validation window have
+    none, NaN)."""
     if errors is None:
         return {}
+    held_out = errors[np.isfinite(errors)]
     return {
-        "spot_error_mean_pct": float(np.mean(errors)),
-        "spot_error_median_pct": float(np.median(errors)),
-        "spot_error_p90_pct": float(np.percentile(errors, 90)),
-        "spot_error_max_pct": float(np.max(errors)),
+        "spot_error_mean_pct": float(np.mean(held_out)),
+        "spot_error_median_pct": float(np.median(held_out)),
+        "spot_error_p90_pct": float(np.percentile(held_out, 90)),
+        "spot_error_max_pct": float(np.max(held_out)),
     }
 
 
@@ -121,7 +124,9 @@ def write_spectralized_image(
         {
             "x": int(x),
             "y": int(y),
-            "cross_validated_error_pct": None if result.spot_errors is None else float(error),
+            "cross_validated_error_pct": (
+                None if error is None or not np.isfinite(error) else float(error)
+            ),
         }
         for (x, y), error in zip(
             spots.xy,
