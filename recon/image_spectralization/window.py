@@ -24,11 +24,11 @@ __all__ = ["CROSS_VALIDATION_PIXELS", "MIN_WINDOW_SPOTS", "Window", "cross_valid
 CROSS_VALIDATION_PIXELS = 250_000
 """Pixels of the window that a larger image is cross-validated in (BENCHMARKS.md,
 "Spectralizing a user's image": at 1000 x 1000 px the window chose as the whole image did)."""
-MIN_WINDOW_SPOTS = 100
-"""Fewest spots (4-connected groups of known pixels) in the window. On the real clothes blend
-at 128 px (256 spots, 1 % RGB noise) a window of 36 spots chose the regression prior without
-the kriged estimate (3.8 % mean Eq. 6.8 against 2.4 % as the whole image chose), windows of 64
-and 100 chose as the whole image (``tests/recon/image_spectralization/test_window.py``)."""
+MIN_WINDOW_SPOTS = 500
+"""Fewest spots (4-connected groups of known pixels) in the window. On the twelve real-reflectance
+mosaics and blends at 600 px (BENCHMARKS.md, "Spectralizing a user's image") windows of 900
+spots chose the space and prior the whole image chose on all twelve; windows of 142 spots (of
+250) on eleven, the twelfth 31 % worse than the whole image's choice."""
 _GROWTH = 1.25  # the window's sides grow by this factor until it holds enough spots
 
 

@@ -117,13 +117,15 @@ def test_a_gain_per_channel_when_asked(crop, tmp_path):
 def test_a_large_image_is_cross_validated_in_a_central_window_unless_told(
     crop, tmp_path, monkeypatch
 ):
-    """With the window made a quarter of the crop (80 x 60 px, grown to 100 x 75 px to hold
-    100 spots: 165 of the 391), only the spots in it get a held-out error (the others none in spots.json, left out of the table and the summary), and
-    the note says so; ``--whole-image-cross-validation`` holds every spot out. Both
-    reconstruct the crop within the bound of the whole image's test."""
+    """With the window made a quarter of the crop (80 x 60 px) and 100 spots its least (a
+    small image's stand-in for a large one's 500; grown to 100 x 75 px: 165 of the 391 spots),
+    only the spots in it get a held-out error (the others none in spots.json, left out of the
+    table and the summary), and the note says so; ``--whole-image-cross-validation`` holds
+    every spot out. Both reconstruct the crop within the bound of the whole image's test."""
     monkeypatch.setattr(
         "recon.image_spectralization.window.CROSS_VALIDATION_PIXELS", 120 * 160 // 4
     )
+    monkeypatch.setattr("recon.image_spectralization.window.MIN_WINDOW_SPOTS", 100)
     folder, truth, xy = crop
     runs = {}
     for name, extra in (("window", []), ("whole", ["--whole-image-cross-validation"])):
