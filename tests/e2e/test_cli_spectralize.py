@@ -285,6 +285,7 @@ PROBES = [
     (["@crop.png", "--spectra", "@spots.csv", "--mask", "@labels.png"], "expected label then"),
     (["@crop.png", "--interleave", "bip"], "'--interleave'"),
     (["@crop.png", "--encoding", "gamma"], "'--encoding'"),
+    (["@crop.png", "--sample-stride", "0"], "'--sample-stride'"),
 ]
 
 

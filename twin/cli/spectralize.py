@@ -92,7 +92,8 @@ def spectralize(
         bool,
         typer.Option(
             help="The thesis's prior (and its rgbxy space unless --appearance names one) "
-            "without cross-validation: one solve, no per-spot errors (by default both are "
+            "without cross-validation: one solve (of a lattice of pixels on images of 100 000 "
+            "pixels or more, see --sample-stride), no per-spot errors (by default both are "
             "chosen by three-fold cross-validation over the spots)."
         ),
     ] = False,
@@ -112,6 +113,17 @@ def spectralize(
             "prior alone.",
         ),
     ] = True,
+    sample_stride: Annotated[
+        int | None,
+        typer.Option(
+            help="With --fast on an image of 100 000 pixels or more, solve every Nth pixel of "
+            "every Nth row and the spots, the other pixels from their nearest solved ones in "
+            "appearance space (by default every second: faster and closer to the truth than "
+            "every pixel); 1: every pixel.",
+            show_default=False,
+            min=1,
+        ),
+    ] = None,
     whole_image_cross_validation: Annotated[
         bool,
         typer.Option(
@@ -165,6 +177,7 @@ def spectralize(
     )
     from recon.image_spectralization.camera_fit import MAX_DEGREE
     from recon.image_spectralization.window import CROSS_VALIDATION_PIXELS
+    from recon.spectralize.hierarchy import SAMPLE_STRIDE
     from twin.studies.spectralized_image import OUTPUTS, write_spectralized_image
 
     started = time.perf_counter()
@@ -191,6 +204,7 @@ def spectralize(
         kriging=kriging,
         camera_degree=0 if gains_only else MAX_DEGREE,
         cross_validation_pixels=None if whole_image_cross_validation else CROSS_VALIDATION_PIXELS,
+        sample_stride=SAMPLE_STRIDE if sample_stride is None else sample_stride,
         progress=not as_json,
     )
     inputs = {
