@@ -5,16 +5,17 @@ at a megapixel. Prints JSON.
    Flea3 response, spots at 1 % of the pixels (single pixels on a regular grid), no noise:
    the mean relative error (Eq. 6.8, %) against the true seven bands of the pixels that are not
    spots, for ``recon.image_spectralization.spectralize_image`` (prior and kriging weight by
-   three-fold cross-validation, and ``fast``), Murakami 2007 and A+ (``recon.baselines``),
-   with the seconds of each; and the cost of the cross-validated path over the plain solve.
+   three-fold cross-validation; ``fast``, hierarchical and of every pixel), Murakami 2007 and
+   A+ (``recon.baselines``), with the seconds of each; and the cost of the cross-validated path
+   over the plain solve.
 2. The same at 1000 x 1000 pixels: a mosaic of the real VHREL clothes reflectances (33 bands,
    ``recon.experiments.real_images``) under a measured camera and D65, spots at 1 %: seconds of
-   the plain solve (``fast``), of the cross-validated path (by default in a central window of
-   the image, ``recon.image_spectralization.window``), of that path over the whole image and
-   of it with the RGBXY space given (not chosen against the learned one), run back to back,
-   and their ratios; also
-   the process's CPU seconds of each, which a machine shared with other jobs disturbs less
-   than the wall time.
+   the plain solve (``fast``: hierarchical, ``recon.spectralize.hierarchy``; and of every
+   pixel), of the cross-validated path (by default in a central window of the image,
+   ``recon.image_spectralization.window``), of that path over the whole image and of it with
+   the RGBXY space given (not chosen against the learned one), run back to back, and their
+   ratios; also the process's CPU seconds of each, which a machine shared with other jobs
+   disturbs less than the wall time.
 
 Run: PYTHONPATH=. .venv/bin/python -m benchmarks.spectralize_image [--side 1000]
 """
@@ -38,6 +39,7 @@ from recon.image_spectralization.spots import SpotSpectra
 from recon.measured_data import read_llanos2019_multispectral
 from recon.metrics import relative_error
 from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid
+from recon.spectralize.hierarchy import SAMPLE_STRIDE
 
 
 def _spots(truth: np.ndarray, grid: WavelengthGrid) -> tuple[SpotSpectra, np.ndarray]:
@@ -56,13 +58,14 @@ def _timed(function):
     return value, round(time.perf_counter() - started, 2)
 
 
-def _ours(rgb, spots, response, fast, appearance="auto", window=True):
+def _ours(rgb, spots, response, fast, appearance="auto", window=True, stride=SAMPLE_STRIDE):
     return spectralize_image(
         rgb,
         spots,
         response,
         fast=fast,
         appearance=appearance,
+        sample_stride=stride,
         **({} if window else {"cross_validation_pixels": None}),
     )
 
@@ -82,6 +85,7 @@ def llanos_case() -> dict:
             runs.setdefault("chosen", _ours(rgb, spots, response, False)).cube
         ),
         "spectralize --fast": lambda: _ours(rgb, spots, response, True).cube,
+        "spectralize --fast, every pixel": lambda: _ours(rgb, spots, response, True, stride=1).cube,
         "murakami": lambda: baselines.recover(
             rgb, real.response, method="murakami", known_pixels=pixels, known_spectra=known
         ),
@@ -132,16 +136,17 @@ def megapixel_case(side: int) -> dict:
         "image": f"{side} x {side} mosaic of VHREL clothes, 33 bands, {case.camera} + D65"
     }
     out["spots"] = int(mask.sum())
-    for name, fast, appearance, window in (
-        ("fast", True, "auto", True),
-        ("cross-validated", False, "auto", True),
-        ("cross-validated whole image", False, "auto", False),
-        ("cross-validated rgbxy", False, "rgbxy", True),
+    for name, fast, appearance, window, stride in (
+        ("fast", True, "auto", True, SAMPLE_STRIDE),
+        ("fast every pixel", True, "auto", True, 1),
+        ("cross-validated", False, "auto", True, SAMPLE_STRIDE),
+        ("cross-validated whole image", False, "auto", False, SAMPLE_STRIDE),
+        ("cross-validated rgbxy", False, "rgbxy", True, SAMPLE_STRIDE),
     ):
         cpu_started = time.process_time()
         result, seconds = _timed(
-            lambda fast=fast, appearance=appearance, window=window: _ours(
-                rgb, spots, response, fast, appearance, window
+            lambda fast=fast, appearance=appearance, window=window, stride=stride: _ours(
+                rgb, spots, response, fast, appearance, window, stride
             )
         )
         out[f"{name}_s"] = seconds
