@@ -25,11 +25,11 @@ Steps:
    term: the settings of the chapter 7 experiments, :mod:`recon.experiments.sparse`) on the
    chosen space's graph, started from the chosen prior's reconstruction of the last fold where
    the whole image was cross-validated (fewer iterations; the same solution within the
-   solver's tolerance). With ``fast``, an image of at least 100 000 pixels is solved
-   hierarchically (:mod:`recon.spectralize.hierarchy`): on a lattice of a quarter of the
-   pixels and the spots, the others from their nearest solved samples in appearance space,
-   which was both faster and closer to the truth than solving every pixel there. Negative values are
-   clipped to zero.
+   solver's tolerance). With ``fast`` and the RGBXY space, an image of at least 100 000
+   pixels is solved hierarchically (:mod:`recon.spectralize.hierarchy`): on a lattice of a
+   quarter of the pixels and the spots, the others from their nearest solved samples in
+   appearance space, which was both faster and closer to the truth than solving every pixel
+   there. Negative values are clipped to zero.
 5. With the cross-validation, the blend with Murakami 2007's kriged estimate
    (:mod:`recon.image_spectralization.kriging_blend`): the kriging weight with which the
    held-out spots are predicted best, 0 (no blend) where the kriged estimate does not help;
@@ -251,7 +251,7 @@ def spectralize_image(
         (:func:`recon.image_spectralization.window.cross_validation_window`; module
         description, step 3); ``None``: the whole image.
     sample_stride
-        With ``fast`` and an image of at least
+        With ``fast``, the RGBXY space and an image of at least
         :data:`~recon.spectralize.hierarchy.MIN_PIXELS` pixels, the energy is solved on every
         ``sample_stride``-th pixel of every ``sample_stride``-th row and the spots, the other
         pixels taken from the solved ones (:mod:`recon.spectralize.hierarchy`; module
@@ -292,7 +292,11 @@ def spectralize_image(
         energy = _ENERGY | {"appearance": FAST_APPEARANCE if appearance == "auto" else appearance}
         if energy["appearance"] in LEARNED_SPACES:
             energy = fitted_on(energy, pixels, spectra)
-        hierarchical = sample_stride > 1 and rgb.shape[0] * rgb.shape[1] >= hierarchy.MIN_PIXELS
+        hierarchical = (
+            sample_stride > 1
+            and rgb.shape[0] * rgb.shape[1] >= hierarchy.MIN_PIXELS
+            and energy["appearance"] in hierarchy.SPACES
+        )
         if not hierarchical:
             graph = graph_for(rgb, energy)
             timings["graph"] = time.perf_counter() - started

@@ -15,9 +15,10 @@ On the twelve real-reflectance mosaics and blends of ``recon.experiments.real_im
 192 px (thesis prior, RGBXY, 1 % RGB noise), with ``stride`` 2 and 4 neighbours, the error
 (Eq. 6.8) is 0.65-1.01 of the plain solve's with spots at 1 % of the pixels and 0.64-0.98 with
 chapter 7's 250 spots (0.80-1.02 with the regression prior); at a megapixel the solve and graph
-take a third of the plain solve's time (BENCHMARKS.md, "Spectralizing a user's image"). The
-samples' sparser graph links each pixel further, so the spots' information spreads further per
-link, and the extension averages four solved samples.
+take a third of the plain solve's time (BENCHMARKS.md, "Hierarchical spectralization"); in the
+learned appearance space it was worse (:data:`SPACES`). The samples' sparser graph links each
+pixel further, so the spots' information spreads further per link, and the extension averages
+four solved samples.
 
 References
 ----------
@@ -40,6 +41,7 @@ from recon.spectralize.solve import PointSpectra, reconstruct
 __all__ = [
     "EXTENSION_NEIGHBOURS",
     "MIN_PIXELS",
+    "SPACES",
     "SAMPLE_STRIDE",
     "extend_from_samples",
     "lattice_samples",
@@ -49,6 +51,12 @@ __all__ = [
 SAMPLE_STRIDE = 2
 """Every ``SAMPLE_STRIDE``-th pixel of every ``SAMPLE_STRIDE``-th row is solved (a quarter of
 them; a sixteenth with 4 was worse than the plain solve on one of twelve cases, 1.37x)."""
+SPACES = frozenset({"rgb", "rgbxy"})
+"""The appearance spaces ``spectwin spectralize --fast`` solves hierarchically. In the learned
+space (:mod:`recon.spectralize.learned_appearance`) the hierarchy was worse than every pixel
+solved: 1.31 against 1.03 % on the clothes blend and 0.94 against 0.65 % on the colour checker
+blend at 600 px (spots at 1 %, thesis prior), where the learned space's neighbours already carry
+the smooth structure that the lattice thins out."""
 MIN_PIXELS = 100_000
 """Smallest image solved hierarchically by ``spectwin spectralize --fast``: the lattice must be
 fine against the image's structures. At 96 x 96 px (chapter 7's 250 spots) the hierarchy was

@@ -92,8 +92,8 @@ def spectralize(
         bool,
         typer.Option(
             help="The thesis's prior (and its rgbxy space unless --appearance names one) "
-            "without cross-validation: one solve (of a lattice of pixels on images of 100 000 "
-            "pixels or more, see --sample-stride), no per-spot errors (by default both are "
+            "without cross-validation: one solve (in rgbxy of a lattice of pixels on images of "
+            "100 000 pixels or more, see --sample-stride), no per-spot errors (by default both are "
             "chosen by three-fold cross-validation over the spots)."
         ),
     ] = False,
@@ -116,10 +116,10 @@ def spectralize(
     sample_stride: Annotated[
         int | None,
         typer.Option(
-            help="With --fast on an image of 100 000 pixels or more, solve every Nth pixel of "
-            "every Nth row and the spots, the other pixels from their nearest solved ones in "
-            "appearance space (by default every second: faster and closer to the truth than "
-            "every pixel); 1: every pixel.",
+            help="With --fast in rgbxy on an image of 100 000 pixels or more, solve every Nth "
+            "pixel of every Nth row and the spots, the other pixels from their nearest solved "
+            "ones in appearance space (by default every second: faster and closer to the truth "
+            "than every pixel); 1: every pixel.",
             show_default=False,
             min=1,
         ),

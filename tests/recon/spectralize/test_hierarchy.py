@@ -93,8 +93,8 @@ def test_spectralize_image_fast_is_hierarchical_unless_small_or_the_stride_is_on
     small_blend_image, monkeypatch
 ):
     """``fast`` solves the lattice of an image of ``MIN_PIXELS`` or more (here lowered to the
-    48 x 48 px image's size); ``sample_stride=1``, or a smaller image, is the plain solve of
-    every pixel, whose timings name its graph."""
+    48 x 48 px image's size) in RGBXY; ``sample_stride=1``, a smaller image or the learned
+    space is the plain solve of every pixel, whose timings name its graph."""
     rgb, spots, response = small_blend_image
     small = spectralize_image(rgb, spots, response, fast=True)
     monkeypatch.setattr(hierarchy, "MIN_PIXELS", 48 * 48)
@@ -102,6 +102,8 @@ def test_spectralize_image_fast_is_hierarchical_unless_small_or_the_stride_is_on
     plain = spectralize_image(rgb, spots, response, fast=True, sample_stride=1)
     assert "graph" in plain.timings_s and "graph" not in default.timings_s
     np.testing.assert_array_equal(small.cube, plain.cube)
+    learned = spectralize_image(rgb, spots, response, fast=True, appearance="learned")
+    assert "graph" in learned.timings_s and learned.appearance == "learned"
     assert not np.array_equal(default.cube, plain.cube)
     assert default.cube.shape == plain.cube.shape == (*rgb.shape[:2], 33)
     pixels = spots.flat_pixels(rgb.shape[:2])
