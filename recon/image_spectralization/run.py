@@ -335,29 +335,16 @@ def spectralize_image(
             )
     prior = FAST_PRIOR if choice is None else choice.prior
     started = time.perf_counter()
+    solve: dict[str, Any] = {
+        "point_spectra": PointSpectra(pixels, spectra),
+        "prior": prior,
+        "tol": tol,
+        "progress": progress,
+    } | energy
     if hierarchical:
-        spectra_out = reconstruct_on_samples(
-            rgb,
-            r_cam,
-            point_spectra=PointSpectra(pixels, spectra),
-            stride=sample_stride,
-            prior=prior,
-            tol=tol,
-            progress=progress,
-            **energy,
-        )
+        spectra_out = reconstruct_on_samples(rgb, r_cam, stride=sample_stride, **solve)
     else:
-        spectra_out = reconstruct(
-            rgb,
-            r_cam,
-            point_spectra=PointSpectra(pixels, spectra),
-            prior=prior,
-            graph=graph,
-            tol=tol,
-            initial=warm_start,
-            progress=progress,
-            **energy,
-        ).spectra
+        spectra_out = reconstruct(rgb, r_cam, graph=graph, initial=warm_start, **solve).spectra
     timings["solve"] = time.perf_counter() - started
     held_out = {} if choice is None else dict(choice.held_out_errors)
     spot_errors = None if choice is None else _in_window(choice.pixel_errors[prior], inside)
