@@ -304,11 +304,12 @@ def spectralize_image(
         started = time.perf_counter()
         window = cross_validation_window(rgb.shape[:2], pixels, cross_validation_pixels)
         inside = window.inside(pixels)
+        window_pixels, window_spectra = window.local(pixels[inside]), spectra[inside]
         chosen = choose_appearance(
             rgb[window.slices],
             r_cam,
-            window.local(pixels[inside]),
-            spectra[inside],
+            window_pixels,
+            window_spectra,
             spaces=SPACES if appearance == "auto" else (appearance,),
             folds=FOLDS,
             tol=tol,
@@ -360,8 +361,8 @@ def spectralize_image(
             kriging_choice = choose_kriging_weight(
                 rgb[window.slices],
                 r_cam,
-                window.local(pixels[inside]),
-                spectra[inside],
+                window_pixels,
+                window_spectra,
                 choice,
                 correlation_length=default_correlation_length(*rgb.shape[:2]),
             )

@@ -36,6 +36,15 @@ def _write_spots(path: Path, xy: np.ndarray, spectra: np.ndarray, wavelengths) -
     path.write_text("\n".join(lines) + "\n")
 
 
+def _spectralize(image: Path, spots: Path, response: Path, out: Path, *extra: str):
+    """``spectwin spectralize IMAGE --spectra SPOTS --response RESPONSE --out OUT [extra]``."""
+    return runner.invoke(
+        app,
+        ["spectralize", str(image), "--spectra", str(spots), "--response", str(response)]
+        + ["--out", str(out), *extra],
+    )
+
+
 @pytest.fixture(scope="module")
 def crop(tmp_path_factory):
     """The crop as a 16-bit PNG, its spots, the Flea3 response as CSV and the truth."""
@@ -60,10 +69,8 @@ def crop(tmp_path_factory):
 def test_spectralize_a_real_crop_and_read_it_back(crop, tmp_path):
     folder, truth, xy = crop
     out = tmp_path / "out"
-    result = runner.invoke(
-        app,
-        ["spectralize", str(folder / "crop.png"), "--spectra", str(folder / "spots.csv")]
-        + ["--response", str(folder / "flea3.csv"), "--out", str(out), "--interleave", "bil"],
+    result = _spectralize(
+        folder / "crop.png", folder / "spots.csv", folder / "flea3.csv", out, "--interleave", "bil"
     )
     assert result.exit_code == 0, result.output
     assert "held-out error per spot" in result.output or "worst five spots" in result.output
@@ -91,11 +98,7 @@ def test_spectralize_a_real_crop_and_read_it_back(crop, tmp_path):
     assert all(spot["cross_validated_error_pct"] >= 0 for spot in spots["spots"])
     preview = cv2.imread(str(out / "preview.png"))
     assert preview.shape == (120, 160, 3)
-    again = runner.invoke(
-        app,
-        ["spectralize", str(folder / "crop.png"), "--spectra", str(folder / "spots.csv")]
-        + ["--response", str(folder / "flea3.csv"), "--out", str(out)],
-    )
+    again = _spectralize(folder / "crop.png", folder / "spots.csv", folder / "flea3.csv", out)
     assert again.exit_code == 2
     assert "already holds spectra.exr" in again.output
 
@@ -104,10 +107,8 @@ def test_a_gain_per_channel_when_asked(crop, tmp_path):
     # The crop's RGB is the bare Flea3 response's: a gain per channel is the whole camera term.
     folder, truth, _ = crop
     out = tmp_path / "out"
-    result = runner.invoke(
-        app,
-        ["spectralize", str(folder / "crop.png"), "--spectra", str(folder / "spots.csv")]
-        + ["--response", str(folder / "flea3.csv"), "--out", str(out), "--gains-only"],
+    result = _spectralize(
+        folder / "crop.png", folder / "spots.csv", folder / "flea3.csv", out, "--gains-only"
     )
     assert result.exit_code == 0, result.output
     cube = read_spectral_exr(out / "spectra.exr").cube
@@ -130,10 +131,8 @@ def test_a_large_image_is_cross_validated_in_a_central_window_unless_told(
     runs = {}
     for name, extra in (("window", []), ("whole", ["--whole-image-cross-validation"])):
         out = tmp_path / name
-        result = runner.invoke(
-            app,
-            ["spectralize", str(folder / "crop.png"), "--spectra", str(folder / "spots.csv")]
-            + ["--response", str(folder / "flea3.csv"), "--out", str(out), *extra],
+        result = _spectralize(
+            folder / "crop.png", folder / "spots.csv", folder / "flea3.csv", out, *extra
         )
         assert result.exit_code == 0, result.output
         cube = read_spectral_exr(out / "spectra.exr").cube
@@ -183,10 +182,8 @@ def test_on_a_smooth_image_the_kriged_estimate_is_blended_in_unless_switched_off
     )
     for name, switch in runs:
         out = tmp_path / name
-        result = runner.invoke(
-            app,
-            ["spectralize", str(tmp_path / "blend.png"), "--spectra", str(tmp_path / "spots.csv")]
-            + ["--response", str(tmp_path / "camera.csv"), "--out", str(out), *switch],
+        result = _spectralize(
+            tmp_path / "blend.png", tmp_path / "spots.csv", tmp_path / "camera.csv", out, *switch
         )
         assert result.exit_code == 0, result.output
         summary = json.loads((out / "spots.json").read_text())["summary"]
@@ -307,11 +304,14 @@ def test_spectralize_refuses_bad_input_in_one_line(bad, tmp_path, arguments, phr
 
 
 def test_an_8_bit_image_is_decoded_from_srgb_when_asked_and_says_so(bad, tmp_path):
-    result = runner.invoke(
-        app,
-        ["spectralize", str(bad / "eight_bit.png"), "--spectra", str(bad / "spots.csv")]
-        + ["--response", str(bad / "flea3.csv"), "--out", str(tmp_path / "o"), "--fast"]
-        + ["--encoding", "srgb"],
+    result = _spectralize(
+        bad / "eight_bit.png",
+        bad / "spots.csv",
+        bad / "flea3.csv",
+        tmp_path / "o",
+        "--fast",
+        "--encoding",
+        "srgb",
     )
     assert result.exit_code == 0, result.output
     assert "note: decoded from sRGB" in " ".join(result.output.split())

@@ -8,14 +8,11 @@ import numpy as np
 import pytest
 
 from recon.errors import InputError
-from recon.experiments.real_images import real_test_image
-from recon.experiments.sampling import add_rgb_noise, whisk_broom_mask
 from recon.image_spectralization import window as window_module
 from recon.image_spectralization.run import spectralize_image
-from recon.image_spectralization.spots import SpotSpectra
 from recon.image_spectralization.window import MIN_WINDOW_SPOTS, cross_validation_window
 from recon.metrics import relative_error
-from recon.spectra import DEFAULT_GRID, SampledSpectra
+from tests.recon.whisk_broom import blend_with_spots
 
 
 def _grid_spots(shape: tuple[int, int], step: int) -> np.ndarray:
@@ -76,16 +73,7 @@ def test_inside_and_local_index_the_windows_pixels(monkeypatch):
 def clothes_blend():
     """The real VHREL clothes reflectances' smooth blend at 128 px, a spot at every 64th pixel
     (256) of its true spectra, 1 % RGB noise: ``(truth, rgb, spots, response, mask)``."""
-    case = real_test_image("vhrel_clothes blend", side=128, seed=0)
-    mask = whisk_broom_mask(case.truth.shape[:2], n_spots=256)
-    rows, cols = np.nonzero(mask)
-    spots = SpotSpectra(
-        np.stack([cols, rows], 1), SampledSpectra(DEFAULT_GRID, case.truth[rows, cols]), "test"
-    )
-    per_nm = case.response / DEFAULT_GRID.quadrature_weights()[:, None]
-    response = SampledSpectra(DEFAULT_GRID, per_nm.T, ("R", "G", "B"))
-    rgb = add_rgb_noise(case.truth @ case.response, 0.01, np.random.default_rng(0))
-    return case.truth, rgb, spots, response, mask
+    return blend_with_spots("vhrel_clothes blend", 128, 256, noise=0.01)
 
 
 def test_a_window_chooses_as_the_whole_image_and_reconstructs_as_well(clothes_blend, monkeypatch):
