@@ -193,6 +193,7 @@ class ParallaxLine:
     per_metre: np.ndarray
 
     def shift(self, height_m: float) -> np.ndarray:
+        """``(2,)`` the shift where the surface lies ``height_m`` above the plate."""
         return self.offset + height_m * self.per_metre
 
 
@@ -241,7 +242,7 @@ def parallax_shift(
     ends = [line.shift(height) for height in heights_m]
     count = int(np.ceil(np.abs(ends[1] - ends[0]).max() / _PARALLAX_STEP_TEXELS)) + 1
     heights = np.linspace(*heights_m, count)
-    shifts = line.offset + heights[:, None] * line.per_metre
+    shifts = np.array([line.shift(height) for height in heights])
     short = np.abs(shifts).max(axis=1) <= min(partner.shape) / 4  # an interval of heights
     if not short.any():
         return line.shift(0.0)
