@@ -205,25 +205,32 @@ def _apply_link_rule(candidates: np.ndarray, k: int) -> np.ndarray:
 
     :math:`N_j` depends on :math:`N_c` for :math:`c < j` only, so a fixed-point iteration that
     revisits just the pixels whose lower-index candidates changed reaches the sequential result.
-    Each round reads the previous round's choices only, so its rows are split between two
-    threads (numpy's indexing and sorting release the GIL).
+    Those pixels are read off an index of every pixel's dependants (the higher pixels that have
+    it as a candidate), so a round costs in proportion to its changes, not to the image. Each
+    round reads the previous round's choices only, so its rows are split between two threads
+    (numpy's indexing and sorting release the GIL).
     """
     n = candidates.shape[0]
     pixels = np.arange(n, dtype=candidates.dtype)
     lower = candidates < pixels[:, None]
+    dependent, slot = np.nonzero(lower)
+    dependants = sparse.csr_matrix(
+        (np.ones(dependent.size, dtype=bool), (candidates[dependent, slot], dependent)),
+        shape=(n, n),
+    )
     neighbours = candidates[:, :k].copy()
     active = pixels
     with ThreadPoolExecutor(_THREADS) as pool:
         while active.size:
             chunks = np.array_split(active, _THREADS if active.size > _SPLIT_ROWS else 1)
-            rounds = pool.map(
-                lambda rows: _rule_choices(candidates, lower, neighbours, rows, k), chunks
+            rounds = list(
+                pool.map(lambda rows: _rule_choices(candidates, lower, neighbours, rows, k), chunks)
             )
-            marked = np.zeros(n, dtype=bool)
-            for changed, chosen in list(rounds):
+            for changed, chosen in rounds:
                 neighbours[changed] = chosen
-                marked[changed] = True
-            active = np.flatnonzero((marked[candidates] & lower).any(axis=1)).astype(pixels.dtype)
+            marked = np.zeros(n, dtype=bool)
+            marked[dependants[np.concatenate([changed for changed, _ in rounds])].indices] = True
+            active = np.flatnonzero(marked).astype(pixels.dtype)
     return neighbours
 
 
