@@ -25,11 +25,12 @@ Steps:
    term: the settings of the chapter 7 experiments, :mod:`recon.experiments.sparse`) on the
    chosen space's graph, started from the chosen prior's reconstruction of the last fold where
    the whole image was cross-validated (fewer iterations; the same solution within the
-   solver's tolerance). With ``fast`` and the RGBXY space, an image of at least 100 000
-   pixels is solved hierarchically (:mod:`recon.spectralize.hierarchy`): on a lattice of a
-   quarter of the pixels and the spots, the others from their nearest solved samples in
-   appearance space, which was both faster and closer to the truth than solving every pixel
-   there. Negative values are clipped to zero.
+   solver's tolerance). In the RGBXY space an image of at least 100 000 pixels is solved
+   hierarchically (:mod:`recon.spectralize.hierarchy`): on a lattice of a quarter of the
+   pixels and the spots, the others from their nearest solved samples in appearance space,
+   which was both faster and closer to the truth than solving every pixel there; the folds of
+   step 3 then solve RGBXY on the lattice too, so that its held-out errors are those of the
+   reconstruction used. Negative values are clipped to zero.
 5. With the cross-validation, the blend with Murakami 2007's kriged estimate
    (:mod:`recon.image_spectralization.kriging_blend`): the kriging weight with which the
    held-out spots are predicted best, 0 (no blend) where the kriged estimate does not help;
@@ -56,6 +57,7 @@ from recon.image_spectralization.spots import SpotSpectra
 from recon.image_spectralization.window import CROSS_VALIDATION_PIXELS, cross_validation_window
 from recon.spectra import SampledSpectra, WavelengthGrid, resample
 from recon.spectralize import hierarchy
+from recon.spectralize.appearance import NeighbourGraph
 from recon.spectralize.appearance_choice import SPACES, choose_appearance
 from recon.spectralize.hierarchy import SAMPLE_STRIDE, reconstruct_on_samples
 from recon.spectralize.learned_appearance import LEARNED_SPACES, fitted_on
@@ -251,11 +253,11 @@ def spectralize_image(
         (:func:`recon.image_spectralization.window.cross_validation_window`; module
         description, step 3); ``None``: the whole image.
     sample_stride
-        With ``fast``, the RGBXY space and an image of at least
-        :data:`~recon.spectralize.hierarchy.MIN_PIXELS` pixels, the energy is solved on every
-        ``sample_stride``-th pixel of every ``sample_stride``-th row and the spots, the other
-        pixels taken from the solved ones (:mod:`recon.spectralize.hierarchy`; module
-        description, step 4); 1: on every pixel.
+        In the RGBXY space on an image of at least
+        :data:`~recon.spectralize.hierarchy.MIN_PIXELS` pixels, the energy is solved (in the
+        folds and finally) on every ``sample_stride``-th pixel of every ``sample_stride``-th
+        row and the spots, the other pixels taken from the solved ones
+        (:mod:`recon.spectralize.hierarchy`; module description, step 4); 1: on every pixel.
     progress
         Show progress bars.
 
@@ -286,20 +288,12 @@ def spectralize_image(
     camera = camera_term(response, grid, flat[pixels], spectra, max_degree=camera_degree)
     r_cam = camera.matrix
     timings, choice, appearance_errors, warm_start = {}, None, {}, None
-    hierarchical = False
+    graph: NeighbourGraph | None = None
+    stride = hierarchy.stride_for(rgb.shape, sample_stride)
     if fast:
-        started = time.perf_counter()
         energy = _ENERGY | {"appearance": FAST_APPEARANCE if appearance == "auto" else appearance}
         if energy["appearance"] in LEARNED_SPACES:
             energy = fitted_on(energy, pixels, spectra)
-        hierarchical = (
-            sample_stride > 1
-            and rgb.shape[0] * rgb.shape[1] >= hierarchy.MIN_PIXELS
-            and energy["appearance"] in hierarchy.SPACES
-        )
-        if not hierarchical:
-            graph = graph_for(rgb, energy)
-            timings["graph"] = time.perf_counter() - started
     else:
         started = time.perf_counter()
         window = cross_validation_window(rgb.shape[:2], pixels, cross_validation_pixels)
@@ -312,6 +306,7 @@ def spectralize_image(
             window_spectra,
             spaces=SPACES if appearance == "auto" else (appearance,),
             folds=FOLDS,
+            sample_stride=stride,  # the folds solve as the whole image will be solved
             tol=tol,
             progress=progress,
             **_ENERGY,
@@ -323,17 +318,19 @@ def spectralize_image(
         if window.whole:
             graph, warm_start = chosen.graph, choice.fold_spectra
         else:
-            started = time.perf_counter()
             energy = _ENERGY | {"appearance": chosen.appearance}
             if chosen.appearance in LEARNED_SPACES:
                 energy = fitted_on(energy, pixels, spectra)
-            graph = graph_for(rgb, energy)
-            timings["graph"] = time.perf_counter() - started
             notes.append(
                 f"space, prior and kriging weight chosen by the cross-validation of "
                 f"{window.describe()} ({int(inside.sum())} of {pixels.size} spot pixels, "
                 f"the others without a held-out error)"
             )
+    hierarchical = stride > 1 and energy["appearance"] in hierarchy.SPACES
+    if not hierarchical and graph is None:
+        started = time.perf_counter()
+        graph = graph_for(rgb, energy)
+        timings["graph"] = time.perf_counter() - started
     prior = FAST_PRIOR if choice is None else choice.prior
     started = time.perf_counter()
     solve: dict[str, Any] = {
@@ -343,7 +340,7 @@ def spectralize_image(
         "progress": progress,
     } | energy
     if hierarchical:
-        spectra_out = reconstruct_on_samples(rgb, r_cam, stride=sample_stride, **solve)
+        spectra_out = reconstruct_on_samples(rgb, r_cam, stride=stride, **solve)
     else:
         spectra_out = reconstruct(rgb, r_cam, graph=graph, initial=warm_start, **solve).spectra
     timings["solve"] = time.perf_counter() - started

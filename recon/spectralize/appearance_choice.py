@@ -26,6 +26,8 @@ import numpy as np
 from recon.errors import InputError
 from recon.progress import progress_steps
 from recon.spectralize.appearance import APPEARANCE_SPACES, NeighbourGraph
+from recon.spectralize.hierarchy import SPACES as HIERARCHICAL_SPACES
+from recon.spectralize.hierarchy import choose_prior_on_samples
 from recon.spectralize.learned_appearance import (
     LEARNED_SPACES,
     fitted_on,
@@ -45,13 +47,16 @@ class AppearanceChoice:
     """The chosen ``appearance`` space, its :class:`~recon.spectralize.PriorChoice`
     (``prior_choice``: the prior chosen with it, its folds and held-out predictions), the
     ``energy`` options that select the space for the solve from all spots (``appearance`` and
-    ``appearance_options``, a learned space fitted on all spots) and its appearance ``graph``,
-    and per space tried the held-out error (Eq. 6.8, %) of its better prior."""
+    ``appearance_options``, a learned space fitted on all spots) and its appearance ``graph``
+    where the folds used it (None for a learned space, whose folds find their own graphs, and
+    where the folds were solved on a lattice of samples,
+    :func:`recon.spectralize.hierarchy.choose_prior_on_samples`), and per space tried the
+    held-out error (Eq. 6.8, %) of its better prior."""
 
     appearance: str
     prior_choice: PriorChoice
     energy: dict[str, Any]
-    graph: NeighbourGraph
+    graph: NeighbourGraph | None
     held_out_errors: dict[str, float]
 
 
@@ -63,6 +68,7 @@ def choose_appearance(
     *,
     spaces: Sequence[str] = SPACES,
     folds: int = FOLDS,
+    sample_stride: int = 1,
     progress: bool = False,
     **options: Any,
 ) -> AppearanceChoice:
@@ -75,6 +81,12 @@ def choose_appearance(
     spaces
         Appearance spaces to try (names of
         :data:`~recon.spectralize.appearance.APPEARANCE_SPACES`); a tie goes to the first.
+    sample_stride
+        Above 1, the spaces of :data:`recon.spectralize.hierarchy.SPACES` are cross-validated
+        on the lattice of every ``sample_stride``-th pixel of every ``sample_stride``-th row
+        of an ``(H, W, C)`` image (:func:`recon.spectralize.hierarchy.choose_prior_on_samples`),
+        so that their held-out errors are those of the hierarchical reconstruction; 1: every
+        space on every pixel.
     progress
         Show a progress bar over the spaces.
     **options
@@ -107,7 +119,7 @@ def choose_appearance(
     if taken:
         raise InputError(f"{', '.join(taken)}: choose_appearance sets them; do not pass them")
     images = np.asarray(rgb, dtype=np.float64)
-    choices: dict[str, tuple[PriorChoice, dict[str, Any], NeighbourGraph]] = {}
+    choices: dict[str, tuple[PriorChoice, dict[str, Any], NeighbourGraph | None]] = {}
     with progress_steps("choosing the appearance space", len(spaces), enabled=progress) as step:
         for space in spaces:
             energy = {"appearance": space} | {
@@ -119,16 +131,29 @@ def choose_appearance(
                     energy["appearance_options"]["features"] = standardized_features(
                         images if images.ndim == 4 else images[None]
                     )
-            graph = graph_for(images, options | energy)
-            choice = choose_prior(
-                images,
-                response,
-                known_pixels,
-                known_spectra,
-                folds=folds,
-                graph=graph,
-                **(options | energy),
-            )
+            graph = None
+            if sample_stride > 1 and space in HIERARCHICAL_SPACES and images.ndim == 3:
+                choice = choose_prior_on_samples(
+                    images,
+                    response,
+                    known_pixels,
+                    known_spectra,
+                    folds=folds,
+                    stride=sample_stride,
+                    **(options | energy),
+                )
+            else:
+                if space not in LEARNED_SPACES:  # a learned space's folds find their own
+                    graph = graph_for(images, options | energy)
+                choice = choose_prior(
+                    images,
+                    response,
+                    known_pixels,
+                    known_spectra,
+                    folds=folds,
+                    graph=graph,
+                    **(options | energy),
+                )
             choices[space] = (choice, energy, graph)
             step()
     errors = {space: choices[space][0].held_out_errors[choices[space][0].prior] for space in spaces}

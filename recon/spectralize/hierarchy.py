@@ -9,7 +9,8 @@ image's); every other pixel then takes the mean of its ``neighbours`` nearest sa
 appearance space, weighted by inverse distance, each scaled by the ratio of the pixel's
 brightness (sum of camera values) to the sample's, so that shading within a material carries
 over as a scale (locally, spectra proportional to the camera values, as Hardeberg's and Dong's
-local methods assume).
+local methods assume). :func:`choose_prior_on_samples` cross-validates the prior on the same
+lattice: the spots are samples, so each held-out spot is predicted by the samples' solve.
 
 On the twelve real-reflectance mosaics and blends of ``recon.experiments.real_images`` at
 192 px (thesis prior, RGBXY, 1 % RGB noise), with ``stride`` 2 and 4 neighbours, the error
@@ -29,13 +30,16 @@ References
 
 from __future__ import annotations
 
+import dataclasses
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from pykdtree.kdtree import KDTree
 
 from recon.errors import InputError
-from recon.spectralize.appearance import appearance_neighbours, appearance_points
+from recon.spectralize.appearance import NeighbourGraph, appearance_neighbours, appearance_points
+from recon.spectralize.prior_choice import FOLDS, PriorChoice, choose_prior, spot_labels
 from recon.spectralize.solve import PointSpectra, reconstruct
 
 __all__ = [
@@ -43,28 +47,38 @@ __all__ = [
     "MIN_PIXELS",
     "SPACES",
     "SAMPLE_STRIDE",
+    "SampledImage",
+    "choose_prior_on_samples",
     "extend_from_samples",
     "lattice_samples",
     "reconstruct_on_samples",
+    "stride_for",
 ]
 
 SAMPLE_STRIDE = 2
 """Every ``SAMPLE_STRIDE``-th pixel of every ``SAMPLE_STRIDE``-th row is solved (a quarter of
 them; a sixteenth with 4 was worse than the plain solve on one of twelve cases, 1.37x)."""
 SPACES = frozenset({"rgb", "rgbxy"})
-"""The appearance spaces ``spectwin spectralize --fast`` solves hierarchically. In the learned
+"""The appearance spaces ``spectwin spectralize`` solves hierarchically. In the learned
 space (:mod:`recon.spectralize.learned_appearance`) the hierarchy was worse than every pixel
 solved: 1.31 against 1.03 % on the clothes blend and 0.94 against 0.65 % on the colour checker
 blend at 600 px (spots at 1 %, thesis prior), where the learned space's neighbours already carry
 the smooth structure that the lattice thins out."""
 MIN_PIXELS = 100_000
-"""Smallest image solved hierarchically by ``spectwin spectralize --fast``: the lattice must be
+"""Smallest image solved hierarchically by ``spectwin spectralize``: the lattice must be
 fine against the image's structures. At 96 x 96 px (chapter 7's 250 spots) the hierarchy was
 worse than the plain solve on 6 of the 24 cases and priors (up to 1.43x: 190 materials in 190
 cells of about 48 px), at 192 px on 2 of 24 by at most 2 %, at 600 and 1000 px on none."""
 EXTENSION_NEIGHBOURS = 4
 """Solved samples each other pixel is made from (1 was worse than 4 on the three cases tried)."""
 _CHUNK = 65_536  # pixels extended at a time (their neighbours' spectra held at once)
+
+
+def stride_for(image_shape: tuple[int, ...], stride: int = SAMPLE_STRIDE) -> int:
+    """The lattice stride an image of ``image_shape`` (rows, columns first) is solved with in
+    the spaces of :data:`SPACES`: ``stride`` from :data:`MIN_PIXELS` pixels, else 1 (every
+    pixel)."""
+    return stride if image_shape[0] * image_shape[1] >= MIN_PIXELS else 1
 
 
 def lattice_samples(
@@ -148,6 +162,65 @@ def extend_from_samples(
     return extended
 
 
+def _point_spectra_only(options: dict[str, Any]) -> None:
+    """Refuse the options of :func:`recon.spectralize.solve.reconstruct` that a solve on the
+    samples cannot take."""
+    taken = sorted({"graph", "p_dyn", "band_images", "device_integrals"} & set(options))
+    if taken:
+        raise InputError(
+            f"{', '.join(taken)}: the hierarchical reconstruction takes point spectra and an "
+            "appearance space only"
+        )
+
+
+@dataclass(frozen=True)
+class SampledImage:
+    """An image's lattice of samples (:func:`lattice_samples`) and what its solves share: the
+    ``samples`` (sorted flat indices), the appearance ``points`` of every pixel, the
+    ``graph`` among the samples (Eq. 6.3, in those points), every pixel's ``camera_values``
+    ``(n, C)`` and the ``known`` pixels' indices among the samples."""
+
+    samples: np.ndarray
+    points: np.ndarray
+    graph: NeighbourGraph
+    camera_values: np.ndarray
+    known: np.ndarray
+
+    @classmethod
+    def of(
+        cls,
+        rgb: np.ndarray,
+        known_pixels: np.ndarray,
+        *,
+        stride: int = SAMPLE_STRIDE,
+        appearance: str = "rgbxy",
+        appearance_options: dict[str, Any] | None = None,
+        neighbours: int = 3,
+    ) -> SampledImage:
+        """The lattice of ``rgb`` (``(H, W, C)``) with the ``known_pixels`` among its samples,
+        linked by ``neighbours`` in the space ``appearance`` (module description)."""
+        images = np.asarray(rgb, dtype=np.float64)
+        if images.ndim != 3:
+            raise InputError(f"rgb: expected (H, W, C) camera values, got shape {images.shape}")
+        pixels = np.asarray(known_pixels, dtype=np.intp)
+        samples = lattice_samples(images.shape[:2], pixels, stride)
+        points = appearance_points(images[None], appearance, **(appearance_options or {}))
+        graph = appearance_neighbours(np.ascontiguousarray(points[samples]), k=neighbours)
+        flat = images.reshape(-1, images.shape[-1])
+        return cls(samples, points, graph, flat, np.searchsorted(samples, pixels))
+
+    def sample_values(self) -> np.ndarray:
+        """``(1, n_samples, C)``: the samples' camera values as an image of one row, the
+        layout the solves take them in."""
+        return self.camera_values[self.samples][None]
+
+    def solve_options(self, options: dict[str, Any]) -> dict[str, Any]:
+        """The solver options of a solve on the samples: ``options`` with the samples' graph
+        and RGB as the space that links components without data (the samples' links are
+        given)."""
+        return options | {"graph": self.graph, "appearance": "rgb"}
+
+
 def reconstruct_on_samples(
     rgb: np.ndarray,
     response: np.ndarray,
@@ -182,29 +255,81 @@ def reconstruct_on_samples(
     numpy.ndarray
         ``(H, W, K)`` spectra.
     """
-    taken = sorted({"graph", "p_dyn", "band_images", "device_integrals"} & set(options))
-    if taken:
-        raise InputError(
-            f"{', '.join(taken)}: the hierarchical reconstruction takes point spectra and an "
-            "appearance space only"
-        )
+    _point_spectra_only(options)
     images = np.asarray(rgb, dtype=np.float64)
-    if images.ndim != 3:
-        raise InputError(f"rgb: expected (H, W, C) camera values, got shape {images.shape}")
-    pixels = np.asarray(point_spectra.pixels, dtype=np.intp)
     spectra = np.asarray(point_spectra.spectra, dtype=np.float64)
-    samples = lattice_samples(images.shape[:2], pixels, stride)
-    points = appearance_points(images[None], appearance, **(appearance_options or {}))
-    graph = appearance_neighbours(np.ascontiguousarray(points[samples]), k=neighbours)
-    flat = images.reshape(-1, images.shape[-1])
-    solved = reconstruct(
-        flat[samples][None],
-        response,
-        point_spectra=PointSpectra(np.searchsorted(samples, pixels), spectra),
-        graph=graph,
-        appearance="rgb",  # the samples' links are given; RGB anchors data-less components
+    sampled = SampledImage.of(
+        images,
+        point_spectra.pixels,
+        stride=stride,
+        appearance=appearance,
+        appearance_options=appearance_options,
         neighbours=neighbours,
-        **options,
-    ).spectra.reshape(samples.size, -1)
-    extended = extend_from_samples(points, flat, samples, solved)
+    )
+    solved = reconstruct(
+        sampled.sample_values(),
+        response,
+        point_spectra=PointSpectra(sampled.known, spectra),
+        neighbours=neighbours,
+        **sampled.solve_options(options),
+    ).spectra.reshape(sampled.samples.size, -1)
+    extended = extend_from_samples(sampled.points, sampled.camera_values, sampled.samples, solved)
     return extended.reshape(*images.shape[:2], -1)
+
+
+def choose_prior_on_samples(
+    rgb: np.ndarray,
+    response: np.ndarray,
+    known_pixels: np.ndarray,
+    known_spectra: np.ndarray,
+    *,
+    folds: int = FOLDS,
+    stride: int = SAMPLE_STRIDE,
+    appearance: str = "rgbxy",
+    appearance_options: dict[str, Any] | None = None,
+    neighbours: int = 3,
+    progress: bool = False,
+    **options: Any,
+) -> PriorChoice:
+    """:func:`recon.spectralize.choose_prior` with every fold solved on the lattice, as
+    :func:`reconstruct_on_samples` solves: the held-out spots are samples, so each is
+    predicted by the samples' solve itself, and the folds measure the reconstruction that is
+    used.
+
+    Parameters
+    ----------
+    rgb, response, known_pixels, known_spectra, folds, progress
+        As in :func:`recon.spectralize.choose_prior`, ``rgb`` ``(H, W, C)``; the spots are
+        numbered on the image's own grid.
+    stride, appearance, appearance_options, neighbours, **options
+        As in :func:`reconstruct_on_samples`.
+
+    Returns
+    -------
+    PriorChoice
+        In the order of ``known_pixels``; without ``fold_spectra`` (the folds' spectra are
+        the samples', no starting guess for the image).
+    """
+    _point_spectra_only(options)
+    images = np.asarray(rgb, dtype=np.float64)
+    pixels = np.asarray(known_pixels, dtype=np.intp)
+    sampled = SampledImage.of(
+        images,
+        pixels,
+        stride=stride,
+        appearance=appearance,
+        appearance_options=appearance_options,
+        neighbours=neighbours,
+    )
+    choice = choose_prior(
+        sampled.sample_values(),
+        response,
+        sampled.known,
+        known_spectra,
+        folds=folds,
+        spot_of_pixel=spot_labels(pixels, (1, *images.shape[:2]), folds),
+        neighbours=neighbours,
+        progress=progress,
+        **sampled.solve_options(options),
+    )
+    return dataclasses.replace(choice, fold_spectra=None)

@@ -45,7 +45,7 @@ from recon.spectralize.joint import reconstruct_priors
 from recon.spectralize.learned_appearance import LEARNED_SPACES, fitted_on
 from recon.spectralize.solve import PRIORS, PointSpectra, graph_for
 
-__all__ = ["PriorChoice", "choose_prior"]
+__all__ = ["PriorChoice", "choose_prior", "spot_labels"]
 
 FOLDS = 5
 """Folds of the cross-validation: fold ``f`` holds out the spots whose number (row-major order of
@@ -84,7 +84,7 @@ def _held_out(spots: np.ndarray, folds: int, fold: int) -> np.ndarray:
     return np.asarray(spots % folds == fold)
 
 
-def _spot_labels(
+def spot_labels(
     pixels: np.ndarray, image_shape: tuple[int, int, int], folds: int = FOLDS
 ) -> np.ndarray:
     """Spot number of every known pixel: 4-connected groups of known pixels within one image;
@@ -115,6 +115,7 @@ def choose_prior(
     known_spectra: np.ndarray,
     *,
     folds: int = FOLDS,
+    spot_of_pixel: np.ndarray | None = None,
     progress: bool = False,
     **options: Any,
 ) -> PriorChoice:
@@ -132,6 +133,10 @@ def choose_prior(
     folds
         Folds of the cross-validation (at least 2): fold ``f`` holds out the spots whose number
         (row-major order of their first pixel) is ``f`` modulo ``folds``.
+    spot_of_pixel
+        ``(m,)`` the spot number of every known pixel (from 0, numbered as above), where the
+        layout of ``rgb`` does not tell which pixels are adjacent (the lattice of samples of
+        :mod:`recon.spectralize.hierarchy`, laid out as one row); ``None``: found from it.
     progress
         Show a progress bar over the folds.
     **options
@@ -182,7 +187,15 @@ def choose_prior(
             f"known_pixels: expected indices in [0, {np.prod(pixel_grid)}), got "
             f"[{pixels.min()}, {pixels.max()}]"
         )
-    spots = _spot_labels(pixels, pixel_grid, folds)
+    if spot_of_pixel is None:
+        spots = spot_labels(pixels, pixel_grid, folds)
+    else:
+        spots = np.asarray(spot_of_pixel)
+        if spots.shape != pixels.shape:
+            raise InputError(
+                f"spot_of_pixel: expected one spot number per known pixel ({pixels.size}), "
+                f"got shape {spots.shape}"
+            )
     count = int(spots.max()) + 1 if spots.size else 0
     if count < folds:
         raise InputError(

@@ -116,10 +116,10 @@ def spectralize(
     sample_stride: Annotated[
         int | None,
         typer.Option(
-            help="With --fast in rgbxy on an image of 100 000 pixels or more, solve every Nth "
-            "pixel of every Nth row and the spots, the other pixels from their nearest solved "
-            "ones in appearance space (by default every second: faster and closer to the truth "
-            "than every pixel); 1: every pixel.",
+            help="In rgbxy on an image of 100 000 pixels or more, solve every Nth pixel of "
+            "every Nth row and the spots (in the cross-validation's folds and finally), the "
+            "other pixels from their nearest solved ones in appearance space (by default every "
+            "second: faster and closer to the truth than every pixel); 1: every pixel.",
             show_default=False,
             min=1,
         ),

@@ -10,14 +10,15 @@ import pytest
 from recon.errors import InputError
 from recon.image_spectralization.run import spectralize_image
 from recon.metrics import relative_error
-from recon.spectralize import hierarchy
+from recon.spectralize import appearance_choice, choose_prior, hierarchy
 from recon.spectralize.hierarchy import (
+    choose_prior_on_samples,
     extend_from_samples,
     lattice_samples,
     reconstruct_on_samples,
 )
 from recon.spectralize.solve import EnergyWeights, PointSpectra, spectralize
-from tests.recon.whisk_broom import whisk_broom_case
+from tests.recon.whisk_broom import blend_with_spots, whisk_broom_case
 
 SETTINGS = {"appearance": "rgbxy", "weights": EnergyWeights(delta=0.0), "tol": 1e-8}
 
@@ -110,3 +111,59 @@ def test_spectralize_image_fast_is_hierarchical_unless_small_or_the_stride_is_on
     np.testing.assert_allclose(
         default.cube.reshape(-1, 33)[pixels], plain.cube.reshape(-1, 33)[pixels], rtol=0.1
     )
+
+
+def test_folds_on_a_lattice_of_every_pixel_are_the_folds_of_the_image():
+    """With stride 1 the lattice is every pixel, laid out as one row: the spots numbered on the
+    image's own grid, the graph found in RGBXY, so the held-out predictions are those of
+    ``choose_prior`` on the image itself. (A smooth blend: in every fold each graph component
+    keeps a spot. Where one does not, the lattice links it in RGB, the image in RGBXY.)"""
+    case, rgb, pixels, spectra = whisk_broom_case("vhrel_clothes blend", 64)
+    options = SETTINGS | {"tol": 1e-10}
+    on_image = choose_prior(rgb, case.response, pixels, spectra, folds=3, **options)
+    on_lattice = choose_prior_on_samples(
+        rgb, case.response, pixels, spectra, folds=3, stride=1, **options
+    )
+    np.testing.assert_array_equal(on_lattice.spot_of_pixel, on_image.spot_of_pixel)
+    for prior in ("spectra", "regression"):
+        np.testing.assert_allclose(
+            on_lattice.held_out_spectra[prior], on_image.held_out_spectra[prior], rtol=1e-6
+        )
+    assert on_lattice.prior == on_image.prior and on_lattice.fold_spectra is None
+
+
+def test_spot_numbers_must_match_the_known_pixels():
+    case, rgb, pixels, spectra = whisk_broom_case("vhrel_clothes mosaic", 64)
+    with pytest.raises(InputError, match="spot_of_pixel: expected one spot number per known"):
+        choose_prior(rgb, case.response, pixels, spectra, spot_of_pixel=np.arange(3))
+
+
+def test_the_cross_validated_path_folds_and_solves_rgbxy_on_the_lattice(monkeypatch):
+    """``spectralize_image``'s default on an image of ``MIN_PIXELS`` or more (lowered here to
+    the 192 px image's size): the RGBXY folds run on the lattice (their held-out errors are
+    ``choose_prior_on_samples``'s) and the final solve is hierarchical (no graph of the whole
+    image); on the real clothes mosaic (250 spots, 1 % RGB noise) it is closer to the truth
+    than every pixel solved (``sample_stride=1``). Measured: 3.35 % against 4.47 % off the
+    spots."""
+    truth, rgb, spots, response, mask = blend_with_spots(
+        "vhrel_clothes mosaic", 192, 250, noise=0.01
+    )
+    monkeypatch.setattr(hierarchy, "MIN_PIXELS", 192 * 192)
+    lattice_folds = []
+
+    def recorded(*args, **options):
+        choice = choose_prior_on_samples(*args, **options)
+        lattice_folds.append((options["stride"], choice))
+        return choice
+
+    monkeypatch.setattr(appearance_choice, "choose_prior_on_samples", recorded)
+    default = spectralize_image(rgb, spots, response, appearance="rgbxy", kriging=False)
+    plain = spectralize_image(
+        rgb, spots, response, appearance="rgbxy", kriging=False, sample_stride=1
+    )
+    errors = [float(relative_error(r.cube, truth)[~mask].mean()) for r in (default, plain)]
+    assert errors[0] < 0.9 * errors[1]
+    ((stride, choice),) = lattice_folds
+    assert stride == hierarchy.SAMPLE_STRIDE
+    assert default.held_out_errors == choice.held_out_errors
+    assert plain.held_out_errors != choice.held_out_errors
