@@ -162,17 +162,6 @@ def extend_from_samples(
     return extended
 
 
-def _point_spectra_only(options: dict[str, Any]) -> None:
-    """Refuse the options of :func:`recon.spectralize.solve.reconstruct` that a solve on the
-    samples cannot take."""
-    taken = sorted({"graph", "p_dyn", "band_images", "device_integrals"} & set(options))
-    if taken:
-        raise InputError(
-            f"{', '.join(taken)}: the hierarchical reconstruction takes point spectra and an "
-            "appearance space only"
-        )
-
-
 @dataclass(frozen=True)
 class SampledImage:
     """An image's lattice of samples (:func:`lattice_samples`) and what its solves share: the
@@ -188,37 +177,38 @@ class SampledImage:
 
     @classmethod
     def of(
-        cls,
-        rgb: np.ndarray,
-        known_pixels: np.ndarray,
-        *,
-        stride: int = SAMPLE_STRIDE,
-        appearance: str = "rgbxy",
-        appearance_options: dict[str, Any] | None = None,
-        neighbours: int = 3,
-    ) -> SampledImage:
+        cls, rgb: np.ndarray, known_pixels: np.ndarray, stride: int, options: dict[str, Any]
+    ) -> tuple[SampledImage, dict[str, Any]]:
         """The lattice of ``rgb`` (``(H, W, C)``) with the ``known_pixels`` among its samples,
-        linked by ``neighbours`` in the space ``appearance`` (module description)."""
+        linked by the ``neighbours`` (3) of ``options`` in their space ``appearance``
+        (``"rgbxy"``, with ``appearance_options``); and the other ``options`` as a solve on the
+        samples takes them: with the samples' graph, and RGB as the space that links
+        components without data (module description)."""
+        taken = sorted({"graph", "p_dyn", "band_images", "device_integrals"} & set(options))
+        if taken:
+            raise InputError(
+                f"{', '.join(taken)}: the hierarchical reconstruction takes point spectra and "
+                "an appearance space only"
+            )
         images = np.asarray(rgb, dtype=np.float64)
         if images.ndim != 3:
             raise InputError(f"rgb: expected (H, W, C) camera values, got shape {images.shape}")
+        solve = dict(options)
+        appearance = solve.pop("appearance", "rgbxy")
+        appearance_options = solve.pop("appearance_options", None) or {}
+        neighbours = solve.setdefault("neighbours", 3)
         pixels = np.asarray(known_pixels, dtype=np.intp)
         samples = lattice_samples(images.shape[:2], pixels, stride)
-        points = appearance_points(images[None], appearance, **(appearance_options or {}))
+        points = appearance_points(images[None], appearance, **appearance_options)
         graph = appearance_neighbours(np.ascontiguousarray(points[samples]), k=neighbours)
         flat = images.reshape(-1, images.shape[-1])
-        return cls(samples, points, graph, flat, np.searchsorted(samples, pixels))
+        sampled = cls(samples, points, graph, flat, np.searchsorted(samples, pixels))
+        return sampled, solve | {"graph": graph, "appearance": "rgb"}
 
     def sample_values(self) -> np.ndarray:
         """``(1, n_samples, C)``: the samples' camera values as an image of one row, the
         layout the solves take them in."""
         return self.camera_values[self.samples][None]
-
-    def solve_options(self, options: dict[str, Any]) -> dict[str, Any]:
-        """The solver options of a solve on the samples: ``options`` with the samples' graph
-        and RGB as the space that links components without data (the samples' links are
-        given)."""
-        return options | {"graph": self.graph, "appearance": "rgb"}
 
 
 def reconstruct_on_samples(
@@ -227,9 +217,6 @@ def reconstruct_on_samples(
     *,
     point_spectra: PointSpectra,
     stride: int = SAMPLE_STRIDE,
-    appearance: str = "rgbxy",
-    appearance_options: dict[str, Any] | None = None,
-    neighbours: int = 3,
     **options: Any,
 ) -> np.ndarray:
     """The hierarchical reconstruction of the module description.
@@ -243,38 +230,28 @@ def reconstruct_on_samples(
         The known spectra at flat pixel indices of ``rgb`` (Eq. 6.10), an array of spectra.
     stride
         Of the lattice solved (:data:`SAMPLE_STRIDE`).
-    appearance, appearance_options, neighbours
-        The appearance space of the graph (Eq. 6.3-6.6), found for the whole image and linked
-        among the samples; the extension uses the same points.
     **options
-        The other options of :func:`recon.spectralize.solve.reconstruct` (``weights``,
-        ``prior``, ``tol``, ``progress``, ...); not ``graph`` or ``p_dyn``.
+        The options of :func:`recon.spectralize.solve.reconstruct`: ``appearance`` (default
+        ``"rgbxy"``), ``appearance_options`` and ``neighbours``, the graph's (Eq. 6.3-6.6),
+        found for the whole image and linked among the samples (the extension uses the same
+        points), and the others (``weights``, ``prior``, ``tol``, ``progress``, ...); not
+        ``graph`` or ``p_dyn``.
 
     Returns
     -------
     numpy.ndarray
         ``(H, W, K)`` spectra.
     """
-    _point_spectra_only(options)
-    images = np.asarray(rgb, dtype=np.float64)
+    sampled, solve = SampledImage.of(rgb, point_spectra.pixels, stride, options)
     spectra = np.asarray(point_spectra.spectra, dtype=np.float64)
-    sampled = SampledImage.of(
-        images,
-        point_spectra.pixels,
-        stride=stride,
-        appearance=appearance,
-        appearance_options=appearance_options,
-        neighbours=neighbours,
-    )
     solved = reconstruct(
         sampled.sample_values(),
         response,
         point_spectra=PointSpectra(sampled.known, spectra),
-        neighbours=neighbours,
-        **sampled.solve_options(options),
+        **solve,
     ).spectra.reshape(sampled.samples.size, -1)
     extended = extend_from_samples(sampled.points, sampled.camera_values, sampled.samples, solved)
-    return extended.reshape(*images.shape[:2], -1)
+    return extended.reshape(*np.shape(rgb)[:2], -1)
 
 
 def choose_prior_on_samples(
@@ -285,9 +262,6 @@ def choose_prior_on_samples(
     *,
     folds: int = FOLDS,
     stride: int = SAMPLE_STRIDE,
-    appearance: str = "rgbxy",
-    appearance_options: dict[str, Any] | None = None,
-    neighbours: int = 3,
     progress: bool = False,
     **options: Any,
 ) -> PriorChoice:
@@ -301,7 +275,7 @@ def choose_prior_on_samples(
     rgb, response, known_pixels, known_spectra, folds, progress
         As in :func:`recon.spectralize.choose_prior`, ``rgb`` ``(H, W, C)``; the spots are
         numbered on the image's own grid.
-    stride, appearance, appearance_options, neighbours, **options
+    stride, **options
         As in :func:`reconstruct_on_samples`.
 
     Returns
@@ -310,26 +284,16 @@ def choose_prior_on_samples(
         In the order of ``known_pixels``; without ``fold_spectra`` (the folds' spectra are
         the samples', no starting guess for the image).
     """
-    _point_spectra_only(options)
-    images = np.asarray(rgb, dtype=np.float64)
     pixels = np.asarray(known_pixels, dtype=np.intp)
-    sampled = SampledImage.of(
-        images,
-        pixels,
-        stride=stride,
-        appearance=appearance,
-        appearance_options=appearance_options,
-        neighbours=neighbours,
-    )
+    sampled, solve = SampledImage.of(rgb, pixels, stride, options)
     choice = choose_prior(
         sampled.sample_values(),
         response,
         sampled.known,
         known_spectra,
         folds=folds,
-        spot_of_pixel=spot_labels(pixels, (1, *images.shape[:2]), folds),
-        neighbours=neighbours,
+        spot_of_pixel=spot_labels(pixels, (1, *np.shape(rgb)[:2]), folds),
         progress=progress,
-        **sampled.solve_options(options),
+        **solve,
     )
     return dataclasses.replace(choice, fold_spectra=None)
