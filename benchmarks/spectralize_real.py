@@ -17,6 +17,7 @@ noise): the mean error of the lit pixels beside
 the bar for ``p_dyn`` 0 and 1 and the floor of the scale (``DYNAMIC_FLOOR``) at 0.1 % and 5 %.
 
 Run: PYTHONPATH=. .venv/bin/python -m benchmarks.spectralize_real [--seeds 0 1] [--side 192]
+    [--cases llanos2019 ...]
 """
 
 from __future__ import annotations
@@ -104,11 +105,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, nargs="+", default=[0])
     parser.add_argument("--side", type=int, default=192)
+    parser.add_argument("--cases", nargs="*", default=None, help="default: every real image")
     parser.add_argument("--spot-fractions", type=float, nargs="*", default=[0.01, 0.02, 0.04])
     arguments = parser.parse_args()
     started = time.perf_counter()
     images = {}
-    for name in real_test_image_names():
+    for name in arguments.cases or real_test_image_names():
         for seed in arguments.seeds:
             case = real_test_image(name, side=arguments.side, seed=seed)
             mask = whisk_broom_mask(case.truth.shape[:2])

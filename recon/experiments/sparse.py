@@ -31,9 +31,10 @@ from recon.errors import InputError
 from recon.experiments.sampling import add_rgb_noise, known_spectra_from_mask, whisk_broom_mask
 from recon.image_spectralization.kriging_blend import blend_with_kriging, choose_kriging_weight
 from recon.metrics import relative_error
+from recon.spectralize import hierarchy
 from recon.spectralize.appearance_choice import choose_appearance
 from recon.spectralize.prior_choice import PriorChoice, choose_prior
-from recon.spectralize.solve import EnergyWeights, spectralize
+from recon.spectralize.solve import EnergyWeights, PointSpectra, spectralize
 
 __all__ = [
     "METHODS",
@@ -100,19 +101,32 @@ def _spectralization_kriged(data: SparseInput) -> np.ndarray:
 def _spectralization_chosen_appearance(data: SparseInput) -> np.ndarray:
     """As :func:`_spectralization_kriged`, the appearance space (RGBXY or the one learned from
     the known spectra) chosen with the prior by the same folds
-    (:func:`recon.spectralize.choose_appearance`)."""
+    (:func:`recon.spectralize.choose_appearance`); as ``spectwin spectralize`` does, RGBXY is
+    solved hierarchically (in the folds and finally) on images of
+    :data:`recon.spectralize.hierarchy.MIN_PIXELS` or more."""
     settings = {key: value for key, value in _SPECTRALIZATION.items() if key != "appearance"}
-    chosen = choose_appearance(data.rgb, data.response, data.pixels, data.spectra, **settings)
-    solved = spectralize(
-        data.rgb,
-        data.response,
-        known_pixels=data.pixels,
-        known_spectra=data.spectra,
-        prior=chosen.prior_choice.prior,
-        graph=chosen.graph,
-        **settings,
-        **chosen.energy,
+    stride = hierarchy.stride_for(data.rgb.shape)
+    chosen = choose_appearance(
+        data.rgb, data.response, data.pixels, data.spectra, sample_stride=stride, **settings
     )
+    solve = settings | chosen.energy | {"prior": chosen.prior_choice.prior}
+    if stride > 1 and chosen.appearance in hierarchy.SPACES:
+        solved = hierarchy.reconstruct_on_samples(
+            data.rgb,
+            data.response,
+            point_spectra=PointSpectra(data.pixels, data.spectra),
+            stride=stride,
+            **solve,
+        )
+    else:
+        solved = spectralize(
+            data.rgb,
+            data.response,
+            known_pixels=data.pixels,
+            known_spectra=data.spectra,
+            graph=chosen.graph,
+            **solve,
+        )
     return _blended(data, chosen.prior_choice, solved)
 
 

@@ -21,9 +21,12 @@ from recon.errors import InputError
 
 __all__ = ["CROSS_VALIDATION_PIXELS", "MIN_WINDOW_SPOTS", "Window", "cross_validation_window"]
 
-CROSS_VALIDATION_PIXELS = 250_000
+CROSS_VALIDATION_PIXELS = 100_000
 """Pixels of the window that a larger image is cross-validated in (BENCHMARKS.md,
-"Spectralizing a user's image": at 1000 x 1000 px the window chose as the whole image did)."""
+"Spectralizing a user's image"): on the twelve real-reflectance mosaics and blends at
+1000 x 1000 px (spots at 1 %), windows of 100 000 px chose the space and prior the whole image
+chose on all twelve, as windows of 90 000 px did at 600 px; a window of 250 000 px took 2.5
+times as long."""
 MIN_WINDOW_SPOTS = 500
 """Fewest spots (4-connected groups of known pixels) in the window. On the twelve real-reflectance
 mosaics and blends at 600 px (BENCHMARKS.md, "Spectralizing a user's image") windows of 900

@@ -128,8 +128,8 @@ def spectralize(
         bool,
         typer.Option(
             "--whole-image-cross-validation",
-            help="Cross-validate a large image whole (by default an image of more than a "
-            "quarter megapixel is cross-validated in a central window of that size at full "
+            help="Cross-validate a large image whole (by default an image of more than "
+            "100 000 pixels is cross-validated in a central window of that size at full "
             "resolution, and only its spots get a held-out error).",
         ),
     ] = False,
