@@ -131,12 +131,7 @@ def megapixel_case(side: int) -> dict:
     case = real_test_image("vhrel_clothes mosaic", side=side, seed=0)
     rgb = case.truth @ case.response
     spots, mask = _spots(case.truth, DEFAULT_GRID)
-    # The response as band integrals: the camera-times-D65 curves per nm on the default grid.
-    response = SampledSpectra(
-        DEFAULT_GRID,
-        (case.response / DEFAULT_GRID.quadrature_weights()[:, None]).T,
-        ("R", "G", "B"),
-    )
+    response = case.response_per_nm()
     out: dict[str, Any] = {
         "image": f"{side} x {side} mosaic of VHREL clothes, 33 bands, {case.camera} + D65"
     }

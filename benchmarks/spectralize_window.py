@@ -62,8 +62,7 @@ def case_run(
     spots = SpotSpectra(
         np.stack([cols, rows], 1), SampledSpectra(DEFAULT_GRID, case.truth[rows, cols]), "bench"
     )
-    per_nm = case.response / DEFAULT_GRID.quadrature_weights()[:, None]
-    response = SampledSpectra(DEFAULT_GRID, per_nm.T, ("R", "G", "B"))
+    response = case.response_per_nm()
     rgb = add_rgb_noise(case.truth @ case.response, 0.01, np.random.default_rng(seed))
     out: dict = {"case": name, "seed": seed, "camera": case.camera, "spots": int(mask.sum())}
     settings = _settings(against, side, share)

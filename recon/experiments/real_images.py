@@ -36,7 +36,7 @@ from recon.measured_data import (
     read_llanos2019_multispectral,
     read_spectra_csv,
 )
-from recon.spectra import DEFAULT_GRID, from_colour, resample
+from recon.spectra import DEFAULT_GRID, SampledSpectra, WavelengthGrid, from_colour, resample
 from recon.spectralize.solve import BandImage
 
 __all__ = [
@@ -64,14 +64,21 @@ _KINDS = ("mosaic", "blend")
 
 @dataclass(frozen=True)
 class RealTestImage:
-    """A test case: ``truth`` ``(H, W, K)`` spectra, ``response`` ``(K, 3)`` with
-    ``rgb = truth @ response`` (Eq. 7.1), and what they are made of."""
+    """A test case: ``truth`` ``(H, W, K)`` spectra on ``grid``, ``response`` ``(K, 3)`` with
+    ``rgb = truth @ response`` (Eq. 7.1, band integrals), and what they are made of."""
 
     name: str
     truth: np.ndarray
     response: np.ndarray
     camera: str
     description: str
+    grid: WavelengthGrid = DEFAULT_GRID
+
+    def response_per_nm(self) -> SampledSpectra:
+        """The response as a camera's response file gives it: ``(3, K)`` rows R, G, B per
+        nanometre (the band integrals divided by the grid's quadrature weights)."""
+        per_nm = self.response / self.grid.quadrature_weights()[:, None]
+        return SampledSpectra(self.grid, per_nm.T, ("R", "G", "B"))
 
 
 def real_test_image_names() -> tuple[str, ...]:
@@ -111,7 +118,7 @@ def real_test_image(name: str, *, side: int = 192, seed: int = 0) -> RealTestIma
     if name == "llanos2019":
         real = read_llanos2019_multispectral()
         return RealTestImage(
-            name, real.image, real.response, "Llanos 2019 sensor", "real 7-band image"
+            name, real.image, real.response, "Llanos 2019 sensor", "real 7-band image", real.grid
         )
     set_name, kind = name.split(" ")
     reflectances = read_spectra_csv(f"spectra/reflectances/{set_name}.csv")

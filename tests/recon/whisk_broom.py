@@ -31,8 +31,7 @@ def blend_with_spots(name: str, side: int, spots: int, noise: float = 0.0):
     known = SpotSpectra(
         np.stack([cols, rows], 1), SampledSpectra(DEFAULT_GRID, case.truth[rows, cols]), "test"
     )
-    per_nm = case.response / DEFAULT_GRID.quadrature_weights()[:, None]
-    response = SampledSpectra(DEFAULT_GRID, per_nm.T, ("R", "G", "B"))
+    response = case.response_per_nm()
     rgb = case.truth @ case.response
     if noise:
         rgb = add_rgb_noise(rgb, noise, np.random.default_rng(0))

@@ -15,7 +15,7 @@ from recon.experiments.real_images import (
 from recon.experiments.sampling import whisk_broom_mask
 from recon.experiments.sparse import run_protocol
 from recon.experiments.synthetic_images import smooth_blend
-from recon.measured_data import read_spectra_csv
+from recon.measured_data import read_llanos2019_multispectral, read_spectra_csv
 
 
 def test_every_reflectance_set_gives_a_mosaic_and_a_blend_under_its_own_camera():
@@ -31,6 +31,22 @@ def test_every_reflectance_set_gives_a_mosaic_and_a_blend_under_its_own_camera()
     assert len(cameras) == 2 * len(REFLECTANCE_SETS)
     with pytest.raises(InputError, match="expected one of llanos2019"):
         real_test_image("lego mosaic")
+
+
+def test_the_response_per_nanometre_is_the_one_measured_and_integrates_to_the_bands():
+    """Llanos's image: the per-nanometre response is its measured sensor map; a mosaic's,
+    integrated over the 10 nm grid (trapezoids), gives back the band integrals."""
+    llanos = real_test_image("llanos2019")
+    np.testing.assert_allclose(
+        llanos.response_per_nm().values, read_llanos2019_multispectral().sensor_map.T, rtol=1e-12
+    )
+    assert llanos.response_per_nm().grid.wavelengths_nm.size == 7
+    case = real_test_image("vhrel_clothes mosaic", side=24)
+    per_nm = case.response_per_nm()
+    assert per_nm.names == ("R", "G", "B")
+    steps = np.diff(per_nm.grid.wavelengths_nm)
+    trapezoid = np.concatenate([[steps[0] / 2], (steps[:-1] + steps[1:]) / 2, [steps[-1] / 2]])
+    np.testing.assert_allclose(per_nm.values * trapezoid, case.response.T, rtol=1e-12)
 
 
 def test_a_smooth_blend_stays_within_its_spectra_times_the_shading():
