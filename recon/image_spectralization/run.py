@@ -341,6 +341,10 @@ def spectralize_image(
     } | energy
     if hierarchical:
         spectra_out = reconstruct_on_samples(rgb, r_cam, stride=stride, **solve)
+        notes.append(
+            f"solved on one pixel in each {stride} x {stride} block and on the spots, the "
+            f"other pixels from their nearest solved ones in appearance space"
+        )
     else:
         spectra_out = reconstruct(rgb, r_cam, graph=graph, initial=warm_start, **solve).spectra
     timings["solve"] = time.perf_counter() - started

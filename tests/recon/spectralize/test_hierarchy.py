@@ -102,6 +102,8 @@ def test_spectralize_image_fast_is_hierarchical_unless_small_or_the_stride_is_on
     default = spectralize_image(rgb, spots, response, fast=True)
     plain = spectralize_image(rgb, spots, response, fast=True, sample_stride=1)
     assert "graph" in plain.timings_s and "graph" not in default.timings_s
+    assert any("one pixel in each 2 x 2 block and on the spots" in n for n in default.notes)
+    assert not any("block" in note for note in plain.notes + small.notes)
     np.testing.assert_array_equal(small.cube, plain.cube)
     learned = spectralize_image(rgb, spots, response, fast=True, appearance="learned")
     assert "graph" in learned.timings_s and learned.appearance == "learned"
