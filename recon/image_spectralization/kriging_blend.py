@@ -36,7 +36,13 @@ from recon.errors import InputError
 from recon.metrics import relative_error
 from recon.spectralize.prior_choice import PriorChoice
 
-__all__ = ["GRID_PER_LENGTH", "KrigingWeight", "blend_with_kriging", "choose_kriging_weight"]
+__all__ = [
+    "GRID_PER_LENGTH",
+    "KrigingWeight",
+    "blend_with_kriging",
+    "choose_kriging_weight",
+    "kriged_estimate",
+]
 
 WEIGHTS = np.linspace(0.0, 1.0, 21)
 """The kriging weights tried, in steps of 0.05."""
@@ -154,6 +160,22 @@ def choose_kriging_weight(
     )
 
 
+def kriged_estimate(
+    rgb: np.ndarray, response: np.ndarray, known_pixels: np.ndarray, known_spectra: np.ndarray
+) -> np.ndarray:
+    """Murakami's kriged estimate of every pixel of ``rgb`` from the spots, ``(H, W, K)``, its
+    correction on a grid of :data:`GRID_PER_LENGTH` points per correlation length."""
+    images = np.asarray(rgb, dtype=np.float64)
+    length = default_correlation_length(*images.shape[:2])
+    return _kriged(
+        images,
+        response,
+        np.asarray(known_pixels),
+        np.asarray(known_spectra, dtype=np.float64),
+        grid_step=max(1, int(length // GRID_PER_LENGTH)),
+    )
+
+
 def blend_with_kriging(
     spectralized: np.ndarray,
     rgb: np.ndarray,
@@ -163,20 +185,11 @@ def blend_with_kriging(
     kriging_weight: float,
 ) -> np.ndarray:
     """``(1 - kriging_weight) * spectralized + kriging_weight *`` Murakami's kriged estimate
-    from the spots (its correction on a grid of :data:`GRID_PER_LENGTH` points per
-    correlation length); the spectralization itself where the weight is 0.
-    ``spectralized``: ``(H, W, K)``."""
+    from the spots (:func:`kriged_estimate`); the spectralization itself where the weight is
+    0. ``spectralized``: ``(H, W, K)``."""
     if not 0.0 <= kriging_weight <= 1.0:
         raise InputError(f"kriging_weight: expected a weight in [0, 1], got {kriging_weight}")
     if kriging_weight == 0.0:
         return spectralized
-    images = np.asarray(rgb, dtype=np.float64)
-    length = default_correlation_length(*images.shape[:2])
-    kriged = _kriged(
-        images,
-        response,
-        np.asarray(known_pixels),
-        np.asarray(known_spectra, dtype=np.float64),
-        grid_step=max(1, int(length // GRID_PER_LENGTH)),
-    )
+    kriged = kriged_estimate(rgb, response, known_pixels, known_spectra)
     return (1.0 - kriging_weight) * spectralized + kriging_weight * kriged

@@ -34,7 +34,8 @@ Steps:
 5. With the cross-validation, the blend with Murakami 2007's kriged estimate
    (:mod:`recon.image_spectralization.kriging_blend`): the kriging weight with which the
    held-out spots are predicted best, 0 (no blend) where the kriged estimate does not help;
-   off with ``kriging=False``.
+   off with ``kriging=False``. It is chosen before the solve of step 4, which a weight of 1
+   (the kriged estimate alone) leaves out.
 
 References
 ----------
@@ -52,7 +53,11 @@ import numpy as np
 from recon.baselines.murakami2007 import default_correlation_length
 from recon.errors import InputError
 from recon.image_spectralization.camera_fit import MAX_DEGREE, camera_term
-from recon.image_spectralization.kriging_blend import blend_with_kriging, choose_kriging_weight
+from recon.image_spectralization.kriging_blend import (
+    blend_with_kriging,
+    choose_kriging_weight,
+    kriged_estimate,
+)
 from recon.image_spectralization.spots import SpotSpectra
 from recon.image_spectralization.window import CROSS_VALIDATION_PIXELS, cross_validation_window
 from recon.spectra import SampledSpectra, WavelengthGrid, resample
@@ -135,7 +140,8 @@ class ImageSpectralization:
     fit_residual_pct
         ``(3,)`` relative RMS residual of that fit per channel, %.
     timings_s
-        Seconds of the appearance graph, the cross-validation and the solve.
+        Seconds of the steps taken: the cross-validation, the appearance graph, the solve and
+        the kriged estimate (its weight's choice and the blend).
     notes
         What was done to the inputs beyond reading them.
     """
@@ -161,6 +167,37 @@ def _in_window(errors: np.ndarray, inside: np.ndarray) -> np.ndarray:
     every = np.full(inside.shape, np.nan)
     every[inside] = errors
     return every
+
+
+def _solved(
+    rgb: np.ndarray,
+    r_cam: np.ndarray,
+    point_spectra: PointSpectra,
+    solve: dict[str, Any],
+    stride: int,
+    graph: NeighbourGraph | None,
+    warm_start: np.ndarray | None,
+    timings: dict[str, float],
+) -> np.ndarray:
+    """The solve of step 4 (module description) with the energy and solver options ``solve``:
+    on the lattice of ``stride`` where it is above 1, else on the appearance graph (found here
+    unless given) from ``warm_start``; its seconds (and the graph's) go into ``timings``."""
+    if stride > 1:
+        started = time.perf_counter()
+        spectra = reconstruct_on_samples(
+            rgb, r_cam, point_spectra=point_spectra, stride=stride, **solve
+        )
+    else:
+        if graph is None:
+            started = time.perf_counter()
+            graph = graph_for(rgb, solve)
+            timings["graph"] = time.perf_counter() - started
+        started = time.perf_counter()
+        spectra = reconstruct(
+            rgb, r_cam, point_spectra=point_spectra, graph=graph, initial=warm_start, **solve
+        ).spectra
+    timings["solve"] = time.perf_counter() - started
+    return np.asarray(spectra)
 
 
 def _channel_integrals(response: SampledSpectra, low: float, high: float) -> np.ndarray:
@@ -326,28 +363,7 @@ def spectralize_image(
                 f"{window.describe()} ({int(inside.sum())} of {pixels.size} spot pixels, "
                 f"the others without a held-out error)"
             )
-    hierarchical = stride > 1 and energy["appearance"] in hierarchy.SPACES
-    if not hierarchical and graph is None:
-        started = time.perf_counter()
-        graph = graph_for(rgb, energy)
-        timings["graph"] = time.perf_counter() - started
     prior = FAST_PRIOR if choice is None else choice.prior
-    started = time.perf_counter()
-    solve: dict[str, Any] = {
-        "point_spectra": PointSpectra(pixels, spectra),
-        "prior": prior,
-        "tol": tol,
-        "progress": progress,
-    } | energy
-    if hierarchical:
-        spectra_out = reconstruct_on_samples(rgb, r_cam, stride=stride, **solve)
-        notes.append(
-            f"solved on one pixel in each {stride} x {stride} block and on the spots, the "
-            f"other pixels from their nearest solved ones in appearance space"
-        )
-    else:
-        spectra_out = reconstruct(rgb, r_cam, graph=graph, initial=warm_start, **solve).spectra
-    timings["solve"] = time.perf_counter() - started
     held_out = {} if choice is None else dict(choice.held_out_errors)
     spot_errors = None if choice is None else _in_window(choice.pixel_errors[prior], inside)
     weight = 0.0
@@ -370,8 +386,31 @@ def spectralize_image(
             weight = kriging_choice.kriging_weight
             held_out |= {key: kriging_choice.held_out_errors[key] for key in ("kriging", "blend")}
             spot_errors = _in_window(kriging_choice.pixel_errors, inside)
-            spectra_out = blend_with_kriging(spectra_out, rgb, r_cam, pixels, spectra, weight)
             timings["kriging"] = time.perf_counter() - started
+    if weight == 1.0:  # the blend is the kriged estimate alone: nothing to solve
+        started = time.perf_counter()
+        spectra_out = kriged_estimate(rgb, r_cam, pixels, spectra)
+        timings["kriging"] += time.perf_counter() - started
+        notes.append(
+            "the kriged estimate alone: the held-out spots chose it over any blend with the "
+            "spectralization, which was therefore not solved"
+        )
+    else:
+        hierarchical = stride > 1 and energy["appearance"] in hierarchy.SPACES
+        solve = {"prior": prior, "tol": tol, "progress": progress} | energy
+        known = PointSpectra(pixels, spectra)
+        spectra_out = _solved(
+            rgb, r_cam, known, solve, stride if hierarchical else 1, graph, warm_start, timings
+        )
+        if hierarchical:
+            notes.append(
+                f"solved on one pixel in each {stride} x {stride} block and on the spots, the "
+                f"other pixels from their nearest solved ones in appearance space"
+            )
+        if weight:
+            started = time.perf_counter()
+            spectra_out = blend_with_kriging(spectra_out, rgb, r_cam, pixels, spectra, weight)
+            timings["kriging"] += time.perf_counter() - started
     cube = np.clip(spectra_out, 0.0, None).astype(np.float32)
     return ImageSpectralization(
         cube=cube,

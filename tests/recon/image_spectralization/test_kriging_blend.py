@@ -16,7 +16,7 @@ from recon.image_spectralization.run import spectralize_image
 from recon.metrics import relative_error
 from recon.spectralize import choose_prior
 from recon.spectralize.solve import EnergyWeights, spectralize
-from tests.recon.whisk_broom import whisk_broom_case
+from tests.recon.whisk_broom import blend_with_spots, whisk_broom_case
 
 SETTINGS = {"appearance": "rgbxy", "weights": EnergyWeights(delta=0.0), "tol": 1e-8}
 
@@ -87,3 +87,24 @@ def test_spectralize_image_blends_unless_there_are_too_many_spots(monkeypatch, s
     alone = spectralize_image(rgb, spots, response)
     assert alone.kriging_weight == 0.0 and "blend" not in alone.held_out_errors
     assert any("no blend with the kriged estimate: 64 spot pixels" in n for n in alone.notes)
+
+
+def test_a_weight_of_one_takes_the_kriged_estimate_without_a_solve(monkeypatch):
+    """On the noiseless food blend (64 px, 128 spots) the held-out spots choose the kriged
+    estimate alone (weight 1; measured): the spectralization is not solved, and the result is
+    Murakami's estimate from the spots (with the camera's band integrals instead of the term
+    fitted to the spots: the same within 0.001 %)."""
+    truth, rgb, spots, response, mask = blend_with_spots("vhrel_food blend", 64, 128)
+    monkeypatch.setattr(run, "_solved", lambda *_: pytest.fail("the spectralization was solved"))
+    result = spectralize_image(rgb, spots, response)
+    assert result.kriging_weight == 1.0 and "solve" not in result.timings_s
+    assert any(note.startswith("the kriged estimate alone") for note in result.notes)
+    pixels = spots.flat_pixels(rgb.shape[:2])
+    murakami = recover(
+        rgb,
+        response.values.T * response.grid.quadrature_weights()[:, None],
+        method="murakami",
+        known_pixels=pixels,
+        known_spectra=truth.reshape(-1, 33)[pixels],
+    )
+    assert float(relative_error(result.cube, murakami).mean()) < 1e-3
