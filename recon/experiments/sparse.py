@@ -109,24 +109,16 @@ def _spectralization_chosen_appearance(data: SparseInput) -> np.ndarray:
     chosen = choose_appearance(
         data.rgb, data.response, data.pixels, data.spectra, sample_stride=stride, **settings
     )
-    solve = settings | chosen.energy | {"prior": chosen.prior_choice.prior}
-    if stride > 1 and chosen.appearance in hierarchy.SPACES:
-        solved = hierarchy.reconstruct_on_samples(
-            data.rgb,
-            data.response,
-            point_spectra=PointSpectra(data.pixels, data.spectra),
-            stride=stride,
-            **solve,
-        )
-    else:
-        solved = spectralize(
-            data.rgb,
-            data.response,
-            known_pixels=data.pixels,
-            known_spectra=data.spectra,
-            graph=chosen.graph,
-            **solve,
-        )
+    solved = hierarchy.reconstruct_image(
+        data.rgb,
+        data.response,
+        point_spectra=PointSpectra(data.pixels, data.spectra),
+        stride=stride,
+        graph=chosen.graph,
+        prior=chosen.prior_choice.prior,
+        **settings,
+        **chosen.energy,
+    )
     return _blended(data, chosen.prior_choice, solved)
 
 

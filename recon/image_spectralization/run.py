@@ -64,9 +64,9 @@ from recon.spectra import SampledSpectra, WavelengthGrid, resample
 from recon.spectralize import hierarchy
 from recon.spectralize.appearance import NeighbourGraph
 from recon.spectralize.appearance_choice import SPACES, choose_appearance
-from recon.spectralize.hierarchy import SAMPLE_STRIDE, reconstruct_on_samples
+from recon.spectralize.hierarchy import SAMPLE_STRIDE
 from recon.spectralize.learned_appearance import LEARNED_SPACES, fitted_on
-from recon.spectralize.solve import EnergyWeights, PointSpectra, graph_for, reconstruct
+from recon.spectralize.solve import EnergyWeights, PointSpectra, graph_for
 
 __all__ = [
     "APPEARANCES",
@@ -167,37 +167,6 @@ def _in_window(errors: np.ndarray, inside: np.ndarray) -> np.ndarray:
     every = np.full(inside.shape, np.nan)
     every[inside] = errors
     return every
-
-
-def _solved(
-    rgb: np.ndarray,
-    r_cam: np.ndarray,
-    point_spectra: PointSpectra,
-    solve: dict[str, Any],
-    stride: int,
-    graph: NeighbourGraph | None,
-    warm_start: np.ndarray | None,
-    timings: dict[str, float],
-) -> np.ndarray:
-    """The solve of step 4 (module description) with the energy and solver options ``solve``:
-    on the lattice of ``stride`` where it is above 1, else on the appearance graph (found here
-    unless given) from ``warm_start``; its seconds (and the graph's) go into ``timings``."""
-    if stride > 1:
-        started = time.perf_counter()
-        spectra = reconstruct_on_samples(
-            rgb, r_cam, point_spectra=point_spectra, stride=stride, **solve
-        )
-    else:
-        if graph is None:
-            started = time.perf_counter()
-            graph = graph_for(rgb, solve)
-            timings["graph"] = time.perf_counter() - started
-        started = time.perf_counter()
-        spectra = reconstruct(
-            rgb, r_cam, point_spectra=point_spectra, graph=graph, initial=warm_start, **solve
-        ).spectra
-    timings["solve"] = time.perf_counter() - started
-    return np.asarray(spectra)
 
 
 def _channel_integrals(response: SampledSpectra, low: float, high: float) -> np.ndarray:
@@ -396,12 +365,25 @@ def spectralize_image(
             "spectralization, which was therefore not solved"
         )
     else:
-        hierarchical = stride > 1 and energy["appearance"] in hierarchy.SPACES
-        solve = {"prior": prior, "tol": tol, "progress": progress} | energy
-        known = PointSpectra(pixels, spectra)
-        spectra_out = _solved(
-            rgb, r_cam, known, solve, stride if hierarchical else 1, graph, warm_start, timings
+        hierarchical = hierarchy.on_lattice(energy["appearance"], stride)
+        if not hierarchical and graph is None:
+            started = time.perf_counter()
+            graph = graph_for(rgb, energy)
+            timings["graph"] = time.perf_counter() - started
+        started = time.perf_counter()
+        spectra_out = hierarchy.reconstruct_image(
+            rgb,
+            r_cam,
+            point_spectra=PointSpectra(pixels, spectra),
+            stride=stride,
+            graph=graph,
+            initial=warm_start,
+            prior=prior,
+            tol=tol,
+            progress=progress,
+            **energy,
         )
+        timings["solve"] = time.perf_counter() - started
         if hierarchical:
             notes.append(
                 f"solved on one pixel in each {stride} x {stride} block and on the spots, the "

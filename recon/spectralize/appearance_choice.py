@@ -26,8 +26,7 @@ import numpy as np
 from recon.errors import InputError
 from recon.progress import progress_steps
 from recon.spectralize.appearance import APPEARANCE_SPACES, NeighbourGraph
-from recon.spectralize.hierarchy import SPACES as HIERARCHICAL_SPACES
-from recon.spectralize.hierarchy import choose_prior_on_samples
+from recon.spectralize.hierarchy import choose_prior_on_samples, on_lattice
 from recon.spectralize.learned_appearance import (
     LEARNED_SPACES,
     fitted_on,
@@ -132,7 +131,7 @@ def choose_appearance(
                         images if images.ndim == 4 else images[None]
                     )
             graph = None
-            if sample_stride > 1 and space in HIERARCHICAL_SPACES and images.ndim == 3:
+            if on_lattice(space, sample_stride) and images.ndim == 3:
                 choice = choose_prior_on_samples(
                     images,
                     response,

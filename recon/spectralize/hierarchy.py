@@ -51,6 +51,8 @@ __all__ = [
     "choose_prior_on_samples",
     "extend_from_samples",
     "lattice_samples",
+    "on_lattice",
+    "reconstruct_image",
     "reconstruct_on_samples",
     "stride_for",
 ]
@@ -79,6 +81,37 @@ def stride_for(image_shape: tuple[int, ...], stride: int = SAMPLE_STRIDE) -> int
     the spaces of :data:`SPACES`: ``stride`` from :data:`MIN_PIXELS` pixels, else 1 (every
     pixel)."""
     return stride if image_shape[0] * image_shape[1] >= MIN_PIXELS else 1
+
+
+def on_lattice(appearance: str, stride: int) -> bool:
+    """Whether the space ``appearance`` is solved on a lattice of ``stride`` (from
+    :func:`stride_for`): a stride above 1 and a space of :data:`SPACES`."""
+    return stride > 1 and appearance in SPACES
+
+
+def reconstruct_image(
+    rgb: np.ndarray,
+    response: np.ndarray,
+    *,
+    point_spectra: PointSpectra,
+    stride: int,
+    graph: NeighbourGraph | None = None,
+    initial: np.ndarray | None = None,
+    **options: Any,
+) -> np.ndarray:
+    """Every pixel's spectra, ``(H, W, K)``: :func:`reconstruct_on_samples` where the space
+    ``options["appearance"]`` is solved on the lattice of ``stride`` (:func:`on_lattice`), else
+    :func:`recon.spectralize.solve.reconstruct` of every pixel on ``graph`` (found there unless
+    given) from ``initial``."""
+    if on_lattice(options["appearance"], stride):
+        return reconstruct_on_samples(
+            rgb, response, point_spectra=point_spectra, stride=stride, **options
+        )
+    return np.asarray(
+        reconstruct(
+            rgb, response, point_spectra=point_spectra, graph=graph, initial=initial, **options
+        ).spectra
+    )
 
 
 def lattice_samples(

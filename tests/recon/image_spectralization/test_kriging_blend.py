@@ -14,7 +14,7 @@ from recon.image_spectralization import run
 from recon.image_spectralization.kriging_blend import blend_with_kriging, choose_kriging_weight
 from recon.image_spectralization.run import spectralize_image
 from recon.metrics import relative_error
-from recon.spectralize import choose_prior
+from recon.spectralize import choose_prior, hierarchy
 from recon.spectralize.solve import EnergyWeights, spectralize
 from tests.recon.whisk_broom import blend_with_spots, whisk_broom_case
 
@@ -95,7 +95,9 @@ def test_a_weight_of_one_takes_the_kriged_estimate_without_a_solve(monkeypatch):
     Murakami's estimate from the spots (with the camera's band integrals instead of the term
     fitted to the spots: the same within 0.001 %)."""
     truth, rgb, spots, response, mask = blend_with_spots("vhrel_food blend", 64, 128)
-    monkeypatch.setattr(run, "_solved", lambda *_: pytest.fail("the spectralization was solved"))
+    monkeypatch.setattr(
+        hierarchy, "reconstruct_image", lambda *_, **__: pytest.fail("the image was solved")
+    )
     result = spectralize_image(rgb, spots, response)
     assert result.kriging_weight == 1.0 and "solve" not in result.timings_s
     assert any(note.startswith("the kriged estimate alone") for note in result.notes)
