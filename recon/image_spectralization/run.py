@@ -161,6 +161,13 @@ class ImageSpectralization:
     notes: tuple[str, ...] = field(default_factory=tuple)
 
 
+def _energy(space: str, pixels: np.ndarray, spectra: np.ndarray) -> dict[str, Any]:
+    """The energy options of the solve in the appearance space ``space``, a learned one
+    fitted on all the spots."""
+    energy = _ENERGY | {"appearance": space}
+    return fitted_on(energy, pixels, spectra) if space in LEARNED_SPACES else energy
+
+
 def _in_window(errors: np.ndarray, inside: np.ndarray) -> np.ndarray:
     """Held-out ``errors`` of the spot pixels ``inside`` the cross-validation's window, in the
     order of all spot pixels, NaN for those outside it."""
@@ -297,9 +304,7 @@ def spectralize_image(
     graph: NeighbourGraph | None = None
     stride = hierarchy.stride_for(rgb.shape, sample_stride)
     if fast:
-        energy = _ENERGY | {"appearance": FAST_APPEARANCE if appearance == "auto" else appearance}
-        if energy["appearance"] in LEARNED_SPACES:
-            energy = fitted_on(energy, pixels, spectra)
+        energy = _energy(FAST_APPEARANCE if appearance == "auto" else appearance, pixels, spectra)
     else:
         started = time.perf_counter()
         window = cross_validation_window(rgb.shape[:2], pixels, cross_validation_pixels)
@@ -324,9 +329,7 @@ def spectralize_image(
         if window.whole:
             graph, warm_start = chosen.graph, choice.fold_spectra
         else:
-            energy = _ENERGY | {"appearance": chosen.appearance}
-            if chosen.appearance in LEARNED_SPACES:
-                energy = fitted_on(energy, pixels, spectra)
+            energy = _energy(chosen.appearance, pixels, spectra)
             notes.append(
                 f"space, prior and kriging weight chosen by the cross-validation of "
                 f"{window.describe()} ({int(inside.sum())} of {pixels.size} spot pixels, "
