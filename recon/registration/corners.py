@@ -55,6 +55,7 @@ __all__ = [
     "fit_corner_model",
     "frame_intensity",
     "refine_corners",
+    "shifted_corners",
     "texture_transform",
     "validate_corners",
     "validate_frame",
@@ -154,6 +155,26 @@ def texture_transform(corners_xy: np.ndarray) -> transform.ProjectiveTransform:
             f"corners_xy: no homography to the texture square exists for {corners.tolist()}"
         )
     return estimated
+
+
+def shifted_corners(corners_xy: np.ndarray, shift_texels: np.ndarray, texels: int) -> np.ndarray:
+    """The image corners of the sample square whose texture at ``texels`` per side is the
+    texture of ``corners_xy`` moved by ``shift_texels`` ``(rows, columns)``, as
+    :func:`scipy.ndimage.shift` moves an array: texel ``(i, j)`` of the new texture is the point
+    ``(i - rows, j - columns)`` of the old one. Rectifying a frame at these corners gives that
+    texture with one resampling instead of two.
+
+    Examples
+    --------
+    >>> square = np.array([[0.0, 0], [8, 0], [8, 8], [0, 8]])  # 8 x 8 pixels, 4 texels a side
+    >>> np.round(shifted_corners(square, np.array([0.0, 1.0]), 4), 6) + 0.0  # one texel right
+    array([[-2.,  0.],
+           [ 6.,  0.],
+           [ 6.,  8.],
+           [-2.,  8.]])
+    """
+    uv = TEXTURE_CORNERS_UV - np.asarray(shift_texels, np.float64)[::-1] / texels
+    return np.asarray(texture_transform(corners_xy).inverse(uv))
 
 
 def validate_frame(image: object, name: str = "image") -> np.ndarray:

@@ -83,16 +83,19 @@ class DeviceIntegralTerm:
 
 @dataclass(frozen=True)
 class FilteredBandTerm:
-    """:math:`\\lVert F * X_{:,b} - F * (f D^{b}) \\rVert^2` over one image (Eq. 10.1, first
-    term): a Gaussian filter :math:`F` of standard deviation ``sigma_px`` applied to band ``band``
-    of image ``image``. Zero padding keeps the filter matrix symmetric, so it is its own adjoint.
+    """:math:`\\lVert F * (W X_{:,b}) - F * (W f D^{b}) \\rVert^2` over one image (Eq. 10.1,
+    first term): a Gaussian filter :math:`F` of standard deviation ``sigma_px`` applied to band
+    ``band`` of image ``image``, each pixel weighed by ``weight`` (:math:`W`, ``None``: the
+    thesis's uniform weight) before the filter, so that a pixel of weight 0 enters no filtered
+    value. Zero padding keeps the filter matrix symmetric, so it is its own adjoint.
     """
 
     image: int
     band: int
     sigma_px: float
     shape: tuple[int, int]  # (height, width) of every image
-    target: np.ndarray  # (height, width): F * (f D^b), precomputed as the thesis suggests
+    target: np.ndarray  # (height, width): F * (W f D^b), precomputed as the thesis suggests
+    weight: np.ndarray | None = None  # (height, width), or None for 1 everywhere
 
     @property
     def n_rows(self) -> int:
@@ -104,12 +107,14 @@ class FilteredBandTerm:
         return slice(self.image * size, (self.image + 1) * size)
 
     def apply(self, x: np.ndarray) -> np.ndarray:
-        return gaussian_plane(x[self.pixel_slice(), self.band].reshape(self.shape), self.sigma_px)
+        plane = x[self.pixel_slice(), self.band].reshape(self.shape)
+        return gaussian_plane(plane if self.weight is None else self.weight * plane, self.sigma_px)
 
     def adjoint(self, residual: np.ndarray, out: np.ndarray) -> None:
-        out[self.pixel_slice(), self.band] += gaussian_plane(
-            residual.reshape(self.shape), self.sigma_px
-        ).ravel()
+        plane = gaussian_plane(residual.reshape(self.shape), self.sigma_px)
+        if self.weight is not None:
+            plane = self.weight * plane
+        out[self.pixel_slice(), self.band] += plane.ravel()
 
 
 @dataclass(frozen=True)

@@ -122,12 +122,15 @@ class PointSpectra:
 class BandImage:
     """A noisy image of one band (Eq. 10.1): ``values`` ``(height, width)`` of image
     ``image`` in band index ``band``, matched to the reconstruction after a Gaussian filter of
-    standard deviation ``sigma_px`` pixels (0 matches pixel by pixel)."""
+    standard deviation ``sigma_px`` pixels (0 matches pixel by pixel), each pixel's match
+    weighted by ``weight`` ``(height, width)`` in [0, 1] (``None``: 1 everywhere, as the
+    thesis; a pixel of weight 0 gives no data)."""
 
     image: int
     band: int
     values: np.ndarray
     sigma_px: float
+    weight: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -399,10 +402,20 @@ def _band_term(
         raise InputError(f"band_images: sigma_px must be >= 0, got {data.sigma_px}")
     if not np.all(np.isfinite(values)):
         raise InputError(f"band_images: image {data.image} band {data.band} has NaN or inf values")
+    weight = None if data.weight is None else np.asarray(data.weight, dtype=np.float64)
+    if weight is not None and (
+        weight.shape != (height, width) or not np.all((weight >= 0) & (weight <= 1))
+    ):
+        raise InputError(
+            f"band_images: image {data.image} band {data.band}: expected a weight of shape "
+            f"({height}, {width}) in [0, 1], got shape {weight.shape}"
+        )
     size = height * width
     plane = scale[data.image * size : (data.image + 1) * size].reshape(height, width) * values
-    target = gaussian_plane(plane, float(data.sigma_px))
-    return FilteredBandTerm(data.image, data.band, float(data.sigma_px), (height, width), target)
+    target = gaussian_plane(plane if weight is None else weight * plane, float(data.sigma_px))
+    return FilteredBandTerm(
+        data.image, data.band, float(data.sigma_px), (height, width), target, weight
+    )
 
 
 def _device_term(data: DeviceIntegrals, scale: np.ndarray, bands: int) -> DeviceIntegralTerm:
@@ -596,7 +609,7 @@ def build_problem(
         if isinstance(term, PointSpectraTerm):
             has_data[term.pixels] = True
         elif isinstance(term, FilteredBandTerm):
-            has_data[term.pixel_slice()] = True
+            has_data[term.pixel_slice()] |= True if term.weight is None else term.weight.ravel() > 0
         else:  # a reading anchors one value per band: the component of its first pixel
             readings = term.weights.tocsr()
             reached = np.diff(readings.indptr) > 0
@@ -717,12 +730,15 @@ def _band_regression_start(problem: SpectralizationProblem) -> np.ndarray | None
         return None
     camera = next(t for t in problem.terms if isinstance(t, CameraTerm))
     scaled_rgb = camera.target
-    filtered: dict[tuple[int, float], np.ndarray] = {}  # (image, sigma): (pixels, C)
+    # (image, sigma, the weight's identity): (pixels, C); the bands of one image share a weight
+    filtered: dict[tuple[int, float, int], np.ndarray] = {}
     systems: dict[int, list[tuple[np.ndarray, np.ndarray]]] = {}
     for term in bands:
-        key = (term.image, term.sigma_px)
+        key = (term.image, term.sigma_px, id(term.weight))
         if key not in filtered:
             planes = scaled_rgb[term.pixel_slice()].T.reshape(-1, *term.shape)
+            if term.weight is not None:
+                planes = planes * term.weight
             filtered[key] = np.stack(
                 [gaussian_plane(plane, term.sigma_px).ravel() for plane in planes], axis=1
             )

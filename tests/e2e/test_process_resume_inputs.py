@@ -170,19 +170,29 @@ def test_a_resume_with_the_same_inputs_finishes_the_store(interrupted):
     assert BTFStore.open(btf).complete
 
 
-def test_a_dome_resume_keeps_eq_10_2s_exponent_and_the_gonio_takes_none(interrupted):
-    """The dome's ``--p-dyn`` is recorded with the BTF; a resume with another is refused in one
-    line, writing nothing; the gonioreflectometer has no Eq. 10.2 and refuses the option."""
+@pytest.mark.parametrize(
+    ("option", "value", "name", "recorded"),
+    [("--p-dyn", "0.5", "p_dyn", 0.0), ("--band-registration", "0", "band_registration", 0.25)],
+)
+def test_a_dome_resume_keeps_its_solve_options_and_the_gonio_takes_none(
+    interrupted, option, value, name, recorded
+):
+    """The dome's ``--p-dyn`` (Eq. 10.2's exponent) and ``--band-registration`` are recorded
+    with the BTF; a resume with another is refused in one line, writing nothing; the
+    gonioreflectometer has neither and refuses the option."""
     root, btf, rig = interrupted
     command = ["process", root / "run.capture.zarr", "--calibration", rig["calibration"]]
-    command += ["--out", btf, "--resume", "--texels", rig["texels"], "--p-dyn", "0.5"]
+    command += ["--out", btf, "--resume", "--texels", rig["texels"], option, value]
     result = runner.invoke(app, [str(argument) for argument in command])
     assert result.exit_code == 2, result.output
     lines = result.stderr.splitlines()
     assert len(lines) == 1, result.stderr
     if rig["calibration"].suffix == ".npz":
-        assert BTFStore.open(btf).metadata.calibration["p_dyn"] == 0.0
-        assert "begun with p_dyn 0; a resumed processing keeps it, got 0.5" in lines[0]
+        assert BTFStore.open(btf).metadata.calibration[name] == recorded
+        assert (
+            f"begun with {name} {recorded:g}; a resumed processing keeps it, got {value}"
+            in (lines[0])
+        )
     else:
-        assert "--p-dyn is not used by a gonioreflectometer run" in lines[0]
+        assert f"{option} is not used by a gonioreflectometer run" in lines[0]
     assert not BTFStore.open(btf).complete

@@ -154,6 +154,17 @@ def process(
             "the fourth).",
         ),
     ] = None,
+    band_registration: Annotated[
+        float | None,
+        typer.Option(
+            min=0.0,
+            max=10.0,
+            help="dome: how far (texels) the spectral camera's bands may lie from the RGB "
+            "camera's view of the same surface; texels where that would change a band much "
+            "(edges, dark lines beside bright ones) weigh less in the joint solve (default "
+            "0.25; 0: every texel alike, as the thesis).",
+        ),
+    ] = None,
     as_json: JsonFlag = False,
 ) -> None:
     """Calibrate and register a measurement run into a spectral BTF store: the
@@ -181,7 +192,10 @@ def process(
     capture = CaptureStore.open(store)
     kind = capture_rig_kind(capture)
     _refuse_unused(
-        ctx, ("workers", "scheduler", "p_dyn"), kind.process_options, f"a {kind.name} run"
+        ctx,
+        ("workers", "scheduler", "p_dyn", "band_registration"),
+        kind.process_options,
+        f"a {kind.name} run",
     )
     options = {
         "texels": texels,
@@ -190,6 +204,7 @@ def process(
         "workers": workers,
         "scheduler": scheduler,
         "p_dyn": p_dyn,
+        "band_registration": band_registration,
     }
     require_sound_capture(capture, store)
     try:

@@ -52,6 +52,7 @@ from recon.dome.images import TexelGrid
 from recon.dome.processing import (
     SOLVER_TOLERANCE,
     DomeProcessing,
+    band_weight,
     dome_directions,
     process_dome,
 )
@@ -161,11 +162,18 @@ class _Images:
 def _solve(images: _Images, v: np.ndarray, bands: np.ndarray) -> np.ndarray:
     """Eq. 10.12 over all the run's images (pairs in :func:`recon.dome.processing
     .dome_directions`' order) from ``v`` ``(n, H, W, 3)`` and, on the band partner's pairs, the
-    scheduled bands of ``bands`` ``(n, H, W, K)``, unfiltered."""
+    scheduled bands of ``bands`` ``(n, H, W, K)``, unfiltered, weighed as the processing weighs
+    them (:func:`recon.dome.processing.band_weight`)."""
     run, work = images.run, images.work
     cameras = run.rgb_cameras
     band_images = [
-        BandImage(pair, band, bands[pair, ..., band], 0.0)
+        BandImage(
+            pair,
+            band,
+            bands[pair, ..., band],
+            0.0,
+            band_weight(v[pair], work.band_registration, work.target_relative_noise),
+        )
         for image in range(len(run.images))
         for pair in [image * len(cameras) + cameras.index(work.partner)]
         for band in run.image_bands(image)

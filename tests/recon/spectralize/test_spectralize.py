@@ -199,7 +199,10 @@ def test_operator_adjoint_holds_for_every_term(mosaic):
         image @ response,
         response,
         point_spectra=PointSpectra(pixels, flat[pixels]),
-        band_images=[BandImage(0, 4, image[..., 4], 1.5), BandImage(0, 20, image[..., 20], 0.0)],
+        band_images=[
+            BandImage(0, 4, image[..., 4], 1.5, rng.random(shape)),
+            BandImage(0, 20, image[..., 20], 0.0),
+        ],
         device_integrals=DeviceIntegrals(device, device @ flat.ravel()),
         p_dyn=0.5,
     )
@@ -207,6 +210,39 @@ def test_operator_adjoint_holds_for_every_term(mosaic):
     x, y = rng.standard_normal(operator.shape[1]), rng.standard_normal(operator.shape[0])
     assert np.dot(operator.matvec(x), y) == pytest.approx(np.dot(x, operator.rmatvec(y)), rel=1e-10)
     assert len(problem.weights) == 7  # point, 2 band images, device, camera, prior, smoothness
+
+
+@pytest.mark.parametrize("sigma_px", [0.0, 1.5])
+def test_a_band_texel_of_weight_zero_gives_no_data(mosaic, sigma_px):
+    """A band image's texels weighed 0 leave the solution as it is whatever their values (a
+    dark line's band values misregistered onto bright neighbours), matched pixel by pixel or
+    after a Gaussian filter (the weight comes before it), while weighed 1 they pull it."""
+    image, _, response = mosaic
+    shape = image.shape[:2]
+    weight = np.ones(shape)
+    weight[20, 10:30] = 0.0
+    spoiled = image[..., 12].copy()
+    spoiled[20, 10:30] *= 5.0
+    line = np.abs(image[20, 10:30, 12]).mean()
+
+    def pull(weights):
+        def solved(values):
+            bands = [BandImage(0, band, image[..., band], sigma_px) for band in (4, 20)]
+            bands.append(BandImage(0, 12, values, sigma_px, weights))
+            return reconstruct(image @ response, response, band_images=bands, tol=1e-10).spectra
+
+        return float(np.abs(solved(spoiled) - solved(image[..., 12]))[20, 10:30, 12].mean())
+
+    assert pull(weight) < 1e-6 * line
+    assert pull(None) > 0.05 * line
+
+
+def test_a_band_weight_of_another_shape_or_range_is_refused(mosaic):
+    image, _, response = mosaic
+    for weight in (np.ones((3, 3)), np.full(image.shape[:2], 2.0)):
+        band = BandImage(0, 4, image[..., 4], 0.0, weight)
+        with pytest.raises(InputError, match="expected a weight of shape"):
+            reconstruct(image @ response, response, band_images=[band])
 
 
 @pytest.mark.parametrize("n_points", [300, 60_000])
