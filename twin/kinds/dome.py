@@ -139,6 +139,12 @@ def _calibrate(
     return Outcome("dome calibration", summary, as_json=as_json)
 
 
+_SOLVE_OPTIONS = ("p_dyn", "band_registration")
+"""``spectwin process`` options of the dome's joint solve, passed to
+:func:`recon.dome.processing.process_dome` where given (its defaults otherwise) and recorded
+with the BTF."""
+
+
 def _process(
     capture: CaptureStore,
     calibration: Path,
@@ -149,12 +155,7 @@ def _process(
     from hwbridge.lock import StoreLock
     from recon.btf.inputs import input_digests
     from recon.calibration.dome_capture import DomeCalibration
-    from recon.dome.processing import (
-        BAND_REGISTRATION_TEXELS,
-        P_DYN,
-        check_dome_run,
-        process_dome,
-    )
+    from recon.dome.processing import check_dome_run, process_dome
     from recon.dome.run import open_dome_run
 
     dome_calibration = DomeCalibration.load(calibration)
@@ -171,12 +172,9 @@ def _process(
             manual_corners=options.get("manual_corners"),
             resume=resume,
             show_progress=show_progress,
-            p_dyn=P_DYN if options.get("p_dyn") is None else options["p_dyn"],
-            band_registration=BAND_REGISTRATION_TEXELS
-            if options.get("band_registration") is None
-            else options["band_registration"],
             created=lambda _: lock.move_into(),
             digests=digests,
+            **{name: options[name] for name in _SOLVE_OPTIONS if options.get(name) is not None},
         )
     found = btf.metadata
     summary = {
@@ -188,11 +186,7 @@ def _process(
         ),
         "projected_marks": list(recorded(found.projected_marks, f"{out}: projected_marks")),
         "saturated_texels": found.saturated_texels,
-        "p_dyn": found.calibration.get("p_dyn") if found.calibration else None,
-        "band_registration": found.calibration.get("band_registration")
-        if found.calibration
-        else None,
-    }
+    } | {name: (found.calibration or {}).get(name) for name in _SOLVE_OPTIONS}
     return Outcome("dome processing", summary)
 
 
@@ -242,7 +236,7 @@ DOME = RigKind(
     process=_process,
     evaluate=_evaluate,
     estimate=_estimate,
-    process_options=frozenset({"p_dyn", "band_registration"}),
+    process_options=frozenset(_SOLVE_OPTIONS),
     sweep=SweepKind(DomeConfig, DomePlan, DOME_MEASURES, check_dome_point, measure_dome_point),
     calibration_file=DOME_CALIBRATION,
     calibration_suffix=".npz",
