@@ -2,6 +2,8 @@
 with the kernels already compiled (a new kernel costs seconds to compile: 2-8 s each for the
 path tracer's with a BTF, 11 s for a validation of another texel count before)."""
 
+import gc
+
 import numpy as np
 import pytest
 
@@ -44,9 +46,15 @@ def _scene(map_height: int, texels: int, direction_step: int) -> dict:
 
 
 def _kernels_of(scene: dict) -> tuple[set[str], np.ndarray]:
-    """The hashes of the large kernels a render of ``scene`` launched, and the image."""
+    """The hashes of the large kernels a render of ``scene`` launched, and the image.
+
+    Unreachable scenes of earlier renders are collected first: a kernel's calls into the
+    plugins are numbered by the instances alive in Dr.Jit's registry, so a scene freed by the
+    garbage collector between two renders gives the second other numbers, and another kernel.
+    """
     import drjit as dr
 
+    gc.collect()
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     try:
         dr.kernel_history()  # empties the history
