@@ -86,11 +86,18 @@ class ReconstructionErrors:
     material: np.ndarray
 
     @classmethod
-    def of(cls, estimate: np.ndarray, truth: np.ndarray) -> ReconstructionErrors:
+    def of(
+        cls, estimate: np.ndarray, truth: np.ndarray, shown: np.ndarray | None = None
+    ) -> ReconstructionErrors:
+        """The errors of ``estimate`` against ``truth``; the material texels are those of a
+        truth of at least :data:`MATERIAL_TEXEL_REFLECTANCE` and, where given, ``shown``
+        ``(n, H, W)`` (the texels that show the sample's surface alone,
+        :func:`twin.render.truth.surface_share`)."""
+        material = truth.mean(-1) >= MATERIAL_TEXEL_REFLECTANCE
         return cls(
             relative_error(estimate, truth),
             delta_e94(estimate, truth, BAND_GRID),
-            truth.mean(-1) >= MATERIAL_TEXEL_REFLECTANCE,
+            material if shown is None else material & shown,
         )
 
     def summary(self, images: slice | Sequence[int] = slice(None)) -> dict[str, float]:

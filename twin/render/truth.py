@@ -36,7 +36,7 @@ from twin.materials.surfaces import MATERIAL_GRID
 from twin.materials.textures import TextureTruth
 from twin.render.node_transport import DistantLight, NodeScene, ParallelCamera, node_weights
 
-__all__ = ["band_passbands", "texture_truth", "truth_btf", "truth_camera_signal"]
+__all__ = ["band_passbands", "surface_share", "texture_truth", "truth_btf", "truth_camera_signal"]
 
 TEXTURE_BASIS = 8
 """Basis spectra that stand for a part with a spectral texture in :func:`texture_truth`."""
@@ -144,6 +144,29 @@ def truth_camera_signal(
     both on ``FINE_GRID``."""
     light_dirs, view_dirs = _check_directions(light_dirs, view_dirs)
     return _renders(material, light_dirs, view_dirs, response, illuminant, texels, spp, seed)
+
+
+def surface_share(
+    material: Material, view_dirs: np.ndarray, *, texels: int, spp: int = 16
+) -> np.ndarray:
+    """``(n_views, texels, texels)`` the share of each texel's rays (stratified as the truth's
+    renders sample them) whose first surface lies within the sample's square: 1 where a texel
+    shows the material's surface alone; less where, seen from the side, it shows the sample's
+    outer sides or past its outline (a sample raised by :math:`h` above the texels' plane, seen
+    at :math:`\theta_v`: a border :math:`h \tan\theta_v` deep on the camera's side). Such
+    texels show the holder in a capture and nothing in the truth, so neither measures the
+    material."""
+    view_dirs = np.atleast_2d(view_dirs)
+    scene = NodeScene(material.parts)
+    half = material.size_m / 2
+    # the outer sides lie on the square's edges: float32 positions there compare either way
+    inside = half * (1 - 1e-6)
+    return np.stack(
+        [
+            scene.inside_share(ParallelCamera(view, half, texels), inside, spp=spp)
+            for view in view_dirs
+        ]
+    )
 
 
 def _part_basis(part) -> tuple[list[np.ndarray], list[str]]:

@@ -17,7 +17,8 @@ rung adding one, every rung solved by the processing's own joint reconstruction
    resolved, 27 % on the colour checker against the analytic path's 9.8 %; at 64, 5.8 against
    7.5 %);
 2. ``camera_sampling``: the same, noise-free, but seen through each camera's pixels: the truth
-   at :data:`FINE_TEXELS_PER_TEXEL` times the texels (:func:`twin.render.truth.texture_truth`)
+   with a texel a pixel of the top camera (:func:`fine_texels`,
+   :func:`twin.render.truth.texture_truth`)
    averaged over every pixel where the camera's registration puts it, the RGB cameras' values
    mosaicked and demosaiced as the processing does
    (:func:`recon.calibration.dome_capture.rgb_linear_image`'s method), all resampled onto the
@@ -71,17 +72,26 @@ if TYPE_CHECKING:
 
 __all__ = [
     "BUDGET_RUNGS",
-    "FINE_TEXELS_PER_TEXEL",
     "camera_sampled_texture",
     "error_budget",
+    "fine_texels",
     "nominal_marks",
 ]
 
-FINE_TEXELS_PER_TEXEL = 2
-"""The truth's resolution for the cameras' sampling (rung 2), in texels per texel: a pixel of
-the top camera spans half a texel at the study's sizes, so it averages one fine texel there.
-Binned back, the fine truth matches the texel truth within its render noise (the colour
-checker at 4 per texel: 1.1 % mean Eq. 6.8 over the material texels)."""
+
+def fine_texels(capture_texels: int, texels: int) -> int:
+    """The truth's texels across the sample for the cameras' sampling (rung 2): one a pixel of
+    the top camera, where a capture texel is a Bayer quad (twice the capture's texels), and at
+    least two a texel; a multiple of ``texels``. Binned back, the fine truth matches the texel
+    truth within its render noise (the colour checker at 4 per texel: 1.1 % mean Eq. 6.8 over
+    the material texels).
+
+    >>> fine_texels(64, 64), fine_texels(192, 64), fine_texels(16, 64)
+    (128, 384, 128)
+    """
+    per_texel = max(2, -(-2 * capture_texels // texels))
+    return per_texel * texels
+
 
 BUDGET_RUNGS = ("reconstruction", "camera_sampling", "stores_true_marks", "stores")
 """The budget's rungs, each adding one source of error to the one before (module docstring)."""
@@ -240,9 +250,8 @@ def error_budget(
     work.register(store)
     light_dirs, view_dirs = dome_directions(run, calibration)
     truth = texture_truth(run.material, light_dirs, view_dirs, texels=texels)
-    fine = texture_truth(
-        run.material, light_dirs, view_dirs, texels=FINE_TEXELS_PER_TEXEL * texels, spp=16
-    )
+    fine_side = fine_texels(run.rig.texels, texels)
+    fine = texture_truth(run.material, light_dirs, view_dirs, texels=fine_side, spp=16)
     white_rgb, _ = setup.cameras.white_rates()
     images = _Images(
         run,
@@ -273,15 +282,20 @@ def error_budget(
         "stores": _processed_v(images, store, work),
     }
     groups = found.groups()
-    material = ReconstructionErrors.of(found.analytic, found.truth).material
-    budget: dict = {"rungs": list(BUDGET_RUNGS), "fine_texels_per_texel": FINE_TEXELS_PER_TEXEL}
+    material = ReconstructionErrors.of(found.analytic, found.truth, found.shown).material
+    budget: dict = {"rungs": list(BUDGET_RUNGS), "fine_texels": fine_side}
     for rung in BUDGET_RUNGS:
-        errors = ReconstructionErrors.of(cubes[rung], found.truth)
-        budget[rung] = {group: errors.summary(indices) for group, indices in groups.items()}
+        errors = ReconstructionErrors.of(cubes[rung], found.truth, found.shown)
+        budget[rung] = {
+            group: errors.summary(indices) if material[indices].any() else None
+            for group, indices in groups.items()
+        }
         if rung in inputs:
             v_error = relative_error(inputs[rung], images.v_true)
             budget[rung]["v_input_error_pct"] = {
                 camera: float(v_error[indices][material[indices]].mean())
+                if material[indices].any()
+                else None
                 for camera, indices in groups.items()
                 if camera in run.rgb_cameras
             }

@@ -16,7 +16,12 @@ code (:mod:`recon.dome`, :mod:`recon.calibration.dome_capture`):
    path's truth for the same light and view directions (:func:`twin.render.truth.texture_truth`
    in the spectral camera's bands); the analytic path (:func:`twin.dome.capture_study
    .simulate_capture`) takes the same images, LEDs and bands and is reconstructed with the same
-   :data:`recon.dome.processing.P_DYN`, so that only the frames' path differs;
+   :data:`recon.dome.processing.P_DYN`, so that only the frames' path differs. Both are
+   measured over the texels that show the sample's surface alone
+   (:func:`twin.render.truth.surface_share`): seen from the side, the border of a raised sample
+   shows its outer sides or, past its outline, the holder in a capture and nothing in the
+   truth, a border :math:`h \tan\theta_v` deep (the wallpaper, 0.8 mm thick, at 75 degrees:
+   5 texels of 64; the Lego's 11 mm bricks at 75 degrees: every texel);
 4. :func:`store_exposure_ratio` takes 10.5's exposure totals from the run's exposures and the
    calibration's white standard.
 
@@ -49,7 +54,7 @@ from twin.dome.capture_study import ReconstructionErrors, reconstruct_capture, s
 from twin.dome.programs import DomeCaptureSize, dome_calibration_program, dome_run_program
 from twin.dome.setup import BAND_GRID, DomeSetup, dome_setup
 from twin.materials import load_material
-from twin.render.truth import texture_truth
+from twin.render.truth import surface_share, texture_truth
 from twin.studies.dome_budget import error_budget as dome_error_budget
 from twin.validate.dome_evaluation import chart_field_errors
 
@@ -187,11 +192,14 @@ def study_calibration(calibration_store: Path) -> DomeCalibration:
 class SameImages:
     """The images of a ``dome-run`` store processed from the store and taken by the analytic
     path (module description), ``(n_pairs, texels, texels, bands)`` reflectance factors each,
-    with the truth, the material, and per pair its view direction and RGB camera."""
+    with the truth, the texels that show the sample's surface alone (``shown``, ``(n_pairs,
+    texels, texels)``, :func:`twin.render.truth.surface_share`: the errors count only these),
+    the material, and per pair its view direction and RGB camera."""
 
     stored: np.ndarray
     analytic: np.ndarray
     truth: np.ndarray
+    shown: np.ndarray
     material: str
     view_dirs: np.ndarray
     cameras: list[str]
@@ -227,7 +235,7 @@ class SameImages:
         material = load_material(self.material)
         chart = any(part.name.startswith("field_") for part in material.parts)
         errors = {
-            name: ReconstructionErrors.of(cube, self.truth)
+            name: ReconstructionErrors.of(cube, self.truth, self.shown)
             for name, cube in (("stores", self.stored), ("analytic", self.analytic))
         }
         material_texels = errors["analytic"].material
@@ -244,7 +252,10 @@ class SameImages:
             }
         }
         for name, cube in (("stores", self.stored), ("analytic", self.analytic)):
-            out[name] = {group: errors[name].summary(indices) for group, indices in groups.items()}
+            out[name] = {
+                group: errors[name].summary(indices) if material_texels[indices].any() else None
+                for group, indices in groups.items()
+            }
             kept = replace(errors[name], material=edge_free)
             out[name]["edge_free"] = {
                 group: kept.summary(indices) if edge_free[indices].any() else None
@@ -314,6 +325,7 @@ def same_images(
         stored.astype(np.float64),
         reconstruct_capture(setup, analytic, p_dyn=p_dyn),
         analytic.truth,
+        surface_share(load_material(run.material), view_dirs, texels=texels) >= 1,
         run.material,
         view_dirs,
         cameras,

@@ -88,6 +88,19 @@ def test_store_path_agrees_with_the_analytic_path_on_the_field_interiors(summary
     assert stored["mean_delta_e94"] < analytic["mean_delta_e94"] + 2.0
 
 
+def test_errors_count_the_texels_that_show_the_sample_alone(nearest, summary):
+    """The colour checker's card is 1 mm thick: seen at 37.5 and 75 degrees its outer side
+    shows in a border 0.77 and 3.7 mm deep on the camera's side, 0.46 and 2.2 of the 1.67 mm
+    texels (``twin.render.truth.surface_share``): one and three columns of texels, the partly
+    covered one included, leave both paths' measure; the top camera's texels all stay."""
+    texels = SIZE.texels
+    for camera, columns in (("rgb00", 0), ("rgb05", 1), ("rgb10", 3)):
+        pairs = [pair for pair, seen_by in enumerate(nearest.cameras) if seen_by == camera]
+        lost = (~nearest.shown[pairs]).sum(axis=(1, 2))
+        assert np.all(lost == columns * texels)
+        assert summary["stores"][camera]["material_texel_fraction"] <= 1 - columns / texels
+
+
 def test_store_exposure_totals_are_thesis_10_5(stores, setup):
     """10.5 from the stores: the reference exposures from the calibration's white standard and
     curve against the analytic path's (the camera model's white rates and full well) within
