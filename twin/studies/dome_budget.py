@@ -39,6 +39,7 @@ truth's (Eq. 6.8 on the three values), per RGB camera: the input the reconstruct
 from __future__ import annotations
 
 import shutil
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -59,6 +60,7 @@ from recon.dome.processing import (
 )
 from recon.dome.run import DomeRun, open_dome_run
 from recon.metrics import relative_error
+from recon.progress import progress_steps
 from recon.radiometric.demosaic import demosaic
 from recon.registration.corners import texture_transform
 from recon.spectralize.solve import BandImage, reconstruct
@@ -236,13 +238,29 @@ def error_budget(
     calibration: DomeCalibration,
     found: SameImages,
     folder: Path,
+    *,
+    show_progress: bool = False,
 ) -> dict:
     """The budget of one material's store (module docstring): per rung the errors of
     :meth:`twin.dome.capture_study.ReconstructionErrors.summary` over the same groups as
     ``found`` (the store processed as it is, with the analytic path), and for rungs 2-4 per RGB
     camera the mean Eq. 6.8 error of V; per camera and stage position how far the marks found
     (or projected, ``found.projected_marks``) lie from where the camera truly images them;
-    ``folder`` takes the BTF store of rung 3 while it is made."""
+    ``folder`` takes the BTF store of rung 3 while it is made. ``show_progress``: a bar over
+    its steps (the truths, the cameras' sampling, rung 3's processing, the solves)."""
+    with progress_steps("error budget", 5, enabled=show_progress) as advance:
+        return _budget(setup, run_store, calibration, found, folder, advance)
+
+
+def _budget(
+    setup: DomeSetup,
+    run_store: Path,
+    calibration: DomeCalibration,
+    found: SameImages,
+    folder: Path,
+    advance: Callable[[], None],
+) -> dict:
+    """:func:`error_budget`, calling ``advance`` after each of its five steps."""
     store = CaptureStore.open(run_store)
     run = open_dome_run(store)
     texels = found.truth.shape[1]
@@ -260,7 +278,9 @@ def error_budget(
         found.truth,
     )
     fine_v = fine.weights @ setup.cameras.basis_rates(fine)[0] / white_rgb
+    advance()
     sampled_v, sampled_bands = _camera_sampled(images, fine_v, setup.cameras.band_reflectance(fine))
+    advance()
     true_marks = nominal_marks(run, work)
     btf_path = folder / f"{run.material}.true-marks.btf.zarr"
     shutil.rmtree(btf_path, ignore_errors=True)
@@ -270,12 +290,14 @@ def error_budget(
         run, calibration, texels, found.partner, manual_corners=true_marks, p_dyn=found.p_dyn
     )
     marked.register(store)
+    advance()
     cubes = {
         "reconstruction": _solve(images, images.v_true, images.band_truth),
         "camera_sampling": _solve(images, sampled_v, sampled_bands),
         "stores_true_marks": np.pi * btf.read(),
         "stores": found.stored,
     }
+    advance()
     inputs = {
         "camera_sampling": sampled_v,
         "stores_true_marks": _processed_v(images, store, marked),
@@ -305,4 +327,5 @@ def error_budget(
         for key, marks in work.registrations.items()
     }
     shutil.rmtree(btf_path, ignore_errors=True)
+    advance()
     return budget

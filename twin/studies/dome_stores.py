@@ -439,7 +439,7 @@ def store_study(
         if error_budget:
             step(f"{material}: the error budget")
             summary["error_budget"] = dome_error_budget(
-                setup, run_store, calibration, nearest, folder
+                setup, run_store, calibration, nearest, folder, show_progress=True
             )
         moved_to = top_camera(nearest)
         step(f"{material}: processing the run store with the band data on {moved_to}")
