@@ -267,7 +267,7 @@ def _budget(
     work = DomeProcessing(run, calibration, texels, found.partner, p_dyn=found.p_dyn)
     work.register(store)
     light_dirs, view_dirs = dome_directions(run, calibration)
-    truth = texture_truth(run.material, light_dirs, view_dirs, texels=texels)
+    truth = found.truth_texture
     fine_side = fine_texels(run.rig.texels, texels)
     fine = texture_truth(run.material, light_dirs, view_dirs, texels=fine_side, spp=16)
     white_rgb, _ = setup.cameras.white_rates()

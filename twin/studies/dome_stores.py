@@ -54,6 +54,7 @@ from twin.dome.capture_study import ReconstructionErrors, reconstruct_capture, s
 from twin.dome.programs import DomeCaptureSize, dome_calibration_program, dome_run_program
 from twin.dome.setup import BAND_GRID, DomeSetup, dome_setup
 from twin.materials import load_material
+from twin.materials.textures import TextureTruth
 from twin.render.truth import surface_share, texture_truth
 from twin.studies.dome_budget import error_budget as dome_error_budget
 from twin.validate.dome_evaluation import chart_field_errors
@@ -61,6 +62,7 @@ from twin.validate.dome_evaluation import chart_field_errors
 __all__ = [
     "STORE_CAPTURE",
     "STORE_DARK_FRAMES",
+    "TRUTH_SPP",
     "UNIFORM_TRUTH_PCT",
     "SameImages",
     "capture_study_stores",
@@ -82,6 +84,13 @@ pairs a material, solved jointly."""
 
 STORE_DARK_FRAMES = 16
 """Dark frames per exposure time of the study's calibration capture (thesis 10.3: 200)."""
+
+TRUTH_SPP = 1024
+"""Samples a texel of the truth both paths are measured against. The red fabric's silver
+threads and the Lego's studs give a truth of 64 samples 17 % and 8 % render noise per texel
+(mean Eq. 6.8 against one of 1024 samples; the colour checker 1.1-1.4 %, the wallpaper
+0.4-1.1 %), which the analytic path, taken from that truth, does not see and the stores do;
+1024 samples take 4 min for the red fabric at 64 texels on 2 cores (the flat materials 40-50 s)."""
 
 UNIFORM_TRUTH_PCT = 5.0
 """Largest Eq. 6.8 error (%) of any of a texel's eight neighbours' truth against its own for the
@@ -192,13 +201,15 @@ def study_calibration(calibration_store: Path) -> DomeCalibration:
 class SameImages:
     """The images of a ``dome-run`` store processed from the store and taken by the analytic
     path (module description), ``(n_pairs, texels, texels, bands)`` reflectance factors each,
-    with the truth, the texels that show the sample's surface alone (``shown``, ``(n_pairs,
+    with the truth (and the texture truth it is taken from, rendered with :data:`TRUTH_SPP`
+    samples a texel), the texels that show the sample's surface alone (``shown``, ``(n_pairs,
     texels, texels)``, :func:`twin.render.truth.surface_share`: the errors count only these),
     the material, and per pair its view direction and RGB camera."""
 
     stored: np.ndarray
     analytic: np.ndarray
     truth: np.ndarray
+    truth_texture: TextureTruth
     shown: np.ndarray
     material: str
     view_dirs: np.ndarray
@@ -292,11 +303,13 @@ def same_images(
     *,
     band_partner: str | None = None,
     p_dyn: float = P_DYN,
+    truth_of: SameImages | None = None,
 ) -> SameImages:
     """A ``dome-run`` store processed into ``btf_path`` and its images taken by the analytic
     path with ``setup`` (module description); the band data on the images of ``band_partner``
     (default: the RGB camera nearest the spectral camera) in both paths, both solved with Eq.
-    10.2's exponent ``p_dyn``."""
+    10.2's exponent ``p_dyn``; the truth and the texels shown those of ``truth_of`` (the same
+    run processed before) where given, else rendered."""
     run = open_dome_run(run_store)
     texels = setup.cameras.spectral.height // setup.cameras.pixels_per_texel
     shutil.rmtree(btf_path, ignore_errors=True)
@@ -318,14 +331,19 @@ def same_images(
         for camera in run.rgb_cameras
     ]
     light_dirs, view_dirs = dome_directions(run, calibration)
-    truth = texture_truth(run.material, light_dirs, view_dirs, texels=texels)
+    if truth_of is None:
+        truth = texture_truth(run.material, light_dirs, view_dirs, texels=texels, spp=TRUTH_SPP)
+        shown = surface_share(load_material(run.material), view_dirs, texels=texels) >= 1
+    else:
+        truth, shown = truth_of.truth_texture, truth_of.shown
     analytic = simulate_capture(setup, truth, light_dirs, bands, rng)
     stored = np.pi * btf.read()
     return SameImages(
         stored.astype(np.float64),
         reconstruct_capture(setup, analytic, p_dyn=p_dyn),
         analytic.truth,
-        surface_share(load_material(run.material), view_dirs, texels=texels) >= 1,
+        truth,
+        shown,
         run.material,
         view_dirs,
         cameras,
@@ -450,6 +468,7 @@ def store_study(
             folder / f"{material}.bands-{moved_to}.btf.zarr",
             rng,
             band_partner=moved_to,
+            truth_of=nearest,
         ).summary()
         summary["view_fixed_shift"] = view_fixed_shift(summary, moved)
         result["materials"][material] = summary

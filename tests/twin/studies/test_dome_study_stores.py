@@ -151,6 +151,7 @@ def test_band_data_moved_to_the_top_camera_separates_spectral_data_from_view(
         folder / "bands-rgb00.btf.zarr",
         np.random.default_rng(SEED),
         band_partner="rgb00",
+        truth_of=nearest,
     ).summary()
     assert moved["images"]["band_partner"] == "rgb00"
     stored = moved["stores"]["diffuse_fields"]["rgb00"]
