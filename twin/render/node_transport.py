@@ -383,26 +383,6 @@ class NodeScene:
         ]
         return np.concatenate(radiance).reshape(height, width, NODES_NM.size)
 
-    def inside_share(self, camera: ParallelCamera, half_m: float, *, spp: int = 16) -> np.ndarray:
-        """``(H, W)`` the share of each pixel's rays (``spp`` stratified, as :meth:`transport`
-        samples them) whose first surface lies within ``|x|, |y| < half_m`` of the frame: 1
-        where a texel sees the sample's surface alone, less where it sees past the sample's
-        outline or its outer sides."""
-        samples = rendered_spp(spp)
-        height, width = camera.shape
-        per_launch = max(1, _MAX_LANES // samples)
-        shares = []
-        for first in range(0, height * width, per_launch):
-            count = min(per_launch, height * width - first)
-            slot, _, ray = self._lanes(camera, 0, first, count, samples)
-            hit = self._scene.ray_intersect(ray)
-            limit = _scalar(half_m)
-            inside = hit.is_valid() & (dr.abs(hit.p.x) < limit) & (dr.abs(hit.p.y) < limit)
-            share = dr.zeros(mi.Float, count)
-            dr.scatter_add(share, dr.select(inside, 1.0 / samples, 0.0), slot)
-            shares.append(np.asarray(share))
-        return np.concatenate(shares).reshape(height, width)
-
     def transport_each(
         self,
         camera: PinholeRays | ParallelCamera,

@@ -26,6 +26,7 @@ also give the texel's spectrum on the fine grid, where the cameras integrate it
 from __future__ import annotations
 
 import numpy as np
+import trimesh
 from scipy import optimize
 
 from recon.errors import InputError
@@ -35,6 +36,7 @@ from twin.materials import Material, load_material
 from twin.materials.surfaces import MATERIAL_GRID
 from twin.materials.textures import TextureTruth
 from twin.render.node_transport import DistantLight, NodeScene, ParallelCamera, node_weights
+from twin.render.ray_cast import first_hits
 
 __all__ = ["band_passbands", "surface_share", "texture_truth", "truth_btf", "truth_camera_signal"]
 
@@ -147,26 +149,34 @@ def truth_camera_signal(
 
 
 def surface_share(
-    material: Material, view_dirs: np.ndarray, *, texels: int, spp: int = 16
+    material: Material, view_dirs: np.ndarray, *, texels: int, strata: int = 4
 ) -> np.ndarray:
-    """``(n_views, texels, texels)`` the share of each texel's rays (stratified as the truth's
-    renders sample them) whose first surface lies within the sample's square: 1 where a texel
-    shows the material's surface alone; less where, seen from the side, it shows the sample's
-    outer sides or past its outline (a sample raised by :math:`h` above the texels' plane, seen
-    at :math:`\theta_v`: a border :math:`h \tan\theta_v` deep on the camera's side). Such
+    """``(n_views, texels, texels)`` the share of each texel's rays (through the centres of
+    ``strata`` x ``strata`` cells of the texel, along :math:`-v` as the truth's renders look)
+    whose first surface lies within the sample's square: 1 where a texel shows the material's
+    surface alone; less where, seen from the side, it shows the sample's outer sides or past
+    its outline (a sample raised by :math:`h` above the texels' plane, seen at
+    :math:`\theta_v`: a border :math:`h \tan\theta_v` deep on the camera's side). Such
     texels show the holder in a capture and nothing in the truth, so neither measures the
     material."""
     view_dirs = np.atleast_2d(view_dirs)
-    scene = NodeScene(material.parts)
     half = material.size_m / 2
+    cells = (np.arange(texels * strata) + 0.5) / (texels * strata) * 2 * half - half
+    x, y = np.meshgrid(cells, -cells)
+    on_plane = np.stack([x, y, np.zeros_like(x)], axis=-1).reshape(-1, 3)
+    mesh = trimesh.util.concatenate([part.mesh for part in material.parts])
+    assert isinstance(mesh, trimesh.Trimesh)  # the parts are triangle meshes
     # the outer sides lie on the square's edges: float32 positions there compare either way
     inside = half * (1 - 1e-6)
-    return np.stack(
-        [
-            scene.inside_share(ParallelCamera(view, half, texels), inside, spp=spp)
-            for view in view_dirs
-        ]
-    )
+    shares = []
+    for view in view_dirs:
+        hit, points, _ = first_hits(
+            mesh, on_plane + 0.1 * view, np.broadcast_to(-view, on_plane.shape)
+        )
+        shown = np.zeros(len(on_plane))
+        shown[hit] = np.all(np.abs(points[:, :2]) < inside, axis=1)
+        shares.append(shown.reshape(texels, strata, texels, strata).mean(axis=(1, 3)))
+    return np.stack(shares)
 
 
 def _part_basis(part) -> tuple[list[np.ndarray], list[str]]:
