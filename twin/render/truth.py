@@ -156,7 +156,7 @@ def surface_share(
     whose first surface lies within the sample's square: 1 where a texel shows the material's
     surface alone; less where, seen from the side, it shows the sample's outer sides or past
     its outline (a sample raised by :math:`h` above the texels' plane, seen at
-    :math:`\theta_v`: a border :math:`h \tan\theta_v` deep on the camera's side). Such
+    :math:`\\theta_v`: a border :math:`h \\tan\\theta_v` deep on the camera's side). Such
     texels show the holder in a capture and nothing in the truth, so neither measures the
     material."""
     view_dirs = np.atleast_2d(view_dirs)

@@ -20,7 +20,7 @@ code (:mod:`recon.dome`, :mod:`recon.calibration.dome_capture`):
    measured over the texels that show the sample's surface alone
    (:func:`twin.render.truth.surface_share`): seen from the side, the border of a raised sample
    shows its outer sides or, past its outline, the holder in a capture and nothing in the
-   truth, a border :math:`h \tan\theta_v` deep (the wallpaper, 0.8 mm thick, at 75 degrees:
+   truth, a border :math:`h \\tan\\theta_v` deep (the wallpaper, 0.8 mm thick, at 75 degrees:
    5 texels of 64; the Lego's 11 mm bricks at 75 degrees: every texel);
 4. :func:`store_exposure_ratio` takes 10.5's exposure totals from the run's exposures and the
    calibration's white standard.
