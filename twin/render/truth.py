@@ -168,15 +168,13 @@ def surface_share(
     assert isinstance(mesh, trimesh.Trimesh)  # the parts are triangle meshes
     # the outer sides lie on the square's edges: float32 positions there compare either way
     inside = half * (1 - 1e-6)
-    shares = []
-    for view in view_dirs:
-        hit, points, _ = first_hits(
-            mesh, on_plane + 0.1 * view, np.broadcast_to(-view, on_plane.shape)
-        )
-        shown = np.zeros(len(on_plane))
-        shown[hit] = np.all(np.abs(points[:, :2]) < inside, axis=1)
-        shares.append(shown.reshape(texels, strata, texels, strata).mean(axis=(1, 3)))
-    return np.stack(shares)
+    # every view's rays in one trace (one scene for all of them)
+    origins = on_plane[None] + 0.1 * view_dirs[:, None]
+    directions = np.broadcast_to(-view_dirs[:, None], origins.shape)
+    hit, points, _ = first_hits(mesh, origins.reshape(-1, 3), directions.reshape(-1, 3))
+    shown = np.zeros(hit.size)
+    shown[hit] = np.all(np.abs(points[:, :2]) < inside, axis=1)
+    return shown.reshape(len(view_dirs), texels, strata, texels, strata).mean(axis=(2, 4))
 
 
 def _part_basis(part) -> tuple[list[np.ndarray], list[str]]:
