@@ -15,7 +15,7 @@ exposures are nearly noise-free.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -112,6 +112,16 @@ class ReconstructionErrors:
             "mean_delta_e94": float(colour.mean()),
             "p95_delta_e94": float(np.percentile(colour, 95)),
             "material_texel_fraction": float(material.mean()),
+        }
+
+    def group_summaries(
+        self, groups: Mapping[str, Sequence[int]]
+    ) -> dict[str, dict[str, float] | None]:
+        """:meth:`summary` of each group of images, ``None`` for a group without a material
+        texel (e.g. a camera that sees only a raised sample's sides)."""
+        return {
+            group: self.summary(images) if self.material[images].any() else None
+            for group, images in groups.items()
         }
 
 

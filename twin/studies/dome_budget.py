@@ -304,14 +304,11 @@ def _budget(
         "stores": _processed_v(images, store, work),
     }
     groups = found.groups()
-    material = ReconstructionErrors.of(found.analytic, found.truth, found.shown).material
     budget: dict = {"rungs": list(BUDGET_RUNGS), "fine_texels": fine_side}
     for rung in BUDGET_RUNGS:
         errors = ReconstructionErrors.of(cubes[rung], found.truth, found.shown)
-        budget[rung] = {
-            group: errors.summary(indices) if material[indices].any() else None
-            for group, indices in groups.items()
-        }
+        material = errors.material  # the same texels for every rung
+        budget[rung] = errors.group_summaries(groups)
         if rung in inputs:
             v_error = relative_error(inputs[rung], images.v_true)
             budget[rung]["v_input_error_pct"] = {

@@ -263,15 +263,10 @@ class SameImages:
             }
         }
         for name, cube in (("stores", self.stored), ("analytic", self.analytic)):
-            out[name] = {
-                group: errors[name].summary(indices) if material_texels[indices].any() else None
-                for group, indices in groups.items()
-            }
-            kept = replace(errors[name], material=edge_free)
-            out[name]["edge_free"] = {
-                group: kept.summary(indices) if edge_free[indices].any() else None
-                for group, indices in groups.items()
-            }
+            out[name] = errors[name].group_summaries(groups)
+            out[name]["edge_free"] = replace(errors[name], material=edge_free).group_summaries(
+                groups
+            )
             if chart:
                 relative, colour, *_ = chart_field_errors(
                     material, self.view_dirs, cube, self.truth, BAND_GRID, 0.6
